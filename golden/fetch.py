@@ -1,0 +1,201 @@
+"""Bit-exact texel fetch from the memory images, vectorised over many requests.
+
+This is the specification of the hardware pipeline in executable form. Each stage below has a twin of
+the same name in ``hw/`` and computes exactly what that stage computes, from the memory images of a
+:class:`golden.format.TextureSet` only (never from a decoded picture):
+
+1. :func:`lookup_descriptor` -- (texture, level) -> descriptor row;
+2. :func:`block_address` -- (i, j) -> block number ``k`` and offset (x, y) inside the block, by shifts;
+3. :func:`read_index` -- bit address ``k*b`` -> word ``w`` and bit offset; the index from words
+   ``w`` and ``w+1`` (the even/odd banks);
+4. :func:`read_codeword` -- codebook entry ``cb_base + index``; the sub-level and offset select the
+   texel (or Y, U, V samples);
+5. :func:`convert_color` -- the fixed-point colour matrix for yuv411, expansion for the others;
+   raw levels read a word of the raw memory instead of steps 3-4.
+
+``i`` is the column (x) and ``j`` the row (y), both already inside the level.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .format import COLOR_CODES, MAX_LEVELS, TextureSet, unpack_indices
+
+__all__ = ["fetch", "decode", "lookup_descriptor", "block_address", "read_index", "read_codeword",
+           "convert_color", "straddles", "RequestError", "check_requests"]
+
+
+class RequestError(ValueError):
+    """A request names a texture, level or texel that does not exist."""
+
+
+def check_requests(ts: TextureSet, tex, level, i, j) -> None:
+    """Raise :class:`RequestError` (one line) unless every request is inside its level."""
+    tex, level, i, j = (np.asarray(a, dtype=np.int64) for a in (tex, level, i, j))
+    bad = (tex < 0) | (tex >= ts.n_textures) | (level < 0) | (level >= MAX_LEVELS)
+    if bad.any():
+        n = int(np.argmax(bad))
+        raise RequestError(f"request {n}: texture {int(tex[n])} level {int(level[n])} does not exist")
+    d = ts.descriptors[tex, level]
+    bad = ~d["valid"].astype(bool)
+    if bad.any():
+        n = int(np.argmax(bad))
+        raise RequestError(f"request {n}: texture {int(tex[n])} has no level {int(level[n])}")
+    bad = (i < 0) | (j < 0) | (i >= (1 << d["log2w"].astype(np.int64))) | (j >= (1 << d["log2h"].astype(np.int64)))
+    if bad.any():
+        n = int(np.argmax(bad))
+        raise RequestError(f"request {n}: texel ({int(i[n])}, {int(j[n])}) is outside texture "
+                           f"{int(tex[n])} level {int(level[n])} ({1 << int(d['log2w'][n])}x{1 << int(d['log2h'][n])})")
+
+
+def lookup_descriptor(ts: TextureSet, tex, level) -> np.ndarray:
+    """Descriptor rows for each request (structured array, fields of DESCRIPTOR_FIELDS)."""
+    return ts.descriptors[np.asarray(tex, dtype=np.int64), np.asarray(level, dtype=np.int64)]
+
+
+def block_address(d: np.ndarray, i, j):
+    """Block number ``k`` (row-major in the level group's index map) and offset (x, y) in the block.
+
+    ``bx = i >> log2bw``, ``by = j >> log2bh``, ``k = (by << (log2w - log2bw)) | bx``,
+    ``x = i & (bw - 1)``, ``y = j & (bh - 1)`` (block sizes of this level's sub-level).
+    """
+    i = np.asarray(i, dtype=np.int64)
+    j = np.asarray(j, dtype=np.int64)
+    lbw = d["log2bw"].astype(np.int64)
+    lbh = d["log2bh"].astype(np.int64)
+    k = ((j >> lbh) << (d["log2w"].astype(np.int64) - lbw)) | (i >> lbw)
+    return k, i & ((1 << lbw) - 1), j & ((1 << lbh) - 1)
+
+
+def straddles(d: np.ndarray, k, word_bits: int) -> np.ndarray:
+    """True where index ``k`` crosses a word boundary (needs words w and w+1)."""
+    b = d["index_bits"].astype(np.int64)
+    off = (np.asarray(k, dtype=np.int64) * b) % word_bits
+    return off + b > word_bits
+
+
+def read_index(ts: TextureSet, d: np.ndarray, k) -> np.ndarray:
+    """The ``b``-bit index of block ``k``: word ``w = base + (k*b >> log2 W)``, offset ``k*b & (W-1)``,
+    taken from the concatenation ``word[w+1] : word[w]`` (even/odd banks read together)."""
+    wb = ts.word_bits
+    b = d["index_bits"].astype(np.int64)
+    bit = np.asarray(k, dtype=np.int64) * b
+    w = d["base"].astype(np.int64) + (bit // wb)
+    off = (bit % wb).astype(np.uint64)
+    words = ts.index_words.astype(np.uint64)
+    last = len(words) - 1
+    lo = words[np.minimum(w, last)]
+    hi = words[np.minimum(w + 1, last)]
+    if wb == 64:
+        # 128-bit concatenation: shift the pair down by ``off`` in two halves.
+        sh = off
+        low_part = lo >> sh
+        high_part = np.where(sh == 0, np.uint64(0), hi << ((np.uint64(64) - sh) % np.uint64(64)))
+        both = low_part | high_part
+    else:
+        both = (lo | (hi << np.uint64(wb))) >> off
+    return (both & ((np.uint64(1) << b.astype(np.uint64)) - np.uint64(1))).astype(np.int64)
+
+
+def read_codeword(ts: TextureSet, d: np.ndarray, index, x, y) -> np.ndarray:
+    """Raw samples of the texel at offset (x, y) of sub-level ``d['sublevel']`` of entry
+    ``cb_base + index``: (N, 4) uint8 holding (R,G,B,A), (R,G,B,-), (I,-,-,-) or (Y,U,V,-)."""
+    entry = ts.codebook[d["cb_base"].astype(np.int64) + np.asarray(index, dtype=np.int64)]
+    n = len(entry)
+    x = np.asarray(x, dtype=np.int64)
+    y = np.asarray(y, dtype=np.int64)
+    t = (y << d["log2bw"].astype(np.int64)) | x
+    color = d["color"].astype(np.int64)
+    tb = np.choose(color, [3, 4, 1, 1])
+    out = np.zeros((n, 4), np.uint8)
+    rows = np.arange(n)
+    base = d["texel_off"].astype(np.int64) + tb * t
+    last = entry.shape[1] - 1
+    for c in range(4):
+        out[:, c] = entry[rows, np.minimum(base + c, last)]
+    yuv = color == COLOR_CODES["yuv411"]
+    if yuv.any():
+        lcw = np.maximum(d["log2bw"].astype(np.int64) - 1, 0)
+        ct = ((y >> 1) << lcw) | (x >> 1)
+        out[yuv, 1] = entry[rows, np.minimum(d["u_off"].astype(np.int64) + ct, last)][yuv]
+        out[yuv, 2] = entry[rows, np.minimum(d["v_off"].astype(np.int64) + ct, last)][yuv]
+    return out
+
+
+def convert_color(ts: TextureSet, color, samples: np.ndarray) -> np.ndarray:
+    """Samples of :func:`read_codeword` -> RGBA8888. rgb: A=255; intensity: (I,I,I,255);
+    yuv411: the colour matrix, A=255; rgba: unchanged."""
+    color = np.asarray(color)
+    out = samples.copy()
+    i8 = color == COLOR_CODES["intensity"]
+    out[i8, 1] = out[i8, 0]
+    out[i8, 2] = out[i8, 0]
+    yuv = color == COLOR_CODES["yuv411"]
+    if yuv.any():
+        out[yuv, :3] = ts.matrix.apply(samples[yuv, :3])
+    out[color != COLOR_CODES["rgba"], 3] = 255
+    return out
+
+
+def fetch(ts: TextureSet, tex, level, i, j) -> np.ndarray:
+    """RGBA8888 texels, (N, 4) uint8, for requests (tex, level, i, j) (int arrays of equal length).
+
+    Requests must be valid (see :func:`check_requests`); the hardware does not check either.
+    """
+    tex, level, i, j = np.broadcast_arrays(*(np.asarray(a, dtype=np.int64).ravel() for a in (tex, level, i, j)))
+    d = lookup_descriptor(ts, tex, level)
+    out = np.zeros((len(tex), 4), np.uint8)
+    comp = d["compressed"].astype(bool)
+    if comp.any():
+        dc = d[comp]
+        k, x, y = block_address(dc, i[comp], j[comp])
+        index = read_index(ts, dc, k)
+        out[comp] = convert_color(ts, dc["color"], read_codeword(ts, dc, index, x, y))
+    raw = ~comp
+    if raw.any():
+        dr = d[raw]
+        addr = dr["base"].astype(np.int64) + (j[raw] << dr["log2w"].astype(np.int64)) + i[raw]
+        out[raw] = ts.raw_words[addr].astype("<u4").view(np.uint8).reshape(-1, 4)
+    return out
+
+
+def decode(ts: TextureSet, tex: int, level: int = 0) -> np.ndarray:
+    """A whole level as an (h, w, 4) uint8 RGBA image.
+
+    An independent path from :func:`fetch` (whole index maps unpacked, whole codewords tiled), so
+    that "fetch over every texel equals decode" checks the per-texel address arithmetic.
+    """
+    d = ts.descriptor(tex, level)
+    if not d["valid"]:
+        raise RequestError(f"texture {tex} has no level {level}")
+    w, h = 1 << d["log2w"], 1 << d["log2h"]
+    if not d["compressed"]:
+        return ts.raw_words[d["base"]: d["base"] + w * h].astype("<u4").view(np.uint8).reshape(h, w, 4).copy()
+    bw, bh = 1 << d["log2bw"], 1 << d["log2bh"]
+    nbx, nby = w // bw, h // bh
+    idx = unpack_indices(ts.index_words, d["index_bits"], nbx * nby, d["base"], ts.word_bits)
+    entries = ts.codebook[d["cb_base"] + idx].astype(np.int64)
+
+    def tile(plane, pw, ph, c):       # (nblocks, ph*pw*c) -> (h, w, c), each sample covering (bh/ph, bw/pw)
+        a = plane.reshape(nby, nbx, ph, pw, c)
+        a = np.repeat(np.repeat(a, bh // ph, axis=2), bw // pw, axis=3)
+        return a.transpose(0, 2, 1, 3, 4).reshape(h, w, c)
+
+    color = d["color"]
+    out = np.zeros((h, w, 4), np.uint8)
+    t0 = d["texel_off"]
+    if color == COLOR_CODES["yuv411"]:
+        cw, ch = max(1, bw >> 1), max(1, bh >> 1)
+        y = tile(entries[:, t0: t0 + bw * bh], bw, bh, 1)
+        u = tile(entries[:, d["u_off"]: d["u_off"] + cw * ch], cw, ch, 1)
+        v = tile(entries[:, d["v_off"]: d["v_off"] + cw * ch], cw, ch, 1)
+        out[..., :3] = ts.matrix.apply(np.concatenate([y, u, v], axis=2))
+    else:
+        c = {COLOR_CODES["rgb"]: 3, COLOR_CODES["rgba"]: 4, COLOR_CODES["intensity"]: 1}[color]
+        out[..., :c] = tile(entries[:, t0: t0 + bw * bh * c], bw, bh, c)
+        if c == 1:
+            out[..., 1] = out[..., 2] = out[..., 0]
+    if color != COLOR_CODES["rgba"]:
+        out[..., 3] = 255
+    return out

@@ -1,0 +1,528 @@
+"""The VQ texture format: memory images, bit packing and the ``.vqt`` container.
+
+Everything the hardware holds in its memories is produced here, so "what is in the file is what is in
+the chip". The contract (see ``docs/format.md`` for the hardware engineer's version):
+
+* **Index memory** -- ``word_bits``-bit words (16, 32 or 64; default 32). A level group's index map
+  lists its blocks in row-major order; index ``k`` occupies bits ``[k*b, k*b+b)`` of the
+  little-endian bit stream that starts at the group's base word. ``b`` is 1..16. One zero word is
+  appended after the last map so that reading words ``w`` and ``w+1`` never leaves the memory.
+* **Codebook memory** -- one entry per codeword, ``entry_bytes`` wide (the widest codebook's entry;
+  narrower ones are zero-padded). An entry is a little-endian byte string: for each sub-level ``s``
+  of the (extended) codeword, the ``(bw>>s) x (bh>>s)`` texels row-major (RGB888: R,G,B; RGBA8888:
+  R,G,B,A; I8: I), or for YUV 4:1:1 the Y plane, then the U plane, then the V plane, each row-major
+  (chroma planes are ``max(1,w/2) x max(1,h/2)``).
+* **Raw memory** -- 32-bit words, one texel per word, RGBA8888 with R in bits 0..7 (the response
+  format: raw levels need no colour conversion).
+* **Descriptor table** -- one row per (texture, level), ``MAX_LEVELS`` rows per texture; see
+  :data:`DESCRIPTOR_FIELDS`.
+
+A fetch of texel (i, j) of a level (``i`` is the column, ``j`` the row, both inside the level) is
+defined by :mod:`golden.fetch` from these images alone.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import struct
+import tempfile
+import zlib
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .color import JFIF_BT601, ColorMatrix
+
+__all__ = [
+    "FormatError", "COLORS", "COLOR_CODES", "MAX_LEVELS", "MAX_SIZE", "DESCRIPTOR_FIELDS",
+    "DESCRIPTOR_DTYPE", "texel_bytes", "sub_levels", "entry_layout", "EntryLayout", "pack_indices",
+    "unpack_indices", "TextureInfo", "CodebookInfo", "TextureSet", "is_pow2", "log2",
+]
+
+#: Colour formats and their 2-bit codes in the descriptor.
+COLORS = ("rgb", "rgba", "intensity", "yuv411")
+COLOR_CODES = {name: code for code, name in enumerate(COLORS)}
+#: Descriptor rows per texture (levels of a 4096x4096 texture: 13).
+MAX_LEVELS = 16
+MAX_SIZE = 4096
+WORD_BITS_ALLOWED = (16, 32, 64)
+RAW_WORD_BITS = 32
+#: Below this size (in either direction) a mip level is stored raw.
+RAW_BELOW = 32
+
+#: Descriptor row: field name -> meaning. All unsigned integers.
+DESCRIPTOR_FIELDS = {
+    "valid": "1 if this (texture, level) exists",
+    "compressed": "1: index map + codebook; 0: raw texels",
+    "base": "compressed: index memory word of the level group's map; raw: raw memory word of texel (0,0)",
+    "log2w": "log2 of the level's width",
+    "log2h": "log2 of the level's height",
+    "log2bw": "log2 of the block width at this level ((block width) >> sub-level)",
+    "log2bh": "log2 of the block height at this level",
+    "index_bits": "b, 1..16",
+    "cb_base": "codebook memory entry of codeword 0 of this texture's codebook",
+    "sublevel": "0, 1, 2: which part of the extended codeword this level reads",
+    "color": "colour format code (0 rgb, 1 rgba, 2 intensity, 3 yuv411)",
+    "texel_off": "byte offset in the entry of this sub-level's texels (the Y plane for yuv411)",
+    "u_off": "yuv411: byte offset of the sub-level's U plane (else 0)",
+    "v_off": "yuv411: byte offset of the sub-level's V plane (else 0)",
+}
+DESCRIPTOR_DTYPE = np.dtype([(name, "<u4") for name in DESCRIPTOR_FIELDS])
+
+
+class FormatError(ValueError):
+    """A texture set or ``.vqt`` file is malformed (truncated, corrupted, foreign, inconsistent)."""
+
+
+def is_pow2(n: int) -> bool:
+    return isinstance(n, (int, np.integer)) and n > 0 and (n & (n - 1)) == 0
+
+
+def log2(n: int) -> int:
+    return int(n).bit_length() - 1
+
+
+def texel_bytes(color: str) -> int:
+    """Bytes per texel of a codeword plane (Y only for yuv411)."""
+    return {"rgb": 3, "rgba": 4, "intensity": 1, "yuv411": 1}[color]
+
+
+def sub_levels(bw: int, bh: int) -> int:
+    """Sub-levels of an extended codeword of ``bw x bh`` blocks: each halves both sides, at most 3
+    (4x4 -> 4x4, 2x2, 1x1; 2x2 -> 2, 4x1 -> 1)."""
+    return min(3, 1 + min(log2(bw), log2(bh)))
+
+
+@dataclass(frozen=True)
+class EntryLayout:
+    """Byte layout of one codeword entry. ``planes[s]`` = (texel_off, u_off, v_off) of sub-level s."""
+    color: str
+    bw: int
+    bh: int
+    nsub: int
+    planes: tuple
+    size: int
+
+    def sub_shape(self, s: int) -> tuple[int, int]:
+        return self.bw >> s, self.bh >> s
+
+    def chroma_shape(self, s: int) -> tuple[int, int]:
+        w, h = self.sub_shape(s)
+        return max(1, w >> 1), max(1, h >> 1)
+
+
+def entry_layout(color: str, bw: int, bh: int, nsub: int = 1) -> EntryLayout:
+    """Where each sub-level's texels (and yuv411 planes) sit inside a codeword entry."""
+    planes, off = [], 0
+    for s in range(nsub):
+        w, h = bw >> s, bh >> s
+        if color == "yuv411":
+            cw, ch = max(1, w >> 1), max(1, h >> 1)
+            planes.append((off, off + w * h, off + w * h + cw * ch))
+            off += w * h + 2 * cw * ch
+        else:
+            planes.append((off, 0, 0))
+            off += w * h * texel_bytes(color)
+    return EntryLayout(color, bw, bh, nsub, tuple(planes), off)
+
+
+# ---------------------------------------------------------------------------------------------
+# Bit packing
+
+def pack_indices(indices: np.ndarray, b: int, word_bits: int = 32) -> np.ndarray:
+    """Pack indices into the little-endian bit stream of ``word_bits``-bit words.
+
+    Index ``k`` occupies bits ``[k*b, k*b+b)``; the last word is zero-padded.
+    Returns an unsigned array of ``ceil(n*b/word_bits)`` words (dtype of ``word_bits``).
+    """
+    idx = np.asarray(indices, dtype=np.uint64).ravel()
+    if not 1 <= b <= 16:
+        raise FormatError(f"index width {b} is outside 1..16")
+    if idx.size and int(idx.max()) >> b:
+        raise FormatError(f"an index does not fit in {b} bits")
+    bits = ((idx[:, None] >> np.arange(b, dtype=np.uint64)) & 1).astype(np.uint8).ravel()
+    nwords = -(-bits.size // word_bits)
+    bits = np.concatenate([bits, np.zeros(nwords * word_bits - bits.size, np.uint8)])
+    packed = np.packbits(bits, bitorder="little")
+    return packed.view(np.dtype(f"<u{word_bits // 8}")).copy()
+
+
+def unpack_indices(words: np.ndarray, b: int, n: int, base: int = 0, word_bits: int = 32) -> np.ndarray:
+    """Inverse of :func:`pack_indices`: ``n`` indices from the map starting at word ``base``."""
+    w = np.asarray(words).astype(f"<u{word_bits // 8}")
+    bits = np.unpackbits(w[base:].view(np.uint8), bitorder="little")[: n * b]
+    return (bits.reshape(n, b).astype(np.int64) << np.arange(b)).sum(axis=1)
+
+
+# ---------------------------------------------------------------------------------------------
+# The texture set
+
+@dataclass
+class TextureInfo:
+    """What a texture is and how it was encoded (metadata; the memory images are the truth)."""
+    name: str
+    width: int
+    height: int
+    levels: int
+    color: str
+    block: tuple
+    codebook: int          # index into TextureSet.codebooks, or -1 if stored raw
+    index_bits: int
+    mipmapped: bool
+    params: dict = field(default_factory=dict)
+
+    def to_dict(self):
+        d = dict(self.__dict__)
+        d["block"] = list(self.block)
+        return d
+
+    @classmethod
+    def from_dict(cls, d):
+        d = dict(d)
+        d["block"] = tuple(d["block"])
+        return cls(**d)
+
+
+@dataclass
+class CodebookInfo:
+    """One codebook in the codebook memory."""
+    color: str
+    block: tuple
+    nsub: int
+    size: int              # number of codewords K
+    base: int              # first entry in the codebook memory
+
+    @property
+    def layout(self) -> EntryLayout:
+        return entry_layout(self.color, self.block[0], self.block[1], self.nsub)
+
+    def to_dict(self):
+        d = dict(self.__dict__)
+        d["block"] = list(self.block)
+        return d
+
+    @classmethod
+    def from_dict(cls, d):
+        d = dict(d)
+        d["block"] = tuple(d["block"])
+        return cls(**d)
+
+
+MAGIC = b"VQTX\r\n\x1a\n"
+VERSION = 1
+_ARRAYS = ("index_words", "codebook", "raw_words", "descriptors")
+
+
+@dataclass
+class TextureSet:
+    """Textures, their codebooks and the memory images the hardware holds.
+
+    Members
+    -------
+    word_bits : int
+        Index memory word width (16, 32 or 64).
+    index_words : ndarray of ``<u{word_bits/8}``
+        The index memory (level groups' packed index maps, then one zero word).
+    codebook : ndarray uint8 (entries, entry_bytes)
+        The codebook memory, one row per codeword entry.
+    raw_words : ndarray ``<u4``
+        The raw memory, RGBA8888 texel per word.
+    descriptors : structured ndarray (n_textures, MAX_LEVELS) of :data:`DESCRIPTOR_DTYPE`
+    textures, codebooks : metadata lists
+    matrix : ColorMatrix used for yuv411 textures
+    """
+    word_bits: int
+    index_words: np.ndarray
+    codebook: np.ndarray
+    raw_words: np.ndarray
+    descriptors: np.ndarray
+    textures: list
+    codebooks: list
+    matrix: ColorMatrix = JFIF_BT601
+
+    # -- queries ------------------------------------------------------------------------------
+    @property
+    def n_textures(self) -> int:
+        return len(self.textures)
+
+    @property
+    def entry_bytes(self) -> int:
+        return int(self.codebook.shape[1])
+
+    def level_shapes(self, tex: int) -> list[tuple[int, int]]:
+        """[(width, height)] of every level of texture ``tex``."""
+        d = self.descriptors[tex]
+        return [(1 << int(d["log2w"][L]), 1 << int(d["log2h"][L]))
+                for L in range(self.textures[tex].levels)]
+
+    def descriptor(self, tex: int, level: int) -> dict:
+        row = self.descriptors[tex, level]
+        return {name: int(row[name]) for name in DESCRIPTOR_FIELDS}
+
+    def rates(self, tex: int | None = None) -> dict:
+        """Compression rates counted as the paper counts them.
+
+        ``base``: original bits of a block over its index bits (24-bit RGB source for rgb and yuv411,
+        32 for rgba, 8 for intensity). ``overall``: original bits of every stored level over the bits
+        actually stored for them: index maps, raw levels, and the texture's share of its codebook
+        (a shared codebook is split in proportion to the level-0 texels of the textures sharing it).
+        With ``tex=None`` the whole set: total original bits over total stored bits.
+        """
+        if tex is None:
+            orig = stored = 0.0
+            for t in range(self.n_textures):
+                r = self.rates(t)
+                orig += r["original_bits"]
+                stored += r["stored_bits"]
+            return {"overall": orig / stored, "original_bits": orig, "stored_bits": stored}
+        info = self.textures[tex]
+        src_bits = {"rgb": 24, "rgba": 32, "intensity": 8, "yuv411": 24}[info.color]
+        orig = index = raw = 0
+        for L, (w, h) in enumerate(self.level_shapes(tex)):
+            d = self.descriptors[tex, L]
+            orig += w * h * src_bits
+            if d["compressed"]:
+                if d["sublevel"] == 0:
+                    nblocks = (w >> int(d["log2bw"])) * (h >> int(d["log2bh"]))
+                    index += nblocks * int(d["index_bits"])
+            else:
+                raw += w * h * src_bits
+        cb_share = 0.0
+        if info.codebook >= 0:
+            cb = self.codebooks[info.codebook]
+            sharers = [t for t in self.textures if t.codebook == info.codebook]
+            total = sum(t.width * t.height for t in sharers)
+            cb_share = cb.size * cb.layout.size * 8 * (info.width * info.height) / total
+        bw, bh = info.block
+        stored = index + raw + cb_share
+        return {
+            "base": (bw * bh * src_bits / info.index_bits) if info.codebook >= 0 else 1.0,
+            "overall": orig / stored,
+            "original_bits": orig, "stored_bits": stored,
+            "index_bits_total": index, "raw_bits": raw, "codebook_bits_share": cb_share,
+        }
+
+    # -- validation -----------------------------------------------------------------------------
+    def validate(self) -> None:
+        """Check that the descriptors only point inside the memories. Raises FormatError."""
+        if self.word_bits not in WORD_BITS_ALLOWED:
+            raise FormatError(f"index word width {self.word_bits} is not one of {WORD_BITS_ALLOWED}")
+        if self.index_words.dtype != np.dtype(f"<u{self.word_bits // 8}"):
+            raise FormatError("index memory dtype does not match its word width")
+        if self.codebook.dtype != np.uint8 or self.codebook.ndim != 2:
+            raise FormatError("codebook memory must be a 2-D uint8 array")
+        if self.raw_words.dtype != np.dtype("<u4") or self.raw_words.ndim != 1:
+            raise FormatError("raw memory must be a 1-D array of 32-bit words")
+        d = self.descriptors
+        if d.dtype != DESCRIPTOR_DTYPE or d.shape != (len(self.textures), MAX_LEVELS):
+            raise FormatError("descriptor table has the wrong shape or fields")
+        for t, info in enumerate(self.textures):
+            if not (1 <= info.levels <= MAX_LEVELS):
+                raise FormatError(f"texture {t}: {info.levels} levels")
+            for L in range(MAX_LEVELS):
+                row = d[t, L]
+                if bool(row["valid"]) != (L < info.levels):
+                    raise FormatError(f"texture {t} level {L}: valid flag disagrees with level count")
+                if not row["valid"]:
+                    continue
+                w, h = 1 << int(row["log2w"]), 1 << int(row["log2h"])
+                if row["log2w"] > 12 or row["log2h"] > 12:
+                    raise FormatError(f"texture {t} level {L}: size out of range")
+                if row["compressed"]:
+                    b = int(row["index_bits"])
+                    if not 1 <= b <= 16 or row["color"] > 3 or row["sublevel"] > 2:
+                        raise FormatError(f"texture {t} level {L}: bad index width, colour or sub-level")
+                    if row["log2bw"] > row["log2w"] or row["log2bh"] > row["log2h"]:
+                        raise FormatError(f"texture {t} level {L}: block larger than level")
+                    nblocks = (w >> int(row["log2bw"])) * (h >> int(row["log2bh"]))
+                    last_word = int(row["base"]) + (nblocks * b - 1) // self.word_bits + 1
+                    if last_word >= len(self.index_words):
+                        raise FormatError(f"texture {t} level {L}: index map runs past the index memory")
+                    cb = self.codebooks[info.codebook] if 0 <= info.codebook < len(self.codebooks) else None
+                    if cb is None or int(row["cb_base"]) != cb.base or cb.base + cb.size > len(self.codebook):
+                        raise FormatError(f"texture {t} level {L}: codebook missing or past the codebook memory")
+                    if max(int(row["texel_off"]), int(row["u_off"]), int(row["v_off"])) >= self.entry_bytes:
+                        raise FormatError(f"texture {t} level {L}: plane offset outside the entry")
+                elif int(row["base"]) + w * h > len(self.raw_words):
+                    raise FormatError(f"texture {t} level {L}: raw level runs past the raw memory")
+
+    def max_index(self) -> None:
+        """Raise FormatError if an index in any map points past its codebook."""
+        for t, info in enumerate(self.textures):
+            if info.codebook < 0:
+                continue
+            size = self.codebooks[info.codebook].size
+            for L in range(info.levels):
+                row = self.descriptors[t, L]
+                if not row["compressed"] or row["sublevel"]:
+                    continue
+                n = (1 << int(row["log2w"]) >> int(row["log2bw"])) * (1 << int(row["log2h"]) >> int(row["log2bh"]))
+                idx = unpack_indices(self.index_words, int(row["index_bits"]), n, int(row["base"]), self.word_bits)
+                if n and int(idx.max()) >= size:
+                    raise FormatError(f"texture {t} level {L}: index {int(idx.max())} past codebook of {size}")
+
+    # -- combining --------------------------------------------------------------------------------
+    @classmethod
+    def combine(cls, sets: list["TextureSet"]) -> "TextureSet":
+        """One texture set holding all textures of ``sets`` (each keeps its own codebooks).
+
+        Memories are concatenated and descriptors rebased; texture ids follow the order of ``sets``.
+        All sets must share the word width and colour matrix.
+        """
+        if not sets:
+            raise FormatError("nothing to combine")
+        wb, matrix = sets[0].word_bits, sets[0].matrix
+        if any(s.word_bits != wb or s.matrix != matrix for s in sets):
+            raise FormatError("combined texture sets must share word width and colour matrix")
+        entry_bytes = max(s.entry_bytes for s in sets)
+        index_parts, cb_parts, raw_parts, desc_parts, textures, codebooks = [], [], [], [], [], []
+        iw = ce = rw = 0
+        for s in sets:
+            words = s.index_words[:-1]        # drop the guard word; one is appended at the end
+            index_parts.append(words)
+            cb = np.zeros((len(s.codebook), entry_bytes), np.uint8)
+            cb[:, : s.entry_bytes] = s.codebook
+            cb_parts.append(cb)
+            raw_parts.append(s.raw_words)
+            d = s.descriptors.copy()
+            comp = d["compressed"].astype(bool) & d["valid"].astype(bool)
+            raw = ~d["compressed"].astype(bool) & d["valid"].astype(bool)
+            d["base"][comp] += iw
+            d["base"][raw] += rw
+            d["cb_base"][comp] += ce
+            desc_parts.append(d)
+            for info in s.textures:
+                info = TextureInfo.from_dict(info.to_dict())
+                if info.codebook >= 0:
+                    info.codebook += len(codebooks)
+                textures.append(info)
+            for cbi in s.codebooks:
+                codebooks.append(CodebookInfo(cbi.color, cbi.block, cbi.nsub, cbi.size, cbi.base + ce))
+            iw += len(words)
+            ce += len(s.codebook)
+            rw += len(s.raw_words)
+        dt = np.dtype(f"<u{wb // 8}")
+        index_parts.append(np.zeros(1, dt))
+        out = cls(
+            word_bits=wb,
+            index_words=np.concatenate(index_parts).astype(dt),
+            codebook=np.concatenate(cb_parts) if cb_parts else np.zeros((0, 1), np.uint8),
+            raw_words=np.concatenate(raw_parts).astype("<u4"),
+            descriptors=np.concatenate(desc_parts),
+            textures=textures, codebooks=codebooks, matrix=matrix,
+        )
+        out.validate()
+        return out
+
+    # -- the .vqt container ---------------------------------------------------------------------
+    def to_bytes(self) -> bytes:
+        """Serialise: magic, version, header length, JSON header, arrays, CRC-32 (little-endian)."""
+        arrays = {
+            "index_words": np.ascontiguousarray(self.index_words),
+            "codebook": np.ascontiguousarray(self.codebook),
+            "raw_words": np.ascontiguousarray(self.raw_words),
+            "descriptors": np.ascontiguousarray(self.descriptors),
+        }
+        table, blobs, off = {}, [], 0
+        for name in _ARRAYS:
+            a = arrays[name]
+            raw = a.tobytes()
+            table[name] = {"shape": list(a.shape), "offset": off, "nbytes": len(raw),
+                           "dtype": a.dtype.str if a.dtype.names is None else "descriptor"}
+            blobs.append(raw)
+            off += len(raw)
+        header = json.dumps({
+            "word_bits": self.word_bits,
+            "entry_bytes": self.entry_bytes,
+            "descriptor_fields": list(DESCRIPTOR_FIELDS),
+            "matrix": self.matrix.to_dict(),
+            "textures": [t.to_dict() for t in self.textures],
+            "codebooks": [c.to_dict() for c in self.codebooks],
+            "arrays": table,
+        }, sort_keys=True).encode()
+        body = MAGIC + struct.pack("<II", VERSION, len(header)) + header + b"".join(blobs)
+        return body + struct.pack("<I", zlib.crc32(body))
+
+    @classmethod
+    def from_bytes(cls, data: bytes) -> "TextureSet":
+        """Parse a ``.vqt`` image. Raises :class:`FormatError` on anything truncated or corrupt."""
+        if len(data) < len(MAGIC) + 12:
+            raise FormatError("file is too short to be a .vqt texture set")
+        if data[: len(MAGIC)] != MAGIC:
+            raise FormatError("not a .vqt texture set (bad magic)")
+        version, hlen = struct.unpack_from("<II", data, len(MAGIC))
+        if version != VERSION:
+            raise FormatError(f"unsupported .vqt version {version} (this reader knows {VERSION})")
+        (crc,) = struct.unpack_from("<I", data, len(data) - 4)
+        if zlib.crc32(data[:-4]) != crc:
+            raise FormatError("checksum mismatch: the file is truncated or corrupted")
+        start = len(MAGIC) + 8
+        if start + hlen > len(data) - 4:
+            raise FormatError("header runs past the end of the file")
+        try:
+            header = json.loads(data[start: start + hlen].decode())
+            body = memoryview(data)[start + hlen: len(data) - 4]
+            arrays = {}
+            for name in _ARRAYS:
+                spec = header["arrays"][name]
+                dtype = DESCRIPTOR_DTYPE if spec["dtype"] == "descriptor" else np.dtype(spec["dtype"])
+                if dtype.names is None and dtype.kind != "u":
+                    raise FormatError(f"array {name} has a non-integer type")
+                shape = tuple(int(x) for x in spec["shape"])
+                n = int(np.prod(shape)) * dtype.itemsize
+                off = int(spec["offset"])
+                if n != spec["nbytes"] or off < 0 or off + n > len(body):
+                    raise FormatError(f"array {name} runs past the end of the file")
+                arrays[name] = np.frombuffer(body[off: off + n], dtype=dtype).reshape(shape).copy()
+            if header["descriptor_fields"] != list(DESCRIPTOR_FIELDS):
+                raise FormatError("descriptor fields differ from this reader's")
+            ts = cls(
+                word_bits=int(header["word_bits"]),
+                index_words=arrays["index_words"], codebook=arrays["codebook"],
+                raw_words=arrays["raw_words"], descriptors=arrays["descriptors"],
+                textures=[TextureInfo.from_dict(t) for t in header["textures"]],
+                codebooks=[CodebookInfo.from_dict(c) for c in header["codebooks"]],
+                matrix=ColorMatrix.from_dict(header["matrix"]),
+            )
+            ts.validate()
+        except FormatError:
+            raise
+        except (KeyError, IndexError, TypeError, ValueError, AttributeError, UnicodeDecodeError) as e:
+            raise FormatError(f"malformed .vqt header: {e}") from None
+        return ts
+
+    def save(self, path) -> None:
+        """Write atomically (temporary file in the same folder, then rename)."""
+        data = self.to_bytes()
+        folder = os.path.dirname(os.path.abspath(path))
+        fd, tmp = tempfile.mkstemp(prefix=".vqt-", dir=folder)
+        try:
+            with os.fdopen(fd, "wb") as f:
+                f.write(data)
+            os.replace(tmp, path)
+        except BaseException:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+            raise
+
+    @classmethod
+    def load(cls, path) -> "TextureSet":
+        """Read a ``.vqt`` file. A missing or unreadable file also raises :class:`FormatError`."""
+        try:
+            with open(path, "rb") as f:
+                data = f.read()
+        except OSError as e:
+            raise FormatError(f"cannot read {path}: {e.strerror}") from None
+        return cls.from_bytes(data)
+
+    def __eq__(self, other):
+        if not isinstance(other, TextureSet):
+            return NotImplemented
+        return self.to_bytes() == other.to_bytes()
+
+
+def default_index_bits(k: int) -> int:
+    """ceil(log2 K), at least 1."""
+    return max(1, math.ceil(math.log2(k)))
