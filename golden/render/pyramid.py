@@ -1,0 +1,144 @@
+"""Reference mip pyramids and the uncompressed :class:`ReferenceSource`.
+
+The renderer asks texels of a *texture source*, any object with
+
+    level_shapes(tex) -> [(width, height) of level 0, 1, ...]
+    fetch(tex, level, i, j) -> (N, 4) uint8 RGBA     (int arrays (N,); i = column, j = row)
+
+This module implements that protocol over uncompressed pyramids: the golden reference against which
+compressed textures are measured.
+
+Pyramid rule (the same as the extended codewords of golden.format): level n+1 texel is the rounded
+mean ``(a + b + c + d + 2) >> 2`` per channel of the 2x2 texels above it. For a non-square texture,
+once one side has reached 1 the other keeps halving with ``(a + b + 1) >> 1``. The pyramid goes down
+to 1x1. Images are promoted to RGBA first: RGB gets A = 255, intensity I becomes (I, I, I, 255).
+"""
+
+from __future__ import annotations
+
+from typing import Protocol, Sequence
+
+import numpy as np
+
+__all__ = ["TextureSource", "to_rgba", "downsample", "build_pyramid", "ReferenceSource"]
+
+
+class TextureSource(Protocol):
+    """Where the sampler's texels come from (reference pyramids, compressed TextureSet, RTL...)."""
+
+    def level_shapes(self, tex: int) -> list[tuple[int, int]]: ...
+
+    def fetch(self, tex, level, i, j) -> np.ndarray: ...
+
+
+def _is_pow2(n: int) -> bool:
+    return n >= 1 and (n & (n - 1)) == 0
+
+
+def to_rgba(image: np.ndarray) -> np.ndarray:
+    """Promote a uint8 image (H, W), (H, W, 1), (H, W, 3) or (H, W, 4) to RGBA (H, W, 4)."""
+    img = np.asarray(image)
+    if img.dtype != np.uint8:
+        raise ValueError(f"expected a uint8 image, got {img.dtype}")
+    if img.ndim == 2:
+        img = img[:, :, None]
+    if img.ndim != 3 or img.shape[2] not in (1, 2, 3, 4):
+        raise ValueError(f"expected (H, W) or (H, W, C) with C in 1..4, got shape {img.shape}")
+    h, w, c = img.shape
+    out = np.empty((h, w, 4), np.uint8)
+    if c == 1:
+        out[:, :, :3] = img
+        out[:, :, 3] = 255
+    elif c == 2:  # grey + alpha
+        out[:, :, :3] = img[:, :, :1]
+        out[:, :, 3] = img[:, :, 1]
+    elif c == 3:
+        out[:, :, :3] = img
+        out[:, :, 3] = 255
+    else:
+        out[:] = img
+    return out
+
+
+def downsample(level: np.ndarray) -> np.ndarray:
+    """One box-filter step of the pyramid rule for a uint8 (H, W, C) level (H or W > 1)."""
+    a = level.astype(np.uint16)
+    h, w = a.shape[:2]
+    if h > 1 and w > 1:
+        s = a[0::2, 0::2] + a[0::2, 1::2] + a[1::2, 0::2] + a[1::2, 1::2]
+        return ((s + 2) >> 2).astype(np.uint8)
+    if w > 1:  # one row left: average horizontal pairs
+        return ((a[:, 0::2] + a[:, 1::2] + 1) >> 1).astype(np.uint8)
+    if h > 1:
+        return ((a[0::2] + a[1::2] + 1) >> 1).astype(np.uint8)
+    raise ValueError("a 1x1 level has no smaller level")
+
+
+def build_pyramid(image: np.ndarray) -> list[np.ndarray]:
+    """All levels, RGBA uint8 (H_L, W_L, 4), of a power-of-two image, from level 0 down to 1x1."""
+    level = to_rgba(image)
+    h, w = level.shape[:2]
+    if not (_is_pow2(w) and _is_pow2(h)):
+        raise ValueError(f"texture size {w}x{h} is not a power of two")
+    levels = [level]
+    while level.shape[0] > 1 or level.shape[1] > 1:
+        level = downsample(level)
+        levels.append(level)
+    return levels
+
+
+class ReferenceSource:
+    """The TextureSource protocol over uncompressed reference pyramids.
+
+    All levels of all textures live in one flat (texels, 4) array; a fetch is one gather.
+
+    Arguments:
+        images: uint8 images (H, W, C), power-of-two sizes, texture id = position in the list.
+    """
+
+    def __init__(self, images: Sequence[np.ndarray]):
+        pyramids = [build_pyramid(img) for img in images]
+        self._shapes = [[(lv.shape[1], lv.shape[0]) for lv in p] for p in pyramids]
+        nlev = max((len(p) for p in pyramids), default=1)
+        t = len(pyramids)
+        self._base = np.zeros((max(t, 1), nlev), np.int64)
+        self._width = np.ones((max(t, 1), nlev), np.int64)
+        self._height = np.zeros((max(t, 1), nlev), np.int64)  # 0 marks a missing level
+        chunks, base = [], 0
+        for k, p in enumerate(pyramids):
+            for n, lv in enumerate(p):
+                self._base[k, n] = base
+                self._width[k, n] = lv.shape[1]
+                self._height[k, n] = lv.shape[0]
+                chunks.append(lv.reshape(-1, 4))
+                base += lv.shape[0] * lv.shape[1]
+        self._texels = np.concatenate(chunks) if chunks else np.zeros((0, 4), np.uint8)
+        self.pyramids = pyramids
+
+    @property
+    def num_textures(self) -> int:
+        return len(self._shapes)
+
+    def level_shapes(self, tex: int) -> list[tuple[int, int]]:
+        return list(self._shapes[tex])
+
+    def level(self, tex: int, level: int) -> np.ndarray:
+        """The RGBA array (H, W, 4) of one level."""
+        return self.pyramids[tex][level]
+
+    def fetch(self, tex, level, i, j) -> np.ndarray:
+        """Texels (N, 4) uint8 at (tex, level, i, j); raises ValueError on any out-of-range request."""
+        tex = np.asarray(tex, np.int64)
+        level = np.asarray(level, np.int64)
+        i = np.asarray(i, np.int64)
+        j = np.asarray(j, np.int64)
+        if tex.size == 0:
+            return np.zeros((0, 4), np.uint8)
+        t, n = self._base.shape
+        if tex.min() < 0 or tex.max() >= self.num_textures or level.min() < 0 or level.max() >= n:
+            raise ValueError("fetch: texture id or level out of range")
+        w = self._width[tex, level]
+        h = self._height[tex, level]
+        if (i < 0).any() or (j < 0).any() or (i >= w).any() or (j >= h).any():
+            raise ValueError("fetch: (i, j) outside the level (or level missing)")
+        return self._texels[self._base[tex, level] + j * w + i]
