@@ -1,0 +1,215 @@
+"""Texture sampling in two phases: texel *requests*, then *resolve* of the returned texels.
+
+    sampler = Sampler(level_shapes, address, mode)
+    reqs = sampler.requests(fragments)          # (N, 4) int64 (texture, level, i, j)
+    frame = sampler.resolve(texels)             # texels (N, 4) uint8 RGBA, in request order
+
+Any backend (reference pyramids, the golden VQ fetch, the RTL) supplies the texels between the two
+calls; the same texels always give the same frame, bit for bit.
+
+**Request order.** Covered pixels in row-major order (y, then x); per pixel:
+
+- ``point``: 1 request, level 0, the nearest texel ``i = floor(s W0)``, ``j = floor(t H0)``.
+- ``trilinear``: 8 requests, level L0 first then level L1, and within a level the 2x2 footprint in
+  the order (i0, j0), (i1, j0), (i0, j1), (i1, j1). Every covered pixel issues all eight, even when
+  a weight is zero (a constant-rate stream, as in the hardware). Uncovered pixels issue nothing and
+  get the background colour.
+
+**Level of detail** (per pixel, from the rasterizer's analytic derivatives and the level-0 size
+W0 x H0 of the pixel's texture)::
+
+    rho_x^2 = (ds/dx W0)^2 + (dt/dx H0)^2,   rho_y^2 = (ds/dy W0)^2 + (dt/dy H0)^2
+    lambda  = log2(max(rho_x, rho_y)) = 0.5 log2(max(rho_x^2, rho_y^2))
+
+(the OpenGL scale factor). lambda is quantised to ``FRAC_BITS`` = 8 fractional bits with round to
+nearest, ``lam = floor(lambda 256 + 1/2)``, clamped to [0, 256 (levels - 1)]; ``L0 = lam >> 8``,
+level blend ``f = lam & 255``, ``L1 = min(L0 + 1, levels - 1)``. lambda <= 0 (magnification) thus
+gives bilinear filtering of level 0.
+
+**Bilinear footprint** in level L of size W x H: ``u = floor(s W 256) - 128`` (texel centres at
+half-integers; s W 256 is exact in float64 because W 256 is a power of two), ``i0 = u >> 8``,
+``i1 = i0 + 1``, ``fu = u & 255``; the same for t, j, fv.
+
+**Fixed-point weights** (all integers): bilinear ``(256-fu)(256-fv), fu(256-fv), (256-fu)fv, fu fv``
+(sum 2^16), times the level weights ``256 - f`` for L0 and ``f`` for L1 (sum 2^8): eight weights that
+sum to exactly 2^24. Per channel ``out = (sum w_k texel_k + 2^23) >> 24``; the sum is below 2^32.
+
+**Addressing** per texture and axis: ``wrap`` (i mod W) or ``clamp`` (clip to [0, W-1]), applied to
+integer texel indices, so a clamped footprint at the border repeats the edge texel.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from .raster import Fragments
+
+__all__ = [
+    "FRAC_BITS", "WEIGHT_BITS", "MODES", "BACKGROUND", "level_of_detail", "quantize_lod",
+    "address", "trilinear_weights", "Sampler",
+]
+
+FRAC_BITS = 8
+WEIGHT_BITS = 3 * FRAC_BITS
+MODES = ("point", "trilinear")
+BACKGROUND = (0, 0, 0, 255)
+_ONE = 1 << FRAC_BITS
+
+
+def level_of_detail(frags: Fragments, width0: np.ndarray, height0: np.ndarray) -> np.ndarray:
+    """lambda (float64, may be -inf) per fragment, for level-0 sizes per fragment."""
+    w = np.asarray(width0, np.float64)
+    h = np.asarray(height0, np.float64)
+    rx = (frags.dsdx * w) ** 2 + (frags.dtdx * h) ** 2
+    ry = (frags.dsdy * w) ** 2 + (frags.dtdy * h) ** 2
+    with np.errstate(divide="ignore"):
+        return 0.5 * np.log2(np.maximum(rx, ry))
+
+
+def quantize_lod(lam: np.ndarray, levels: np.ndarray) -> np.ndarray:
+    """lambda -> int64 with FRAC_BITS fraction, round to nearest, clamped to [0, (levels-1) 2^8]."""
+    top = (np.asarray(levels, np.int64) - 1) * _ONE
+    x = np.nan_to_num(np.asarray(lam, np.float64) * _ONE + 0.5, nan=0.0, neginf=0.0)
+    return np.floor(np.minimum(np.maximum(x, 0.0), top)).astype(np.int64)
+
+
+def address(i: np.ndarray, size: np.ndarray, wrap: np.ndarray) -> np.ndarray:
+    """Integer texel index into [0, size): wrap (power-of-two size) where ``wrap``, else clamp."""
+    return np.where(wrap, i & (size - 1), np.clip(i, 0, size - 1))
+
+
+def trilinear_weights(fu0, fv0, fu1, fv1, f) -> np.ndarray:
+    """(M, 8) int64 weights in request order from 8-bit fractions; each row sums to 2^24."""
+    fu0, fv0, fu1, fv1, f = (np.asarray(x, np.int64) for x in (fu0, fv0, fu1, fv1, f))
+    def bil(fu, fv):
+        gu, gv = _ONE - fu, _ONE - fv
+        return np.stack([gu * gv, fu * gv, gu * fv, fu * fv], 1)
+    return np.concatenate([bil(fu0, fv0) * (_ONE - f)[:, None], bil(fu1, fv1) * f[:, None]], 1)
+
+
+def _parse_address(a) -> tuple[bool, bool]:
+    if isinstance(a, str):
+        a = (a, a)
+    if len(a) != 2 or any(m not in ("wrap", "clamp") for m in a):
+        raise ValueError(f"addressing must be 'wrap', 'clamp' or a pair of them, got {a!r}")
+    return a[0] == "wrap", a[1] == "wrap"
+
+
+class Sampler:
+    """Point or trilinear sampling of one frame, split into requests() and resolve().
+
+    Arguments:
+        level_shapes: per texture id, [(width, height) of level 0, 1, ...] (power-of-two sizes).
+        address: per texture id, "wrap", "clamp" or a pair (s, t); default wrap everywhere.
+        mode: "point" or "trilinear".
+        background: RGBA of uncovered pixels.
+    """
+
+    def __init__(self, level_shapes: Sequence[Sequence[tuple[int, int]]], address=None,
+                 mode: str = "trilinear", background=BACKGROUND):
+        if mode not in MODES:
+            raise ValueError(f"unknown sampling mode {mode!r} (known: {', '.join(MODES)})")
+        self.mode = mode
+        t = len(level_shapes)
+        nlev = max((len(s) for s in level_shapes), default=1)
+        self._widths = np.ones((max(t, 1), nlev), np.int64)
+        self._heights = np.ones((max(t, 1), nlev), np.int64)
+        self._levels = np.ones(max(t, 1), np.int64)
+        for k, shapes in enumerate(level_shapes):
+            if not shapes:
+                raise ValueError(f"texture {k} has no levels")
+            for n, (w, h) in enumerate(shapes):
+                if w < 1 or h < 1 or (w & (w - 1)) or (h & (h - 1)):
+                    raise ValueError(f"texture {k} level {n}: size {w}x{h} is not a power of two")
+                self._widths[k, n], self._heights[k, n] = w, h
+            self._levels[k] = len(shapes)
+        if address is None:
+            address = ["wrap"] * t
+        if isinstance(address, str):
+            address = [address] * t
+        if len(address) != t:
+            raise ValueError("one addressing mode per texture")
+        wraps = [_parse_address(a) for a in address] or [(True, True)]
+        self._wrap_s = np.array([w[0] for w in wraps])
+        self._wrap_t = np.array([w[1] for w in wraps])
+        bg = tuple(int(c) for c in background)
+        if len(bg) == 3:
+            bg += (255,)
+        if len(bg) != 4 or not all(0 <= c <= 255 for c in bg):
+            raise ValueError(f"background must be RGB or RGBA bytes, got {background!r}")
+        self.background = np.array(bg, np.uint8)
+        self._plan = None
+
+    @property
+    def requests_per_pixel(self) -> int:
+        return 1 if self.mode == "point" else 8
+
+    def lod(self, frags: Fragments) -> np.ndarray:
+        """Unquantised lambda per fragment."""
+        return level_of_detail(frags, self._widths[frags.tex, 0], self._heights[frags.tex, 0])
+
+    def requests(self, frags: Fragments) -> np.ndarray:
+        """Texel requests (N, 4) int64 (texture, level, i, j) for the fragments, in the documented order.
+
+        Also remembers what resolve() needs (pixels, weights, frame size).
+        """
+        tex = np.asarray(frags.tex, np.int64)
+        if len(tex) and (tex.min() < 0 or tex.max() >= len(self._levels)):
+            raise ValueError("fragment texture id out of range")
+        m = len(tex)
+        ws, wt = self._wrap_s[tex], self._wrap_t[tex]
+        if self.mode == "point":
+            w0, h0 = self._widths[tex, 0], self._heights[tex, 0]
+            i = address(np.floor(frags.s * w0).astype(np.int64), w0, ws)
+            j = address(np.floor(frags.t * h0).astype(np.int64), h0, wt)
+            reqs = np.stack([tex, np.zeros(m, np.int64), i, j], 1)
+            weights = None
+        else:
+            lam = quantize_lod(self.lod(frags), self._levels[tex])
+            l0 = lam >> FRAC_BITS
+            f = lam & (_ONE - 1)
+            l1 = np.minimum(l0 + 1, self._levels[tex] - 1)
+            reqs = np.empty((m, 8, 4), np.int64)
+            reqs[:, :, 0] = tex[:, None]
+            fracs = []
+            for k, lv in enumerate((l0, l1)):
+                wl, hl = self._widths[tex, lv], self._heights[tex, lv]
+                u = np.floor(frags.s * (wl * _ONE)).astype(np.int64) - (_ONE >> 1)
+                v = np.floor(frags.t * (hl * _ONE)).astype(np.int64) - (_ONE >> 1)
+                i0, j0 = u >> FRAC_BITS, v >> FRAC_BITS
+                fracs += [u & (_ONE - 1), v & (_ONE - 1)]
+                i0a, i1a = address(i0, wl, ws), address(i0 + 1, wl, ws)
+                j0a, j1a = address(j0, hl, wt), address(j0 + 1, hl, wt)
+                b = 4 * k
+                reqs[:, b:b + 4, 1] = lv[:, None]
+                reqs[:, b:b + 4, 2] = np.stack([i0a, i1a, i0a, i1a], 1)
+                reqs[:, b:b + 4, 3] = np.stack([j0a, j0a, j1a, j1a], 1)
+            weights = trilinear_weights(fracs[0], fracs[1], fracs[2], fracs[3], f).astype(np.uint32)
+            reqs = reqs.reshape(-1, 4)
+        self._plan = (frags.width, frags.height, np.asarray(frags.pixel, np.int64), weights)
+        return reqs
+
+    def resolve(self, texels: np.ndarray) -> np.ndarray:
+        """The frame (H, W, 4) uint8 from the texels (N, 4) uint8 answering requests(), in order."""
+        if self._plan is None:
+            raise RuntimeError("resolve() before requests()")
+        width, height, pixel, weights = self._plan
+        tx = np.asarray(texels)
+        n = len(pixel) * self.requests_per_pixel
+        if tx.shape != (n, 4):
+            raise ValueError(f"expected texels of shape ({n}, 4), got {tx.shape}")
+        if tx.dtype != np.uint8:
+            raise ValueError(f"expected uint8 texels, got {tx.dtype}")
+        frame = np.empty((height * width, 4), np.uint8)
+        frame[:] = self.background
+        if self.mode == "point":
+            frame[pixel] = tx
+        else:
+            acc = np.zeros((len(pixel), 4), np.uint32)
+            tx = tx.reshape(-1, 8, 4)
+            for k in range(8):  # exact: the weights sum to 2^24, so acc < 2^32
+                acc += weights[:, k, None] * tx[:, k]
+            frame[pixel] = ((acc + (1 << (WEIGHT_BITS - 1))) >> WEIGHT_BITS).astype(np.uint8)
+        return frame.reshape(height, width, 4)
