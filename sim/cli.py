@@ -170,7 +170,6 @@ def _csv_header_rows(path: str) -> int:
 
 def cmd_sim(args) -> int:
     from golden.fetch import check_requests
-    from sim.backend import simulate
     ts = _load_set(args.file)
     req = _read_requests(args.requests)
     if len(req) == 0:
@@ -178,6 +177,7 @@ def cmd_sim(args) -> int:
     check_requests(ts, req[:, 0], req[:, 1], req[:, 2], req[:, 3])
     if not 0.0 <= args.stall < 1.0:
         raise CliError(f"--stall {args.stall} must be in [0, 1)")
+    from sim.backend import simulate
     res = simulate(ts, req, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port)
     _atomic_write(args.output, lambda tmp: np.save(open(tmp, "wb"), res.responses.astype(np.uint8)))
     from sim.report import cycle_report, cycle_text
