@@ -94,10 +94,16 @@ class ReferenceSource:
 
     Arguments:
         images: uint8 images (H, W, C), power-of-two sizes, texture id = position in the list.
+        levels: optional, per texture, how many levels to keep (None: all, down to 1x1; 1: a
+            texture without mipmaps).
     """
 
-    def __init__(self, images: Sequence[np.ndarray]):
+    def __init__(self, images: Sequence[np.ndarray], levels: Sequence[int | None] | None = None):
         pyramids = [build_pyramid(img) for img in images]
+        if levels is not None:
+            if len(levels) != len(pyramids):
+                raise ValueError("one level count per texture")
+            pyramids = [p if n is None else p[: max(1, int(n))] for p, n in zip(pyramids, levels)]
         self._shapes = [[(lv.shape[1], lv.shape[0]) for lv in p] for p in pyramids]
         nlev = max((len(p) for p in pyramids), default=1)
         t = len(pyramids)
