@@ -1,0 +1,269 @@
+"""``vqtex render`` and ``vqtex demo``: scenes rendered from compressed textures, golden and RTL.
+
+A frame is rendered in two phases (``golden.render.frame``): its texel requests, then the frame
+resolved from the texels that answer them. The golden backend answers with ``golden.fetch``; the RTL
+backends (pysim, cxxrtl, verilator) answer by simulating the texel-fetch unit on the same request
+stream, so "the RTL frame is identical to the golden frame" is a pixel-for-pixel comparison.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+
+import numpy as np
+
+__all__ = ["add_parser", "render_scene", "VQSource"]
+
+
+class VQSource:
+    """golden.render's TextureSource over a compressed TextureSet (texels from golden.fetch)."""
+
+    def __init__(self, ts):
+        self.ts = ts
+
+    def level_shapes(self, tex: int):
+        return self.ts.level_shapes(tex)
+
+    def fetch(self, tex, level, i, j):
+        from golden.fetch import fetch
+        return fetch(self.ts, tex, level, i, j)
+
+
+class Progress:
+    """A one-line progress bar on stderr (only when stderr is a terminal, or when forced)."""
+
+    def __init__(self, total: int, label: str, enabled: bool | None = None):
+        self.total, self.label, self.n = max(1, total), label, 0
+        self.enabled = sys.stderr.isatty() if enabled is None else enabled
+        self.t0 = time.perf_counter()
+        self._draw()
+
+    def _draw(self):
+        if not self.enabled:
+            return
+        w = 30
+        fill = int(w * self.n / self.total)
+        sys.stderr.write(f"\r{self.label:<22} [{'#' * fill}{'.' * (w - fill)}] {self.n}/{self.total} "
+                         f"{time.perf_counter() - self.t0:6.1f}s")
+        sys.stderr.flush()
+
+    def step(self, k: int = 1):
+        self.n += k
+        self._draw()
+
+    def done(self):
+        if self.enabled:
+            self.n = self.total
+            self._draw()
+            sys.stderr.write("\n")
+
+
+def _parse_frames(text: str | None, total: int) -> list[int]:
+    from sim.cli import CliError
+    if text is None:
+        return list(range(total))
+    try:
+        if ":" in text:
+            a, b = text.split(":", 1)
+            frames = list(range(total))[slice(int(a) if a else None, int(b) if b else None)]
+        else:
+            frames = [int(text)]
+    except ValueError:
+        raise CliError(f"--frames {text!r} is not A:B or a frame number") from None
+    if not frames or any(not 0 <= f < total for f in frames):
+        raise CliError(f"--frames {text!r} selects no frame of the scene's {total}")
+    return frames
+
+
+def _frame_path(pattern: str, frame: int, many: bool) -> str:
+    if not many:
+        return pattern
+    root, ext = os.path.splitext(pattern)
+    return f"{root}_{frame:04d}{ext or '.png'}"
+
+
+def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall=0.0, seed=0,
+                 one_port=False, reference=True, progress=None):
+    """Render ``frames`` of ``scene`` from TextureSet ``ts``; yields one dict per frame with the frame,
+    the golden frame when the backend is RTL (for comparison), cycle results and the reference MSE."""
+    from golden.fetch import fetch
+    from golden.render.frame import frame_requests
+    from golden.render.metrics import frame_mse
+    from golden.render.pyramid import ReferenceSource
+    src = VQSource(ts)
+    ref_src = None
+    if reference:
+        images = [img for img, _ in scene.load_textures()]
+        ref_src = ReferenceSource(images, levels=[len(ts.level_shapes(t)) for t in range(ts.n_textures)])
+    for f in frames:
+        out = {"frame": f}
+        t0 = time.perf_counter()
+        reqs, sampler = frame_requests(scene, f, src, mode)
+        golden_texels = fetch(ts, reqs[:, 0], reqs[:, 1], reqs[:, 2], reqs[:, 3])
+        golden_frame = sampler.resolve(golden_texels)
+        out["golden_seconds"] = time.perf_counter() - t0
+        out["requests"] = int(len(reqs))
+        if backend == "golden":
+            out["image"] = golden_frame
+        else:
+            from sim.backend import simulate
+            t0 = time.perf_counter()
+            res = simulate(ts, reqs, backend=backend, stall=stall, seed=seed, one_port=one_port) if len(reqs) else None
+            out["rtl_seconds"] = time.perf_counter() - t0
+            out["image"] = sampler.resolve(res.responses) if res is not None else golden_frame
+            out["identical_to_golden"] = bool(np.array_equal(out["image"], golden_frame))
+            out["sim"] = res
+        if ref_src is not None:
+            ref = sampler.resolve(ref_src.fetch(reqs[:, 0], reqs[:, 1], reqs[:, 2], reqs[:, 3]))
+            out["mse"] = frame_mse(out["image"], ref)
+            out["reference"] = ref
+        if progress:
+            progress.step()
+        yield out
+
+
+def _encode_scene(scene, progress_label="encoding textures"):
+    from golden.render.scene import build_texture_set
+    p = Progress(1, progress_label)
+    ts = build_texture_set(scene)
+    p.step()
+    p.done()
+    return ts
+
+
+def _frame_report(r: dict) -> dict:
+    d = {"frame": r["frame"], "requests": r["requests"], "golden_seconds": round(r["golden_seconds"], 4)}
+    if "mse" in r:
+        d["mse"] = round(float(r["mse"]), 4)
+    if "sim" in r and r["sim"] is not None:
+        s = r["sim"]
+        d.update(rtl_seconds=round(r["rtl_seconds"], 4), cycles=int(s.cycles), latency=int(s.latency),
+                 straddling_index_reads=int(s.straddles),
+                 stall_cycles={k: int(v) for k, v in s.stall_cycles.items()},
+                 identical_to_golden=r["identical_to_golden"])
+    return d
+
+
+def cmd_render(args) -> int:
+    from golden.format import TextureSet
+    from golden.render.imageio import write_image
+    from golden.render.scene import load_scene
+    from sim.cli import CliError, _atomic_write, _emit
+    scene = load_scene(args.scene)
+    frames = _parse_frames(args.frames, scene.frames)
+    ts = TextureSet.load(args.texture_set) if args.texture_set else _encode_scene(scene)
+    if ts.n_textures != len(scene.textures):
+        raise CliError(f"{args.texture_set} holds {ts.n_textures} textures, the scene uses {len(scene.textures)}")
+    folder = os.path.dirname(os.path.abspath(args.output))
+    if not os.path.isdir(folder):
+        raise CliError(f"output folder {folder} does not exist")
+    prog = Progress(len(frames), f"rendering ({args.backend})")
+    per_frame, mismatches = [], []
+    for r in render_scene(scene, ts, frames, mode=args.mode, backend=args.backend, stall=args.stall,
+                          seed=args.seed, one_port=args.one_port, progress=prog):
+        path = _frame_path(args.output, r["frame"], len(frames) > 1)
+        img = r["image"]
+        _atomic_write(path, lambda tmp: write_image(tmp, img))
+        rep = _frame_report(r)
+        rep["output"] = path
+        per_frame.append(rep)
+        if r.get("identical_to_golden") is False:
+            mismatches.append(r["frame"])
+    prog.done()
+    report = {
+        "scene": scene.name, "mode": args.mode, "backend": args.backend, "frames": per_frame,
+        "overall_rate": round(ts.rates()["overall"], 4),
+        "mean_mse": round(float(np.mean([f["mse"] for f in per_frame])), 4),
+    }
+    if args.backend != "golden":
+        report["identical_to_golden"] = not mismatches
+        report["cycles_per_frame"] = round(float(np.mean([f["cycles"] for f in per_frame])), 1)
+    if args.report:
+        _atomic_write(args.report, lambda tmp: open(tmp, "w").write(json.dumps(report, indent=2, sort_keys=True)))
+    text = [f"{scene.name}: {len(frames)} frame(s), {args.mode}, backend {args.backend}, "
+            f"overall compression {report['overall_rate']:.2f}:1, mean frame MSE {report['mean_mse']:.3f}"]
+    if args.backend != "golden":
+        text.append(f"RTL frames identical to golden: {'yes' if not mismatches else 'NO, frames ' + str(mismatches)}; "
+                    f"{report['cycles_per_frame']:.0f} cycles per frame")
+    _emit(report, args.json, "\n".join(text))
+    if mismatches:
+        raise CliError(f"RTL frames {mismatches} differ from the golden frames")
+    return 0
+
+
+def cmd_demo(args) -> int:
+    """Encode the bundled textures, render a few topspin frames with golden and compiled RTL,
+    check they are identical, write the frames and a report, print a summary."""
+    from golden.render.imageio import write_image
+    from golden.render.scene import load_scene
+    from sim.cli import CliError, _atomic_write, _emit
+    t_start = time.perf_counter()
+    os.makedirs(args.out_dir, exist_ok=True)
+    scene = load_scene("topspin")
+    frames = _parse_frames(args.frames, scene.frames)
+    t0 = time.perf_counter()
+    ts = _encode_scene(scene, "encoding textures")
+    encode_s = time.perf_counter() - t0
+    ts.save(os.path.join(args.out_dir, "topspin.vqt"))
+    prog = Progress(len(frames), f"rendering ({args.backend})")
+    per_frame, mismatches = [], []
+    for r in render_scene(scene, ts, frames, mode="trilinear", backend=args.backend, progress=prog):
+        path = os.path.join(args.out_dir, f"topspin_{r['frame']:04d}.png")
+        img = r["image"]
+        _atomic_write(path, lambda tmp: write_image(tmp, img))
+        rep = _frame_report(r)
+        rep["output"] = path
+        per_frame.append(rep)
+        if not r.get("identical_to_golden", True):
+            mismatches.append(r["frame"])
+    prog.done()
+    rates = {t.name: round(ts.rates(k)["overall"], 3) for k, t in enumerate(ts.textures)}
+    report = {
+        "scene": "topspin", "frames": per_frame, "backend": args.backend,
+        "identical_to_golden": not mismatches,
+        "texture_rates": rates, "overall_rate": round(ts.rates()["overall"], 4),
+        "mean_mse": round(float(np.mean([f["mse"] for f in per_frame])), 4),
+        "cycles_per_frame": round(float(np.mean([f.get("cycles", 0) for f in per_frame])), 1),
+        "encode_seconds": round(encode_s, 2), "total_seconds": round(time.perf_counter() - t_start, 2),
+    }
+    _atomic_write(os.path.join(args.out_dir, "report.json"),
+                  lambda tmp: open(tmp, "w").write(json.dumps(report, indent=2, sort_keys=True)))
+    lines = [
+        f"vqtex demo: topspin, {len(frames)} frames {scene.width}x{scene.height}, trilinear mipmapping",
+        f"  textures: " + ", ".join(f"{n} {r:.1f}:1" for n, r in rates.items())
+        + f"  (overall {report['overall_rate']:.2f}:1)",
+        f"  frame MSE vs uncompressed: {report['mean_mse']:.3f} (mean over frames)",
+        f"  RTL ({args.backend}) frames identical to golden: {'yes' if not mismatches else 'NO ' + str(mismatches)}",
+        f"  cycles per frame: {report['cycles_per_frame']:.0f} for {per_frame[0]['requests']} texel requests",
+        f"  wrote {args.out_dir}/topspin_*.png and {args.out_dir}/report.json in {report['total_seconds']:.1f} s",
+    ]
+    _emit(report, args.json, "\n".join(lines))
+    if mismatches:
+        raise CliError(f"RTL frames {mismatches} differ from the golden frames")
+    return 0
+
+
+def add_parser(sub) -> None:
+    r = sub.add_parser("render", help="render a scene (TOML file or built-in name) from compressed textures")
+    r.add_argument("scene", help="scene file or built-in scene name (topspin, town)")
+    r.add_argument("-o", "--output", required=True, help="PNG; with several frames, _NNNN is added")
+    r.add_argument("--frames", help="A:B (Python slice) or one frame number (default: all)")
+    r.add_argument("--mode", choices=["point", "trilinear"], default="trilinear")
+    r.add_argument("--backend", choices=["golden", "pysim", "cxxrtl", "verilator"], default="golden")
+    r.add_argument("--texture-set", help="use this .vqt instead of encoding the scene's textures")
+    r.add_argument("--stall", type=float, default=0.0)
+    r.add_argument("--seed", type=int, default=0)
+    r.add_argument("--one-port", action="store_true")
+    r.add_argument("--report", help="write the JSON report here")
+    r.add_argument("--json", action="store_true")
+    r.set_defaults(func=cmd_render)
+
+    d = sub.add_parser("demo", help="the main job on embedded defaults (offline)")
+    d.add_argument("--out-dir", default="vqtex-demo")
+    d.add_argument("--frames", default="0:3")
+    d.add_argument("--backend", choices=["cxxrtl", "verilator", "pysim", "golden"], default="cxxrtl")
+    d.add_argument("--json", action="store_true")
+    d.set_defaults(func=cmd_demo)
