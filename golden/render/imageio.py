@@ -106,6 +106,7 @@ def write_image(path: str | os.PathLike, image: np.ndarray) -> None:
         out.close()
         if not ok:
             raise ImageIOError(f"{path}: cannot write ({out.geterror().strip()})")
+        os.chmod(tmp, 0o644)  # mkstemp makes 0600; an image is an ordinary file
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):

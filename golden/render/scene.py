@@ -29,7 +29,7 @@ A scene file (see golden/data/topspin.toml and town.toml for complete examples):
     index_bits = 8           # default: ceil(log2(codebook_size))
     mipmaps = true           # default true
     encoder = "gla"          # default "gla"
-    seed = 0                 # default 0
+    seed = 0                 # encoder seed (default 0)
 
     [[texture]]
     name = "floor"
@@ -39,7 +39,7 @@ A scene file (see golden/data/topspin.toml and town.toml for complete examples):
     params = { planks = 4 }  # extra generator parameters (optional)
     address = "wrap"         # wrap | clamp | [s_mode, t_mode] (default wrap)
     group = "signs"          # default: the texture's own name (a codebook of its own)
-    # any encoding key may also be given here; all textures of a group must agree
+    # any encoding key but seed may also be given here; all textures of a group must agree
 
     [[mesh]]
     name = "floor"
@@ -88,6 +88,8 @@ DATA_DIR = Path(__file__).resolve().parent.parent / "data"
 BUILTIN_SCENES = ("topspin", "town")
 COLORS = ("rgb", "rgba", "intensity", "yuv411")
 ENCODING_KEYS = ("block", "codebook_size", "color", "index_bits", "mipmaps", "encoder", "seed")
+# a texture may override these (its own "seed" is the generator's; the encoder seed is a group's)
+TEXTURE_ENCODING_KEYS = ("block", "codebook_size", "color", "index_bits", "mipmaps", "encoder")
 ENCODING_DEFAULTS = {
     "block": "4x4", "codebook_size": 256, "color": "rgb", "index_bits": None, "mipmaps": True,
     "encoder": "gla", "seed": 0,
@@ -557,7 +559,7 @@ def parse_scene(text: str, path: str | os.PathLike = "<scene>") -> Scene:
         tname = t.get("name") if isinstance(t, dict) else None
         w = f"[[texture]] #{n + 1}" + (f" '{tname}'" if isinstance(tname, str) else "")
         _check_keys(ctx, w, t, {"name", "file", "generator", "size", "seed", "params", "address", "group",
-                                *ENCODING_KEYS})
+                                *TEXTURE_ENCODING_KEYS})
         if "name" not in t:
             ctx.fail(w, "missing key 'name'")
         tname = _str(ctx, w, "name", t["name"])
@@ -601,7 +603,8 @@ def parse_scene(text: str, path: str | os.PathLike = "<scene>") -> Scene:
         if not (isinstance(addr, list) and len(addr) == 2 and all(a in ("wrap", "clamp") for a in addr)):
             ctx.fail(w, f"'address' must be \"wrap\", \"clamp\" or a pair of them, got {t.get('address')!r}")
         group = _str(ctx, w, "group", t.get("group", tname))
-        enc = _encoding(ctx, w, t, group_enc.get(group, ENCODING_DEFAULTS))
+        enc = _encoding(ctx, w, {k: v for k, v in t.items() if k in TEXTURE_ENCODING_KEYS},
+                        group_enc.get(group, ENCODING_DEFAULTS))
         specs.append(TextureSpec(tname, -1, file, gen, tuple(size), seed, dict(params), tuple(addr), group, enc))
 
     # groups: consistent settings, ids group by group
