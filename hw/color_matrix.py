@@ -1,0 +1,129 @@
+"""Colour matrix: raw samples -> RGBA8888.
+
+Twin of :func:`golden.fetch.convert_color` and :meth:`golden.color.ColorMatrix.apply`. One
+parameterised fixed-point 3x3 matrix serves every YUV decode::
+
+    out_c = clamp(((sum_k M[c][k] * (in_k - off_k)) + bias) >> F, 0, 255)
+
+(any signed coefficients, offsets, ``F`` and rounding: full-range BT.601 and the Dreamcast YUV422
+decode are two instances). rgb, rgba and intensity samples bypass the matrix:
+rgb -> (R, G, B, 255), intensity -> (I, I, I, 255), rgba unchanged.
+"""
+
+from __future__ import annotations
+
+from amaranth import *
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
+from golden.color import ColorMatrix as ColorMatrixSpec
+from golden.format import COLOR_CODES
+
+from .codebook_rom import SamplesLayout
+
+__all__ = ["ColorMatrix", "LATENCY"]
+
+#: Cycles from samples to RGBA.
+LATENCY = 2
+
+_RGB, _RGBA, _I8, _YUV = (COLOR_CODES[c] for c in ("rgb", "rgba", "intensity", "yuv411"))
+
+
+class ColorMatrix(wiring.Component):
+    """The colour matrix with its bypass.
+
+    1. *multiply*: ``x_k = in_k - off_k`` (signed 9 bits) and the nine products ``M[c][k] * x_k``
+       (``matrix.product_bits`` signed bits each, constant multipliers), registered.
+    2. *sum*: per output ``sum_k p[c][k] + bias`` (``matrix.sum_bits`` signed bits), arithmetic
+       shift right by ``F``, clamp to 0..255; or the bypass expansion; registered.
+
+    Latency 2 (both stages advance when ``en`` is high). Throughput: one texel per cycle.
+
+    Arguments
+    ---------
+    matrix : golden.color.ColorMatrix
+        Coefficients, offsets, fractional bits and rounding.
+
+    Members
+    -------
+    samples : In(SamplesLayout)
+        (Y, U, V, -) for yuv411, else the texel's bytes (see :func:`golden.fetch.read_codeword`).
+    color : In(2)
+        Colour format code of the samples.
+    en : In(1)
+        Pipeline advance.
+    rgba : Out(SamplesLayout)
+        R, G, B, A, registered.
+
+    Raises
+    ------
+    TypeError
+        If ``matrix`` is not a :class:`golden.color.ColorMatrix`.
+    """
+
+    def __init__(self, matrix: ColorMatrixSpec):
+        if not isinstance(matrix, ColorMatrixSpec):
+            raise TypeError(f"matrix must be a golden.color.ColorMatrix, not {type(matrix).__name__}")
+        self._matrix = matrix
+        super().__init__({
+            "samples": In(SamplesLayout),
+            "color": In(2),
+            "en": In(1),
+            "rgba": Out(SamplesLayout),
+        })
+
+    @property
+    def matrix(self) -> ColorMatrixSpec:
+        return self._matrix
+
+    @property
+    def latency(self) -> int:
+        return LATENCY
+
+    def elaborate(self, platform):
+        m = Module()
+        mat = self._matrix
+        pbits, sbits, F = mat.product_bits, mat.sum_bits, mat.frac_bits
+
+        # Stage 1: offsets and constant multiplications.
+        x = [Signal(signed(9), name=f"x{k}") for k in range(3)]
+        m.d.comb += [x[k].eq(self.samples[k] - mat.offsets[k]) for k in range(3)]
+        prod = [[Signal(signed(pbits), name=f"p_{'rgb'[c]}{'yuv'[k]}") for k in range(3)] for c in range(3)]
+        samples_r = Signal(SamplesLayout)
+        color_r = Signal(2)
+        with m.If(self.en):
+            for c in range(3):
+                for k in range(3):
+                    m.d.sync += prod[c][k].eq(x[k] * C(mat.coeffs[c][k], signed(19)))
+            m.d.sync += [samples_r.eq(self.samples), color_r.eq(self.color)]
+
+        # Stage 2: sum + bias, shift, clamp; or bypass.
+        acc = [Signal(signed(sbits), name=f"sum_{'rgb'[c]}") for c in range(3)]
+        shifted = [Signal(signed(sbits), name=f"shifted_{'rgb'[c]}") for c in range(3)]
+        conv = [Signal(8, name=f"conv_{'rgb'[c]}") for c in range(3)]
+        for c in range(3):
+            m.d.comb += [
+                acc[c].eq(prod[c][0] + prod[c][1] + prod[c][2] + mat.bias),
+                shifted[c].eq(acc[c] >> F),
+            ]
+            with m.If(shifted[c] < 0):
+                m.d.comb += conv[c].eq(0)
+            with m.Elif(shifted[c] > 255):
+                m.d.comb += conv[c].eq(255)
+            with m.Else():
+                m.d.comb += conv[c].eq(shifted[c][:8])
+
+        s = samples_r
+        out = Signal(SamplesLayout)
+        with m.Switch(color_r):
+            with m.Case(_YUV):
+                m.d.comb += out.eq(Cat(conv[0], conv[1], conv[2], C(255, 8)))
+            with m.Case(_I8):
+                m.d.comb += out.eq(Cat(s[0], s[0], s[0], C(255, 8)))
+            with m.Case(_RGB):
+                m.d.comb += out.eq(Cat(s[0], s[1], s[2], C(255, 8)))
+            with m.Default():
+                m.d.comb += out.eq(s)
+        with m.If(self.en):
+            m.d.sync += self.rgba.eq(out)
+        return m

@@ -1,0 +1,129 @@
+"""Descriptor table: (texture, level) -> the level's descriptor row.
+
+Twin of :func:`golden.fetch.lookup_descriptor`. The table is a ROM holding
+``golden.format.TextureSet.descriptors`` (``MAX_LEVELS`` rows per texture, row address
+``texture * MAX_LEVELS + level``), so one pipeline serves every texture of a scene.
+"""
+
+from __future__ import annotations
+
+from amaranth import *
+from amaranth.lib import data, memory, wiring
+from amaranth.lib.wiring import In, Out
+
+from golden.format import DESCRIPTOR_FIELDS, MAX_LEVELS, TextureSet, log2
+
+__all__ = ["DescriptorLayout", "DescriptorTable", "descriptor_widths", "texture_bits", "LEVEL_BITS"]
+
+#: Width of a level number (``MAX_LEVELS`` = 16 rows per texture).
+LEVEL_BITS = log2(MAX_LEVELS)
+
+
+def _bits(n: int) -> int:
+    """Bits to hold 0..n (at least 1)."""
+    return max(1, int(n).bit_length())
+
+
+def texture_bits(ts: TextureSet) -> int:
+    """Width of a texture id for this set (at least 1)."""
+    return _bits(ts.n_textures - 1)
+
+
+def descriptor_widths(ts: TextureSet) -> dict:
+    """Width of every descriptor field for the memories of ``ts`` (field name -> bits).
+
+    ``base`` is wide enough for both the index memory and the raw memory, ``cb_base`` for the
+    codebook memory, the plane offsets for a byte of the widest entry.
+    """
+    base_bits = _bits(max(len(ts.index_words), len(ts.raw_words)))
+    return {
+        "valid": 1,
+        "compressed": 1,
+        "base": base_bits,
+        "log2w": 4,
+        "log2h": 4,
+        "log2bw": 2,
+        "log2bh": 2,
+        "index_bits": 5,
+        "cb_base": _bits(len(ts.codebook)),
+        "sublevel": 2,
+        "color": 2,
+        "texel_off": _bits(ts.entry_bytes),
+        "u_off": _bits(ts.entry_bytes),
+        "v_off": _bits(ts.entry_bytes),
+    }
+
+
+class DescriptorLayout(data.StructLayout):
+    """One descriptor row, the fields of :data:`golden.format.DESCRIPTOR_FIELDS` in that order.
+
+    Arguments
+    ---------
+    widths : dict
+        Field name -> width, as returned by :func:`descriptor_widths`.
+    """
+
+    def __init__(self, widths: dict):
+        missing = set(DESCRIPTOR_FIELDS) - set(widths)
+        if missing:
+            raise ValueError(f"descriptor widths lack {sorted(missing)}")
+        super().__init__({name: unsigned(widths[name]) for name in DESCRIPTOR_FIELDS})
+
+
+class DescriptorTable(wiring.Component):
+    """The descriptor table ROM.
+
+    Latency 1 (a synchronous read: the row for the ``texture`` and ``level`` presented in the cycle
+    ``en`` is high appears on ``row`` in the next cycle and stays there while ``en`` is low).
+    Throughput: one lookup per cycle.
+
+    Arguments
+    ---------
+    ts : TextureSet
+        The texture set whose descriptors the ROM holds.
+
+    Members
+    -------
+    texture : In(texture_bits(ts))
+        Texture id.
+    level : In(4)
+        Level inside the texture (0..15).
+    en : In(1)
+        Read enable (the pipeline's advance).
+    row : Out(DescriptorLayout)
+        The descriptor row, registered.
+    """
+
+    def __init__(self, ts: TextureSet):
+        self._ts = ts
+        self._widths = descriptor_widths(ts)
+        self._layout = DescriptorLayout(self._widths)
+        super().__init__({
+            "texture": In(texture_bits(ts)),
+            "level": In(LEVEL_BITS),
+            "en": In(1),
+            "row": Out(self._layout),
+        })
+
+    @property
+    def layout(self) -> DescriptorLayout:
+        return self._layout
+
+    @property
+    def widths(self) -> dict:
+        return dict(self._widths)
+
+    def elaborate(self, platform):
+        m = Module()
+        rows = self._ts.descriptors.reshape(-1)
+        init = [{name: int(row[name]) for name in DESCRIPTOR_FIELDS} for row in rows]
+        depth = 1 << (texture_bits(self._ts) + LEVEL_BITS)       # every address decodes
+        init += [{name: 0 for name in DESCRIPTOR_FIELDS}] * (depth - len(init))
+        m.submodules.table = table = memory.Memory(shape=self._layout, depth=depth, init=init)
+        port = table.read_port(domain="sync")
+        m.d.comb += [
+            port.addr.eq(Cat(self.level, self.texture)),
+            port.en.eq(self.en),
+            self.row.eq(port.data),
+        ]
+        return m

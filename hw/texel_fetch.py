@@ -1,0 +1,298 @@
+"""TexelFetch: the whole texel-fetch pipeline of Beers, Agrawala and Chaddha (SIGGRAPH 1996).
+
+A request (texture, level, i, j, tag) reads as a story through the blocks::
+
+    descriptor table -> block address shifter -> index reader -> codebook ROM -> colour matrix
+      (1 cycle)          (1 cycle)                (2 cycles)      (2 cycles)      (2 cycles)
+
+and leaves as an RGBA8888 response with its tag, in request order, ``LATENCY`` = 8 cycles later.
+Raw levels take the same path (the shifter computes the raw address, the codebook ROM stage reads
+the raw memory, the colour matrix passes the word through), so the latency does not depend on the
+request.
+
+Pipeline control is in one place (:meth:`TexelFetch.elaborate`): every register advances on
+``advance = ~o.valid | o.ready`` (the output register is empty or being emptied); with ``one_port``
+the stages upstream of the index reader's word-address stage also wait while it ``hold``\\ s.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from amaranth import *
+from amaranth.lib import data, stream, wiring
+from amaranth.lib.wiring import In, Out
+
+from golden.format import TextureSet
+
+from . import address, codebook_rom, color_matrix, descriptor, index_reader
+from .address import COORD_BITS, BlockAddress
+from .codebook_rom import CodebookROM
+from .color_matrix import ColorMatrix
+from .descriptor import LEVEL_BITS, DescriptorTable, descriptor_widths, texture_bits
+from .index_reader import IndexReader
+
+__all__ = ["TexelFetch", "RequestLayout", "ResponseLayout", "LATENCY", "STAGES"]
+
+#: Pipeline registers in order; ``TexelFetch`` has a ``valid_<name>`` output for each.
+STAGES = ("descriptor", "address", "index_word", "index", "codebook", "texel", "color_product", "color")
+#: Cycles from accepting a request to presenting its response (one per stage).
+LATENCY = len(STAGES)
+assert LATENCY == (1 + 1 + index_reader.LATENCY + codebook_rom.LATENCY + color_matrix.LATENCY)
+
+
+class RequestLayout(data.StructLayout):
+    """A texel request: texture id, level, texel column ``i`` and row ``j`` inside the level, tag.
+
+    Arguments
+    ---------
+    texture_bits : int
+        Width of the texture id (``hw.descriptor.texture_bits(ts)``).
+    tag_width : int
+        Width of the tag (0 allowed).
+    """
+
+    def __init__(self, texture_bits: int, tag_width: int):
+        super().__init__({
+            "texture": unsigned(texture_bits),
+            "level": unsigned(LEVEL_BITS),
+            "i": unsigned(COORD_BITS),
+            "j": unsigned(COORD_BITS),
+            "tag": unsigned(tag_width),
+        })
+
+
+class ResponseLayout(data.StructLayout):
+    """A texel response: RGBA8888 and the request's tag.
+
+    Arguments
+    ---------
+    tag_width : int
+        Width of the tag (0 allowed).
+    """
+
+    def __init__(self, tag_width: int):
+        super().__init__({
+            "r": unsigned(8), "g": unsigned(8), "b": unsigned(8), "a": unsigned(8),
+            "tag": unsigned(tag_width),
+        })
+
+
+def _bits(n: int) -> int:
+    return max(1, int(n).bit_length())
+
+
+def _addr_bits(depth: int) -> int:
+    return max(1, (max(1, depth) - 1).bit_length())
+
+
+class TexelFetch(wiring.Component):
+    """The texel-fetch unit holding the memories of one texture set.
+
+    Latency: ``LATENCY`` = 8 cycles, a constant. A request accepted in cycle ``t`` (``i.valid`` and
+    ``i.ready`` high) is presented on ``o`` (``o.valid`` high) in cycle ``t + 8`` when no
+    backpressure or one-port stall intervened.
+
+    Throughput: one request per cycle whenever the output is not stalled, whatever the index width
+    (the index memory's even and odd banks deliver both words of a straddling index together).
+    With ``one_port``, every straddling index read costs exactly one extra cycle.
+
+    Cycle count: with requests presented back to back from cycle 0 and ``o.ready`` always high,
+    N requests transfer their last response in cycle ``N - 1 + LATENCY``, i.e. in ``N + LATENCY``
+    cycles counted from the first cycle ``i.valid`` is high up to and including the cycle the last
+    response transfers (``+ straddles`` with ``one_port``).
+
+    Backpressure: ``i.ready = advance & ~hold`` where ``advance = ~o.valid | o.ready``; every
+    pipeline register (including the memories' read registers) advances on ``advance``, so a
+    stalled output freezes the whole pipeline and no response is lost, duplicated or reordered.
+    ``i.ready`` depends combinationally on ``o.ready``.
+
+    Arguments
+    ---------
+    texture_set : TextureSet
+        The memories: descriptor table, index memory, codebook memory, raw memory, colour matrix.
+    one_port : bool
+        Single-bank index memory (reproduces the paper's straddle penalty in cycle counts).
+    tag_width : int
+        Width of the request tag carried to the response.
+
+    Members
+    -------
+    i : In(stream.Signature(RequestLayout(texture_bits, tag_width)))
+        Requests. Requests must be valid (texture and level exist, texel inside the level); the
+        unit does not check (see :func:`golden.fetch.check_requests`).
+    o : Out(stream.Signature(ResponseLayout(tag_width)))
+        Responses, in request order.
+    straddle : Out(1)
+        Strobe: an index read that straddles a word boundary advances to the extract stage
+        (once per straddling request, in both modes).
+    stall_one_port : Out(1)
+        Strobe: a cycle spent on the extra read of a straddling index (one-port only).
+    stall_output : Out(1)
+        ``o.valid & ~o.ready``: a cycle of output backpressure.
+    valid_descriptor, valid_address, valid_index_word, valid_index, valid_codebook, valid_texel, valid_color_product, valid_color : Out(1)
+        Per-stage valid bits (``valid_color`` is ``o.valid``), for occupancy reports.
+
+    Raises
+    ------
+    TypeError
+        If ``texture_set`` is not a TextureSet or ``tag_width`` is not a non-negative int.
+    """
+
+    def __init__(self, texture_set: TextureSet, *, one_port: bool = False, tag_width: int = 8):
+        if not isinstance(texture_set, TextureSet):
+            raise TypeError(f"texture_set must be a TextureSet, not {type(texture_set).__name__}")
+        if not isinstance(tag_width, int) or tag_width < 0:
+            raise TypeError(f"tag_width must be a non-negative integer, not {tag_width!r}")
+        texture_set.validate()
+        self._ts = texture_set
+        self._one_port = bool(one_port)
+        self._tag_width = tag_width
+        self._texture_bits = texture_bits(texture_set)
+        members = {
+            "i": In(stream.Signature(RequestLayout(self._texture_bits, tag_width))),
+            "o": Out(stream.Signature(ResponseLayout(tag_width))),
+            "straddle": Out(1),
+            "stall_one_port": Out(1),
+            "stall_output": Out(1),
+        }
+        members.update({f"valid_{name}": Out(1) for name in STAGES})
+        super().__init__(members)
+
+    @property
+    def latency(self) -> int:
+        """Cycles from accepting a request to presenting its response: ``LATENCY`` (8)."""
+        return LATENCY
+
+    @property
+    def one_port(self) -> bool:
+        return self._one_port
+
+    @property
+    def texture_set(self) -> TextureSet:
+        return self._ts
+
+    @property
+    def tag_width(self) -> int:
+        return self._tag_width
+
+    @property
+    def texture_bits(self) -> int:
+        return self._texture_bits
+
+    def _k_bits(self) -> int:
+        d = self._ts.descriptors
+        comp = (d["compressed"] != 0) & (d["valid"] != 0)
+        if not comp.any():
+            return 1
+        span = (d["log2w"].astype(int) - d["log2bw"] + d["log2h"] - d["log2bh"])[comp]
+        return max(1, int(span.max()))
+
+    def elaborate(self, platform):
+        m = Module()
+        ts = self._ts
+        widths = descriptor_widths(ts)
+
+        m.submodules.descriptor = desc = DescriptorTable(ts)
+        m.submodules.address = addr = BlockAddress(
+            base_bits=widths["base"], k_bits=self._k_bits(), raw_bits=_addr_bits(len(ts.raw_words)))
+        m.submodules.index_reader = idx = IndexReader(
+            ts.index_words, word_bits=ts.word_bits, k_bits=self._k_bits(), base_bits=widths["base"],
+            one_port=self._one_port)
+        m.submodules.codebook_rom = rom = CodebookROM(
+            ts.codebook, ts.raw_words, cb_bits=widths["cb_base"], raw_bits=_addr_bits(len(ts.raw_words)),
+            off_bits=widths["texel_off"])
+        m.submodules.color_matrix = cm = ColorMatrix(ts.matrix)
+
+        # -- pipeline control, all in one place ---------------------------------------------------
+        valid = [Signal(name=f"valid_{name}") for name in STAGES]
+        advance = Signal()          # every register moves
+        upstream = Signal()         # registers upstream of the index reader's word stage move
+        m.d.comb += [
+            advance.eq(~self.o.valid | self.o.ready),
+            upstream.eq(advance & ~idx.hold),
+            self.i.ready.eq(upstream),
+            self.o.valid.eq(valid[-1]),
+            self.straddle.eq(idx.straddle & upstream),
+            self.stall_one_port.eq(idx.hold & advance),
+            self.stall_output.eq(self.o.valid & ~self.o.ready),
+        ]
+        m.d.comb += [getattr(self, f"valid_{name}").eq(v) for name, v in zip(STAGES, valid)]
+        with m.If(upstream):
+            m.d.sync += [valid[0].eq(self.i.valid), valid[1].eq(valid[0])]
+        with m.If(advance):
+            m.d.sync += valid[2].eq(valid[1] & ~idx.hold)
+            m.d.sync += [valid[n].eq(valid[n - 1]) for n in range(3, len(STAGES))]
+
+        # -- carried fields: registers beside the blocks' own, same enables ----------------------
+        def carry(value, en, name):
+            reg = Signal.like(value, name=name)
+            with m.If(en):
+                m.d.sync += reg.eq(value)
+            return reg
+
+        # Stage 1: descriptor.
+        m.d.comb += [
+            desc.texture.eq(self.i.p.texture),
+            desc.level.eq(self.i.p.level),
+            desc.en.eq(upstream),
+        ]
+        row = desc.row
+        i1 = carry(self.i.p.i, upstream, "i_descriptor")
+        j1 = carry(self.i.p.j, upstream, "j_descriptor")
+        tag = [carry(self.i.p.tag, upstream, "tag_descriptor")]
+
+        # Stage 2: block address.
+        m.d.comb += [
+            addr.i.eq(i1), addr.j.eq(j1),
+            addr.log2w.eq(row.log2w), addr.log2bw.eq(row.log2bw), addr.log2bh.eq(row.log2bh),
+            addr.base.eq(row.base),
+            addr.en.eq(upstream),
+        ]
+        d2 = carry(row, upstream, "row_address")
+        tag.append(carry(tag[-1], upstream, "tag_address"))
+
+        # Stages 3-4: index reader.
+        m.d.comb += [
+            idx.valid.eq(valid[1] & d2.compressed),
+            idx.k.eq(addr.k),
+            idx.b.eq(d2.index_bits),
+            idx.base.eq(d2.base),
+            idx.en.eq(advance),
+        ]
+        side = Signal(data.StructLayout({
+            "compressed": 1, "cb_base": len(d2.cb_base), "raw_addr": len(addr.raw_addr),
+            "x": 3, "y": 3, "log2bw": 2, "color": 2,
+            "texel_off": len(d2.texel_off), "u_off": len(d2.u_off), "v_off": len(d2.v_off),
+        }))
+        m.d.comb += [
+            side.compressed.eq(d2.compressed), side.cb_base.eq(d2.cb_base),
+            side.raw_addr.eq(addr.raw_addr), side.x.eq(addr.x), side.y.eq(addr.y),
+            side.log2bw.eq(d2.log2bw), side.color.eq(d2.color),
+            side.texel_off.eq(d2.texel_off), side.u_off.eq(d2.u_off), side.v_off.eq(d2.v_off),
+        ]
+        s3 = carry(side, advance, "side_index_word")
+        s4 = carry(s3, advance, "side_index")
+        for name in STAGES[2:4]:
+            tag.append(carry(tag[-1], advance, f"tag_{name}"))
+
+        # Stages 5-6: codebook ROM (and raw memory).
+        m.d.comb += [
+            rom.index.eq(idx.index), rom.cb_base.eq(s4.cb_base), rom.raw_addr.eq(s4.raw_addr),
+            rom.compressed.eq(s4.compressed), rom.x.eq(s4.x), rom.y.eq(s4.y),
+            rom.log2bw.eq(s4.log2bw), rom.color.eq(s4.color),
+            rom.texel_off.eq(s4.texel_off), rom.u_off.eq(s4.u_off), rom.v_off.eq(s4.v_off),
+            rom.en.eq(advance),
+        ]
+        # Stages 7-8: colour matrix.
+        m.d.comb += [
+            cm.samples.eq(rom.samples), cm.color.eq(rom.color_out), cm.en.eq(advance),
+        ]
+        for name in STAGES[4:]:
+            tag.append(carry(tag[-1], advance, f"tag_{name}"))
+
+        m.d.comb += [
+            self.o.p.r.eq(cm.rgba[0]), self.o.p.g.eq(cm.rgba[1]),
+            self.o.p.b.eq(cm.rgba[2]), self.o.p.a.eq(cm.rgba[3]),
+            self.o.p.tag.eq(tag[-1]),
+        ]
+        return m

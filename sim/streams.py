@@ -1,0 +1,69 @@
+"""Stream helpers shared by the simulation backends: the backpressure pattern and pysim testbench
+helpers for ``amaranth.lib.stream`` interfaces.
+
+The backpressure pattern
+------------------------
+``o.ready`` in cycle ``t`` (cycle 0 is the first cycle the first request is presented) is
+``ready_pattern(seed, stall, n)[t]`` = ``numpy.random.default_rng(seed).random(n)[t] >= stall``.
+numpy's generator draws its doubles in sequence, so the pattern is one infinite sequence per
+``(seed, stall)`` and any two lengths agree on their common prefix: a backend that runs out of
+pattern asks for a longer one. ``stall = 0`` is "always ready". Every backend (golden cycle model,
+pysim, cxxrtl, verilator) is fed this same array.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["ready_pattern", "pattern_length", "stream_put", "stream_get", "stream_get_with_backpressure"]
+
+
+def ready_pattern(seed: int, stall: float, ncycles: int) -> np.ndarray:
+    """``o.ready`` for cycles ``0 .. ncycles-1``: bool array, ``rng.random(n) >= stall``.
+
+    Raises
+    ------
+    ValueError
+        If ``stall`` is not in [0, 1) or ``ncycles`` is negative.
+    """
+    stall = float(stall)
+    if not 0.0 <= stall < 1.0:
+        raise ValueError(f"stall probability {stall} must be in [0, 1)")
+    if ncycles < 0:
+        raise ValueError("ncycles must be non-negative")
+    if stall == 0.0:
+        return np.ones(int(ncycles), dtype=bool)
+    return np.random.default_rng(seed).random(int(ncycles)) >= stall
+
+
+def pattern_length(n_requests: int, stall: float, slack: int) -> int:
+    """A first guess at the pattern length that lets ``n_requests`` transfer (a backend doubles it
+    while it is too short): the expected cycles with 25% margin plus ``slack``."""
+    return int(n_requests / (1.0 - stall) * 1.25) + int(slack) + 64
+
+
+async def stream_put(ctx, stream, payload):
+    """Present ``payload`` on ``stream`` (valid high) until it transfers; returns after the transfer
+    cycle's clock edge with ``valid`` low again."""
+    ctx.set(stream.valid, 1)
+    ctx.set(stream.payload, payload)
+    await ctx.tick().until(stream.ready)
+    ctx.set(stream.valid, 0)
+
+
+async def stream_get(ctx, stream):
+    """Raise ``ready`` until ``stream`` transfers; return the payload (lowers ``ready`` after)."""
+    ctx.set(stream.ready, 1)
+    payload, = await ctx.tick().sample(stream.payload).until(stream.valid)
+    ctx.set(stream.ready, 0)
+    return payload
+
+
+async def stream_get_with_backpressure(ctx, stream, ready):
+    """Receive payloads from ``stream`` forever, driving ``ready`` from the iterable ``ready`` one
+    value per cycle; an async generator of the payloads in order."""
+    for r in ready:
+        ctx.set(stream.ready, int(bool(r)))
+        _, _, valid, payload = await ctx.tick().sample(stream.valid, stream.payload)
+        if r and valid:
+            yield payload
