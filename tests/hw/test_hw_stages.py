@@ -1,0 +1,119 @@
+"""Each hw stage against its golden.fetch twin: descriptor table, block address shifter, index reader,
+codebook ROM."""
+
+import numpy as np
+import pytest
+
+import hw_cases
+from golden.fetch import block_address, lookup_descriptor, read_codeword, read_index
+from golden.format import DESCRIPTOR_DTYPE, DESCRIPTOR_FIELDS, MAX_LEVELS, pack_indices
+from hw import codebook_rom, index_reader
+from hw.address import BlockAddress
+from hw.codebook_rom import CodebookROM
+from hw.descriptor import DescriptorTable, descriptor_widths
+from hw.index_reader import IndexReader
+from sim.streams import run_lockstep
+
+
+def test_descriptor_table_every_row():
+    ts = hw_cases.combined_set()
+    tex, lev = np.divmod(np.arange(ts.n_textures * MAX_LEVELS), MAX_LEVELS)
+    dut = DescriptorTable(ts)
+    res = run_lockstep(dut, {"texture": tex.tolist(), "level": lev.tolist()}, ["row"], 1,
+                       en_pattern=np.random.default_rng(0).random(400) > 0.3)
+    want = lookup_descriptor(ts, tex, lev)
+    for n, raw in enumerate(res["row"]):
+        row = dut.layout.from_bits(raw)
+        assert {f: int(getattr(row, f)) for f in DESCRIPTOR_FIELDS} == {f: int(want[n][f]) for f in DESCRIPTOR_FIELDS}
+
+
+def test_block_address_random_levels():
+    rng = np.random.default_rng(3)
+    n = 300
+    d = np.zeros(n, DESCRIPTOR_DTYPE)
+    d["log2w"] = rng.integers(0, 13, n)
+    d["log2h"] = rng.integers(0, 13, n)
+    d["log2bw"] = np.minimum(rng.integers(0, 4, n), d["log2w"])
+    d["log2bh"] = np.minimum(rng.integers(0, 4, n), d["log2h"])
+    d["base"] = rng.integers(0, 1 << 20, n)
+    i = (rng.random(n) * (1 << d["log2w"].astype(np.int64))).astype(np.int64)
+    j = (rng.random(n) * (1 << d["log2h"].astype(np.int64))).astype(np.int64)
+    i[:4], j[:4] = 0, 0
+    i[4:8], j[4:8] = (1 << d["log2w"][4:8].astype(np.int64)) - 1, (1 << d["log2h"][4:8].astype(np.int64)) - 1
+    dut = BlockAddress(base_bits=21, k_bits=24, raw_bits=26)
+    inputs = {"i": i, "j": j, "log2w": d["log2w"], "log2bw": d["log2bw"], "log2bh": d["log2bh"], "base": d["base"]}
+    res = run_lockstep(dut, {k: np.asarray(v).tolist() for k, v in inputs.items()}, ["k", "x", "y", "raw_addr"], 1,
+                       en_pattern=rng.random(1000) > 0.2)
+    k, x, y = block_address(d, i, j)
+    assert res["k"] == k.tolist()
+    assert res["x"] == x.tolist()
+    assert res["y"] == y.tolist()
+    assert res["raw_addr"] == (d["base"].astype(np.int64) + (j << d["log2w"].astype(np.int64)) + i).tolist()
+
+
+class _Words:
+    def __init__(self, words, word_bits):
+        self.index_words, self.word_bits = words, word_bits
+
+
+def _index_memory(word_bits, rng):
+    """Maps of every width b = 1..16, full-range random indices, each long enough for every bit
+    offset in a word, at odd base words; returns (words, [(base, b, n)])."""
+    parts, maps, w = [rng.integers(0, 1 << 16, 3).astype(np.uint64)], [], 3
+    for b in range(1, 17):
+        n = word_bits + 1
+        idx = rng.integers(0, 1 << b, n)
+        words = pack_indices(idx, b, word_bits).astype(np.uint64)
+        maps.append((w, b, n))
+        parts.append(words)
+        w += len(words)
+        junk = rng.integers(0, 1 << 16, 1 + b % 2).astype(np.uint64)   # shifts later maps' parity
+        parts.append(junk)
+        w += len(junk)
+    parts.append(np.zeros(1, np.uint64))
+    return np.concatenate(parts).astype(f"<u{word_bits // 8}"), maps
+
+
+@pytest.mark.parametrize("one_port", [False, True], ids=["two_bank", "one_port"])
+@pytest.mark.parametrize("word_bits", [16, 32, 64])
+def test_index_reader_every_width_and_offset(word_bits, one_port):
+    rng = np.random.default_rng(word_bits + one_port)
+    words, maps = _index_memory(word_bits, rng)
+    reqs = np.array([(base, b, k) for base, b, n in maps for k in range(n)], dtype=np.int64)
+    reqs = reqs[rng.permutation(len(reqs))]
+    d = np.zeros(len(reqs), DESCRIPTOR_DTYPE)
+    d["base"], d["index_bits"] = reqs[:, 0], reqs[:, 1]
+    want = read_index(_Words(words, word_bits), d, reqs[:, 2])
+    dut = IndexReader(words, word_bits=word_bits, k_bits=7, base_bits=12, one_port=one_port)
+    en = rng.random(4 * len(reqs)) > 0.15 if word_bits == 32 else None
+    res = run_lockstep(dut, {"base": reqs[:, 0].tolist(), "b": reqs[:, 1].tolist(), "k": reqs[:, 2].tolist(),
+                             "valid": [1] * len(reqs)}, ["index"], index_reader.LATENCY,
+                       en_pattern=en, hold="hold" if one_port else None)
+    assert res["index"] == want.tolist()
+
+
+@pytest.mark.parametrize("name", ["combined", "yuv_2x4_b12_mip_w64", "rgba_2x2_b7_mip_w16"])
+def test_codebook_rom_every_level(name):
+    ts = hw_cases.combined_set() if name == "combined" else hw_cases.texture_set(name)
+    rng = np.random.default_rng(5)
+    req = np.concatenate([hw_cases.random_requests(ts, 150, 6), hw_cases.adversarial_requests(ts, 7)])
+    d = lookup_descriptor(ts, req[:, 0], req[:, 1])
+    comp = d["compressed"].astype(bool)
+    k, x, y = block_address(d, req[:, 2], req[:, 3])
+    index = np.zeros(len(req), np.int64)
+    index[comp] = rng.integers(0, [ts.codebooks[ts.textures[t].codebook].size for t in req[comp, 0]])
+    raw_addr = d["base"].astype(np.int64) + (req[:, 3] << d["log2w"].astype(np.int64)) + req[:, 2]
+    raw_addr[comp] = rng.integers(0, max(1, len(ts.raw_words)), comp.sum())   # ignored, must stay in range
+    want = np.zeros((len(req), 4), np.uint8)
+    want[comp] = read_codeword(ts, d[comp], index[comp], x[comp], y[comp])
+    want[~comp] = ts.raw_words[raw_addr[~comp]].astype("<u4").view(np.uint8).reshape(-1, 4)
+    w = descriptor_widths(ts)
+    dut = CodebookROM(ts.codebook, ts.raw_words, cb_bits=w["cb_base"], raw_bits=16, off_bits=w["texel_off"])
+    fields = {"index": index, "cb_base": d["cb_base"], "raw_addr": raw_addr, "compressed": d["compressed"],
+              "x": x, "y": y, "log2bw": d["log2bw"], "color": d["color"],
+              "texel_off": d["texel_off"], "u_off": d["u_off"], "v_off": d["v_off"]}
+    res = run_lockstep(dut, {k: np.asarray(v).astype(np.int64).tolist() for k, v in fields.items()},
+                       ["samples", "color_out"], codebook_rom.LATENCY, en_pattern=rng.random(2000) > 0.2)
+    got = ((np.array(res["samples"], dtype=np.int64)[:, None] >> (8 * np.arange(4))) & 0xFF).astype(np.uint8)
+    assert np.array_equal(got, want)
+    assert res["color_out"] == np.where(comp, d["color"], 1).tolist()
