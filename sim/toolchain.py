@@ -1,0 +1,140 @@
+"""Third-party tools (g++, Verilator, Icarus Verilog) and the build cache of the compiled backends.
+
+The cache lives in ``$VQTEX_CACHE`` (default ``~/.cache/vqtex``). An entry is a folder named by a
+hash of everything that goes into the build (generated sources, driver sources, compiler version and
+flags); it is built in a private temporary folder inside the cache and renamed into place, so two
+processes building the same entry at once both end with a complete entry and never see a partial one
+(the loser of the rename throws its copy away).
+
+A missing tool raises :class:`ToolchainError`, an ``OSError``, so the command line prints it as one
+line and exits with status 2.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import subprocess
+import tempfile
+import time
+
+__all__ = ["ToolchainError", "find_tool", "tool_version", "cache_dir", "digest", "cached_build",
+           "index_get", "index_put", "INSTALL_HINT"]
+
+#: What to install for each tool (Debian package names; scripts/install-sim-tools does it).
+INSTALL_HINT = {
+    "g++": "install a C++ compiler (Debian: apt-get install g++, or run scripts/install-sim-tools)",
+    "verilator": "install Verilator (Debian: apt-get install verilator, or run scripts/install-sim-tools)",
+    "iverilog": "install Icarus Verilog (Debian: apt-get install iverilog, or run scripts/install-sim-tools)",
+    "vvp": "install Icarus Verilog (Debian: apt-get install iverilog, or run scripts/install-sim-tools)",
+}
+
+
+class ToolchainError(OSError):
+    """A tool is missing or a build failed. ``str()`` is one line."""
+
+
+def find_tool(name: str) -> str:
+    """Absolute path of ``name`` (``$CXX`` overrides ``g++``). Raises ToolchainError naming what to install."""
+    cand = os.environ.get("CXX") if name == "g++" else None
+    path = shutil.which(cand or name)
+    if not path:
+        raise ToolchainError(f"{cand or name} not found: {INSTALL_HINT.get(name, 'install ' + name)}")
+    return path
+
+
+_versions: dict = {}
+
+
+def tool_version(path: str) -> str:
+    """First line of ``path --version`` (part of every cache key)."""
+    if path not in _versions:
+        try:
+            out = subprocess.run([path, "--version"], capture_output=True, text=True, timeout=30)
+            _versions[path] = (out.stdout or out.stderr).strip().splitlines()[0]
+        except (OSError, subprocess.SubprocessError, IndexError):
+            _versions[path] = "unknown"
+    return _versions[path]
+
+
+def cache_dir() -> str:
+    """The cache folder (created on demand): ``$VQTEX_CACHE`` or ``~/.cache/vqtex``."""
+    path = os.environ.get("VQTEX_CACHE") or os.path.join(os.path.expanduser("~"), ".cache", "vqtex")
+    os.makedirs(path, exist_ok=True)
+    return path
+
+
+def digest(*parts) -> str:
+    """A short stable hash (hex) of strings, bytes and JSON-able objects."""
+    h = hashlib.sha256()
+    for p in parts:
+        if isinstance(p, str):
+            p = p.encode()
+        elif not isinstance(p, (bytes, bytearray, memoryview)):
+            p = json.dumps(p, sort_keys=True, default=str).encode()
+        h.update(len(p).to_bytes(8, "little"))
+        h.update(p)
+    return h.hexdigest()[:24]
+
+
+def cached_build(kind: str, key: str, build, product: str) -> tuple[str, float, bool]:
+    """Return ``(path of product, build seconds, was cached)`` for the cache entry ``kind/key``.
+
+    ``build(folder)`` writes the entry's files (including ``product``) into an empty folder; it runs
+    only when the entry is missing. Entries are complete or absent (temp folder + rename).
+    """
+    root = os.path.join(cache_dir(), kind)
+    os.makedirs(root, exist_ok=True)
+    final = os.path.join(root, key)
+    target = os.path.join(final, product)
+    if os.path.isfile(target):
+        return target, 0.0, True
+    t0 = time.perf_counter()
+    tmp = tempfile.mkdtemp(prefix=f".build-{key}-", dir=root)
+    try:
+        build(tmp)
+        if not os.path.isfile(os.path.join(tmp, product)):
+            raise ToolchainError(f"{kind} build produced no {product} (see {tmp})")
+        try:
+            os.rename(tmp, final)
+        except OSError:
+            if not os.path.isfile(target):       # neither ours nor a concurrent builder's
+                raise
+    finally:
+        if os.path.isdir(tmp):
+            shutil.rmtree(tmp, ignore_errors=True)
+    return target, time.perf_counter() - t0, False
+
+
+def run_tool(cmd: list, cwd: str, what: str, log: str, env=None) -> None:
+    """Run a build step; on failure raise ToolchainError with the first error line, keep the log."""
+    res = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, env=env)
+    with open(os.path.join(cwd, log), "a") as f:
+        f.write("$ " + " ".join(map(str, cmd)) + "\n" + res.stdout + res.stderr)
+    if res.returncode != 0:
+        lines = [ln for ln in (res.stderr + res.stdout).splitlines() if "error" in ln.lower()]
+        first = (lines or (res.stderr + res.stdout).strip().splitlines() or ["(no output)"])[0]
+        keep = os.path.join(cache_dir(), "failed-" + os.path.basename(cwd.rstrip("/")))
+        shutil.copytree(cwd, keep, dirs_exist_ok=True)
+        raise ToolchainError(f"{what} failed: {first.strip()[:300]} (build kept in {keep})")
+
+
+def index_get(kind: str, key: str) -> str | None:
+    """A small text value stored under ``kind/key`` (e.g. quick key -> source hash), or None."""
+    path = os.path.join(cache_dir(), "index", kind, key)
+    try:
+        with open(path) as f:
+            return f.read().strip() or None
+    except OSError:
+        return None
+
+
+def index_put(kind: str, key: str, value: str) -> None:
+    folder = os.path.join(cache_dir(), "index", kind)
+    os.makedirs(folder, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=folder, prefix=".tmp-")
+    with os.fdopen(fd, "w") as f:
+        f.write(value)
+    os.replace(tmp, os.path.join(folder, key))
