@@ -1,7 +1,9 @@
 """Reading and writing 8-bit images with OpenImageIO.
 
 The renderer's only image I/O. Images are numpy ``uint8`` arrays of shape (H, W, C) with C in
-{1, 3, 4} (grey, RGB, RGBA); row 0 is the top of the picture.
+{1, 3, 4} (grey, RGB, RGBA); row 0 is the top of the picture. Alpha is straight (unassociated) both
+ways: OpenImageIO would otherwise premultiply RGB by alpha when reading a PNG, and un-premultiply
+when writing one.
 
 Writing goes through a temporary file in the destination folder that is renamed over the target
 once complete, so an interrupted or failed write never leaves a half-written image behind.
@@ -25,6 +27,13 @@ def _oiio():
     import OpenImageIO as oiio  # imported lazily: only the image helpers need it
 
     return oiio
+
+
+def _unassociated(oiio):
+    """Open hint: keep alpha straight (unassociated); by default OIIO premultiplies RGB on read."""
+    cfg = oiio.ImageSpec()
+    cfg.attribute("oiio:UnassociatedAlpha", 1)
+    return cfg
 
 
 def image_info(path: str | os.PathLike) -> tuple[int, int, int]:
@@ -57,7 +66,7 @@ def read_image(path: str | os.PathLike) -> np.ndarray:
     path = os.fspath(path)
     if not os.path.isfile(path):
         raise ImageIOError(f"{path}: no such file")
-    inp = oiio.ImageInput.open(path)
+    inp = oiio.ImageInput.open(path, _unassociated(oiio))
     if inp is None:
         raise ImageIOError(f"{path}: cannot open image ({oiio.geterror().strip() or 'unknown format'})")
     try:
@@ -100,6 +109,7 @@ def write_image(path: str | os.PathLike, image: np.ndarray) -> None:
         if out is None:
             raise ImageIOError(f"{path}: no writer for this file type ({oiio.geterror().strip()})")
         spec = oiio.ImageSpec(arr.shape[1], arr.shape[0], arr.shape[2], "uint8")
+        spec.attribute("oiio:UnassociatedAlpha", 1)  # our RGBA is straight alpha: store it as is
         if not out.open(tmp, spec):
             raise ImageIOError(f"{path}: cannot write ({out.geterror().strip()})")
         ok = out.write_image(arr)
