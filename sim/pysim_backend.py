@@ -18,7 +18,7 @@ from amaranth import Cat
 from amaranth.sim import Simulator
 
 from golden.format import TextureSet
-from hw.texel_fetch import STAGES, TexelFetch
+from hw.texel_fetch import LATENCY, STAGES, TexelFetch
 
 from .backend import SimResult
 from .streams import pattern_length, ready_pattern
@@ -54,6 +54,10 @@ def run(ts: TextureSet, requests: np.ndarray, *, stall: float = 0.0, seed: int =
     """
     req = np.asarray(requests, dtype=np.int64).reshape(-1, 4)
     n = len(req)
+    if n == 0:
+        return SimResult(responses=np.zeros((0, 4), np.uint8), cycles=0, requests=0, latency=LATENCY,
+                         stall_cycles={"output_backpressure": 0, "one_port_straddle": 0}, straddles=0,
+                         occupancy=None)
     dut = TexelFetch(ts, one_port=one_port, tag_width=TAG_WIDTH)
     packed = _pack_requests(dut, req)
     rlayout = dut.o.payload.shape()
@@ -122,10 +126,10 @@ def run(ts: TextureSet, requests: np.ndarray, *, stall: float = 0.0, seed: int =
     sim.add_clock(1e-6)
     sim.add_testbench(bench)
     vcd = vcd or os.environ.get("VQTEX_VCD")
-    if vcd and n:
+    if vcd:
         with sim.write_vcd(vcd):
             sim.run()
-    elif n:
+    else:
         sim.run()
     cycles = stats["cycles"]
     occupancy = ({name: float(c) / cycles for name, c in zip(STAGES, stats["occupancy"])}
