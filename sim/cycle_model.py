@@ -38,7 +38,7 @@ from golden.format import TextureSet
 
 from .streams import pattern_length, ready_pattern
 
-__all__ = ["straddle_flags", "transfer_cycles", "run_cycles", "LATENCY", "STAGES"]
+__all__ = ["straddle_flags", "transfer_cycles", "run_cycles", "run_flags", "LATENCY", "STAGES"]
 
 # The RTL's constants (hw imports amaranth; these are plain ints and names).
 from hw.texel_fetch import LATENCY, STAGES  # noqa: E402
@@ -94,8 +94,15 @@ def run_cycles(ts: TextureSet, requests: np.ndarray, *, stall: float = 0.0, seed
     fraction, or None) and ``ready`` (the backpressure pattern over the counted cycles).
     """
     req = np.asarray(requests, dtype=np.int64).reshape(-1, 4)
-    n = len(req)
-    strad = straddle_flags(ts, req)
+    return run_flags(straddle_flags(ts, req), stall=stall, seed=seed, one_port=one_port,
+                     occupancy=occupancy, latency=latency)
+
+
+def run_flags(strad: np.ndarray, *, stall: float = 0.0, seed: int = 0, one_port: bool = False,
+              occupancy: bool = True, latency: int = LATENCY) -> dict:
+    """:func:`run_cycles` from the per-request straddle flags alone (what the timing depends on)."""
+    strad = np.asarray(strad, dtype=bool)
+    n = len(strad)
     bubbles = strad & bool(one_port)
     nbub = int(bubbles.sum())
     length = pattern_length(n + nbub, stall, latency)
