@@ -38,7 +38,7 @@ from .toolchain import (ToolchainError, cached_build, digest, find_tool, index_g
                         tool_version)
 
 __all__ = ["DesignInfo", "MemoryImage", "design_info", "cxxrtl_source", "build_cxxrtl", "BatchLibrary",
-           "run_batch", "simulate_cxxrtl", "CXXFLAGS", "ready_pattern", "DRIVER_DIR"]
+           "run_batch", "run", "CXXFLAGS", "ready_pattern", "DRIVER_DIR"]
 
 DRIVER_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "cxxrtl")
 #: Compiler flags of the CXXRTL library (see docs/simulation.md for the build time / speed trade).
@@ -356,15 +356,9 @@ class BatchLibrary:
 
 
 def ready_pattern(seed: int, stall: float, ncycles: int) -> np.ndarray:
-    """The output's ready pattern: the project's definition in :mod:`sim.backend` when present."""
-    try:
-        from sim import backend
-        fn = getattr(backend, "ready_pattern")
-    except (ImportError, AttributeError):
-        fn = None
-    if fn is not None:
-        return np.asarray(fn(seed, stall, ncycles)).astype(np.uint8)
-    return (np.random.default_rng(seed).random(ncycles) >= stall).astype(np.uint8)
+    """The output's ready pattern, as every backend sees it (:func:`sim.streams.ready_pattern`)."""
+    from sim.streams import ready_pattern as pattern
+    return np.asarray(pattern(seed, stall, ncycles)).astype(np.uint8)
 
 
 def pack_requests(info: DesignInfo, requests: np.ndarray) -> np.ndarray:
@@ -405,14 +399,19 @@ def _sim_result(**kw):
 
 def run_batch(lib: BatchLibrary, info: DesignInfo, requests, *, stall: float = 0.0, seed: int = 0):
     """Run a request stream on a loaded library; returns a ``sim.backend.SimResult``."""
+    from sim.streams import pattern_length
     requests = np.asarray(requests, dtype=np.int64).reshape(-1, 4)
     n = len(requests)
+    if n == 0:
+        return _sim_result(responses=np.zeros((0, 4), np.uint8), cycles=0, requests=0, latency=info.latency,
+                           stall_cycles={"output_backpressure": 0, "one_port_straddle": 0}, straddles=0,
+                           occupancy=None)
     payloads = pack_requests(info, requests)
     worst = 2 * n + info.latency + 16           # one-port: at most two cycles per request
     if stall <= 0:
         rc, resp, counters = lib.run(payloads, None, worst + 16)
     else:
-        length = int(worst / max(1e-3, 1.0 - stall) * 1.25) + 64
+        length = pattern_length(n, stall, 2 * info.latency)
         while True:
             rc, resp, counters = lib.run(payloads, ready_pattern(seed, stall, length), length)
             if rc != 1:
@@ -447,9 +446,9 @@ def open_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8):
     return lib, b.info, b
 
 
-def simulate_cxxrtl(ts, requests, *, stall: float = 0.0, seed: int = 0, one_port: bool = False,
-                    tag_width: int = 8):
-    """``sim.backend.simulate(..., backend="cxxrtl")``."""
+def run(ts, requests, *, stall: float = 0.0, seed: int = 0, one_port: bool = False,
+        tag_width: int = 8):
+    """``sim.backend.simulate(..., backend="cxxrtl")``: the backend entry point."""
     lib, info, _ = open_cxxrtl(ts, one_port=one_port, tag_width=tag_width)
     try:
         return run_batch(lib, info, requests, stall=stall, seed=seed)
