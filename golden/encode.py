@@ -194,7 +194,7 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
            index_bits: int | None = None, mipmaps: bool = False, encoder: str = "gla", seed: int = 0,
            mip_training: str = "average", names=None, word_bits: int = 32,
            matrix: ColorMatrix = JFIF_BT601, raw_below: int = RAW_BELOW, max_iter: int = 100,
-           tol: float = 1e-4) -> TextureSet:
+           tol: float = 1e-4, raw: bool = False) -> TextureSet:
     """Compress ``images`` (list of (H, W[, C]) uint8) into one texture group sharing a codebook.
 
     Arguments
@@ -204,6 +204,7 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
     mipmaps : build the pyramid and extended codewords.  encoder : "gla" or "tsvq".
     mip_training : "average" (the paper) or "joint" (train on all sub-levels).
     raw_below : mip levels narrower or shorter than this are stored raw.
+    raw : store every level uncompressed (the baseline of the paper's Table 5).
 
     Raises
     ------
@@ -229,7 +230,7 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
             h, w = lv.shape[:2]
             top = pyr[L - L % nsub]
             ok = (w >= raw_below and h >= raw_below) if mipmaps else (w >= bw and h >= bh)
-            ok = ok and top.shape[0] % bh == 0 and top.shape[1] % bw == 0
+            ok = ok and top.shape[0] % bh == 0 and top.shape[1] % bw == 0 and not raw
             plan.append(ok)
         plans.append(plan)
 

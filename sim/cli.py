@@ -240,7 +240,7 @@ def build_parser() -> argparse.ArgumentParser:
 def _extra_commands():
     """Commands that live in their own modules (render, demo, export, report, bench)."""
     out = []
-    for mod in ("sim.cmd_render", "sim.cmd_export", "sim.cmd_report", "sim.cmd_bench"):
+    for mod in ("sim.cmd_render", "sim.cmd_export", "sim.cmd_report", "sim.cmd_bench", "sim.experiments"):
         try:
             m = __import__(mod, fromlist=["add_parser"])
         except ImportError:
