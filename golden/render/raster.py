@@ -25,8 +25,8 @@ w = -z_eye):
    Analytic screen derivatives of the perspective-correct interpolants:
    ``ds/dx = (a_u - s a_q) / q``, ``ds/dy = (b_u - s b_q) / q`` (and the same for t).
 
-Everything is vectorised: triangles are processed in chunks whose bounding boxes hold at most
-``CHUNK`` candidate pixels; there is no Python loop over pixels.
+Everything is vectorised: triangles' bounding boxes (split into bands of rows when large) are
+processed in steps of at most ``CHUNK`` candidate pixels; there is no Python loop over pixels.
 """
 
 from __future__ import annotations
@@ -181,7 +181,6 @@ def coverage(fx: np.ndarray, width: int, height: int, chunk: int = CHUNK):
     tris = np.nonzero(live)[0]
     if not len(tris):
         return
-    counts = bw[tris] * bh[tris]
     # edge coefficients E = A*px + B*py + C for edges (0,1), (1,2), (2,0), with the top-left bias
     coef = []
     for a, b in ((0, 1), (1, 2), (2, 0)):
@@ -196,25 +195,33 @@ def coverage(fx: np.ndarray, width: int, height: int, chunk: int = CHUNK):
         topleft = (dy < 0) | ((dy == 0) & (dx > 0))
         E0 = E0 - (~topleft)  # a centre exactly on a non-top-left edge fails E >= 0
         coef.append((A * _ONE, B * _ONE, E0))
-    ends = np.cumsum(counts)
+    # split tall bounding boxes into bands of rows so no single step exceeds `chunk` candidates
+    bwt, bht = bw[tris], bh[tris]
+    rows = np.maximum(1, chunk // bwt)
+    nb = -(-bht // rows)
+    ep = np.repeat(np.arange(len(tris)), nb)  # entry -> position in `tris`
+    band = np.arange(int(nb.sum()), dtype=np.int64) - np.repeat(np.cumsum(nb) - nb, nb)
+    eyoff = band * rows[ep]
+    ecount = bwt[ep] * np.minimum(rows[ep], bht[ep] - eyoff)
+    ends = np.cumsum(ecount)
     start = 0
-    while start < len(tris):
-        # triangles [start, stop) hold at most `chunk` candidates (at least one triangle)
+    while start < len(ep):
+        # entries [start, stop) hold at most `chunk` candidates (at least one entry)
         base = ends[start - 1] if start else 0
         stop = max(int(np.searchsorted(ends, base + chunk, side="right")), start + 1)
-        sl = slice(start, stop)
-        cnt = counts[sl]
-        local = np.repeat(np.arange(stop - start), cnt)
+        cnt = ecount[start:stop]
+        local = np.repeat(np.arange(start, stop), cnt)
         k = np.arange(int(cnt.sum()), dtype=np.int64) - np.repeat(np.cumsum(cnt) - cnt, cnt)
-        w = bw[tris[sl]][local]
+        p = ep[local]
+        w = bwt[p]
         dxp = k % w
-        dyp = k // w
+        dyp = eyoff[local] + k // w
         ok = None
         for A, B, E0 in coef:
-            e = E0[sl][local] + A[sl][local] * dxp + B[sl][local] * dyp
+            e = E0[p] + A[p] * dxp + B[p] * dyp
             ok = e >= 0 if ok is None else ok & (e >= 0)
         idx = np.nonzero(ok)[0]
-        t = tris[sl][local[idx]]
+        t = tris[p[idx]]
         yield t, x0[t] + dxp[idx], y0[t] + dyp[idx]
         start = stop
 

@@ -238,3 +238,19 @@ def test_odd_frame_sizes(shape):
     w, h = shape
     cnt = _hits([[[0, 0], [w, 0], [w, h]], [[0, 0], [w, h], [0, h]]], w, h)
     assert (cnt == 1).all()
+
+
+def test_coverage_does_not_depend_on_the_chunk_size():
+    from golden.render.raster import coverage
+
+    rng = np.random.default_rng(5)
+    tris = snap(rng.uniform(-20, 90, (40, 3, 2)))
+
+    def run(chunk):
+        parts = list(coverage(tris, 64, 48, chunk=chunk))
+        t, x, y = (np.concatenate(p) for p in zip(*parts))
+        return sorted(zip(t.tolist(), x.tolist(), y.tolist()))
+
+    ref = run(1 << 20)
+    assert len(ref) > 1000
+    assert run(7) == ref and run(64) == ref and run(1000) == ref
