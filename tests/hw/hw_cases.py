@@ -38,6 +38,13 @@ CONFIGS = {
     "rgb_4x4_b12_w16": dict(size=(32, 32), block=(4, 4), codebook_size=16, color="rgb", index_bits=12,
                             word_bits=16),
     "rgb_4x4_b8_k256": dict(size=(64, 64), block=(4, 4), codebook_size=256, color="rgb", index_bits=8),
+    "rgb_2x2_b16_w16": dict(size=(32, 32), block=(2, 2), codebook_size=8, color="rgb", index_bits=16,
+                            word_bits=16),
+    "i8_4x4_b1_mip": dict(size=(32, 32), block=(4, 4), codebook_size=2, color="intensity", index_bits=1,
+                          mipmaps=True, raw_below=4),
+    "rgba_8x8_b9_mip": dict(size=(64, 64), block=(8, 8), codebook_size=8, color="rgba", index_bits=9,
+                            mipmaps=True, raw_below=8),
+    "yuv_8x2_b6": dict(size=(64, 32), block=(8, 2), codebook_size=8, color="yuv411", index_bits=6),
     "yuv_dreamcast_4x4_b12_mip": dict(size=(64, 64), block=(4, 4), codebook_size=16, color="yuv411",
                                       index_bits=12, mipmaps=True, raw_below=4, matrix=DREAMCAST_YUV422),
 }
