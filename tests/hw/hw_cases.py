@@ -45,6 +45,7 @@ CONFIGS = {
     "rgba_8x8_b9_mip": dict(size=(64, 64), block=(8, 8), codebook_size=8, color="rgba", index_bits=9,
                             mipmaps=True, raw_below=8),
     "yuv_8x2_b6": dict(size=(64, 32), block=(8, 2), codebook_size=8, color="yuv411", index_bits=6),
+    "raw_only_8x8_mip": dict(size=(8, 8), block=(4, 4), codebook_size=4, color="rgb", mipmaps=True),
     "yuv_dreamcast_4x4_b12_mip": dict(size=(64, 64), block=(4, 4), codebook_size=16, color="yuv411",
                                       index_bits=12, mipmaps=True, raw_below=4, matrix=DREAMCAST_YUV422),
 }
