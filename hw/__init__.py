@@ -1,0 +1,3 @@
+"""The texel-fetch hardware in Amaranth, one file per stage of the paper's pipeline:
+descriptor -> address (block address shifter) -> index_reader -> codebook_rom -> color_matrix,
+wired by texel_fetch.TexelFetch. See docs/hardware.md."""

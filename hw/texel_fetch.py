@@ -136,6 +136,8 @@ class TexelFetch(wiring.Component):
     ------
     TypeError
         If ``texture_set`` is not a TextureSet or ``tag_width`` is not a non-negative int.
+    golden.format.FormatError
+        If the texture set's descriptors point outside its memories.
     """
 
     def __init__(self, texture_set: TextureSet, *, one_port: bool = False, tag_width: int = 8):
