@@ -182,6 +182,25 @@ class _Screen:
         return out
 
 
+    def top2(self, ca: np.ndarray, chunk: int = 0):
+        """Best and second-best screened codewords per vector (k >= 2)."""
+        k = ca.shape[1]
+        n = self.xa.shape[0]
+        b1 = np.empty(n, dtype=np.int64)
+        b2 = np.empty(n, dtype=np.int64)
+        step = self.rows_per_chunk(k, chunk)
+        buf = np.empty((min(step, n), k), dtype=np.float32)
+        for s in range(0, n, step):
+            e = min(n, s + step)
+            sc = buf[: e - s]
+            np.matmul(self.xa[s:e], ca, out=sc)
+            best = sc.argmax(axis=1)
+            b1[s:e] = best
+            sc[np.arange(e - s), best] = -np.inf
+            b2[s:e] = sc.argmax(axis=1)
+        return b1, b2
+
+
 def _exact_d2(x: np.ndarray, c: np.ndarray, idx: np.ndarray) -> np.ndarray:
     """Exact float64 squared distance of each x[i] to c[idx[i]] (chunked)."""
     n, d = x.shape
@@ -190,7 +209,7 @@ def _exact_d2(x: np.ndarray, c: np.ndarray, idx: np.ndarray) -> np.ndarray:
     for s in range(0, n, step):
         e = min(n, s + step)
         diff = x[s:e] - c[idx[s:e]]
-        out[s:e] = np.sum(diff * diff, axis=1)
+        np.einsum("ij,ij->i", diff, diff, out=out[s:e])
     return out
 
 
@@ -319,82 +338,108 @@ def _sse(x, w, c):
     return float(w @ np.einsum("ij,ij->i", diff, diff))
 
 
-def _split(x, w, m, rng, n_power=8, n_lloyd=6):
-    """Split one cell in two.  Initial cut: hyperplane through the centroid orthogonal to the
-    principal axis (power iteration); then up to ``n_lloyd`` 2-means iterations.
-    Returns the boolean mask of the right child, or None if the points cannot be separated."""
+def _split(x, w, m, rng, n_power=6, n_lloyd=8):
+    """Trial split of one cell (x (n, d), weights w, centroid m) into two.
+
+    Initial cut: the hyperplane through the centroid orthogonal to the principal axis (power
+    iteration from a seeded random start); then up to ``n_lloyd`` weighted 2-means iterations.
+    Returns ``(mask, sse0, sse1)`` -- mask True for the second child, the children's total squared
+    errors about their centroids -- or None if the points cannot be separated."""
     xc = x - m
     v = rng.standard_normal(x.shape[1])
     for _ in range(n_power):
-        v = xc.T @ (w * (xc @ v))
+        v = (w * (xc @ v)) @ xc
         nv = np.sqrt(v @ v)
         if not nv > 0:
             break
         v /= nv
-    mask = (xc @ v) > 0 if np.all(np.isfinite(v)) and (v @ v) > 0 else None
-    if mask is None or mask.all() or not mask.any():
+    mask = (xc @ v) > 0
+    if mask.all() or not mask.any():
         # fallback: cut orthogonally to the direction of the farthest point
         far = int(np.argmax(np.einsum("ij,ij->i", xc, xc)))
         mask = (xc @ xc[far]) > 0
         if mask.all() or not mask.any():
             return None
+    wt, st = w.sum(), w @ xc
     for _ in range(n_lloyd):
-        c0 = _wmean(x[~mask], w[~mask])
-        c1 = _wmean(x[mask], w[mask])
+        w1 = np.where(mask, w, 0.0)
+        ww1 = w1.sum()
+        s1 = w1 @ xc
+        c1 = s1 / ww1
+        c0 = (st - s1) / (wt - ww1)
         dv = c1 - c0
-        new = (x @ dv) > 0.5 * (c1 @ c1 - c0 @ c0)
+        new = (xc @ dv) > 0.5 * (c1 @ c1 - c0 @ c0)
         if new.all() or not new.any() or np.array_equal(new, mask):
             break
         mask = new
-    return mask
+    w1 = np.where(mask, w, 0.0)
+    c1 = _wmean(xc[mask], w[mask])
+    c0 = _wmean(xc[~mask], w[~mask])
+    diff = xc - np.where(mask[:, None], c1, c0)
+    d2 = np.einsum("ij,ij->i", diff, diff)
+    return mask, float((w - w1) @ d2), float(w1 @ d2)
 
 
-def _tsvq_build(u, wu, k, seed):
-    """Greedy TSVQ on distinct weighted vectors: repeatedly split the leaf of largest total
-    squared error (ties: the older leaf) until k leaves or no leaf can be split."""
+def _tsvq_build(u, wu, k, seed, criterion="distortion"):
+    """Greedy TSVQ on distinct weighted vectors.
+
+    criterion "distortion" (the paper's rule): split the leaf of largest total squared error.
+    criterion "gain": split the leaf whose (trial) split reduces the total squared error most
+    (greedy tree growing, Riskin & Gray 1991).  Ties go to the older leaf.  Stops at k leaves or
+    when no leaf can be split.  Returns (TsvqTree, labels of the distinct vectors)."""
+    if criterion not in ("distortion", "gain"):
+        raise ValueError(f"unknown TSVQ split criterion {criterion!r}")
     rng = np.random.default_rng(seed)
     m_, d = u.shape
     order = np.arange(m_)
     xs = u.copy()
     ws = wu.copy()
-    cent = [_wmean(xs, ws)]
-    start, end = [0], [m_]
-    left, right = [-1], [-1]
-    const = [bool(np.all(xs == xs[0]))]
-    if const[0]:
-        cent[0] = xs[0].copy()
+    cent, start, end, left, right = [], [], [], [], []
+    trial = {}
     heap = []
-    sse0 = _sse(xs, ws, cent[0])
-    if not const[0]:
-        heap.append((-sse0, 0))
+
+    def new_leaf(a, b):
+        xa, wa = xs[a:b], ws[a:b]
+        cid = len(cent)
+        is_const = bool(np.all(xa == xa[0]))
+        c = xa[0].copy() if is_const else _wmean(xa, wa)
+        cent.append(c)
+        start.append(a)
+        end.append(b)
+        left.append(-1)
+        right.append(-1)
+        if is_const:
+            return
+        sse = _sse(xa, wa, c)
+        if criterion == "gain":
+            t = _split(xa, wa, c, rng)
+            if t is None:
+                return
+            trial[cid] = t
+            heapq.heappush(heap, (-(sse - t[1] - t[2]), cid))
+        else:
+            heapq.heappush(heap, (-sse, cid))
+
+    new_leaf(0, m_)
     n_leaves = 1
     while n_leaves < k and heap:
         _, nid = heapq.heappop(heap)
         s, e = start[nid], end[nid]
-        x, w = xs[s:e], ws[s:e]
-        mask = _split(x, w, cent[nid], rng)
-        if mask is None:
-            continue
+        t = trial.pop(nid, None)
+        if t is None:
+            t = _split(xs[s:e], ws[s:e], cent[nid], rng)
+            if t is None:
+                continue
+        mask = t[0]
         perm = np.concatenate([np.flatnonzero(~mask), np.flatnonzero(mask)])
-        xs[s:e] = x[perm]
-        ws[s:e] = w[perm]
+        xs[s:e] = xs[s:e][perm]
+        ws[s:e] = ws[s:e][perm]
         order[s:e] = order[s:e][perm]
         mid = s + int(np.count_nonzero(~mask))
         left[nid] = len(cent)
         right[nid] = len(cent) + 1
-        for a, b in ((s, mid), (mid, e)):
-            xa, wa = xs[a:b], ws[a:b]
-            cid = len(cent)
-            is_const = bool(np.all(xa == xa[0]))
-            c = xa[0].copy() if is_const else _wmean(xa, wa)
-            cent.append(c)
-            start.append(a)
-            end.append(b)
-            left.append(-1)
-            right.append(-1)
-            const.append(is_const)
-            if not is_const:
-                heapq.heappush(heap, (-_sse(xa, wa, c), cid))
+        new_leaf(s, mid)
+        new_leaf(mid, e)
         n_leaves += 1
     left = np.array(left, dtype=np.int64)
     right = np.array(right, dtype=np.int64)
@@ -413,11 +458,11 @@ def _tsvq_build(u, wu, k, seed):
             stack.append(left[nid])
     leaf_nodes = np.array(leaf_nodes, dtype=np.int64)
     codebook = _pad(cent[leaf_nodes], k)
-    # members of each leaf (in the original distinct-vector order) -> codeword index
+    # members of each leaf -> codeword index (the leaves' slices tile [0, M) left to right)
+    sizes = np.array(end)[leaf_nodes] - np.array(start)[leaf_nodes]
+    lab_sorted = np.repeat(np.arange(leaf_nodes.size), sizes)
     labels = np.empty(m_, dtype=np.int64)
-    st, en = np.array(start), np.array(end)
-    for j, nid in enumerate(leaf_nodes):  # slices, one per leaf: O(k) cheap assignments
-        labels[order[st[nid]:en[nid]]] = j
+    labels[order] = lab_sorted
     return TsvqTree(cent, left, right, leaf, codebook), labels
 
 
@@ -518,59 +563,178 @@ def _repair_empty(u, wu, a, c, cnt, sums, k):
             sums[touched] = sums_t[touched]
 
 
-def _gla_core(u, wu, k, c0, max_iter, tol, chunk=0):
-    """Lloyd iterations on distinct weighted vectors; returns (codebook, labels, history, it, conv)."""
+def _lloyd(u, wu, k, c, a, d2, scr, tol, budget, chunk=0):
+    """Lloyd iterations from codebook ``c`` and an assignment ``a`` made against it (``d2``: exact
+    squared distances of u to c[a]).  Stops by the LBG rule (relative decrease <= tol), at a fixed
+    point, at distortion 0 or after ``budget`` iterations.
+
+    Incremental assignment (exact in exact arithmetic): a vector whose codeword did not move can
+    only be captured by a codeword that moved, so it is screened against the moved codewords only;
+    vectors of moved cells get a full search.  A move is accepted only if the exact float64
+    distance strictly decreases, so the distortion never increases.
+    Returns (c, a, d2, history, iterations, converged); a and d2 are updated copies."""
+    a = a.copy()
+    d2 = d2.copy()
+    wsum = wu.sum()
+    dist = float(wu @ d2) / wsum
+    hist = []
+    it, conv = 0, False
+    while True:
+        if dist == 0.0:
+            conv = True
+            break
+        if it >= budget:
+            break
+        it += 1
+        a_prev = a.copy()
+        cnt, sums = _centroids(u, wu, a, k)
+        c_new = c.copy()
+        _repair_empty(u, wu, a, c_new, cnt, sums, k)
+        full = cnt > 0
+        c_new[full] = sums[full] / cnt[full, None]
+        moved = np.any(c_new != c, axis=1)
+        if not moved.any():  # fixed point: nothing can change any more
+            conv = True
+            hist.append(dist)
+            break
+        pm = moved[a] | (a != a_prev)
+        rows_m = np.flatnonzero(pm)
+        d_old = d2
+        d_old[rows_m] = _exact_d2(u[rows_m], c_new, a[rows_m])
+        ca, _ = scr.codebook(c_new)
+        cand = a.copy()
+        cand[rows_m] = scr.argmax(ca, rows=rows_m, chunk=chunk)
+        mv = np.flatnonzero(moved)
+        rows_s = np.flatnonzero(~pm)
+        if rows_s.size:
+            cand[rows_s] = mv[scr.argmax(np.ascontiguousarray(ca[:, mv]), rows=rows_s, chunk=chunk)]
+        ch = np.flatnonzero(cand != a)
+        d_c = _exact_d2(u[ch], c_new, cand[ch])
+        acc = d_c < d_old[ch]
+        a[ch[acc]] = cand[ch[acc]]
+        d2 = d_old
+        d2[ch[acc]] = d_c[acc]
+        new = float(wu @ d2) / wsum
+        c = c_new
+        hist.append(new)
+        if dist - new <= tol * new:
+            conv = True
+            dist = new
+            break
+        dist = new
+    return c, a, d2, hist, it, conv
+
+
+def _migrate(u, wu, k, c, scr, frac, chunk=0):
+    """One batch of ELBG-style codeword migrations (Patane & Russo 2001, vectorised).
+
+    Utility of a codeword = the weighted error increase if it were removed (its vectors falling
+    to their second-nearest codeword).  The lowest-utility codewords are moved onto the member
+    farthest from its codeword of the cells with the largest such error (the empty-cell repair
+    rule), pairing lowest utility with largest error while utility < 2 x that error, at most
+    ``frac * k`` moves.  Returns (new codebook, assignment, exact d2) or None if nothing moves."""
+    ca, _ = scr.codebook(c)
+    b1, b2 = scr.top2(ca, chunk)
+    d1 = _exact_d2(u, c, b1)
+    db = _exact_d2(u, c, b2)
+    sw = db < d1
+    b1, b2 = np.where(sw, b2, b1), np.where(sw, b1, b2)
+    d1, db = np.where(sw, db, d1), np.where(sw, d1, db)
+    util = np.bincount(b1, weights=wu * (db - d1), minlength=k)
+    err = wu * d1
+    order = np.lexsort((np.arange(u.shape[0]), -err, b1))
+    first = np.ones(order.size, dtype=bool)
+    first[1:] = b1[order[1:]] != b1[order[:-1]]
+    far = np.full(k, -1, dtype=np.int64)
+    gain = np.zeros(k)
+    far[b1[order[first]]] = order[first]
+    gain[b1[order[first]]] = err[order[first]]
+    m = max(1, int(frac * k))
+    rem = np.argsort(util, kind="stable")[:m]
+    rec = np.argsort(-gain, kind="stable")
+    rec = rec[~np.isin(rec, rem)][: rem.size]
+    rem = rem[: rec.size]
+    ok = (util[rem] < 2.0 * gain[rec]) & (gain[rec] > 0)
+    rem, rec = rem[ok], rec[ok]
+    if rem.size == 0:
+        return None
+    c_new = c.copy()
+    c_new[rem] = u[far[rec]]
+    # assignment against the new codebook: the old nearest unless the vector's codeword was
+    # removed (full search) or a new codeword is closer
+    removed = np.zeros(k, dtype=bool)
+    removed[rem] = True
+    a = b1.copy()
+    d2 = d1.copy()
+    pm = np.flatnonzero(removed[a])
+    ca, _ = scr.codebook(c_new)
+    a[pm] = scr.argmax(ca, rows=pm, chunk=chunk)
+    d2[pm] = _exact_d2(u[pm], c_new, a[pm])
+    rs = np.flatnonzero(~removed[b1])
+    cand = rem[scr.argmax(np.ascontiguousarray(ca[:, rem]), rows=rs, chunk=chunk)]
+    dc = _exact_d2(u[rs], c_new, cand)
+    acc = dc < d2[rs]
+    a[rs[acc]] = cand[acc]
+    d2[rs[acc]] = dc[acc]
+    return c_new, a, d2
+
+
+def _gla_core(u, wu, k, c0, max_iter, tol, migrate, frac=0.1, chunk=0):
+    """GLA on distinct weighted vectors; returns (codebook, history, iterations, converged)."""
     c = np.array(c0, dtype=np.float64, copy=True)
     wsum = wu.sum()
     scr = _Screen(u, _wmean(u, wu))
     a, d2 = _nearest_screened(u, c, scr, chunk)
     hist = [float(wu @ d2) / wsum]
-    it, conv = 0, False
-    while it < max_iter:
-        if hist[-1] == 0.0:
-            conv = True
+    c, a, d2, h, it, conv = _lloyd(u, wu, k, c, a, d2, scr, tol, max_iter, chunk)
+    hist += h
+    rounds = 0
+    while conv and rounds < migrate and k >= 2 and it < max_iter and hist[-1] > 0:
+        rounds += 1
+        trial = _migrate(u, wu, k, c, scr, frac, chunk)
+        if trial is None:
             break
-        it += 1
-        cnt, sums = _centroids(u, wu, a, k)
-        _repair_empty(u, wu, a, c, cnt, sums, k)
-        full = cnt > 0
-        c_new = c.copy()
-        c_new[full] = sums[full] / cnt[full, None]
-        d_old = _exact_d2(u, c_new, a)
-        ca, _ = scr.codebook(c_new)
-        cand = scr.argmax(ca, chunk=chunk)
-        d_c = _exact_d2(u, c_new, cand)
-        move = d_c < d_old
-        a_new = np.where(move, cand, a)
-        d2 = np.where(move, d_c, d_old)
-        dist = float(wu @ d2) / wsum
-        if dist > hist[-1]:  # cannot happen in exact arithmetic; keep the monotone contract
-            conv = True
+        c_t, a_t, d2_t, h, it_t, conv_t = _lloyd(u, wu, k, *trial, scr, tol, max_iter - it, chunk)
+        it += it_t
+        d_t = float(wu @ d2_t) / wsum
+        if not d_t < hist[-1]:
+            break  # rejected: keep the previous codebook (converged by the stop rule)
+        improve = hist[-1] - d_t
+        c, a, d2, conv = c_t, a_t, d2_t, conv_t
+        hist.append(d_t)
+        if improve <= tol * d_t:
             break
-        c, a = c_new, a_new
-        prev = hist[-1]
-        hist.append(dist)
-        if prev - dist <= tol * dist:
-            conv = True
-            break
-    return c, a, hist, it, conv
+    return c, hist, it, conv
 
 
-def gla(vectors, k, *, seed=0, weights=None, init=None, max_iter=100, tol=1e-4) -> GlaResult:
-    """Generalized Lloyd algorithm (full-search Lloyd / LBG) with TSVQ initialisation.
+def gla(vectors, k, *, seed=0, weights=None, init=None, max_iter=100, tol=1e-4,
+        migrate=8) -> GlaResult:
+    """Generalized Lloyd algorithm (full-search Lloyd / LBG) with TSVQ initialisation and
+    ELBG-style codeword migration.
 
-    Works on the distinct vectors with merged weights.  Each iteration: (1) centroid update,
-    empty cells repaired by splitting the cell of largest total squared error (the member
-    farthest from its centroid becomes the new codeword, so rare colours survive); (2) every
+    Works on the distinct vectors with merged weights.  Each Lloyd iteration: (1) centroid
+    update, empty cells repaired by splitting the cell of largest total squared error (its member
+    farthest from the centroid becomes the new codeword, so rare colours survive); (2) every
     vector moves to its nearest codeword (float32 GEMM screening; a move is accepted only if its
     exact float64 distance is strictly smaller, so the distortion never increases).
 
-    Stop rule (LBG): stop after the first iteration whose distortion D_m satisfies
-    ``D_{m-1} - D_m <= tol * D_m`` (relative decrease at most ``tol``), or when D_m == 0, or after
-    ``max_iter`` iterations (then ``converged`` is False).
+    Stop rule (LBG): a descent stops after the first iteration whose distortion D_m satisfies
+    ``D_{m-1} - D_m <= tol * D_m``, or at a fixed point, or when D_m == 0.
 
-    ``init``: None or "tsvq" (default: :func:`tsvq` with ``seed``), or a (k, d) array.
-    Returns :class:`GlaResult`; its indices are the exact full-search nearest codewords.
+    Migration (0 < ``migrate`` rounds, default 8): after a descent has stopped, move up to 10% of
+    the codewords, those of least utility, into the cells with the largest error (see
+    ``_migrate``) and descend again; keep the result only if the distortion decreased, and stop
+    migrating after a rejected round or a round that improved by at most ``tol`` (relative).
+    This escapes the poor local minima plain GLA gets stuck in (isolated detailed blocks
+    deserve their own codeword); ``migrate=0`` is the plain GLA.
+
+    ``max_iter`` caps the total number of Lloyd iterations (all descents); ``converged`` is False
+    iff the cap stopped the last descent.
+    ``init``: None or "tsvq" (default: greedy TSVQ with the largest-gain split rule, see
+    :func:`tsvq_tree`, with ``seed``), or a (k, d) array.
+    Returns :class:`GlaResult`; ``history`` holds the distortion after the initial assignment,
+    after each iteration of the first descent and after each accepted migration round
+    (non-increasing).  Indices are the exact full-search nearest codewords.
     With at most k distinct vectors the result is exact (see module docstring).
     """
     k = _check_k(k)
@@ -582,14 +746,14 @@ def gla(vectors, k, *, seed=0, weights=None, init=None, max_iter=100, tol=1e-4) 
         idx, d2 = nearest(x, cb)
         return GlaResult(cb, idx, float(w @ d2) / w.sum(), 0, True, [0.0])
     if init is None or (isinstance(init, str) and init == "tsvq"):
-        c0 = _tsvq_build(u, wu, k, seed)[0].codebook
+        c0 = _tsvq_build(u, wu, k, seed, "gain")[0].codebook
     elif isinstance(init, str):
         raise ValueError(f"unknown init {init!r}")
     else:
         c0 = np.asarray(init, dtype=np.float64)
         if c0.shape != (k, u.shape[1]) or not np.all(np.isfinite(c0)):
             raise ValueError(f"init must be a finite ({k}, {u.shape[1]}) array")
-    c, _, hist, it, conv = _gla_core(u, wu, k, c0, max_iter, tol)
+    c, hist, it, conv = _gla_core(u, wu, k, c0, max_iter, tol, migrate)
     idx, d2 = nearest(x, c)
     return GlaResult(c, idx, float(w @ d2) / w.sum(), it, conv, hist)
 
