@@ -41,8 +41,29 @@ struct Sim {
         vq_put(top.VQ_O_READY, ready);
         o_ready = ready;
     }
+    // One eval per cycle: the rising edge is evaluated with this cycle's inputs. Combinational
+    // outputs (values) are computed from the registers' current state and the inputs; registered
+    // outputs (wires) show their current state until commit(). So the outputs read between eval()
+    // and commit() are this cycle's, and commit() moves the registers to the next state. This needs
+    // eval() to converge in one pass, which CXXRTL guarantees unless the design has a combinational
+    // path through a wire ("converged = false" in the generated code): then sim/cxxrtl_backend.py
+    // defines VQ_EXACT_STEP and every cycle settles with clk low and clocks the edge, each by step().
+#ifndef VQ_EXACT_STEP
+    void settle() {
+        vq_put(top.VQ_CLK, 1);
+        top.VQ_PREV_CLK = value<1>{0u};
+        top.eval();
+    }
+#ifdef VQ_FAST_COMMIT
+    // commit() without its compare-and-branch per wire (we never need "did anything change").
+    void posedge() { VQ_FAST_COMMIT(top) }
+#else
+    void posedge() { top.commit(); }
+#endif
+#else
     void settle() { vq_put(top.VQ_CLK, 0); top.step(); }
     void posedge() { vq_put(top.VQ_CLK, 1); top.step(); }
+#endif
     bool i_ready() { return vq_get(top.VQ_I_READY); }
     bool o_valid() { return vq_get(top.VQ_O_VALID); }
     uint64_t o_payload() { return vq_get(top.VQ_O_PAYLOAD); }
