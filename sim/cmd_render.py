@@ -237,7 +237,8 @@ def cmd_demo(args) -> int:
         + f"  (overall {report['overall_rate']:.2f}:1)",
         f"  frame MSE vs uncompressed: {report['mean_mse']:.3f} (mean over frames)",
         f"  RTL ({args.backend}) frames identical to golden: {'yes' if not mismatches else 'NO ' + str(mismatches)}",
-        f"  cycles per frame: {report['cycles_per_frame']:.0f} for {per_frame[0]['requests']} texel requests",
+        f"  cycles per frame: {report['cycles_per_frame']:.0f} for "
+        f"{np.mean([f['requests'] for f in per_frame]):.0f} texel requests (latency {per_frame[0].get('latency', 0)})",
         f"  wrote {args.out_dir}/topspin_*.png and {args.out_dir}/report.json in {report['total_seconds']:.1f} s",
     ]
     _emit(report, args.json, "\n".join(lines))
