@@ -168,37 +168,47 @@ class _Screen:
 
     def argmax(self, ca: np.ndarray, rows=None, chunk: int = 0) -> np.ndarray:
         """Best screened codeword per vector (first maximum), for all rows or the given subset."""
+        return self._best(ca, rows, chunk, two=False)[0]
+
+    def top2(self, ca: np.ndarray, rows=None, chunk: int = 0):
+        """Best and second-best screened codewords and their scores (float32); the second is
+        -1 with score -inf when there is one column."""
+        return self._best(ca, rows, chunk, two=True)
+
+    def _best(self, ca, rows, chunk, two):
         k = ca.shape[1]
         xa = self.xa if rows is None else self.xa[rows]
         n = xa.shape[0]
-        out = np.empty(n, dtype=np.int64)
+        b1 = np.empty(n, dtype=np.int64)
+        b2 = np.full(n, -1, dtype=np.int64)
+        s1 = np.empty(n, dtype=np.float32)
+        s2 = np.full(n, -np.inf, dtype=np.float32)
         step = self.rows_per_chunk(k, chunk)
         buf = np.empty((min(step, n), k), dtype=np.float32)
         for s in range(0, n, step):
             e = min(n, s + step)
             sc = buf[: e - s]
             np.matmul(xa[s:e], ca, out=sc)
-            out[s:e] = sc.argmax(axis=1)
-        return out
-
-
-    def top2(self, ca: np.ndarray, chunk: int = 0):
-        """Best and second-best screened codewords per vector (k >= 2)."""
-        k = ca.shape[1]
-        n = self.xa.shape[0]
-        b1 = np.empty(n, dtype=np.int64)
-        b2 = np.empty(n, dtype=np.int64)
-        step = self.rows_per_chunk(k, chunk)
-        buf = np.empty((min(step, n), k), dtype=np.float32)
-        for s in range(0, n, step):
-            e = min(n, s + step)
-            sc = buf[: e - s]
-            np.matmul(self.xa[s:e], ca, out=sc)
             best = sc.argmax(axis=1)
             b1[s:e] = best
-            sc[np.arange(e - s), best] = -np.inf
-            b2[s:e] = sc.argmax(axis=1)
-        return b1, b2
+            if two:
+                r = np.arange(e - s)
+                s1[s:e] = sc[r, best]
+                if k > 1:
+                    sc[r, best] = -np.inf
+                    b2[s:e] = nb = sc.argmax(axis=1)
+                    s2[s:e] = sc[r, nb]
+        return b1, b2, s1, s2
+
+    def approx_d2(self, rows, s, ca_rmax):
+        """Screened squared distances from scores, lowered by their rounding-error bound
+        (so they can serve in lower bounds)."""
+        xn = self.xnorm[rows]
+        gam = 2.0 * (self.d + 4) * _U32 * (1 + 1e-3)
+        q = xn * xn - 2.0 * s.astype(np.float64)  # s = -inf (no candidate) gives +inf
+        fin = np.isfinite(q)
+        q[fin] -= 2.0 * gam * (xn[fin] * ca_rmax + 0.5 * ca_rmax * ca_rmax) + np.abs(q[fin]) * 1e-6
+        return q
 
 
 def _exact_d2(x: np.ndarray, c: np.ndarray, idx: np.ndarray) -> np.ndarray:
@@ -213,7 +223,7 @@ def _exact_d2(x: np.ndarray, c: np.ndarray, idx: np.ndarray) -> np.ndarray:
     return out
 
 
-def _nearest_screened(x, c, scr: _Screen, chunk: int = 0):
+def _nearest_screened(x, c, scr: _Screen, chunk: int = 0, rows=None):
     """Exact nearest codeword (ties -> lowest index) using float32 screening + float64 settling.
 
     Error bound of a screened score (x', c' centred; u = 2^-24; GEMM of d+1 terms in float32):
@@ -221,10 +231,13 @@ def _nearest_screened(x, c, scr: _Screen, chunk: int = 0):
     so every codeword whose screened score is within 2E of the best screened score is a candidate,
     and the true nearest is always among them.  Rows with a single candidate are decided by the
     screen; the others are settled with exact float64 distances, ties to the lowest index.
+    ``rows``: only these vectors (x must then be the matching subset).
     """
     n, d = x.shape
     k = c.shape[0]
     ca, rmax = scr.codebook(c)
+    xa = scr.xa if rows is None else scr.xa[rows]
+    xnorm = scr.xnorm if rows is None else scr.xnorm[rows]
     gam = (d + 4) * _U32 * (1 + 1e-3)
     idx = np.empty(n, dtype=np.int64)
     step = scr.rows_per_chunk(k, chunk)
@@ -233,11 +246,11 @@ def _nearest_screened(x, c, scr: _Screen, chunk: int = 0):
     for s in range(0, n, step):
         e = min(n, s + step)
         sc = buf[: e - s]
-        np.matmul(scr.xa[s:e], ca, out=sc)
+        np.matmul(xa[s:e], ca, out=sc)
         best = sc.argmax(axis=1)
         idx[s:e] = best
         smax = sc[np.arange(e - s), best]
-        margin = (2.0 * gam * (scr.xnorm[s:e] * rmax + 0.5 * rmax * rmax)).astype(np.float32)
+        margin = (2.0 * gam * (xnorm[s:e] * rmax + 0.5 * rmax * rmax)).astype(np.float32)
         # float32 rounding of the threshold itself: widen by one more ulp-ish step
         thr = smax - margin - np.abs(smax) * np.float32(4 * _U32)
         cand = sc >= thr[:, None]
@@ -338,45 +351,81 @@ def _sse(x, w, c):
     return float(w @ np.einsum("ij,ij->i", diff, diff))
 
 
-def _split(x, w, m, rng, n_power=6, n_lloyd=8):
-    """Trial split of one cell (x (n, d), weights w, centroid m) into two.
+def _split(x, w, m, rng, need_sse=False, n_power=3, n_lloyd=4, sample=2048):
+    """Split one cell (x (n, d), weights w, centroid m) into two.
 
     Initial cut: the hyperplane through the centroid orthogonal to the principal axis (power
     iteration from a seeded random start); then up to ``n_lloyd`` weighted 2-means iterations.
-    Returns ``(mask, sse0, sse1)`` -- mask True for the second child, the children's total squared
-    errors about their centroids -- or None if the points cannot be separated."""
-    xc = x - m
+    Cells of more than ``sample`` vectors fit the cut on a seeded random sample of that size and
+    then partition all their vectors with it.  Returns the boolean mask of the second child (and,
+    with need_sse, the children's total squared errors about their centroids), or None if the
+    vectors cannot be separated."""
+    n = x.shape[0]
+    if n == 2 and not need_sse:
+        return np.array([False, True])
+    if n > sample:
+        pick = np.sort(rng.choice(n, size=sample, replace=False))
+        xs, ws = x[pick], w[pick]
+    else:
+        xs, ws = x, w
+    xc = xs - m
     v = rng.standard_normal(x.shape[1])
     for _ in range(n_power):
-        v = (w * (xc @ v)) @ xc
+        v = (ws * (xc @ v)) @ xc
         nv = np.sqrt(v @ v)
         if not nv > 0:
             break
         v /= nv
-    mask = (xc @ v) > 0
+    # initial cut: the best split of the projections on the principal axis (1-D 2-means optimum,
+    # by prefix sums over the sorted projections) -- unlike the cut through the centroid it
+    # isolates a small far-away group, e.g. a few brown texels among green ones
+    p = xc @ v
+    order = np.argsort(p, kind="stable")
+    ps, wsrt = p[order], ws[order]
+    cw = np.cumsum(wsrt)[:-1]
+    cs = np.cumsum(wsrt * ps)[:-1]
+    wt_, st_ = cw[-1] + wsrt[-1], cs[-1] + wsrt[-1] * ps[-1]
+    # SSE(left) + SSE(right) = const - cs^2/cw - (st-cs)^2/(wt-cw): maximise the subtracted part
+    score = cs * cs / cw + (st_ - cs) ** 2 / (wt_ - cw)
+    score[ps[1:] <= ps[:-1]] = -np.inf  # cut only between distinct projections
+    j = int(np.argmax(score))
+    dv, thr = v, 0.5 * (ps[j] + ps[j + 1]) if np.isfinite(score[j]) else 0.0
+    mask = (xc @ dv) > thr
+    if not (mask.all() or not mask.any()):
+        wt, st = ws.sum(), ws @ xc
+        for _ in range(n_lloyd):
+            w1 = np.where(mask, ws, 0.0)
+            ww1 = w1.sum()
+            s1 = w1 @ xc
+            c1 = s1 / ww1
+            c0 = (st - s1) / (wt - ww1)
+            dv_new = c1 - c0
+            thr_new = 0.5 * (c1 @ c1 - c0 @ c0)
+            new = (xc @ dv_new) > thr_new
+            if new.all() or not new.any():
+                break
+            dv, thr = dv_new, thr_new
+            if np.array_equal(new, mask):
+                break
+            mask = new
+    xc = x - m
+    if n > sample:
+        mask = (xc @ dv) > thr
     if mask.all() or not mask.any():
-        # fallback: cut orthogonally to the direction of the farthest point
+        # fallback: cut orthogonally to the direction of the farthest vector
         far = int(np.argmax(np.einsum("ij,ij->i", xc, xc)))
-        mask = (xc @ xc[far]) > 0
+        mask = (xc @ xc[far]) > 0.5 * (xc[far] @ xc[far])
         if mask.all() or not mask.any():
-            return None
-    wt, st = w.sum(), w @ xc
-    for _ in range(n_lloyd):
-        w1 = np.where(mask, w, 0.0)
-        ww1 = w1.sum()
-        s1 = w1 @ xc
-        c1 = s1 / ww1
-        c0 = (st - s1) / (wt - ww1)
-        dv = c1 - c0
-        new = (xc @ dv) > 0.5 * (c1 @ c1 - c0 @ c0)
-        if new.all() or not new.any() or np.array_equal(new, mask):
-            break
-        mask = new
-    w1 = np.where(mask, w, 0.0)
+            mask = (xc @ xc[far]) > 0
+            if mask.all() or not mask.any():
+                return None
+    if not need_sse:
+        return mask
     c1 = _wmean(xc[mask], w[mask])
     c0 = _wmean(xc[~mask], w[~mask])
     diff = xc - np.where(mask[:, None], c1, c0)
     d2 = np.einsum("ij,ij->i", diff, diff)
+    w1 = np.where(mask, w, 0.0)
     return mask, float((w - w1) @ d2), float(w1 @ d2)
 
 
@@ -399,23 +448,25 @@ def _tsvq_build(u, wu, k, seed, criterion="distortion"):
     heap = []
 
     def new_leaf(a, b):
-        xa, wa = xs[a:b], ws[a:b]
+        # the rows are distinct, so a leaf is constant iff it holds one row
         cid = len(cent)
-        is_const = bool(np.all(xa == xa[0]))
-        c = xa[0].copy() if is_const else _wmean(xa, wa)
-        cent.append(c)
         start.append(a)
         end.append(b)
         left.append(-1)
         right.append(-1)
-        if is_const:
+        if b - a == 1:
+            cent.append(xs[a].copy())
             return
-        sse = _sse(xa, wa, c)
+        xa, wa = xs[a:b], ws[a:b]
+        c = (wa @ xa) / wa.sum()
+        cent.append(c)
+        diff = xa - c
+        sse = float(wa @ np.einsum("ij,ij->i", diff, diff))
         if criterion == "gain":
-            t = _split(xa, wa, c, rng)
+            t = _split(xa, wa, c, rng, need_sse=True)
             if t is None:
                 return
-            trial[cid] = t
+            trial[cid] = t[0]
             heapq.heappush(heap, (-(sse - t[1] - t[2]), cid))
         else:
             heapq.heappush(heap, (-sse, cid))
@@ -425,12 +476,11 @@ def _tsvq_build(u, wu, k, seed, criterion="distortion"):
     while n_leaves < k and heap:
         _, nid = heapq.heappop(heap)
         s, e = start[nid], end[nid]
-        t = trial.pop(nid, None)
-        if t is None:
-            t = _split(xs[s:e], ws[s:e], cent[nid], rng)
-            if t is None:
+        mask = trial.pop(nid, None)
+        if mask is None:
+            mask = _split(xs[s:e], ws[s:e], cent[nid], rng)
+            if mask is None:
                 continue
-        mask = t[0]
         perm = np.concatenate([np.flatnonzero(~mask), np.flatnonzero(mask)])
         xs[s:e] = xs[s:e][perm]
         ws[s:e] = ws[s:e][perm]
@@ -466,26 +516,26 @@ def _tsvq_build(u, wu, k, seed, criterion="distortion"):
     return TsvqTree(cent, left, right, leaf, codebook), labels
 
 
-def tsvq_tree(vectors, k, *, seed=0, weights=None) -> TsvqTree:
+def tsvq_tree(vectors, k, *, seed=0, weights=None, criterion="distortion") -> TsvqTree:
     """The paper's greedy tree-structured VQ; returns the tree (see :class:`TsvqTree`).
 
     Starting from one cell holding every (distinct, weighted) vector, repeatedly split the leaf
-    of largest total squared error: cut through its centroid orthogonally to its principal axis,
-    then refine the two children with up to 6 weighted 2-means iterations.  Stops at k leaves
-    (or when every leaf holds identical vectors).  ``seed`` drives the power-iteration start
-    vectors; the result is deterministic for a seed."""
+    of largest total squared error (``criterion="distortion"``, the paper's rule; "gain" splits
+    the leaf whose split reduces the error most instead): cut through its centroid orthogonally
+    to its principal axis, then refine the two children with a few weighted 2-means iterations.
+    Stops at k leaves (or when every leaf holds a single distinct vector).  ``seed`` drives the
+    power-iteration start vectors and the samples of large cells; deterministic for a seed."""
     k = _check_k(k)
     _, _, u, wu, _ = _prepare(vectors, weights)
-    return _tsvq_build(u, wu, k, seed)[0]
+    return _tsvq_build(u, wu, k, seed, criterion)[0]
 
 
-def tsvq(vectors, k, *, seed=0, weights=None) -> np.ndarray:
-    """TSVQ codebook: ``(k, d)`` float64, the leaf centroids of :func:`tsvq_tree`.
-
-    With >= k distinct vectors the k codewords are distinct; with fewer, every distinct vector
-    appears exactly, then repeats.  Encode with :func:`nearest` (full search) or with
+def tsvq(vectors, k, *, seed=0, weights=None, criterion="distortion") -> np.ndarray:
+    """TSVQ codebook: ``(k, d)`` float64, the leaf centroids of :func:`tsvq_tree` (left to
+    right).  With >= k distinct vectors the k codewords are distinct; with fewer, every distinct
+    vector appears exactly, then repeats.  Encode with :func:`nearest` (full search) or with
     ``tsvq_tree(...).encode`` (tree search, the paper's fast encoder)."""
-    return tsvq_tree(vectors, k, seed=seed, weights=weights).codebook
+    return tsvq_tree(vectors, k, seed=seed, weights=weights, criterion=criterion).codebook
 
 
 # --------------------------------------------------------------------------------------------
@@ -516,6 +566,22 @@ def _centroids(u, wu, a, k):
     for j in range(u.shape[1]):  # one bincount per dimension: O(M d), no loop over vectors
         sums[:, j] = np.bincount(a, weights=wu * u[:, j], minlength=k)
     return cnt, sums
+
+
+def _update_centroids(u, wu, a_old, a_new, cnt, sums):
+    """Re-derive cnt and sums (in place) of the cells that gained or lost vectors; the result is
+    bit-identical to a full recomputation (same members, same summation order)."""
+    ch = a_old != a_new
+    if not ch.any():
+        return
+    k = cnt.shape[0]
+    touched = np.zeros(k, dtype=bool)
+    touched[a_old[ch]] = True
+    touched[a_new[ch]] = True
+    sel = touched[a_new]
+    cnt_t, sums_t = _centroids(u[sel], wu[sel], a_new[sel], k)
+    cnt[touched] = cnt_t[touched]
+    sums[touched] = sums_t[touched]
 
 
 def _repair_empty(u, wu, a, c, cnt, sums, k):
@@ -549,36 +615,140 @@ def _repair_empty(u, wu, a, c, cnt, sums, k):
         target[np.searchsorted(dcell, donors)] = empty  # donor rank r -> r-th empty cell
         a[pick] = target
         c[target] = u[pick]
-        cnt[dcell] -= wu[pick]
-        sums[dcell] -= wu[pick, None] * u[pick]
-        cnt[target] = wu[pick]
-        sums[target] = wu[pick, None] * u[pick]
-        # re-derive the touched cells exactly to avoid drift from the subtractions
+        # re-derive the touched cells exactly (bit-identical to a full recomputation)
         touched = np.zeros(k, dtype=bool)
         touched[dcell] = True
+        touched[target] = True
         sel = touched[a]
-        if sel.any():
-            cnt_t, sums_t = _centroids(u[sel], wu[sel], a[sel], k)
-            cnt[touched] = cnt_t[touched]
-            sums[touched] = sums_t[touched]
+        cnt_t, sums_t = _centroids(u[sel], wu[sel], a[sel], k)
+        cnt[touched] = cnt_t[touched]
+        sums[touched] = sums_t[touched]
 
 
-def _lloyd(u, wu, k, c, a, d2, scr, tol, budget, chunk=0):
-    """Lloyd iterations from codebook ``c`` and an assignment ``a`` made against it (``d2``: exact
-    squared distances of u to c[a]).  Stops by the LBG rule (relative decrease <= tol), at a fixed
-    point, at distortion 0 or after ``budget`` iterations.
+class _State:
+    """Assignment state of the Lloyd iterations on the distinct vectors: codebook ``c``, codeword
+    ``a`` of each vector, exact squared distance ``d2`` to it and ``lb``, a lower bound of the
+    (Euclidean, not squared) distance to every other codeword (Hamerly's bound)."""
 
-    Incremental assignment (exact in exact arithmetic): a vector whose codeword did not move can
-    only be captured by a codeword that moved, so it is screened against the moved codewords only;
-    vectors of moved cells get a full search.  A move is accepted only if the exact float64
-    distance strictly decreases, so the distortion never increases.
-    Returns (c, a, d2, history, iterations, converged); a and d2 are updated copies."""
-    a = a.copy()
-    d2 = d2.copy()
+    __slots__ = ("c", "a", "d2", "lb")
+
+    def __init__(self, c, a, d2, lb):
+        self.c, self.a, self.d2, self.lb = c, a, d2, lb
+
+    def copy(self):
+        return _State(self.c.copy(), self.a.copy(), self.d2.copy(), self.lb.copy())
+
+
+def _combine(u, c, scr, rmax, rows, a, d, b1, b2, s1, s2, rest):
+    """Merge a vector's current codeword (a, d: exact squared distance) with screened candidates
+    b1, b2 (scores s1, s2; b2 may be -1) and a lower bound ``rest`` (distance) for all codewords
+    not looked at.  The best candidate replaces the current codeword only if its exact float64
+    distance is strictly smaller.  Returns the new (a, d2, lb); lb uses the screened distances
+    lowered by their error bound."""
+    q1 = scr.approx_d2(rows, s1, rmax)
+    q2 = scr.approx_d2(rows, s2, rmax)
+    ch = np.flatnonzero((b1 != a) & (q1 < d))
+    e1 = q1.copy()
+    if ch.size:
+        e1[ch] = _exact_d2(u[rows[ch]], c, b1[ch])
+    take = np.zeros(rows.size, dtype=bool)
+    take[ch] = e1[ch] < d[ch]
+    na = np.where(take, b1, a)
+    nd = np.where(take, e1, d)
+    o = np.minimum(np.where(take, d, np.inf), np.where(b1 != na, q1, np.inf))
+    o = np.minimum(o, np.where((b2 >= 0) & (b2 != na), q2, np.inf))
+    return na, nd, np.minimum(rest, np.sqrt(np.maximum(o, 0.0)))
+
+
+def _assign_full(u, c, scr, chunk=0):
+    """Fresh assignment of every vector: screened top-2 over the whole codebook."""
+    ca, rmax = scr.codebook(c)
+    rows = np.arange(u.shape[0])
+    b1, b2, s1, s2 = scr.top2(ca, chunk=chunk)
+    e1 = _exact_d2(u, c, b1)
+    a, d2, lb = _combine(u, c, scr, rmax, rows, b1, e1, b1, b2, s1, s2,
+                         np.full(rows.size, np.inf))
+    return _State(c, a, d2, lb)
+
+
+def _reassign(u, scr, st: _State, c_new, chunk=0, force=None):
+    """Move every vector of ``st`` to its nearest codeword of ``c_new`` (screened), doing as
+    little work as the bounds allow.  ``force``: vectors whose codeword index changed outside
+    (empty-cell repair).  Exact in exact arithmetic; a vector changes codeword only if the exact
+    float64 distance strictly decreases.
+
+    With drift_j = |c_new_j - c_j|, a vector keeps its codeword against every codeword outside a
+    set J of the largest movers if |x - c_new_a| <= lb - max drift outside J (Hamerly); a vector
+    whose codeword did not move can only be captured by a codeword that moved.  So there are
+    three groups: vectors passing the bound are screened against J only, vectors of unmoved cells
+    against the moved codewords, the rest against everything.  |J| is chosen per call to
+    minimise the number of scores computed."""
+    k = c_new.shape[0]
+    a, d2, lb = st.a.copy(), st.d2.copy(), st.lb.copy()
+    diff = c_new - st.c
+    drift = np.sqrt(np.einsum("ij,ij->i", diff, diff))
+    moved = np.any(c_new != st.c, axis=1)
+    if not moved.any():
+        return _State(c_new, a, d2, lb)
+    mv = np.flatnonzero(moved)
+    pm = moved[a]
+    if force is not None:
+        pm |= force
+    rows = np.flatnonzero(pm)
+    d2[rows] = _exact_d2(u[rows], c_new, a[rows])
+    if force is not None:
+        lb[force] = 0.0
+    ub = np.sqrt(d2)
+    # choose |J|: candidates 0, 1, 2, 4, ... and all moved codewords
+    mv_sorted = mv[np.argsort(-drift[mv], kind="stable")]
+    ds = drift[mv_sorted]
+    best = None
+    sizes = sorted({0, mv.size} | {1 << i for i in range(mv.size.bit_length()) if (1 << i) < mv.size})
+    slack = ub - lb
+    for t in sizes:
+        dec = ds[t] if t < mv.size else 0.0
+        pa = slack <= -dec
+        n_a = int(np.count_nonzero(pa))
+        n_c = int(np.count_nonzero(~pa & pm))
+        n_b = u.shape[0] - n_a - n_c
+        cost = n_a * t + n_b * mv.size + n_c * k
+        if best is None or cost < best[0]:
+            best = (cost, t, dec, pa)
+    _, t, dec, pa = best
+    ca, rmax = scr.codebook(c_new)
+    groups = (
+        (np.flatnonzero(pa), mv_sorted[:t], lb - dec),
+        (np.flatnonzero(~pa & ~pm), mv, lb),
+        (np.flatnonzero(~pa & pm), None, np.inf),
+    )
+    new_lb = lb - dec  # for group A with an empty J
+    for g, cols, rest in groups:
+        if g.size == 0:
+            continue
+        rest_g = rest[g] if isinstance(rest, np.ndarray) else np.full(g.size, rest)
+        if cols is not None and cols.size == 0:
+            new_lb[g] = rest_g
+            continue
+        if cols is None:
+            b1, b2, s1, s2 = scr.top2(ca, rows=g, chunk=chunk)
+        else:
+            b1, b2, s1, s2 = scr.top2(np.ascontiguousarray(ca[:, cols]), rows=g, chunk=chunk)
+            b1 = cols[b1]
+            b2 = np.where(b2 >= 0, cols[np.maximum(b2, 0)], -1)
+        a[g], d2[g], new_lb[g] = _combine(u, c_new, scr, rmax, g, a[g], d2[g], b1, b2, s1, s2,
+                                          rest_g)
+    return _State(c_new, a, d2, new_lb)
+
+
+def _lloyd(u, wu, k, st: _State, scr, tol, budget, chunk=0):
+    """Lloyd iterations from state ``st``.  Stops by the LBG rule (relative decrease <= tol),
+    at a fixed point, at distortion 0 or after ``budget`` iterations.
+    Returns (state, history, iterations, converged)."""
     wsum = wu.sum()
-    dist = float(wu @ d2) / wsum
+    dist = float(wu @ st.d2) / wsum
     hist = []
     it, conv = 0, False
+    cnt, sums = _centroids(u, wu, st.a, k)
     while True:
         if dist == 0.0:
             conv = True
@@ -586,43 +756,27 @@ def _lloyd(u, wu, k, c, a, d2, scr, tol, budget, chunk=0):
         if it >= budget:
             break
         it += 1
-        a_prev = a.copy()
-        cnt, sums = _centroids(u, wu, a, k)
-        c_new = c.copy()
+        a = st.a.copy()
+        c_new = st.c.copy()
         _repair_empty(u, wu, a, c_new, cnt, sums, k)
         full = cnt > 0
         c_new[full] = sums[full] / cnt[full, None]
-        moved = np.any(c_new != c, axis=1)
-        if not moved.any():  # fixed point: nothing can change any more
+        if np.array_equal(c_new, st.c):  # fixed point: nothing can change any more
             conv = True
             hist.append(dist)
             break
-        pm = moved[a] | (a != a_prev)
-        rows_m = np.flatnonzero(pm)
-        d_old = d2
-        d_old[rows_m] = _exact_d2(u[rows_m], c_new, a[rows_m])
-        ca, _ = scr.codebook(c_new)
-        cand = a.copy()
-        cand[rows_m] = scr.argmax(ca, rows=rows_m, chunk=chunk)
-        mv = np.flatnonzero(moved)
-        rows_s = np.flatnonzero(~pm)
-        if rows_s.size:
-            cand[rows_s] = mv[scr.argmax(np.ascontiguousarray(ca[:, mv]), rows=rows_s, chunk=chunk)]
-        ch = np.flatnonzero(cand != a)
-        d_c = _exact_d2(u[ch], c_new, cand[ch])
-        acc = d_c < d_old[ch]
-        a[ch[acc]] = cand[ch[acc]]
-        d2 = d_old
-        d2[ch[acc]] = d_c[acc]
-        new = float(wu @ d2) / wsum
-        c = c_new
+        force = a != st.a
+        st = _reassign(u, scr, _State(st.c, a, st.d2, st.lb), c_new, chunk,
+                       force if force.any() else None)
+        _update_centroids(u, wu, a, st.a, cnt, sums)
+        new = float(wu @ st.d2) / wsum
         hist.append(new)
         if dist - new <= tol * new:
             conv = True
             dist = new
             break
         dist = new
-    return c, a, d2, hist, it, conv
+    return st, hist, it, conv
 
 
 def _migrate(u, wu, k, c, scr, frac, chunk=0):
@@ -632,15 +786,10 @@ def _migrate(u, wu, k, c, scr, frac, chunk=0):
     to their second-nearest codeword).  The lowest-utility codewords are moved onto the member
     farthest from its codeword of the cells with the largest such error (the empty-cell repair
     rule), pairing lowest utility with largest error while utility < 2 x that error, at most
-    ``frac * k`` moves.  Returns (new codebook, assignment, exact d2) or None if nothing moves."""
-    ca, _ = scr.codebook(c)
-    b1, b2 = scr.top2(ca, chunk)
-    d1 = _exact_d2(u, c, b1)
-    db = _exact_d2(u, c, b2)
-    sw = db < d1
-    b1, b2 = np.where(sw, b2, b1), np.where(sw, b1, b2)
-    d1, db = np.where(sw, db, d1), np.where(sw, d1, db)
-    util = np.bincount(b1, weights=wu * (db - d1), minlength=k)
+    ``frac * k`` moves.  Returns the new state (vectors reassigned) or None if nothing moves."""
+    st = _assign_full(u, c, scr, chunk)
+    b1, d1 = st.a, st.d2
+    util = np.bincount(b1, weights=wu * (st.lb * st.lb - d1), minlength=k)
     err = wu * d1
     order = np.lexsort((np.arange(u.shape[0]), -err, b1))
     first = np.ones(order.size, dtype=bool)
@@ -660,82 +809,84 @@ def _migrate(u, wu, k, c, scr, frac, chunk=0):
         return None
     c_new = c.copy()
     c_new[rem] = u[far[rec]]
-    # assignment against the new codebook: the old nearest unless the vector's codeword was
-    # removed (full search) or a new codeword is closer
-    removed = np.zeros(k, dtype=bool)
-    removed[rem] = True
-    a = b1.copy()
-    d2 = d1.copy()
-    pm = np.flatnonzero(removed[a])
-    ca, _ = scr.codebook(c_new)
-    a[pm] = scr.argmax(ca, rows=pm, chunk=chunk)
-    d2[pm] = _exact_d2(u[pm], c_new, a[pm])
-    rs = np.flatnonzero(~removed[b1])
-    cand = rem[scr.argmax(np.ascontiguousarray(ca[:, rem]), rows=rs, chunk=chunk)]
-    dc = _exact_d2(u[rs], c_new, cand)
-    acc = dc < d2[rs]
-    a[rs[acc]] = cand[acc]
-    d2[rs[acc]] = dc[acc]
-    return c_new, a, d2
+    return _reassign(u, scr, st, c_new, chunk)
 
 
 def _gla_core(u, wu, k, c0, max_iter, tol, migrate, frac=0.1, chunk=0):
     """GLA on distinct weighted vectors; returns (codebook, history, iterations, converged)."""
-    c = np.array(c0, dtype=np.float64, copy=True)
     wsum = wu.sum()
     scr = _Screen(u, _wmean(u, wu))
-    a, d2 = _nearest_screened(u, c, scr, chunk)
-    hist = [float(wu @ d2) / wsum]
-    c, a, d2, h, it, conv = _lloyd(u, wu, k, c, a, d2, scr, tol, max_iter, chunk)
+    st = _assign_full(u, np.array(c0, dtype=np.float64, copy=True), scr, chunk)
+    hist = [float(wu @ st.d2) / wsum]
+    st, h, it, conv = _lloyd(u, wu, k, st, scr, tol, max_iter, chunk)
     hist += h
     rounds = 0
     while conv and rounds < migrate and k >= 2 and it < max_iter and hist[-1] > 0:
         rounds += 1
-        trial = _migrate(u, wu, k, c, scr, frac, chunk)
+        trial = _migrate(u, wu, k, st.c, scr, frac, chunk)
         if trial is None:
             break
-        c_t, a_t, d2_t, h, it_t, conv_t = _lloyd(u, wu, k, *trial, scr, tol, max_iter - it, chunk)
+        st_t, h, it_t, conv_t = _lloyd(u, wu, k, trial, scr, tol, max_iter - it, chunk)
         it += it_t
-        d_t = float(wu @ d2_t) / wsum
+        d_t = float(wu @ st_t.d2) / wsum
         if not d_t < hist[-1]:
             break  # rejected: keep the previous codebook (converged by the stop rule)
         improve = hist[-1] - d_t
-        c, a, d2, conv = c_t, a_t, d2_t, conv_t
+        st, conv = st_t, conv_t
         hist.append(d_t)
         if improve <= tol * d_t:
             break
-    return c, hist, it, conv
+    return st, scr, hist, it, conv
+
+
+def _final_indices(u, st: _State, scr, chunk=0):
+    """Exact nearest codeword (ties -> lowest index) of every distinct vector for st.c: a vector
+    whose distance to its codeword is certified below the lower bound of all others keeps it,
+    the rest go through the exact full search.  Returns (indices, exact d2)."""
+    a, d2 = st.a.copy(), st.d2.copy()
+    ub = np.sqrt(d2)
+    unsure = np.flatnonzero(~(ub * (1 + 1e-9) + 1e-12 < st.lb))
+    if unsure.size:
+        a[unsure], d2[unsure] = _nearest_screened(u[unsure], st.c, scr, chunk, rows=unsure)
+    return a, d2
 
 
 def gla(vectors, k, *, seed=0, weights=None, init=None, max_iter=100, tol=1e-4,
-        migrate=8) -> GlaResult:
+        migrate=8, subsample=64) -> GlaResult:
     """Generalized Lloyd algorithm (full-search Lloyd / LBG) with TSVQ initialisation and
     ELBG-style codeword migration.
 
     Works on the distinct vectors with merged weights.  Each Lloyd iteration: (1) centroid
     update, empty cells repaired by splitting the cell of largest total squared error (its member
     farthest from the centroid becomes the new codeword, so rare colours survive); (2) every
-    vector moves to its nearest codeword (float32 GEMM screening; a move is accepted only if its
-    exact float64 distance is strictly smaller, so the distortion never increases).
+    vector moves to its nearest codeword (float32 GEMM screening pruned by Hamerly-style bounds;
+    a move is accepted only if its exact float64 distance is strictly smaller, so the distortion
+    never increases).
 
     Stop rule (LBG): a descent stops after the first iteration whose distortion D_m satisfies
     ``D_{m-1} - D_m <= tol * D_m``, or at a fixed point, or when D_m == 0.
 
-    Migration (0 < ``migrate`` rounds, default 8): after a descent has stopped, move up to 10% of
-    the codewords, those of least utility, into the cells with the largest error (see
-    ``_migrate``) and descend again; keep the result only if the distortion decreased, and stop
-    migrating after a rejected round or a round that improved by at most ``tol`` (relative).
-    This escapes the poor local minima plain GLA gets stuck in (isolated detailed blocks
-    deserve their own codeword); ``migrate=0`` is the plain GLA.
+    Migration (``migrate`` rounds at most, default 8; 0 = plain GLA): after a descent has
+    stopped, move up to 10% of the codewords, those of least utility, onto the worst-coded
+    vectors of the cells with the largest error (see ``_migrate``) and descend again; keep the
+    result only if the distortion decreased, and stop after a rejected round or a round that
+    improved by at most ``tol`` (relative).  This escapes the poor local minima plain GLA gets
+    stuck in (isolated detailed blocks deserve their own codeword).
 
-    ``max_iter`` caps the total number of Lloyd iterations (all descents); ``converged`` is False
-    iff the cap stopped the last descent.
-    ``init``: None or "tsvq" (default: greedy TSVQ with the largest-gain split rule, see
-    :func:`tsvq_tree`, with ``seed``), or a (k, d) array.
-    Returns :class:`GlaResult`; ``history`` holds the distortion after the initial assignment,
-    after each iteration of the first descent and after each accepted migration round
-    (non-increasing).  Indices are the exact full-search nearest codewords.
+    Coarse phase (``subsample`` vectors per codeword, default 64; 0 disables): with more than
+    2 * subsample * k distinct vectors, the initial codebook is designed (TSVQ, descent,
+    migration) on a seeded uniform sample of subsample * k distinct vectors, then refined on all
+    of them (descent, migration).
+
+    ``max_iter`` caps the number of Lloyd iterations of each phase; ``iterations`` counts all of
+    them; ``converged`` is False iff the cap stopped the last descent.
+    ``init``: None or "tsvq" (default: the paper's greedy TSVQ, :func:`tsvq`, with ``seed``), or
+    a (k, d) array (then there is no coarse phase).
+    Returns :class:`GlaResult`; ``history`` holds the distortion (all vectors) after the initial
+    assignment, after each iteration of the first full-data descent and after each accepted
+    migration round (non-increasing).  Indices are the exact full-search nearest codewords.
     With at most k distinct vectors the result is exact (see module docstring).
+    Deterministic for a given seed.
     """
     k = _check_k(k)
     if max_iter < 0:
@@ -745,17 +896,31 @@ def gla(vectors, k, *, seed=0, weights=None, init=None, max_iter=100, tol=1e-4,
         cb = _pad(u, k)
         idx, d2 = nearest(x, cb)
         return GlaResult(cb, idx, float(w @ d2) / w.sum(), 0, True, [0.0])
+    it0 = 0
     if init is None or (isinstance(init, str) and init == "tsvq"):
-        c0 = _tsvq_build(u, wu, k, seed, "gain")[0].codebook
+        if subsample and u.shape[0] > 2 * subsample * k:
+            rng = np.random.default_rng(seed)
+            pick = np.sort(rng.choice(u.shape[0], size=subsample * k, replace=False))
+            us, wus = u[pick], wu[pick]
+            c0 = _tsvq_build(us, wus, k, seed)[0].codebook
+            st, _, _, it0, _ = _gla_core(us, wus, k, c0, max_iter, tol, migrate)
+            c0 = st.c
+        else:
+            c0 = _tsvq_build(u, wu, k, seed)[0].codebook
     elif isinstance(init, str):
         raise ValueError(f"unknown init {init!r}")
     else:
         c0 = np.asarray(init, dtype=np.float64)
         if c0.shape != (k, u.shape[1]) or not np.all(np.isfinite(c0)):
             raise ValueError(f"init must be a finite ({k}, {u.shape[1]}) array")
-    c, hist, it, conv = _gla_core(u, wu, k, c0, max_iter, tol, migrate)
-    idx, d2 = nearest(x, c)
-    return GlaResult(c, idx, float(w @ d2) / w.sum(), it, conv, hist)
+    st, scr, hist, it, conv = _gla_core(u, wu, k, c0, max_iter, tol, migrate)
+    iu, du = _final_indices(u, st, scr)
+    idx = iu[np.maximum(inv, 0)]
+    d2 = du[np.maximum(inv, 0)]
+    zero = np.flatnonzero(inv < 0)  # weight-0 vectors were not trained on
+    if zero.size:
+        idx[zero], d2[zero] = nearest(x[zero], st.c)
+    return GlaResult(st.c, idx, float(w @ d2) / w.sum(), it0 + it, conv, hist)
 
 
 def design(vectors, k, *, method="gla", seed=0, weights=None, **kw):
