@@ -272,8 +272,10 @@ class Build:
     steps: dict = field(default_factory=dict)      # step -> seconds (elaborate, yosys, compile)
 
 
-def build_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8, cxxflags=None) -> Build:
-    """The CXXRTL library for this design (built or taken from the cache)."""
+def build_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8, cxxflags=None, compile: bool = True) -> Build:
+    """The CXXRTL library for this design (built or taken from the cache). With ``compile=False``
+    nothing is compiled: the result names the library the build would produce (``cached`` tells
+    whether it exists)."""
     cxx = find_tool("g++")
     flags = list(cxxflags or CXXFLAGS)
     t0 = time.perf_counter()
@@ -294,6 +296,9 @@ def build_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8, cxxflags=Non
     steps["yosys"] = time.perf_counter() - t1
     key = digest("cxxrtl", src, header, *drivers, flags, tool_version(cxx))
     inc = cxxrtl_include_dir()
+    if not compile:
+        lib = os.path.join(os_cache("cxxrtl"), key, "libvq.so")
+        return Build(lib, 0.0, os.path.isfile(lib), info, key, steps)
 
     def build(folder):
         with open(os.path.join(folder, "design.cc"), "w") as f:

@@ -97,6 +97,14 @@ def cached_build(kind: str, key: str, build, product: str) -> tuple[str, float, 
         build(tmp)
         if not os.path.isfile(os.path.join(tmp, product)):
             raise ToolchainError(f"{kind} build produced no {product} (see {tmp})")
+        if os.path.isdir(final) and not os.path.isfile(target):
+            # A damaged entry (its product was deleted): move it aside, then take its place.
+            stale = tempfile.mkdtemp(prefix=f".stale-{key}-", dir=root)
+            try:
+                os.rename(final, os.path.join(stale, "old"))
+            except OSError:
+                pass                              # a concurrent builder did it first
+            shutil.rmtree(stale, ignore_errors=True)
         try:
             os.rename(tmp, final)
         except OSError:
