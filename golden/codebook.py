@@ -346,39 +346,48 @@ def _wmean(x, w):
     return (w @ x) / w.sum()
 
 
-def _sse(x, w, c):
-    diff = x - c
-    return float(w @ np.einsum("ij,ij->i", diff, diff))
+def _child_stats(x, w, mask):
+    """Split record: mask, the children's centroids and total squared errors (a one-row child's
+    centroid is that row, exactly)."""
+    w1 = np.where(mask, w, 0.0)
+    w0 = w - w1
+    c1 = (w1 @ x) / w1.sum()
+    c0 = (w0 @ x) / w0.sum()
+    xx = np.einsum("ij,ij->i", x, x)
+    dd = np.where(mask, xx - 2.0 * (x @ c1) + c1 @ c1, xx - 2.0 * (x @ c0) + c0 @ c0)
+    e1, e0 = max(float(w1 @ dd), 0.0), max(float(w0 @ dd), 0.0)
+    n1 = int(np.count_nonzero(mask))
+    if n1 == 1:
+        c1, e1 = x[np.argmax(mask)].copy(), 0.0
+    if n1 == mask.size - 1:
+        c0, e0 = x[np.argmin(mask)].copy(), 0.0
+    return mask, c0, c1, e0, e1
 
 
-def _split(x, w, m, rng, need_sse=False, n_power=3, n_lloyd=4, sample=2048):
+def _split(x, w, m, v0, rng, n_power=3, n_lloyd=4, sample=2048):
     """Split one cell (x (n, d), weights w, centroid m) into two.
 
-    Initial cut: the hyperplane through the centroid orthogonal to the principal axis (power
-    iteration from a seeded random start); then up to ``n_lloyd`` weighted 2-means iterations.
-    Cells of more than ``sample`` vectors fit the cut on a seeded random sample of that size and
-    then partition all their vectors with it.  Returns the boolean mask of the second child (and,
-    with need_sse, the children's total squared errors about their centroids), or None if the
-    vectors cannot be separated."""
+    Initial cut: along the principal axis (power iteration from ``v0``), at the 1-D 2-means
+    optimum of the projections (unlike a cut through the centroid this isolates a small, far
+    group, e.g. a few brown texels among green ones); then up to ``n_lloyd`` weighted 2-means
+    iterations.  Cells of more than ``sample`` vectors fit the cut on a random sample (``rng``)
+    of that size, then partition all their vectors with it.  Returns the split record
+    ``(mask of the second child, c0, c1, sse0, sse1)`` or None if the vectors cannot be
+    separated.  ``rng``: a callable returning the Generator (made only when needed)."""
     n = x.shape[0]
-    if n == 2 and not need_sse:
-        return np.array([False, True])
     if n > sample:
-        pick = np.sort(rng.choice(n, size=sample, replace=False))
+        pick = np.sort(rng().choice(n, size=sample, replace=False))
         xs, ws = x[pick], w[pick]
     else:
         xs, ws = x, w
     xc = xs - m
-    v = rng.standard_normal(x.shape[1])
+    v = v0.copy()
     for _ in range(n_power):
         v = (ws * (xc @ v)) @ xc
         nv = np.sqrt(v @ v)
         if not nv > 0:
             break
         v /= nv
-    # initial cut: the best split of the projections on the principal axis (1-D 2-means optimum,
-    # by prefix sums over the sorted projections) -- unlike the cut through the centroid it
-    # isolates a small far-away group, e.g. a few brown texels among green ones
     p = xc @ v
     order = np.argsort(p, kind="stable")
     ps, wsrt = p[order], ws[order]
@@ -408,79 +417,188 @@ def _split(x, w, m, rng, need_sse=False, n_power=3, n_lloyd=4, sample=2048):
             if np.array_equal(new, mask):
                 break
             mask = new
-    xc = x - m
     if n > sample:
-        mask = (xc @ dv) > thr
+        mask = (x @ dv) > thr + m @ dv
     if mask.all() or not mask.any():
         # fallback: cut orthogonally to the direction of the farthest vector
+        xc = x - m
         far = int(np.argmax(np.einsum("ij,ij->i", xc, xc)))
         mask = (xc @ xc[far]) > 0.5 * (xc[far] @ xc[far])
         if mask.all() or not mask.any():
             mask = (xc @ xc[far]) > 0
             if mask.all() or not mask.any():
                 return None
-    if not need_sse:
-        return mask
-    c1 = _wmean(xc[mask], w[mask])
-    c0 = _wmean(xc[~mask], w[~mask])
-    diff = xc - np.where(mask[:, None], c1, c0)
-    d2 = np.einsum("ij,ij->i", diff, diff)
+    return _child_stats(x, w, mask)
+
+
+def _split_batch(xs, ws, starts, ends, cents, v0, n_power=3, n_lloyd=4):
+    """:func:`_split` for many small cells at once (segment-vectorised over the concatenated
+    rows; no sampling).  Returns a list of split records, None where the batch could not cut a
+    cell (the caller then uses :func:`_split`)."""
+    b = starts.size
+    n = ends - starts
+    off = np.zeros(b + 1, dtype=np.int64)
+    off[1:] = np.cumsum(n)
+    st0 = off[:-1]
+    seg = np.repeat(np.arange(b), n)
+    idx = np.arange(off[-1]) - np.repeat(st0 - starts, n)
+    x, w = xs[idx], ws[idx]
+    xc = x - cents[seg]
+    v = v0.copy()
+    for _ in range(n_power):
+        p = np.einsum("ij,ij->i", xc, v[seg])
+        vn = np.add.reduceat((w * p)[:, None] * xc, st0)
+        nv = np.sqrt(np.einsum("ij,ij->i", vn, vn))
+        good = nv > 0
+        v[good] = vn[good] / nv[good, None]
+    p = np.einsum("ij,ij->i", xc, v[seg])
+    # 1-D 2-means optimum per segment over the sorted projections
+    o = np.lexsort((p, seg))
+    ps, wsr = p[o], w[o]
+    cw_all, cs_all = np.cumsum(wsr), np.cumsum(wsr * ps)
+    base_w = np.concatenate([[0.0], cw_all[off[1:-1] - 1]])
+    base_s = np.concatenate([[0.0], cs_all[off[1:-1] - 1]])
+    cw = cw_all - base_w[seg]
+    cs = cs_all - base_s[seg]
+    wt, stt = cw[off[1:] - 1], cs[off[1:] - 1]
+    last = np.zeros(off[-1], dtype=bool)
+    last[off[1:] - 1] = True
+    valid = ~last
+    valid[:-1] &= ps[1:] > ps[:-1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        score = np.where(valid, cs * cs / cw + (stt[seg] - cs) ** 2 / (wt[seg] - cw), -np.inf)
+    smax = np.maximum.reduceat(score, st0)
+    hit = np.flatnonzero(score == smax[seg])
+    _, first = np.unique(seg[hit], return_index=True)
+    j = hit[first]  # first maximiser of each segment (every segment has a hit)
+    okcut = np.isfinite(smax)
+    jn = np.minimum(j + 1, off[-1] - 1)
+    thr = np.where(okcut, 0.5 * (ps[j] + ps[jn]), np.inf)
+    mask = p > thr[seg]
+    wtot = np.add.reduceat(w, st0)
+    stot = np.add.reduceat(w[:, None] * xc, st0)
+    ones = np.ones(off[-1], dtype=np.int64)
+    for _ in range(n_lloyd):
+        w1 = np.where(mask, w, 0.0)
+        ww1 = np.add.reduceat(w1, st0)
+        s1 = np.add.reduceat(w1[:, None] * xc, st0)
+        n1 = np.add.reduceat(np.where(mask, ones, 0), st0)
+        live = (n1 > 0) & (n1 < n)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            c1 = s1 / ww1[:, None]
+            c0 = (stot - s1) / (wtot - ww1)[:, None]
+        dv = c1 - c0
+        th = 0.5 * (np.einsum("ij,ij->i", c1, c1) - np.einsum("ij,ij->i", c0, c0))
+        dv[~live] = 0.0
+        th[~live] = 0.0
+        new = np.einsum("ij,ij->i", xc, dv[seg]) > th[seg]
+        nn1 = np.add.reduceat(np.where(new, ones, 0), st0)
+        upd = (live & (nn1 > 0) & (nn1 < n))[seg]
+        new = np.where(upd, new, mask)
+        if np.array_equal(new, mask):
+            break
+        mask = new
+    # children statistics (centred sums, then back to the original coordinates)
+    n1 = np.add.reduceat(np.where(mask, ones, 0), st0)
     w1 = np.where(mask, w, 0.0)
-    return mask, float((w - w1) @ d2), float(w1 @ d2)
+    w0 = w - w1
+    ww1, ww0 = np.add.reduceat(w1, st0), np.add.reduceat(w0, st0)
+    ok = (n1 > 0) & (n1 < n)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        c1 = np.add.reduceat(w1[:, None] * xc, st0) / ww1[:, None]
+        c0 = np.add.reduceat(w0[:, None] * xc, st0) / ww0[:, None]
+    # SSE = sum w |xc|^2 - W |c|^2 per side (centred at the parent: mild cancellation)
+    wxx = w * np.einsum("ij,ij->i", xc, xc)
+    sse1 = np.add.reduceat(np.where(mask, wxx, 0.0), st0) - ww1 * np.einsum("ij,ij->i", c1, c1)
+    sse0 = np.add.reduceat(np.where(mask, 0.0, wxx), st0) - ww0 * np.einsum("ij,ij->i", c0, c0)
+    sse1 = np.maximum(sse1, 0.0)
+    sse0 = np.maximum(sse0, 0.0)
+    c1 += cents
+    c0 += cents
+    # one-row children: the row itself, exactly
+    single1 = mask & (n1 == 1)[seg]
+    single0 = ~mask & (n - n1 == 1)[seg]
+    c1[seg[single1]] = x[single1]
+    c0[seg[single0]] = x[single0]
+    sse1[n1 == 1] = 0.0
+    sse0[n - n1 == 1] = 0.0
+    out = []
+    for i in range(b):  # one record per cell (bookkeeping only, no arithmetic per vector)
+        if ok[i]:
+            out.append((mask[st0[i]:off[i + 1]], c0[i], c1[i], float(sse0[i]), float(sse1[i])))
+        else:
+            out.append(None)
+    return out
 
 
-def _tsvq_build(u, wu, k, seed, criterion="distortion"):
+def _tsvq_build(u, wu, k, seed, criterion="distortion", batch=128, sample=2048, small_cell=256):
     """Greedy TSVQ on distinct weighted vectors.
 
     criterion "distortion" (the paper's rule): split the leaf of largest total squared error.
-    criterion "gain": split the leaf whose (trial) split reduces the total squared error most
-    (greedy tree growing, Riskin & Gray 1991).  Ties go to the older leaf.  Stops at k leaves or
-    when no leaf can be split.  Returns (TsvqTree, labels of the distinct vectors)."""
+    criterion "gain": split the leaf whose split reduces the total squared error most (greedy
+    tree growing, Riskin & Gray 1991; evaluated lazily, since a gain never exceeds the leaf's
+    error).  Ties go to the older leaf.  Stops at k leaves or when no leaf can be split.
+
+    A leaf's split depends only on its vectors and its node number (seeded start vector and
+    sample), never on when it is computed, so splits are computed ahead in vectorised batches
+    of up to ``batch`` high-error leaves without changing the tree (leaves of at most
+    ``small_cell`` vectors, whose cost is all interpreter overhead; larger ones one by one).
+    Returns (TsvqTree, labels of the distinct vectors)."""
     if criterion not in ("distortion", "gain"):
         raise ValueError(f"unknown TSVQ split criterion {criterion!r}")
-    rng = np.random.default_rng(seed)
     m_, d = u.shape
+    v0 = np.random.default_rng(seed).standard_normal((2 * k + 1, d))
     order = np.arange(m_)
     xs = u.copy()
     ws = wu.copy()
-    cent, start, end, left, right = [], [], [], [], []
-    trial = {}
+    cent, start, end, left, right, sse = [], [], [], [], [], []
+    rec = {}
     heap = []
 
-    def new_leaf(a, b):
-        # the rows are distinct, so a leaf is constant iff it holds one row
+    def new_leaf(a, b, c, e):
         cid = len(cent)
+        cent.append(c)
         start.append(a)
         end.append(b)
         left.append(-1)
         right.append(-1)
-        if b - a == 1:
-            cent.append(xs[a].copy())
-            return
-        xa, wa = xs[a:b], ws[a:b]
-        c = (wa @ xa) / wa.sum()
-        cent.append(c)
-        diff = xa - c
-        sse = float(wa @ np.einsum("ij,ij->i", diff, diff))
-        if criterion == "gain":
-            t = _split(xa, wa, c, rng, need_sse=True)
-            if t is None:
-                return
-            trial[cid] = t[0]
-            heapq.heappush(heap, (-(sse - t[1] - t[2]), cid))
-        else:
-            heapq.heappush(heap, (-sse, cid))
+        sse.append(e)
+        if b - a > 1:  # rows are distinct: one row = constant leaf
+            heapq.heappush(heap, (-e, cid, False))
 
-    new_leaf(0, m_)
+    def compute(nids):
+        small = [i for i in nids if end[i] - start[i] <= small_cell]
+        if small:
+            arr = np.array(small, dtype=np.int64)
+            res = _split_batch(xs, ws, np.array(start)[arr], np.array(end)[arr],
+                               np.array([cent[i] for i in small]), v0[arr])
+            for i, r in zip(small, res):
+                rec[i] = r
+        for i in nids:
+            if rec.get(i, None) is None:
+                s, e = start[i], end[i]
+                rng = lambda i=i: np.random.default_rng([seed, i])  # noqa: E731
+                rec[i] = _split(xs[s:e], ws[s:e], cent[i], v0[i], rng, sample=sample)
+
+    root_c = _wmean(xs, ws) if m_ > 1 else xs[0].copy()
+    diff = xs - root_c
+    new_leaf(0, m_, root_c, float(ws @ np.einsum("ij,ij->i", diff, diff)))
     n_leaves = 1
     while n_leaves < k and heap:
-        _, nid = heapq.heappop(heap)
+        key, nid, exact = heapq.heappop(heap)
+        if nid not in rec:
+            want = max(1, min(batch, k - n_leaves))
+            top = [e[1] for e in heapq.nsmallest(2 * want, heap) if e[1] not in rec]
+            compute([nid] + top[: want - 1])
+        r = rec.pop(nid)
+        if r is None:
+            continue
+        if criterion == "gain" and not exact:
+            heapq.heappush(heap, (-(sse[nid] - r[3] - r[4]), nid, True))
+            rec[nid] = r
+            continue
+        mask, c0, c1, e0, e1 = r
         s, e = start[nid], end[nid]
-        mask = trial.pop(nid, None)
-        if mask is None:
-            mask = _split(xs[s:e], ws[s:e], cent[nid], rng)
-            if mask is None:
-                continue
         perm = np.concatenate([np.flatnonzero(~mask), np.flatnonzero(mask)])
         xs[s:e] = xs[s:e][perm]
         ws[s:e] = ws[s:e][perm]
@@ -488,8 +606,8 @@ def _tsvq_build(u, wu, k, seed, criterion="distortion"):
         mid = s + int(np.count_nonzero(~mask))
         left[nid] = len(cent)
         right[nid] = len(cent) + 1
-        new_leaf(s, mid)
-        new_leaf(mid, e)
+        new_leaf(s, mid, c0, e0)
+        new_leaf(mid, e, c1, e1)
         n_leaves += 1
     left = np.array(left, dtype=np.int64)
     right = np.array(right, dtype=np.int64)
@@ -671,64 +789,101 @@ def _assign_full(u, c, scr, chunk=0):
     return _State(c, a, d2, lb)
 
 
+# Per-vector overhead of screening a vector against a column subset, in units of one score
+# (gathers, two argmax passes, bookkeeping); measured ~100 ns against ~0.5 ns per score.
+_ROW_COST = 200
+_FULL_MIGRATE = 1
+_COARSE_FACTOR = 2.0
+
+
+def _half_gaps(c, scr):
+    """s_j = half the distance from codeword j to its nearest other codeword (Elkan's bound),
+    from float32 screening of the codebook against itself, lowered by its error bound."""
+    k = c.shape[0]
+    if k < 2:
+        return np.full(k, np.inf)
+    cc = c - scr.shift
+    ca, rmax = scr.codebook(c)
+    xa = np.empty((k, scr.d + 1), dtype=np.float32)
+    xa[:, : scr.d] = cc
+    xa[:, scr.d] = 1.0
+    cn = np.einsum("ij,ij->i", cc, cc)
+    out = np.empty(k)
+    step = max(1, _SCORE_BYTES // (4 * k))
+    gam = 2.0 * (scr.d + 4) * _U32 * (1 + 1e-3)
+    for s0 in range(0, k, step):
+        e = min(k, s0 + step)
+        sc = xa[s0:e] @ ca
+        sc[np.arange(e - s0), np.arange(s0, e)] = -np.inf
+        q = cn[s0:e] - 2.0 * sc.max(axis=1).astype(np.float64)
+        q -= 2.0 * gam * (np.sqrt(cn[s0:e]) * rmax + 0.5 * rmax * rmax) + np.abs(q) * 1e-6
+        out[s0:e] = 0.5 * np.sqrt(np.maximum(q, 0.0))
+    return out
+
+
 def _reassign(u, scr, st: _State, c_new, chunk=0, force=None):
     """Move every vector of ``st`` to its nearest codeword of ``c_new`` (screened), doing as
     little work as the bounds allow.  ``force``: vectors whose codeword index changed outside
     (empty-cell repair).  Exact in exact arithmetic; a vector changes codeword only if the exact
     float64 distance strictly decreases.
 
-    With drift_j = |c_new_j - c_j|, a vector keeps its codeword against every codeword outside a
-    set J of the largest movers if |x - c_new_a| <= lb - max drift outside J (Hamerly); a vector
-    whose codeword did not move can only be captured by a codeword that moved.  So there are
-    three groups: vectors passing the bound are screened against J only, vectors of unmoved cells
-    against the moved codewords, the rest against everything.  |J| is chosen per call to
-    minimise the number of scores computed."""
+    With drift_j = |c_new_j - c_j| and ub = |x - c_new_a|: a vector keeps its codeword if
+    ub <= s_a (half the gap from c_new_a to its nearest codeword; Elkan), and it keeps it against
+    every codeword outside a set J of the largest movers if ub <= lb - max drift outside J
+    (Hamerly); a vector whose codeword did not move can only be captured by a codeword that
+    moved.  So: vectors passing the first test are skipped, those passing the second are
+    screened against J only, those of unmoved cells against the moved codewords, the rest
+    against everything.  |J| is chosen per call to minimise the estimated work."""
     k = c_new.shape[0]
+    n = u.shape[0]
     a, d2, lb = st.a.copy(), st.d2.copy(), st.lb.copy()
-    diff = c_new - st.c
-    drift = np.sqrt(np.einsum("ij,ij->i", diff, diff))
     moved = np.any(c_new != st.c, axis=1)
     if not moved.any():
         return _State(c_new, a, d2, lb)
+    diff = c_new - st.c
+    drift = np.sqrt(np.einsum("ij,ij->i", diff, diff)) * (1 + 1e-12)
     mv = np.flatnonzero(moved)
     pm = moved[a]
     if force is not None:
         pm |= force
-    rows = np.flatnonzero(pm)
-    d2[rows] = _exact_d2(u[rows], c_new, a[rows])
-    if force is not None:
         lb[force] = 0.0
-    ub = np.sqrt(d2)
-    # choose |J|: candidates 0, 1, 2, 4, ... and all moved codewords
+    rows = np.flatnonzero(pm)
+    if rows.size > n // 2:
+        d2 = np.where(pm, _exact_d2(u, c_new, a), d2)
+    elif rows.size:
+        d2[rows] = _exact_d2(u[rows], c_new, a[rows])
+    ub = np.sqrt(d2) * (1 + 1e-12)
     mv_sorted = mv[np.argsort(-drift[mv], kind="stable")]
-    ds = drift[mv_sorted]
-    best = None
-    sizes = sorted({0, mv.size} | {1 << i for i in range(mv.size.bit_length()) if (1 << i) < mv.size})
+    ds = np.append(drift[mv_sorted], 0.0)  # ds[t]: largest drift outside the t largest movers
+    skip = ub <= _half_gaps(c_new, scr)[a]
+    # choose |J| = t among 0, 1, 2, 4, ..., |mv|: vectors with slack <= -ds[t] need J only
     slack = ub - lb
-    for t in sizes:
-        dec = ds[t] if t < mv.size else 0.0
-        pa = slack <= -dec
-        n_a = int(np.count_nonzero(pa))
-        n_c = int(np.count_nonzero(~pa & pm))
-        n_b = u.shape[0] - n_a - n_c
-        cost = n_a * t + n_b * mv.size + n_c * k
-        if best is None or cost < best[0]:
-            best = (cost, t, dec, pa)
-    _, t, dec, pa = best
+    ts = np.array(sorted({0, mv.size} | {1 << i for i in range(mv.size.bit_length())
+                                         if (1 << i) < mv.size}))
+    thr = -ds[ts]  # increasing in t
+    live = ~skip
+    pos = np.searchsorted(thr, slack[live], side="left")  # first t whose test passes
+    cnt_pm = np.bincount(pos[pm[live]], minlength=ts.size + 1)
+    cnt_np = np.bincount(pos[~pm[live]], minlength=ts.size + 1)
+    pass_cum = np.cumsum(cnt_pm + cnt_np)[: ts.size]  # vectors passing the test at each t
+    fail_pm = cnt_pm.sum() - np.cumsum(cnt_pm)[: ts.size]
+    fail_np = cnt_np.sum() - np.cumsum(cnt_np)[: ts.size]
+    cost = (pass_cum * (ts + _ROW_COST) * (ts > 0) + fail_np * (mv.size + _ROW_COST)
+            + fail_pm * (k + _ROW_COST))
+    ti = int(np.argmin(cost))
+    t, dec = int(ts[ti]), float(ds[ts[ti]])
+    pa = live & (slack <= -dec)
     ca, rmax = scr.codebook(c_new)
     groups = (
         (np.flatnonzero(pa), mv_sorted[:t], lb - dec),
-        (np.flatnonzero(~pa & ~pm), mv, lb),
-        (np.flatnonzero(~pa & pm), None, np.inf),
+        (np.flatnonzero(live & ~pa & ~pm), mv, lb),
+        (np.flatnonzero(live & ~pa & pm), None, np.inf),
     )
-    new_lb = lb - dec  # for group A with an empty J
+    new_lb = lb - np.where(skip, ds[0], dec)  # skipped vectors and group A with an empty J
     for g, cols, rest in groups:
-        if g.size == 0:
+        if g.size == 0 or (cols is not None and cols.size == 0):
             continue
         rest_g = rest[g] if isinstance(rest, np.ndarray) else np.full(g.size, rest)
-        if cols is not None and cols.size == 0:
-            new_lb[g] = rest_g
-            continue
         if cols is None:
             b1, b2, s1, s2 = scr.top2(ca, rows=g, chunk=chunk)
         else:
@@ -779,27 +934,42 @@ def _lloyd(u, wu, k, st: _State, scr, tol, budget, chunk=0):
     return st, hist, it, conv
 
 
-def _migrate(u, wu, k, c, scr, frac, chunk=0):
+def _migrate(u, wu, k, st: _State, scr, frac, chunk=0):
     """One batch of ELBG-style codeword migrations (Patane & Russo 2001, vectorised).
 
     Utility of a codeword = the weighted error increase if it were removed (its vectors falling
     to their second-nearest codeword).  The lowest-utility codewords are moved onto the member
     farthest from its codeword of the cells with the largest such error (the empty-cell repair
     rule), pairing lowest utility with largest error while utility < 2 x that error, at most
-    ``frac * k`` moves.  Returns the new state (vectors reassigned) or None if nothing moves."""
-    st = _assign_full(u, c, scr, chunk)
-    b1, d1 = st.a, st.d2
-    util = np.bincount(b1, weights=wu * (st.lb * st.lb - d1), minlength=k)
+    ``frac * k`` moves.  Utilities are first bounded from below with the state's second-nearest
+    bounds, then computed exactly (screened search) for the 3 * frac * k least useful codewords.
+    Returns the new state (vectors reassigned) or None if nothing moves."""
+    c, a, d1 = st.c, st.a, st.d2
+    m = max(1, int(frac * k))
+    util = np.bincount(a, weights=wu * np.maximum(st.lb * st.lb - d1, 0.0), minlength=k)
+    pool = np.argsort(util, kind="stable")[: min(k, 3 * m)]
+    in_pool = np.zeros(k, dtype=bool)
+    in_pool[pool] = True
+    rows = np.flatnonzero(in_pool[a])
+    if rows.size:
+        ca, _ = scr.codebook(c)
+        b1, b2, _, _ = scr.top2(ca, rows=rows, chunk=chunk)
+        other = np.where(b1 != a[rows], b1, b2)
+        d_other = np.full(rows.size, np.inf)
+        ok = other >= 0
+        d_other[ok] = _exact_d2(u[rows[ok]], c, other[ok])
+        util_p = np.bincount(a[rows], weights=wu[rows] * np.maximum(d_other - d1[rows], 0.0),
+                             minlength=k)
+        util[pool] = util_p[pool]
+    rem = pool[np.argsort(util[pool], kind="stable")][:m]
     err = wu * d1
-    order = np.lexsort((np.arange(u.shape[0]), -err, b1))
+    order = np.lexsort((np.arange(u.shape[0]), -err, a))
     first = np.ones(order.size, dtype=bool)
-    first[1:] = b1[order[1:]] != b1[order[:-1]]
+    first[1:] = a[order[1:]] != a[order[:-1]]
     far = np.full(k, -1, dtype=np.int64)
     gain = np.zeros(k)
-    far[b1[order[first]]] = order[first]
-    gain[b1[order[first]]] = err[order[first]]
-    m = max(1, int(frac * k))
-    rem = np.argsort(util, kind="stable")[:m]
+    far[a[order[first]]] = order[first]
+    gain[a[order[first]]] = err[order[first]]
     rec = np.argsort(-gain, kind="stable")
     rec = rec[~np.isin(rec, rem)][: rem.size]
     rem = rem[: rec.size]
@@ -823,7 +993,7 @@ def _gla_core(u, wu, k, c0, max_iter, tol, migrate, frac=0.1, chunk=0):
     rounds = 0
     while conv and rounds < migrate and k >= 2 and it < max_iter and hist[-1] > 0:
         rounds += 1
-        trial = _migrate(u, wu, k, st.c, scr, frac, chunk)
+        trial = _migrate(u, wu, k, st, scr, frac, chunk)
         if trial is None:
             break
         st_t, h, it_t, conv_t = _lloyd(u, wu, k, trial, scr, tol, max_iter - it, chunk)
@@ -897,14 +1067,16 @@ def gla(vectors, k, *, seed=0, weights=None, init=None, max_iter=100, tol=1e-4,
         idx, d2 = nearest(x, cb)
         return GlaResult(cb, idx, float(w @ d2) / w.sum(), 0, True, [0.0])
     it0 = 0
+    mig_full = migrate
     if init is None or (isinstance(init, str) and init == "tsvq"):
-        if subsample and u.shape[0] > 2 * subsample * k:
+        if subsample and u.shape[0] > _COARSE_FACTOR * subsample * k:
             rng = np.random.default_rng(seed)
             pick = np.sort(rng.choice(u.shape[0], size=subsample * k, replace=False))
             us, wus = u[pick], wu[pick]
             c0 = _tsvq_build(us, wus, k, seed)[0].codebook
             st, _, _, it0, _ = _gla_core(us, wus, k, c0, max_iter, tol, migrate)
             c0 = st.c
+            mig_full = min(migrate, _FULL_MIGRATE)
         else:
             c0 = _tsvq_build(u, wu, k, seed)[0].codebook
     elif isinstance(init, str):
@@ -913,7 +1085,7 @@ def gla(vectors, k, *, seed=0, weights=None, init=None, max_iter=100, tol=1e-4,
         c0 = np.asarray(init, dtype=np.float64)
         if c0.shape != (k, u.shape[1]) or not np.all(np.isfinite(c0)):
             raise ValueError(f"init must be a finite ({k}, {u.shape[1]}) array")
-    st, scr, hist, it, conv = _gla_core(u, wu, k, c0, max_iter, tol, migrate)
+    st, scr, hist, it, conv = _gla_core(u, wu, k, c0, max_iter, tol, mig_full)
     iu, du = _final_indices(u, st, scr)
     idx = iu[np.maximum(inv, 0)]
     d2 = du[np.maximum(inv, 0)]

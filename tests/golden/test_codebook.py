@@ -76,7 +76,7 @@ def test_deterministic_for_a_seed():
 
 
 def test_subsampled_path_is_deterministic_and_sane():
-    x = _clusters(2, n=20000, d=6, centres=30, spread=10.0)
+    x = _clusters(2, n=20000, d=6, centres=16, spread=10.0)
     r1 = cb.gla(x, 16, seed=1, subsample=8)  # 20000 distinct > 2 * 8 * 16: coarse phase
     r2 = cb.gla(x, 16, seed=1, subsample=8)
     assert r1.codebook.tobytes() == r2.codebook.tobytes()
