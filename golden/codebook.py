@@ -793,7 +793,7 @@ def _assign_full(u, c, scr, chunk=0):
 # (gathers, two argmax passes, bookkeeping); measured ~100 ns against ~0.5 ns per score.
 _ROW_COST = 200
 _FULL_MIGRATE = 1
-_COARSE_FACTOR = 2.0
+_COARSE_FACTOR = 1.5
 
 
 def _half_gaps(c, scr):
@@ -1021,8 +1021,8 @@ def _final_indices(u, st: _State, scr, chunk=0):
     return a, d2
 
 
-def gla(vectors, k, *, seed=0, weights=None, init=None, max_iter=100, tol=1e-4,
-        migrate=8, subsample=64) -> GlaResult:
+def gla(vectors, k, *, seed=0, weights=None, init=None, max_iter=100, tol=1e-3,
+        migrate=8, subsample=32) -> GlaResult:
     """Generalized Lloyd algorithm (full-search Lloyd / LBG) with TSVQ initialisation and
     ELBG-style codeword migration.
 
