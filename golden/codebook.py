@@ -794,6 +794,7 @@ def _assign_full(u, c, scr, chunk=0):
 _ROW_COST = 200
 _FULL_MIGRATE = 1
 _COARSE_FACTOR = 1.5
+_COARSE_MIN = 8192  # smaller samples could miss rare colours altogether
 
 
 def _half_gaps(c, scr):
@@ -1043,10 +1044,10 @@ def gla(vectors, k, *, seed=0, weights=None, init=None, max_iter=100, tol=1e-3,
     improved by at most ``tol`` (relative).  This escapes the poor local minima plain GLA gets
     stuck in (isolated detailed blocks deserve their own codeword).
 
-    Coarse phase (``subsample`` vectors per codeword, default 64; 0 disables): with more than
-    2 * subsample * k distinct vectors, the initial codebook is designed (TSVQ, descent,
-    migration) on a seeded uniform sample of subsample * k distinct vectors, then refined on all
-    of them (descent, migration).
+    Coarse phase (``subsample`` vectors per codeword, default 32; 0 disables): with more than
+    1.5 * subsample * k distinct vectors and subsample * k >= 8192, the initial codebook is
+    designed (TSVQ, descent, migration) on a seeded uniform sample of subsample * k distinct
+    vectors, then refined on all of them (descent, one migration round).
 
     ``max_iter`` caps the number of Lloyd iterations of each phase; ``iterations`` counts all of
     them; ``converged`` is False iff the cap stopped the last descent.
@@ -1069,9 +1070,10 @@ def gla(vectors, k, *, seed=0, weights=None, init=None, max_iter=100, tol=1e-3,
     it0 = 0
     mig_full = migrate
     if init is None or (isinstance(init, str) and init == "tsvq"):
-        if subsample and u.shape[0] > _COARSE_FACTOR * subsample * k:
+        ns = subsample * k if subsample else 0
+        if ns >= _COARSE_MIN and u.shape[0] > _COARSE_FACTOR * ns:
             rng = np.random.default_rng(seed)
-            pick = np.sort(rng.choice(u.shape[0], size=subsample * k, replace=False))
+            pick = np.sort(rng.choice(u.shape[0], size=ns, replace=False))
             us, wus = u[pick], wu[pick]
             c0 = _tsvq_build(us, wus, k, seed)[0].codebook
             st, _, _, it0, _ = _gla_core(us, wus, k, c0, max_iter, tol, migrate)

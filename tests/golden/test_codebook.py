@@ -76,9 +76,9 @@ def test_deterministic_for_a_seed():
 
 
 def test_subsampled_path_is_deterministic_and_sane():
-    x = _clusters(2, n=20000, d=6, centres=16, spread=10.0)
-    r1 = cb.gla(x, 16, seed=1, subsample=8)  # 20000 distinct > 2 * 8 * 16: coarse phase
-    r2 = cb.gla(x, 16, seed=1, subsample=8)
+    x = _clusters(2, n=40000, d=6, centres=16, spread=10.0)
+    r1 = cb.gla(x, 16, seed=1, subsample=1024)  # > 1.5 * 16384 distinct: coarse phase
+    r2 = cb.gla(x, 16, seed=1, subsample=1024)
     assert r1.codebook.tobytes() == r2.codebook.tobytes()
     full = cb.gla(x, 16, seed=1, subsample=0)
     assert r1.distortion <= 1.05 * full.distortion
@@ -264,3 +264,16 @@ def test_tsvq_tree_encode_and_greedy_rule():
     assert tree.depth >= 5
     gain = cb.tsvq_tree(x, 32, seed=0, criterion="gain")
     assert len(np.unique(gain.codebook, axis=0)) == 32
+
+
+def test_rare_outlier_survives_the_coarse_phase():
+    # 2 brown vectors among 40000 green ones: the coarse phase's sample (16384 of them) misses
+    # both for about a third of the seeds; the full-data phase (repair, migration) must still
+    # give them a codeword
+    rng = np.random.default_rng(12)
+    green = np.array([60, 160, 50.0]) + rng.normal(0, 1, (40000, 3))
+    brown = np.array([120, 80, 40.0]) + rng.normal(0, 2, (2, 3))
+    x = np.concatenate([green, brown])
+    for seed in range(4):
+        r = cb.gla(x, 8, seed=seed, subsample=2048)
+        assert np.min(np.linalg.norm(r.codebook - [120, 80, 40.0], axis=1)) < 10
