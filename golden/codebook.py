@@ -748,13 +748,10 @@ class _State:
     ``a`` of each vector, exact squared distance ``d2`` to it and ``lb``, a lower bound of the
     (Euclidean, not squared) distance to every other codeword (Hamerly's bound)."""
 
-    __slots__ = ("c", "a", "d2", "lb")
+    __slots__ = ("c", "a", "d2", "lb", "gaps")
 
-    def __init__(self, c, a, d2, lb):
-        self.c, self.a, self.d2, self.lb = c, a, d2, lb
-
-    def copy(self):
-        return _State(self.c.copy(), self.a.copy(), self.d2.copy(), self.lb.copy())
+    def __init__(self, c, a, d2, lb, gaps=None):
+        self.c, self.a, self.d2, self.lb, self.gaps = c, a, d2, lb, gaps
 
 
 def _combine(u, c, scr, rmax, rows, a, d, b1, b2, s1, s2, rest):
@@ -793,32 +790,50 @@ def _assign_full(u, c, scr, chunk=0):
 # (gathers, two argmax passes, bookkeeping); measured ~100 ns against ~0.5 ns per score.
 _ROW_COST = 200
 _FULL_MIGRATE = 1
+_MIGRATE_FRAC = 0.1
+_MIGRATE_RATIO = 2.0
 _COARSE_FACTOR = 1.5
 _COARSE_MIN = 8192  # smaller samples could miss rare colours altogether
 
 
-def _half_gaps(c, scr):
-    """s_j = half the distance from codeword j to its nearest other codeword (Elkan's bound),
-    from float32 screening of the codebook against itself, lowered by its error bound."""
+def _half_gaps(c, scr, moved=None, old=None):
+    """Lower bounds of s_j = half the distance from codeword j to its nearest other codeword
+    (Elkan's bound), from float32 screening lowered by its error bound.
+
+    With ``moved`` (indices of the codewords that changed) and ``old`` (the bounds before the
+    change) only the rows of the moved codewords are screened: a codeword that did not move is
+    at least as far from every unmoved codeword as before, so its new bound is the smaller of
+    its old bound and half its distance to the nearest moved codeword."""
     k = c.shape[0]
     if k < 2:
         return np.full(k, np.inf)
+    rows = np.arange(k) if moved is None or old is None or 2 * moved.size > k else moved
     cc = c - scr.shift
     ca, rmax = scr.codebook(c)
-    xa = np.empty((k, scr.d + 1), dtype=np.float32)
-    xa[:, : scr.d] = cc
-    xa[:, scr.d] = 1.0
     cn = np.einsum("ij,ij->i", cc, cc)
-    out = np.empty(k)
-    step = max(1, _SCORE_BYTES // (4 * k))
+    xa = np.empty((rows.size, scr.d + 1), dtype=np.float32)
+    xa[:, : scr.d] = cc[rows]
+    xa[:, scr.d] = 1.0
     gam = 2.0 * (scr.d + 4) * _U32 * (1 + 1e-3)
-    for s0 in range(0, k, step):
-        e = min(k, s0 + step)
+    row_min = np.empty(rows.size)
+    col_min = np.full(k, np.inf)
+    step = max(1, _SCORE_BYTES // (4 * k))
+    for s0 in range(0, rows.size, step):
+        e = min(rows.size, s0 + step)
         sc = xa[s0:e] @ ca
-        sc[np.arange(e - s0), np.arange(s0, e)] = -np.inf
-        q = cn[s0:e] - 2.0 * sc.max(axis=1).astype(np.float64)
-        q -= 2.0 * gam * (np.sqrt(cn[s0:e]) * rmax + 0.5 * rmax * rmax) + np.abs(q) * 1e-6
-        out[s0:e] = 0.5 * np.sqrt(np.maximum(q, 0.0))
+        r_cn = cn[rows[s0:e]]
+        # squared distances, lowered by the screening error bound
+        q = r_cn[:, None] - 2.0 * sc.astype(np.float64)
+        q -= (2.0 * gam * (np.sqrt(r_cn) * rmax + 0.5 * rmax * rmax))[:, None] + np.abs(q) * 1e-6
+        q[np.arange(e - s0), rows[s0:e]] = np.inf  # not its own neighbour
+        row_min[s0:e] = q.min(axis=1)
+        np.minimum(col_min, q.min(axis=0), out=col_min)
+    out = np.empty(k)
+    if rows.size == k:
+        out[:] = 0.5 * np.sqrt(np.maximum(row_min, 0.0))
+        return out
+    out[:] = np.minimum(old, 0.5 * np.sqrt(np.maximum(col_min, 0.0)))
+    out[rows] = 0.5 * np.sqrt(np.maximum(row_min, 0.0))
     return out
 
 
@@ -840,7 +855,7 @@ def _reassign(u, scr, st: _State, c_new, chunk=0, force=None):
     a, d2, lb = st.a.copy(), st.d2.copy(), st.lb.copy()
     moved = np.any(c_new != st.c, axis=1)
     if not moved.any():
-        return _State(c_new, a, d2, lb)
+        return _State(c_new, a, d2, lb, st.gaps)
     diff = c_new - st.c
     drift = np.sqrt(np.einsum("ij,ij->i", diff, diff)) * (1 + 1e-12)
     mv = np.flatnonzero(moved)
@@ -856,7 +871,8 @@ def _reassign(u, scr, st: _State, c_new, chunk=0, force=None):
     ub = np.sqrt(d2) * (1 + 1e-12)
     mv_sorted = mv[np.argsort(-drift[mv], kind="stable")]
     ds = np.append(drift[mv_sorted], 0.0)  # ds[t]: largest drift outside the t largest movers
-    skip = ub <= _half_gaps(c_new, scr)[a]
+    gaps = _half_gaps(c_new, scr, mv, st.gaps)
+    skip = ub <= gaps[a]
     # choose |J| = t among 0, 1, 2, 4, ..., |mv|: vectors with slack <= -ds[t] need J only
     slack = ub - lb
     ts = np.array(sorted({0, mv.size} | {1 << i for i in range(mv.size.bit_length())
@@ -869,10 +885,14 @@ def _reassign(u, scr, st: _State, c_new, chunk=0, force=None):
     pass_cum = np.cumsum(cnt_pm + cnt_np)[: ts.size]  # vectors passing the test at each t
     fail_pm = cnt_pm.sum() - np.cumsum(cnt_pm)[: ts.size]
     fail_np = cnt_np.sum() - np.cumsum(cnt_np)[: ts.size]
-    cost = (pass_cum * (ts + _ROW_COST) * (ts > 0) + fail_np * (mv.size + _ROW_COST)
+    # vectors passing with J empty (slack <= -ds[0]) need no work at all
+    cost = ((pass_cum - pass_cum[0]) * (ts + _ROW_COST) + fail_np * (mv.size + _ROW_COST)
             + fail_pm * (k + _ROW_COST))
     ti = int(np.argmin(cost))
     t, dec = int(ts[ti]), float(ds[ts[ti]])
+    free = live & (slack <= -ds[0])
+    skip |= free
+    live &= ~free
     pa = live & (slack <= -dec)
     ca, rmax = scr.codebook(c_new)
     groups = (
@@ -893,7 +913,7 @@ def _reassign(u, scr, st: _State, c_new, chunk=0, force=None):
             b2 = np.where(b2 >= 0, cols[np.maximum(b2, 0)], -1)
         a[g], d2[g], new_lb[g] = _combine(u, c_new, scr, rmax, g, a[g], d2[g], b1, b2, s1, s2,
                                           rest_g)
-    return _State(c_new, a, d2, new_lb)
+    return _State(c_new, a, d2, new_lb, gaps)
 
 
 def _lloyd(u, wu, k, st: _State, scr, tol, budget, chunk=0):
@@ -922,7 +942,7 @@ def _lloyd(u, wu, k, st: _State, scr, tol, budget, chunk=0):
             hist.append(dist)
             break
         force = a != st.a
-        st = _reassign(u, scr, _State(st.c, a, st.d2, st.lb), c_new, chunk,
+        st = _reassign(u, scr, _State(st.c, a, st.d2, st.lb, st.gaps), c_new, chunk,
                        force if force.any() else None)
         _update_centroids(u, wu, a, st.a, cnt, sums)
         new = float(wu @ st.d2) / wsum
@@ -974,7 +994,7 @@ def _migrate(u, wu, k, st: _State, scr, frac, chunk=0):
     rec = np.argsort(-gain, kind="stable")
     rec = rec[~np.isin(rec, rem)][: rem.size]
     rem = rem[: rec.size]
-    ok = (util[rem] < 2.0 * gain[rec]) & (gain[rec] > 0)
+    ok = (util[rem] < _MIGRATE_RATIO * gain[rec]) & (gain[rec] > 0)
     rem, rec = rem[ok], rec[ok]
     if rem.size == 0:
         return None
@@ -983,8 +1003,9 @@ def _migrate(u, wu, k, st: _State, scr, frac, chunk=0):
     return _reassign(u, scr, st, c_new, chunk)
 
 
-def _gla_core(u, wu, k, c0, max_iter, tol, migrate, frac=0.1, chunk=0):
+def _gla_core(u, wu, k, c0, max_iter, tol, migrate, frac=None, chunk=0):
     """GLA on distinct weighted vectors; returns (codebook, history, iterations, converged)."""
+    frac = _MIGRATE_FRAC if frac is None else frac
     wsum = wu.sum()
     scr = _Screen(u, _wmean(u, wu))
     st = _assign_full(u, np.array(c0, dtype=np.float64, copy=True), scr, chunk)
