@@ -12,13 +12,13 @@ Conventions shared by every function here
   weights added (so passing duplicates or their count as weight is the same problem).
   Vectors of weight 0 take no part in training but still get an index.
 * Codebooks are ``(k, d)`` float64; indices are int64 ``(N,)``.
-* Distances are squared Euclidean distances.  The *exact* distance of x to c is
-  ``np.sum((x - c) ** 2)`` evaluated in float64; ``nearest`` is exact with respect to it
-  (ties go to the lowest index).  Inner loops screen candidates with a float32 GEMM
-  (||x||^2 - 2 x.c + ||c||^2 form, on mean-centred data) and settle them in float64.
-* Everything is deterministic: the same inputs and seed give the same output bits (for a given
-  numpy/BLAS build and thread count, which only affects float32 screening, never the exact
-  float64 decisions except for ties that the screening cannot see -- see ``nearest``).
+* Distances are squared Euclidean distances.  The *exact* distance of x to c is the float64 sum
+  of the squared differences; ``nearest`` is exact with respect to it (ties go to the lowest
+  index).  Inner loops screen candidates with a float32 GEMM (||x||^2 - 2 x.c + ||c||^2 form, on
+  mean-centred data, in chunks of about 2 MiB of scores) and settle them in float64.
+* Everything is deterministic: the same inputs and seed give the same output bits run to run.
+  ``nearest`` is moreover independent of the BLAS; the designed codebooks can differ between
+  BLAS builds (the float32 screening steers which near-tie a Lloyd iteration resolves first).
 * Degenerate inputs: when there are at most k distinct vectors (of positive weight) every design
   function returns all of them, exactly, followed by repeats (``np.resize`` order) up to k rows;
   the distortion is then 0.
@@ -101,7 +101,7 @@ def unique_weighted(x: np.ndarray, w: np.ndarray):
     their summed weights ``wu`` (M,) and ``inverse`` (N,) int64 with ``u[inverse] == x``.
     Rows are compared bit for bit (call with -0.0 already mapped to +0.0).
     """
-    n = x.shape[0]
+    x = np.ascontiguousarray(x, dtype=np.float64)
     h = _row_hash(x)
     _, first, inv = np.unique(h, return_index=True, return_inverse=True)
     inv = inv.reshape(-1)
@@ -223,14 +223,15 @@ def _exact_d2(x: np.ndarray, c: np.ndarray, idx: np.ndarray) -> np.ndarray:
     return out
 
 
-def _nearest_screened(x, c, scr: _Screen, chunk: int = 0, rows=None):
+def _nearest_screened(x, c, scr: _Screen, chunk: int = 0, rows=None, tie=None):
     """Exact nearest codeword (ties -> lowest index) using float32 screening + float64 settling.
 
     Error bound of a screened score (x', c' centred; u = 2^-24; GEMM of d+1 terms in float32):
         |s~_j - s_j| <= E = (d + 4) u (|x'| |c'_j| + |c'_j|^2 / 2) (1 + 1e-3)
     so every codeword whose screened score is within 2E of the best screened score is a candidate,
     and the true nearest is always among them.  Rows with a single candidate are decided by the
-    screen; the others are settled with exact float64 distances, ties to the lowest index.
+    screen; the others are settled, chunk by chunk, with exact float64 distances, ties to the
+    lowest index (or the lowest ``tie[j]`` when given).
     ``rows``: only these vectors (x must then be the matching subset).
     """
     n, d = x.shape
@@ -242,7 +243,6 @@ def _nearest_screened(x, c, scr: _Screen, chunk: int = 0, rows=None):
     idx = np.empty(n, dtype=np.int64)
     step = scr.rows_per_chunk(k, chunk)
     buf = np.empty((min(step, n), k), dtype=np.float32)
-    amb_rows, amb_cols = [], []
     for s in range(0, n, step):
         e = min(n, s + step)
         sc = buf[: e - s]
@@ -251,25 +251,20 @@ def _nearest_screened(x, c, scr: _Screen, chunk: int = 0, rows=None):
         idx[s:e] = best
         smax = sc[np.arange(e - s), best]
         margin = (2.0 * gam * (xnorm[s:e] * rmax + 0.5 * rmax * rmax)).astype(np.float32)
-        # float32 rounding of the threshold itself: widen by one more ulp-ish step
+        # float32 rounding of the threshold itself: widen by a few more ulps
         thr = smax - margin - np.abs(smax) * np.float32(4 * _U32)
         cand = sc >= thr[:, None]
-        ncand = np.count_nonzero(cand, axis=1)
-        amb = np.flatnonzero(ncand > 1)
+        amb = np.flatnonzero(np.count_nonzero(cand, axis=1) > 1)
         if amb.size:
-            r, cidx = np.nonzero(cand[amb])
-            amb_rows.append(amb[r] + s)
-            amb_cols.append(cidx)
-    if amb_rows:
-        r = np.concatenate(amb_rows)
-        cc = np.concatenate(amb_cols)
-        dd = _exact_d2(x[r], c, cc) if r.size else np.empty(0)
-        # per row: smallest exact distance, then lowest codeword index
-        order = np.lexsort((cc, dd, r))
-        r, cc = r[order], cc[order]
-        first = np.ones(r.size, dtype=bool)
-        first[1:] = r[1:] != r[:-1]
-        idx[r[first]] = cc[first]
+            r, cc = np.nonzero(cand[amb])
+            r = amb[r] + s
+            dd = _exact_d2(x[r], c, cc)
+            # per row: smallest exact distance, then lowest codeword index
+            order = np.lexsort((cc if tie is None else tie[cc], dd, r))
+            r, cc = r[order], cc[order]
+            first = np.ones(r.size, dtype=bool)
+            first[1:] = r[1:] != r[:-1]
+            idx[r[first]] = cc[first]
     return idx, _exact_d2(x, c, idx)
 
 
@@ -279,10 +274,11 @@ def nearest(vectors: np.ndarray, codebook: np.ndarray, chunk: int = 0) -> tuple[
     Parameters: ``vectors`` (N, d) real, ``codebook`` (k, d) real, ``chunk`` rows per distance
     chunk (0 = automatic, about 2 MiB of float32 scores per chunk; memory stays far below 1 GB).
 
-    Returns ``(indices, d2)``: int64 (N,) index of the codeword minimising the exact float64
-    squared distance ``sum((x - c) ** 2)``, ties to the lowest index, and float64 (N,) that
-    distance.  Exact: a float32 GEMM only screens candidates under a rigorous rounding-error bound;
-    close calls are settled in float64.  Deterministic.
+    Returns ``(indices, d2)``: int64 (N,) index of the codeword minimising the float64 squared
+    distance (sum of squared differences), ties to the lowest index, and float64 (N,) that
+    distance.  Exact: a float32 GEMM only screens candidates under a rigorous rounding-error
+    bound; close calls are settled in float64.  Repeated codewords are searched once (the lowest
+    index answers).  Deterministic, and independent of the BLAS.
     """
     x = _as_vectors(vectors)
     c = np.asarray(codebook, dtype=np.float64)
@@ -290,9 +286,9 @@ def nearest(vectors: np.ndarray, codebook: np.ndarray, chunk: int = 0) -> tuple[
         raise ValueError(f"codebook must be (k, {x.shape[1]}), got shape {c.shape}")
     if not np.all(np.isfinite(c)):
         raise ValueError("codebook must be finite")
-    c = np.ascontiguousarray(c)
-    shift = c.mean(axis=0)
-    return _nearest_screened(x, c, _Screen(x, shift), chunk)
+    cu, first = np.unique(c + 0.0, axis=0, return_index=True)  # first = lowest index of a row
+    idx, d2 = _nearest_screened(x, cu, _Screen(x, cu.mean(axis=0)), chunk, tie=first)
+    return first[idx], d2
 
 
 # --------------------------------------------------------------------------------------------
@@ -679,9 +675,12 @@ class GlaResult:
 
 
 def _centroids(u, wu, a, k):
+    """Per cell: total weight (k,) and weighted sum of the vectors (k, d).  Each cell's sum
+    depends only on its members in index order, so recomputing a subset of cells gives the same
+    bits as a full recomputation."""
     cnt = np.bincount(a, weights=wu, minlength=k)
     sums = np.empty((k, u.shape[1]), dtype=np.float64)
-    for j in range(u.shape[1]):  # one bincount per dimension: O(M d), no loop over vectors
+    for j in range(u.shape[1]):  # one bincount per dimension (measured faster than sorting)
         sums[:, j] = np.bincount(a, weights=wu * u[:, j], minlength=k)
     return cnt, sums
 
@@ -942,10 +941,14 @@ def _lloyd(u, wu, k, st: _State, scr, tol, budget, chunk=0):
             hist.append(dist)
             break
         force = a != st.a
-        st = _reassign(u, scr, _State(st.c, a, st.d2, st.lb, st.gaps), c_new, chunk,
-                       force if force.any() else None)
-        _update_centroids(u, wu, a, st.a, cnt, sums)
-        new = float(wu @ st.d2) / wsum
+        st_new = _reassign(u, scr, _State(st.c, a, st.d2, st.lb, st.gaps), c_new, chunk,
+                           force if force.any() else None)
+        new = float(wu @ st_new.d2) / wsum
+        if new > dist:  # only float rounding could do this: keep the contract, stop here
+            conv = True
+            break
+        _update_centroids(u, wu, a, st_new.a, cnt, sums)
+        st = st_new
         hist.append(new)
         if dist - new <= tol * new:
             conv = True
