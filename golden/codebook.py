@@ -686,19 +686,25 @@ def _centroids(u, wu, a, k):
 
 
 def _update_centroids(u, wu, a_old, a_new, cnt, sums):
-    """Re-derive cnt and sums (in place) of the cells that gained or lost vectors; the result is
-    bit-identical to a full recomputation (same members, same summation order)."""
-    ch = a_old != a_new
-    if not ch.any():
+    """Update cnt and sums (in place) for the vectors that changed cell: their weight and
+    weighted vector move from the old cell to the new one.  Cells that neither gained nor lost
+    vectors keep their sums bit for bit (so their codewords do not "move")."""
+    ch = np.flatnonzero(a_old != a_new)
+    if ch.size == 0:
         return
-    k = cnt.shape[0]
-    touched = np.zeros(k, dtype=bool)
-    touched[a_old[ch]] = True
-    touched[a_new[ch]] = True
-    sel = touched[a_new]
-    cnt_t, sums_t = _centroids(u[sel], wu[sel], a_new[sel], k)
-    cnt[touched] = cnt_t[touched]
-    sums[touched] = sums_t[touched]
+    if 4 * ch.size > a_new.size:  # large change: recompute
+        cnt[:], sums[:] = _centroids(u, wu, a_new, k=cnt.shape[0])
+        return
+    wv = wu[ch, None] * u[ch]
+    np.subtract.at(sums, a_old[ch], wv)
+    np.add.at(sums, a_new[ch], wv)
+    np.subtract.at(cnt, a_old[ch], wu[ch])
+    np.add.at(cnt, a_new[ch], wu[ch])
+    # a cell that lost all its vectors is empty: clear the rounding residue exactly
+    gone = np.unique(a_old[ch])
+    gone = gone[np.bincount(a_new, minlength=cnt.shape[0])[gone] == 0]
+    cnt[gone] = 0.0
+    sums[gone] = 0.0
 
 
 def _repair_empty(u, wu, a, c, cnt, sums, k):
@@ -1096,8 +1102,7 @@ def gla(vectors, k, *, seed=0, weights=None, init=None, max_iter=100, tol=1e-3,
     if init is None or (isinstance(init, str) and init == "tsvq"):
         ns = subsample * k if subsample else 0
         if ns >= _COARSE_MIN and u.shape[0] > _COARSE_FACTOR * ns:
-            rng = np.random.default_rng(seed)
-            pick = np.sort(rng.choice(u.shape[0], size=ns, replace=False))
+            pick = np.sort(np.random.default_rng(seed).permutation(u.shape[0])[:ns])
             us, wus = u[pick], wu[pick]
             c0 = _tsvq_build(us, wus, k, seed)[0].codebook
             st, _, _, it0, _ = _gla_core(us, wus, k, c0, max_iter, tol, migrate)
