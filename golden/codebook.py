@@ -170,10 +170,11 @@ class _Screen:
         """Best screened codeword per vector (first maximum), for all rows or the given subset."""
         return self._best(ca, rows, chunk, two=False)[0]
 
-    def top2(self, ca: np.ndarray, rows=None, chunk: int = 0):
+    def top2(self, ca: np.ndarray, rows=None, chunk: int = 0, two=True):
         """Best and second-best screened codewords and their scores (float32); the second is
-        -1 with score -inf when there is one column."""
-        return self._best(ca, rows, chunk, two=True)
+        -1 with score -inf when there is one column.  two=False: the second is not searched
+        (returned as -1, -inf)."""
+        return self._best(ca, rows, chunk, two=two)
 
     def _best(self, ca, rows, chunk, two):
         k = ca.shape[1]
@@ -191,9 +192,9 @@ class _Screen:
             np.matmul(xa[s:e], ca, out=sc)
             best = sc.argmax(axis=1)
             b1[s:e] = best
+            r = np.arange(e - s)
+            s1[s:e] = sc[r, best]
             if two:
-                r = np.arange(e - s)
-                s1[s:e] = sc[r, best]
                 if k > 1:
                     sc[r, best] = -np.inf
                     b2[s:e] = nb = sc.argmax(axis=1)
@@ -662,8 +663,10 @@ class GlaResult:
     codebook: (k, d) float64.  indices: (N,) int64, exact full-search nearest codeword of every
     input vector (``nearest(vectors, codebook)``).  distortion: weighted mean over vectors of the
     squared error ||x - c||^2 (per vector, not per component) of that final encoding.
-    iterations: Lloyd iterations run.  converged: the stop rule fired (False: max_iter reached).
-    history: distortion after the initial assignment and after each iteration (non-increasing).
+    iterations: Lloyd iterations run (all phases and migration rounds).  converged: the stop
+    rule fired (False: max_iter reached).  history: distortion (same definition, all vectors)
+    after the initial assignment, after each iteration of the first full-data descent and after
+    each accepted migration round; non-increasing.
     """
 
     codebook: np.ndarray
@@ -761,7 +764,8 @@ class _State:
 
 def _combine(u, c, scr, rmax, rows, a, d, b1, b2, s1, s2, rest):
     """Merge a vector's current codeword (a, d: exact squared distance) with screened candidates
-    b1, b2 (scores s1, s2; b2 may be -1) and a lower bound ``rest`` (distance) for all codewords
+    b1, b2 (scores s1, s2; b2 = -1: no second candidate; b2 = k: no index, s2 bounds the score
+    of every other screened codeword) and a lower bound ``rest`` (distance) for all codewords
     not looked at.  The best candidate replaces the current codeword only if its exact float64
     distance is strictly smaller.  Returns the new (a, d2, lb); lb uses the screened distances
     lowered by their error bound."""
@@ -884,9 +888,11 @@ def _reassign(u, scr, st: _State, c_new, chunk=0, force=None):
                                          if (1 << i) < mv.size}))
     thr = -ds[ts]  # increasing in t
     live = ~skip
-    pos = np.searchsorted(thr, slack[live], side="left")  # first t whose test passes
-    cnt_pm = np.bincount(pos[pm[live]], minlength=ts.size + 1)
-    cnt_np = np.bincount(pos[~pm[live]], minlength=ts.size + 1)
+    stride = max(1, n // 8192)  # the cost model only needs estimates: count a strided sample
+    samp = np.flatnonzero(live[::stride]) * stride
+    pos = np.searchsorted(thr, slack[samp], side="left")  # first t whose test passes
+    cnt_pm = np.bincount(pos[pm[samp]], minlength=ts.size + 1)
+    cnt_np = np.bincount(pos[~pm[samp]], minlength=ts.size + 1)
     pass_cum = np.cumsum(cnt_pm + cnt_np)[: ts.size]  # vectors passing the test at each t
     fail_pm = cnt_pm.sum() - np.cumsum(cnt_pm)[: ts.size]
     fail_np = cnt_np.sum() - np.cumsum(cnt_np)[: ts.size]
@@ -906,16 +912,31 @@ def _reassign(u, scr, st: _State, c_new, chunk=0, force=None):
         (np.flatnonzero(live & ~pa & pm), None, np.inf),
     )
     new_lb = lb - np.where(skip, ds[0], dec)  # skipped vectors and group A with an empty J
-    for g, cols, rest in groups:
+    if t > 0 and groups[0][0].size:
+        # group A: a vector whose own codeword is not in J needs only the best of J (all of J
+        # is then at least that far); the others need the best two
+        g = groups[0][0]
+        in_j = np.zeros(k, dtype=bool)
+        in_j[mv_sorted[:t]] = True
+        own = in_j[a[g]]
+        groups = ((g[own], mv_sorted[:t], lb - dec, True),
+                  (g[~own], mv_sorted[:t], lb - dec, False)) + tuple(x + (True,) for x in groups[1:])
+    else:
+        groups = tuple(x + (True,) for x in groups)
+    for g, cols, rest, two in groups:
         if g.size == 0 or (cols is not None and cols.size == 0):
             continue
         rest_g = rest[g] if isinstance(rest, np.ndarray) else np.full(g.size, rest)
         if cols is None:
             b1, b2, s1, s2 = scr.top2(ca, rows=g, chunk=chunk)
         else:
-            b1, b2, s1, s2 = scr.top2(np.ascontiguousarray(ca[:, cols]), rows=g, chunk=chunk)
+            b1, b2, s1, s2 = scr.top2(np.ascontiguousarray(ca[:, cols]), rows=g, chunk=chunk,
+                                      two=two)
             b1 = cols[b1]
             b2 = np.where(b2 >= 0, cols[np.maximum(b2, 0)], -1)
+            if not two and cols.size > 1:
+                b2 = np.full(g.size, k)  # "the other columns": no index, bounded by s1
+                s2 = s1
         a[g], d2[g], new_lb[g] = _combine(u, c_new, scr, rmax, g, a[g], d2[g], b1, b2, s1, s2,
                                           rest_g)
     return _State(c_new, a, d2, new_lb, gaps)
@@ -1065,7 +1086,9 @@ def gla(vectors, k, *, seed=0, weights=None, init=None, max_iter=100, tol=1e-3,
     never increases).
 
     Stop rule (LBG): a descent stops after the first iteration whose distortion D_m satisfies
-    ``D_{m-1} - D_m <= tol * D_m``, or at a fixed point, or when D_m == 0.
+    ``D_{m-1} - D_m <= tol * D_m``, or at a fixed point, or when D_m == 0.  The default
+    tol = 1e-3 (at most ~0.004 dB gained by the last iteration) was chosen by measurement: on
+    the benchmark photographs tol = 1e-4 doubles the running time for 0.01-0.02 dB.
 
     Migration (``migrate`` rounds at most, default 8; 0 = plain GLA): after a descent has
     stopped, move up to 10% of the codewords, those of least utility, onto the worst-coded
