@@ -410,6 +410,13 @@ _SUBMODULES = {
     "color_matrix": "colour matrix",
 }
 _TOP_FIELDS = [
+    # the blocks' output registers, named after the top's wires that carry them
+    (r"^row\b", "descriptor table"),
+    (r"^(k|x|y|raw_addr)(\$\d+)?(\[|$)", "block address"),
+    (r"^index(\$\d+)?(\[|$)", "index reader"),
+    (r"^(samples|color_out)(\$\d+)?(\[|$)", "codebook ROM"),
+    (r"^(i|o)__(valid|ready)", "pipeline control"),
+    (r"^(rgba|o__)", "colour matrix"),
     (r"^(advance|upstream)\b", "pipeline control"),
     (r"^valid_", "pipeline control"),
     (r"^tag_", "tag carry"),
