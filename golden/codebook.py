@@ -207,9 +207,10 @@ class _Screen:
         xn = self.xnorm[rows]
         gam = 2.0 * (self.d + 4) * _U32 * (1 + 1e-3)
         q = xn * xn - 2.0 * s.astype(np.float64)  # s = -inf (no candidate) gives +inf
-        fin = np.isfinite(q)
-        q[fin] -= 2.0 * gam * (xn[fin] * ca_rmax + 0.5 * ca_rmax * ca_rmax) + np.abs(q[fin]) * 1e-6
-        return q
+        # q - |q| 1e-6 - margin, written so that q = +inf stays +inf
+        low = np.minimum(q * (1 - 1e-6), q * (1 + 1e-6))
+        low -= 2.0 * gam * ca_rmax * xn + gam * ca_rmax * ca_rmax
+        return low
 
 
 def _exact_d2(x: np.ndarray, c: np.ndarray, idx: np.ndarray) -> np.ndarray:
