@@ -153,6 +153,7 @@ class _Screen:
         self.xa[:, :d] = xc
         self.xa[:, d] = 1.0
         self.xnorm = np.sqrt(np.einsum("ij,ij->i", xc, xc))
+        self._buf = None
 
     def codebook(self, c: np.ndarray):
         cc = c - self.shift
@@ -176,16 +177,23 @@ class _Screen:
         (returned as -1, -inf)."""
         return self._best(ca, rows, chunk, two=two)
 
+    def scores_buffer(self, size):
+        """A reusable float32 buffer of at least ``size`` elements (fresh large allocations
+        cost page faults on every call)."""
+        if self._buf is None or self._buf.size < size:
+            self._buf = np.empty(size, dtype=np.float32)
+        return self._buf
+
     def _best(self, ca, rows, chunk, two):
         k = ca.shape[1]
-        xa = self.xa if rows is None else self.xa[rows]
+        xa = self.xa if rows is None else np.take(self.xa, rows, axis=0)
         n = xa.shape[0]
         b1 = np.empty(n, dtype=np.int64)
         b2 = np.full(n, -1, dtype=np.int64)
         s1 = np.empty(n, dtype=np.float32)
         s2 = np.full(n, -np.inf, dtype=np.float32)
         step = self.rows_per_chunk(k, chunk)
-        buf = np.empty((min(step, n), k), dtype=np.float32)
+        buf = self.scores_buffer(min(step, n) * k)[: min(step, n) * k].reshape(-1, k)
         for s in range(0, n, step):
             e = min(n, s + step)
             sc = buf[: e - s]
@@ -220,7 +228,8 @@ def _exact_d2(x: np.ndarray, c: np.ndarray, idx: np.ndarray) -> np.ndarray:
     step = max(1, _MAX_TEMP_BYTES // (8 * d))
     for s in range(0, n, step):
         e = min(n, s + step)
-        diff = x[s:e] - c[idx[s:e]]
+        diff = np.take(c, idx[s:e], axis=0)  # one temporary, reused in place (much faster)
+        np.subtract(x[s:e], diff, out=diff)
         np.einsum("ij,ij->i", diff, diff, out=out[s:e])
     return out
 
@@ -239,12 +248,12 @@ def _nearest_screened(x, c, scr: _Screen, chunk: int = 0, rows=None, tie=None):
     n, d = x.shape
     k = c.shape[0]
     ca, rmax = scr.codebook(c)
-    xa = scr.xa if rows is None else scr.xa[rows]
+    xa = scr.xa if rows is None else np.take(scr.xa, rows, axis=0)
     xnorm = scr.xnorm if rows is None else scr.xnorm[rows]
     gam = (d + 4) * _U32 * (1 + 1e-3)
     idx = np.empty(n, dtype=np.int64)
     step = scr.rows_per_chunk(k, chunk)
-    buf = np.empty((min(step, n), k), dtype=np.float32)
+    buf = scr.scores_buffer(min(step, n) * k)[: min(step, n) * k].reshape(-1, k)
     for s in range(0, n, step):
         e = min(n, s + step)
         sc = buf[: e - s]
