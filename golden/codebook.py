@@ -105,9 +105,9 @@ def unique_weighted(x: np.ndarray, w: np.ndarray):
     h = _row_hash(x)
     _, first, inv = np.unique(h, return_index=True, return_inverse=True)
     inv = inv.reshape(-1)
-    if np.array_equal(x, x[first][inv]):  # no hash collision: the hash classes are the rows
-        u = x[first]
-    else:  # a collision (astronomically rare): exact lexicographic dedup
+    u = np.take(x, first, axis=0)
+    if not np.array_equal(x, np.take(u, inv, axis=0)):
+        # a hash collision (astronomically rare): exact lexicographic dedup
         u, inv = np.unique(x, axis=0, return_inverse=True)
         inv = inv.reshape(-1)
     wu = np.bincount(inv, weights=w, minlength=u.shape[0])
