@@ -277,3 +277,31 @@ def test_rare_outlier_survives_the_coarse_phase():
     for seed in range(4):
         r = cb.gla(x, 8, seed=seed, subsample=2048)
         assert np.min(np.linalg.norm(r.codebook - [120, 80, 40.0], axis=1)) < 10
+
+
+def test_dedup_hash_collision_fallback(monkeypatch):
+    rng = np.random.default_rng(13)
+    x = rng.integers(0, 4, (500, 3)).astype(np.float64)
+    ref_u, ref_inv = np.unique(x, axis=0, return_inverse=True)
+    monkeypatch.setattr(cb, "_row_hash", lambda v: np.zeros(v.shape[0], dtype=np.uint64))
+    u, wu, inv = cb.unique_weighted(x, np.ones(500))
+    np.testing.assert_array_equal(u[inv], x)
+    assert len(u) == len(ref_u) and wu.sum() == 500
+
+
+def test_zero_weights_get_an_index_but_do_not_train():
+    x = np.concatenate([_clusters(14, n=600, d=4, centres=6), np.full((3, 4), 1000.0)])
+    w = np.concatenate([np.ones(600), np.zeros(3)])
+    r = cb.gla(x, 6, weights=w)
+    assert np.all(r.codebook < 400)  # the far, weight-0 vectors pulled nothing
+    np.testing.assert_array_equal(r.indices, cb.nearest(x, r.codebook)[0])
+    assert r.distortion == pytest.approx(np.average(cb.nearest(x, r.codebook)[1], weights=w))
+
+
+def test_nearest_with_many_repeated_codewords():
+    rng = np.random.default_rng(15)
+    c = np.repeat(rng.uniform(0, 255, (3, 12)), 700, axis=0)  # 2100 rows, 3 distinct
+    x = rng.uniform(0, 255, (20000, 12))
+    idx, d2 = cb.nearest(x, c)
+    ref = cb.nearest(x, c[::700])[0] * 700  # lowest index of each repeated codeword
+    np.testing.assert_array_equal(idx, ref)
