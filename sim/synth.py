@@ -217,8 +217,8 @@ def yosys_script(*, keep_unit: bool = True, abc9: bool = True) -> str:
 
 
 def run_yosys(rtlil_text: str, workdir: str, *, timeout: float | None = None) -> dict:
-    """Synthesize for ECP5 in ``workdir``. Returns ``{"stat": parsed stat, "seconds": s,
-    "netlist": path, "log": path}``."""
+    """Synthesize for ECP5 in ``workdir``. Returns ``{"stat": parse_yosys_stat(...), "memories":
+    {memory: {"mapped_to", "DP16KD"}}, "seconds": s, "netlist": path, "log": path}``."""
     with open(os.path.join(workdir, "design.il"), "w") as f:
         f.write(rtlil_text)
     with open(os.path.join(workdir, "synth.ys"), "w") as f:
@@ -300,8 +300,25 @@ def run_nextpnr(workdir: str, *, freq: float = 150.0, seed: int = 1, timeout: fl
             "--json", "netlist.json", "--freq", f"{freq:g}", "--seed", str(seed), "--timing-allow-fail",
             "--report", "report.json", "-l", "nextpnr.log", "-q"]
     _, dt = _run("nextpnr", args, workdir, "nextpnr.out", timeout)
-    with open(os.path.join(workdir, "report.json")) as f:
-        rep = parse_nextpnr_report(json.load(f))
+    path = os.path.join(workdir, "report.json")
+    if os.path.isfile(path):
+        with open(path) as f:
+            rep = parse_nextpnr_report(json.load(f))
+    else:                                   # a nextpnr without --report: the log's summary only
+        with open(os.path.join(workdir, "nextpnr.log")) as f:
+            log = parse_nextpnr_log(f.read())
+        if not log["clocks"]:
+            raise SynthError("nextpnr wrote neither a report nor a Max frequency line")
+        clock = min(log["clocks"], key=lambda c: log["clocks"][c]["fmax_mhz"])
+        c = log["clocks"][clock]
+        src, dst = log["critical_from"] or "", log["critical_to"] or ""
+        rep = {"clock": clock, "fmax_mhz": c["fmax_mhz"], "target_mhz": c["target_mhz"], "utilisation": {},
+               "critical_path": {"from": src, "to": dst, "from_signal": signal_of(src.rsplit(".", 1)[0]),
+                                 "to_signal": signal_of(dst.rsplit(".", 1)[0]),
+                                 "from_stage": stage_of(signal_of(src.rsplit(".", 1)[0])),
+                                 "to_stage": stage_of(signal_of(dst.rsplit(".", 1)[0])),
+                                 "stages": [], "cells": [], "delay_ns": round(1000.0 / c["fmax_mhz"], 3),
+                                 "logic_ns": 0.0, "routing_ns": 0.0, "steps": []}}
     rep["seconds"] = dt
     rep["log"] = os.path.join(workdir, "nextpnr.log")
     return rep
@@ -392,7 +409,8 @@ def parse_nextpnr_log(text: str) -> dict:
     src = sink = None
     if heads:
         block = text[heads[-1].end():]
-        block = block.split("\nInfo: \n", 1)[0] if "\nInfo: \n" in block else block
+        end = re.search(r"ns logic, [\d.]+ ns routing", block)    # the path's summary line ends it
+        block = block[:end.start()] if end else block
         sources = re.findall(r"Source (\S+)", block)
         sinks = re.findall(r"Sink (\S+)", block)
         src, sink = (sources[0] if sources else None), (sinks[-1] if sinks else None)

@@ -107,6 +107,13 @@ Info:    routing  0.12  4.94 Net x (78,34) -> (78,35)
 Info:                          Sink {DST}.DI
 Info: 5.0 ns logic, 6.5 ns routing
 
+Info: Critical path report for cross-domain path '<async>' -> 'posedge {CLK}':
+Info:       type curr  total name
+Info:     source  0.00  0.00 Source rst$tr_io.O
+Info:    routing  6.38  6.38 Net rst$TRELLIS_IO_IN (126,26) -> (2,56)
+Info:                          Sink i_i$31_TRELLIS_FF_Q_10.LSR
+Info: 0.29 ns logic, 6.38 ns routing
+
 Warning: Max frequency for clock '{CLK}': 87.28 MHz (FAIL at 150.00 MHz)
 """
 
@@ -157,6 +164,17 @@ def test_parse_nextpnr_log():
     rep = synth.parse_nextpnr_log(LOG_SAMPLE)
     assert rep["clocks"][CLK] == {"fmax_mhz": 87.28, "target_mhz": 150.0, "pass": False}   # the final line
     assert rep["critical_from"] == f"{K}.Q" and rep["critical_to"] == f"{DST}.DI"
+
+
+def test_run_nextpnr_reads_report_or_falls_back_to_log(monkeypatch, tmp_path):
+    monkeypatch.setattr(synth, "_run", lambda *a, **k: ("", 1.5))        # the tool "ran"
+    (tmp_path / "nextpnr.log").write_text(LOG_SAMPLE)
+    rep = synth.run_nextpnr(str(tmp_path))                               # no report.json: the log
+    assert rep["fmax_mhz"] == 87.28 and rep["seconds"] == 1.5
+    assert rep["critical_path"]["from_stage"] == "block address" and rep["critical_path"]["to_stage"] == "index reader"
+    (tmp_path / "report.json").write_text(json.dumps(REPORT_SAMPLE))
+    rep = synth.run_nextpnr(str(tmp_path))
+    assert rep["fmax_mhz"] == 87.28 and len(rep["critical_path"]["steps"]) == 7
 
 
 @pytest.mark.parametrize("cell, signal, stage", [
