@@ -13,8 +13,9 @@ Cases (targets: PSNR loss against KMeans at most ``max_loss_db`` and a speed-up 
 
 PSNR = 10 log10(255^2 / MSE) over every reconstructed pixel component, each block decoded to its
 codeword rounded and clipped to uint8.  Both methods run under the same BLAS/OpenMP thread limit
-(threadpoolctl; default 1 thread, which is also the fair setting on a shared machine), and
-interleaved; the time of a method is the minimum wall time over ``repeats`` runs (same count for
+(threadpoolctl; default 1 thread, the reproducible setting on a shared machine; with more
+threads sklearn's OpenMP Lloyd loop gains more than our mostly single-threaded numpy pipeline),
+and interleaved; the time of a method is the minimum wall time over ``repeats`` runs (same count for
 both methods; case 3 runs once by default because KMeans takes minutes there).
 
 Run: ``python -m sim.bench_encode [--json] [--threads N] [--repeats R] [--cases 1,2,3]``
