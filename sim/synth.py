@@ -570,6 +570,9 @@ def area_text(rep: dict) -> str:
             lines.append(f"    from {cp['from_signal']}  ({cp['from']})")
             lines.append(f"    to   {cp['to_signal']}  ({cp['to']})")
             lines.append(f"    through {' -> '.join(cp['stages'])}")
+            if cp.get("cells"):
+                short = [c[len("unit.fetch."):] if c.startswith("unit.fetch.") else c for c in cp["cells"]]
+                lines.append(f"    via {' -> '.join(short)}")
     s = rep["seconds"]
     lines.append("  time: " + ", ".join(f"{k.replace('_', ' ')} {v:.1f} s" for k, v in s.items()))
     return "\n".join(lines)
