@@ -27,11 +27,13 @@ import numpy as np
 
 from . import codebook as vq
 from .color import JFIF_BT601, ColorMatrix, rgb_to_yuv
+from .mipmap import box_down, build_pyramid
+from .mipmap import to_rgba as _to_rgba
 from .format import (COLOR_CODES, COLORS, DESCRIPTOR_DTYPE, MAX_LEVELS, MAX_SIZE, RAW_BELOW,
                      WORD_BITS_ALLOWED, CodebookInfo, TextureInfo, TextureSet, default_index_bits,
                      entry_layout, is_pow2, log2, pack_indices, sub_levels)
 
-__all__ = ["EncodeError", "encode", "pyramid", "to_rgba", "ENCODERS", "MIP_TRAINING"]
+__all__ = ["EncodeError", "encode", "reference_pyramid", "ENCODERS", "MIP_TRAINING"]
 
 ENCODERS = ("gla", "tsvq")
 MIP_TRAINING = ("average", "joint")
@@ -44,28 +46,12 @@ class EncodeError(ValueError):
 # ---------------------------------------------------------------------------------------------
 # Pixels
 
-def _as_hwc(img: np.ndarray) -> np.ndarray:
-    a = np.asarray(img)
-    if a.ndim == 2:
-        a = a[:, :, None]
-    if a.ndim != 3 or a.shape[2] not in (1, 2, 3, 4):
-        raise EncodeError(f"image of shape {a.shape} is not (H, W) or (H, W, 1..4)")
-    if a.dtype != np.uint8:
-        raise EncodeError(f"image must be uint8, not {a.dtype}")
-    if a.shape[2] == 2:                      # grey + alpha
-        a = np.concatenate([a[:, :, :1]] * 3 + [a[:, :, 1:]], axis=2)
-    return a
-
-
-def to_rgba(img: np.ndarray) -> np.ndarray:
-    """(H, W, C) uint8 -> (H, W, 4) uint8: grey is replicated, a missing alpha is 255."""
-    a = _as_hwc(img)
-    h, w, c = a.shape
-    if c == 1:
-        a = np.repeat(a, 3, axis=2)
-    if a.shape[2] == 3:
-        a = np.concatenate([a, np.full((h, w, 1), 255, np.uint8)], axis=2)
-    return a
+def _rgba(img: np.ndarray) -> np.ndarray:
+    """The image as RGBA uint8; a bad array is an EncodeError."""
+    try:
+        return _to_rgba(img)
+    except ValueError as e:
+        raise EncodeError(f"image: {e}") from None
 
 
 def _for_color(rgba: np.ndarray, color: str) -> np.ndarray:
@@ -77,24 +63,6 @@ def _for_color(rgba: np.ndarray, color: str) -> np.ndarray:
         y = np.rint(rgba[..., :3].astype(np.float64) @ np.array([0.299, 0.587, 0.114]))
         out[..., :3] = np.clip(y, 0, 255).astype(np.uint8)[..., None]
         out[..., 3] = 255
-    return out
-
-
-def _box_down(a: np.ndarray) -> np.ndarray:
-    """Halve each axis of the leading two that is longer than 1, rounded mean (integers)."""
-    a = a.astype(np.int64)
-    h, w = a.shape[:2]
-    fy, fx = (2 if h > 1 else 1), (2 if w > 1 else 1)
-    n = fy * fx
-    s = a.reshape(h // fy, fy, w // fx, fx, *a.shape[2:]).sum(axis=(1, 3))
-    return (s + n // 2) // n
-
-
-def pyramid(img: np.ndarray, levels: int | None = None) -> list[np.ndarray]:
-    """Box-filtered mip pyramid of an (H, W, C) uint8 image down to 1x1 (or ``levels`` levels)."""
-    out = [img]
-    while max(out[-1].shape[:2]) > 1 and (levels is None or len(out) < levels):
-        out.append(_box_down(out[-1]).astype(np.uint8))
     return out
 
 
@@ -156,7 +124,7 @@ def _extend(code0: np.ndarray, layout) -> np.ndarray:
     parts = [code0.astype(np.int64)]
     planes = _split_planes(parts[0], layout.color, layout.bw, layout.bh)
     for s in range(1, layout.nsub):
-        planes = [_box_down(p.transpose(1, 2, 0, 3)).transpose(2, 0, 1, 3) for p in planes]
+        planes = [box_down(p.transpose(1, 2, 0, 3)).transpose(2, 0, 1, 3) for p in planes]
         parts.append(np.concatenate([p.reshape(len(p), -1) for p in planes], axis=1))
     return np.concatenate(parts, axis=1)
 
@@ -222,8 +190,8 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
     # Pyramids (as the texture holds them) and the plan: which levels are compressed.
     pyrs, plans = [], []
     for img in images:
-        rgba = _for_color(to_rgba(img), color)
-        pyr = pyramid(rgba) if mipmaps else [rgba]
+        rgba = _for_color(_rgba(img), color)
+        pyr = build_pyramid(rgba) if mipmaps else [rgba]
         pyrs.append(pyr)
         plan = []
         for L, lv in enumerate(pyr):
@@ -327,5 +295,5 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
 
 def reference_pyramid(img: np.ndarray, color: str, mipmaps: bool) -> list[np.ndarray]:
     """The uncompressed RGBA pyramid a texture of this colour format stands for (for error metrics)."""
-    rgba = _for_color(to_rgba(img), color)
-    return pyramid(rgba) if mipmaps else [rgba]
+    rgba = _for_color(_rgba(img), color)
+    return build_pyramid(rgba) if mipmaps else [rgba]

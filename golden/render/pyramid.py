@@ -20,6 +20,8 @@ from typing import Protocol, Sequence
 
 import numpy as np
 
+from golden.mipmap import build_pyramid, downsample, to_rgba  # noqa: F401 (re-exported)
+
 __all__ = ["TextureSource", "to_rgba", "downsample", "build_pyramid", "ReferenceSource"]
 
 
@@ -33,58 +35,6 @@ class TextureSource(Protocol):
 
 def _is_pow2(n: int) -> bool:
     return n >= 1 and (n & (n - 1)) == 0
-
-
-def to_rgba(image: np.ndarray) -> np.ndarray:
-    """Promote a uint8 image (H, W), (H, W, 1), (H, W, 3) or (H, W, 4) to RGBA (H, W, 4)."""
-    img = np.asarray(image)
-    if img.dtype != np.uint8:
-        raise ValueError(f"expected a uint8 image, got {img.dtype}")
-    if img.ndim == 2:
-        img = img[:, :, None]
-    if img.ndim != 3 or img.shape[2] not in (1, 2, 3, 4):
-        raise ValueError(f"expected (H, W) or (H, W, C) with C in 1..4, got shape {img.shape}")
-    h, w, c = img.shape
-    out = np.empty((h, w, 4), np.uint8)
-    if c == 1:
-        out[:, :, :3] = img
-        out[:, :, 3] = 255
-    elif c == 2:  # grey + alpha
-        out[:, :, :3] = img[:, :, :1]
-        out[:, :, 3] = img[:, :, 1]
-    elif c == 3:
-        out[:, :, :3] = img
-        out[:, :, 3] = 255
-    else:
-        out[:] = img
-    return out
-
-
-def downsample(level: np.ndarray) -> np.ndarray:
-    """One box-filter step of the pyramid rule for a uint8 (H, W, C) level (H or W > 1)."""
-    a = level.astype(np.uint16)
-    h, w = a.shape[:2]
-    if h > 1 and w > 1:
-        s = a[0::2, 0::2] + a[0::2, 1::2] + a[1::2, 0::2] + a[1::2, 1::2]
-        return ((s + 2) >> 2).astype(np.uint8)
-    if w > 1:  # one row left: average horizontal pairs
-        return ((a[:, 0::2] + a[:, 1::2] + 1) >> 1).astype(np.uint8)
-    if h > 1:
-        return ((a[0::2] + a[1::2] + 1) >> 1).astype(np.uint8)
-    raise ValueError("a 1x1 level has no smaller level")
-
-
-def build_pyramid(image: np.ndarray) -> list[np.ndarray]:
-    """All levels, RGBA uint8 (H_L, W_L, 4), of a power-of-two image, from level 0 down to 1x1."""
-    level = to_rgba(image)
-    h, w = level.shape[:2]
-    if not (_is_pow2(w) and _is_pow2(h)):
-        raise ValueError(f"texture size {w}x{h} is not a power of two")
-    levels = [level]
-    while level.shape[0] > 1 or level.shape[1] > 1:
-        level = downsample(level)
-        levels.append(level)
-    return levels
 
 
 class ReferenceSource:

@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from golden.encode import _box_down, encode, reference_pyramid
+from golden.encode import encode, reference_pyramid
+from golden.mipmap import box_down as _box_down
 from golden.fetch import RequestError, check_requests, decode, fetch, straddles, lookup_descriptor, block_address
 from golden.format import TextureSet
 
