@@ -159,8 +159,23 @@ def unpack_indices(words: np.ndarray, b: int, n: int, base: int = 0, word_bits: 
 # ---------------------------------------------------------------------------------------------
 # The texture set
 
+class _Record:
+    """JSON round trip of a metadata dataclass (``block`` is a tuple in Python, a list in JSON)."""
+
+    def to_dict(self):
+        d = dict(self.__dict__)
+        d["block"] = list(self.block)
+        return d
+
+    @classmethod
+    def from_dict(cls, d):
+        d = dict(d)
+        d["block"] = tuple(d["block"])
+        return cls(**d)
+
+
 @dataclass
-class TextureInfo:
+class TextureInfo(_Record):
     """What a texture is and how it was encoded (metadata; the memory images are the truth)."""
     name: str
     width: int
@@ -173,20 +188,10 @@ class TextureInfo:
     mipmapped: bool
     params: dict = field(default_factory=dict)
 
-    def to_dict(self):
-        d = dict(self.__dict__)
-        d["block"] = list(self.block)
-        return d
-
-    @classmethod
-    def from_dict(cls, d):
-        d = dict(d)
-        d["block"] = tuple(d["block"])
-        return cls(**d)
 
 
 @dataclass
-class CodebookInfo:
+class CodebookInfo(_Record):
     """One codebook in the codebook memory."""
     color: str
     block: tuple
@@ -198,16 +203,6 @@ class CodebookInfo:
     def layout(self) -> EntryLayout:
         return entry_layout(self.color, self.block[0], self.block[1], self.nsub)
 
-    def to_dict(self):
-        d = dict(self.__dict__)
-        d["block"] = list(self.block)
-        return d
-
-    @classmethod
-    def from_dict(cls, d):
-        d = dict(d)
-        d["block"] = tuple(d["block"])
-        return cls(**d)
 
 
 MAGIC = b"VQTX\r\n\x1a\n"
