@@ -162,7 +162,7 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
            index_bits: int | None = None, mipmaps: bool = False, encoder: str = "gla", seed: int = 0,
            mip_training: str = "average", names=None, word_bits: int = 32,
            matrix: ColorMatrix = JFIF_BT601, raw_below: int = RAW_BELOW, max_iter: int = 100,
-           tol: float = 1e-4, raw: bool = False) -> TextureSet:
+           tol: float = 1e-3, raw: bool = False) -> TextureSet:
     """Compress ``images`` (list of (H, W[, C]) uint8) into one texture group sharing a codebook.
 
     Arguments
@@ -173,6 +173,8 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
     mip_training : "average" (the paper) or "joint" (train on all sub-levels).
     raw_below : mip levels narrower or shorter than this are stored raw.
     raw : store every level uncompressed (the baseline of the paper's Table 5).
+    max_iter, tol : GLA's stop rule: stop when the distortion's relative decrease falls to ``tol``
+        (``D_{m-1} - D_m <= tol * D_m``) or after ``max_iter`` iterations (``golden.codebook.gla``).
 
     Raises
     ------
