@@ -226,8 +226,11 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
     cb_rows = np.zeros((codebook_size, layout.size), np.uint8)
     if groups:
         allv = np.concatenate(vecs).astype(np.float32)
-        code, idx = vq.design(allv, codebook_size, method=encoder, seed=seed, max_iter=max_iter, tol=tol) \
-            if encoder == "gla" else vq.design(allv, codebook_size, method=encoder, seed=seed)
+        if encoder == "gla":
+            code, idx = vq.design(allv, codebook_size, method="gla", seed=seed, max_iter=max_iter, tol=tol)
+        else:                                       # the paper's TSVQ with tree-search encoding
+            tree = vq.tsvq_tree(allv, codebook_size, seed=seed)
+            code, idx = tree.codebook, tree.encode(allv)
         code = np.asarray(code, dtype=np.float64)
         if mip_training == "joint":
             ends = [layout.planes[s][0] for s in range(1, nsub)] + [layout.size]

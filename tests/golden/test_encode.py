@@ -99,3 +99,22 @@ def test_bad_images():
         encode([np.zeros((32, 32, 3), np.float32)])
     with pytest.raises(EncodeError, match="no images"):
         encode([])
+
+
+def test_tsvq_encoder_uses_tree_search():
+    """encoder="tsvq" is the paper's TSVQ: its index map is the tree search's, not a full search."""
+    from golden import codebook as vq
+    from golden.encode import block_vectors
+    from golden.format import unpack_indices
+    img = _photo()
+    if img.ndim == 2 or img.shape[2] == 1:
+        img = np.repeat(img.reshape(img.shape[0], img.shape[1], 1), 3, axis=2)
+    img = np.ascontiguousarray(img[..., :3])
+    ts = encode([img], block=(2, 2), codebook_size=64, encoder="tsvq", seed=4)
+    v = block_vectors(reference_pyramid(img, "rgb", False)[0], "rgb", 2, 2).astype(np.float32)
+    tree = vq.tsvq_tree(v, 64, seed=4)
+    d = ts.descriptor(0, 0)
+    got = unpack_indices(ts.index_words, d["index_bits"], len(v), d["base"])
+    assert np.array_equal(got, tree.encode(v))
+    full, _ = vq.nearest(v, tree.codebook)
+    assert not np.array_equal(full, got) or len(np.unique(v, axis=0)) <= 64
