@@ -182,6 +182,9 @@ def cmd_sim(args) -> int:
     _atomic_write(args.output, lambda tmp: np.save(open(tmp, "wb"), res.responses.astype(np.uint8)))
     from sim.report import cycle_report, cycle_text
     report = cycle_report(res, backend=args.backend, one_port=args.one_port, stall=args.stall)
+    if args.plot:
+        from sim.report import cycle_plot
+        _atomic_write(args.plot, lambda tmp: cycle_plot(report, tmp))
     _emit(report, args.json, cycle_text(report) + f"\nwrote {args.output}")
     return 0
 
@@ -229,6 +232,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--stall", type=float, default=0.0, help="probability the output's ready is low")
     s.add_argument("--seed", type=int, default=0)
     s.add_argument("--one-port", action="store_true", help="one-port index memory (paper's penalty)")
+    s.add_argument("--plot", help="also draw where the cycles went (PNG)")
     s.add_argument("--json", action="store_true")
     s.set_defaults(func=cmd_sim)
 

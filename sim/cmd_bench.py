@@ -3,7 +3,7 @@
 encode  -- the codebook designer against scikit-learn's KMeans (needs the ``bench`` extra)
 mip     -- extended codewords: the paper's averages against joint training, per level
 sim     -- simulation backends: pysim, compiled CXXRTL, Verilator (cycles per second, build times)
-render  -- the golden renderer: time and requests per frame for the built-in scenes
+render  -- golden render time (uncompressed and VQ) and RTL cycles per frame, both built-in scenes
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ BENCHES = {
     "encode": "sim.bench_encode",
     "mip": "sim.bench_mip",
     "sim": "sim.bench_sim",
-    "render": "golden.render.bench",
+    "render": "sim.bench_render",
 }
 
 

@@ -43,7 +43,9 @@ def cycle_text(rep: dict) -> str:
 
 
 def cycle_plot(rep: dict, path: str) -> None:
-    """A bar chart (PNG) of where the cycles went: useful work, latency, stalls by cause.
+    """A stacked bar (PNG, 640x80) of where the cycles went, left to right: one cycle per request
+    (green), the pipeline latency (blue), output backpressure stalls (red), one-port straddle stalls
+    (yellow). Each part's width is proportional to its cycle count.
 
     Drawn with numpy into an image (no plotting library needed) and written with OpenImageIO.
     """

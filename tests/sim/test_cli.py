@@ -119,3 +119,25 @@ def test_console_script_no_traceback(tmp_path):
     p = subprocess.run([sys.executable, "-m", "sim.cli", "info", str(tmp_path / "nope.vqt")],
                        capture_output=True, text=True)
     assert p.returncode == 2 and "Traceback" not in p.stderr and p.stderr.count("\n") == 1
+
+
+def test_sim_plot_shows_where_cycles_went(tmp_path, images, capsys):
+    out = str(tmp_path / "set.vqt")
+    assert _run(capsys, "encode", images[0], "-o", out, "-k", "16", "--index-bits", "12")[0] == 0
+    rng = np.random.default_rng(1)
+    req = np.column_stack([np.zeros(400, int), np.zeros(400, int), rng.integers(0, 64, 400), rng.integers(0, 64, 400)])
+    np.save(tmp_path / "r.npy", req)
+    png = tmp_path / "cycles.png"
+    code, stdout, _ = _run(capsys, "sim", out, str(tmp_path / "r.npy"), "-o", str(tmp_path / "o.npy"),
+                           "--stall", "0.5", "--one-port", "--plot", str(png), "--json")
+    assert code == 0
+    rep = json.loads(stdout)
+    img = read_image(png)
+    row = img[40]
+    widths = {name: int(np.all(row == col, axis=1).sum()) for name, col in
+              (("requests", (60, 160, 60)), ("backpressure", (220, 90, 60)), ("straddle", (230, 180, 40)))}
+    total = rep["cycles"]
+    assert abs(widths["requests"] - 639 * rep["requests"] / total) <= 2
+    assert abs(widths["backpressure"] - 639 * rep["stall_cycles"]["output_backpressure"] / total) <= 2
+    assert abs(widths["straddle"] - 639 * rep["stall_cycles"]["one_port_straddle"] / total) <= 2
+    assert rep["stall_cycles"]["one_port_straddle"] == rep["straddling_index_reads"] > 0
