@@ -4,28 +4,39 @@ Twin of :func:`golden.fetch.read_codeword`, and of the raw-level read in :func:`
 The codebook memory holds one wide entry per codeword (``entry_bytes * 8`` bits, byte ``n`` of the
 entry in bits ``[8n, 8n+8)``); an extended (mipmap) codeword holds every sub-level, and the
 descriptor's plane offsets say where this level's texels (or Y, U, V planes) start. Raw levels read a
-32-bit RGBA word from the raw memory through the same two stages.
+32-bit RGBA word from the raw memory through the same four stages. Both memories are banked
+(:class:`hw.banked_rom.BankedROM`: 512-entry block RAM banks, each read registered).
 """
 
 from __future__ import annotations
 
 import numpy as np
 from amaranth import *
-from amaranth.lib import data, memory, wiring
+from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
 from golden.format import COLOR_CODES
 
+from .banked_rom import BANK_DEPTH, BankedROM
+
 __all__ = ["CodebookROM", "SamplesLayout", "LATENCY"]
 
 #: Cycles from the index to the samples.
-LATENCY = 2
+LATENCY = 4
 
 #: Four 8-bit samples: (R,G,B,A), (R,G,B,-), (I,-,-,-) or (Y,U,V,-) as in ``read_codeword``.
 SamplesLayout = data.ArrayLayout(unsigned(8), 4)
 
-_YUV = COLOR_CODES["yuv411"]
-_RGBA = COLOR_CODES["rgba"]
+_RGB, _RGBA, _YUV = (COLOR_CODES[c] for c in ("rgb", "rgba", "yuv411"))
+
+
+def _pick(values: list, index):
+    """``values[index]``, combinational; the list is padded to a power of two with its last value so
+    that every index selects something (one value: no multiplexer)."""
+    if len(values) == 1:
+        return values[0]
+    n = 1 << (len(values) - 1).bit_length()
+    return Array(values + [values[-1]] * (n - len(values)))[index]
 
 
 def _entry_ints(codebook: np.ndarray) -> list:
@@ -36,14 +47,22 @@ def _entry_ints(codebook: np.ndarray) -> list:
 class CodebookROM(wiring.Component):
     """Codebook memory and raw memory, with the texel select.
 
-    1. *read*: the codebook memory at ``cb_base + index`` and the raw memory at ``raw_addr``.
-    2. *select*: texel ``t = (y << log2bw) | x``; the four bytes from ``texel_off + tb * t``
-       (``tb`` = 3, 4, 1, 1 bytes per texel for rgb, rgba, intensity, yuv411; a byte past the entry
-       reads the entry's last byte, as the golden model clamps); for yuv411, samples 1 and 2 are
-       ``u_off + ct`` and ``v_off + ct`` with ``ct = ((y >> 1) << max(log2bw - 1, 0)) | (x >> 1)``.
-       A raw level's samples are the raw word's bytes and its ``color_out`` is rgba.
+    The texel's bytes start at ``start = texel_off + tb * t`` with ``t = (y << log2bw) | x`` and
+    ``tb`` = 3, 4, 1, 1 bytes per texel for rgb, rgba, intensity, yuv411 (a byte past the entry
+    reads the entry's last byte, as the golden model clamps); for yuv411, samples 1 and 2 are the
+    bytes at ``u_off + ct`` and ``v_off + ct`` with ``ct = ((y >> 1) << max(log2bw - 1, 0)) | (x >> 1)``.
+    A raw level's samples are the raw word's bytes and its ``color_out`` is rgba. Four stages:
 
-    Latency 2 (both stages advance when ``en`` is high). Throughput: one texel per cycle.
+    1. *read*: the codebook memory at ``cb_base + index`` and the raw memory at ``raw_addr``; the
+       byte addresses ``start``, ``u_off + ct``, ``v_off + ct`` (``tb * t`` as shifts and an add),
+       registered beside the block RAMs' read registers.
+    2. *data*: the read data, registered per 512-entry bank.
+    3. *window*: in every codebook bank, the two 4-byte-aligned words of the entry that hold the
+       texel's bytes (a 64-bit window) and the words holding U and V; the raw word of the selected
+       raw bank. Registered.
+    4. *select*: the bank's windows selected, then the bytes inside them; registered as ``samples``.
+
+    Latency 4 (every stage advances when ``en`` is high). Throughput: one texel per cycle.
 
     Arguments
     ---------
@@ -53,6 +72,8 @@ class CodebookROM(wiring.Component):
         The raw memory image.
     cb_bits, raw_bits, off_bits : int
         Widths of the codebook base, the raw address and the plane offsets.
+    bank_depth : int
+        Entries per block RAM bank of each memory (:class:`hw.banked_rom.BankedROM`).
 
     Members
     -------
@@ -80,13 +101,15 @@ class CodebookROM(wiring.Component):
         Registered colour format of the samples (rgba for raw levels).
     """
 
-    def __init__(self, codebook, raw_words, *, cb_bits: int, raw_bits: int, off_bits: int):
+    def __init__(self, codebook, raw_words, *, cb_bits: int, raw_bits: int, off_bits: int,
+                 bank_depth: int = BANK_DEPTH):
         codebook = np.asarray(codebook, dtype=np.uint8)
         if codebook.ndim != 2:
             raise ValueError("codebook memory must be a 2-D uint8 array")
         self._entry_bytes = max(1, codebook.shape[1])
         self._entries = _entry_ints(codebook) or [0]
         self._raw = [int(v) for v in np.asarray(raw_words, dtype=np.uint32).tolist()] or [0]
+        self._bank_depth = bank_depth
         super().__init__({
             "index": In(16),
             "cb_base": In(cb_bits),
@@ -111,59 +134,87 @@ class CodebookROM(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         nbytes = self._entry_bytes
-        m.submodules.codebook = codebook = memory.Memory(shape=nbytes * 8, depth=len(self._entries),
-                                                         init=self._entries)
-        m.submodules.raw = raw = memory.Memory(shape=32, depth=len(self._raw), init=self._raw)
-        cb_rd = codebook.read_port(domain="sync")
-        raw_rd = raw.read_port(domain="sync")
+        m.submodules.codebook = codebook = BankedROM(self._entries, width=nbytes * 8, bank_depth=self._bank_depth)
+        m.submodules.raw = raw = BankedROM(self._raw, width=32, bank_depth=self._bank_depth)
         m.d.comb += [
-            cb_rd.addr.eq(self.cb_base + self.index),
-            cb_rd.en.eq(self.en),
-            raw_rd.addr.eq(self.raw_addr),
-            raw_rd.en.eq(self.en),
+            codebook.addr.eq(self.cb_base + self.index), codebook.en.eq(self.en),
+            raw.addr.eq(self.raw_addr), raw.en.eq(self.en),
         ]
 
-        # Stage 1 registers beside the memories' own.
-        fields = ("compressed", "x", "y", "log2bw", "color", "texel_off", "u_off", "v_off")
-        r = {name: Signal.like(getattr(self, name), name=f"{name}_r") for name in fields}
-        with m.If(self.en):
-            m.d.sync += [r[name].eq(getattr(self, name)) for name in fields]
+        def reg(value, name):
+            r = Signal.like(value, name=name)
+            with m.If(self.en):
+                m.d.sync += r.eq(value)
+            return r
 
-        # Stage 2: texel select. The entry is padded with three copies of its last byte so that
-        # every byte address up to last + 3 reads what the golden model's clamp reads.
-        entry = cb_rd.data
-        last = entry[(nbytes - 1) * 8:]
-        padded = Cat(entry, last, last, last)
+        # Stage 1: byte addresses of the texel and of its U and V, beside the memory reads.
         t = Signal(6)
-        tb = Signal(3)
-        start = Signal(len(r["texel_off"]) + 7)
+        tbt = Signal(8)                     # tb * t
         lcw = Signal(2)
         ct = Signal(6)
         m.d.comb += [
-            t.eq((r["y"] << r["log2bw"]) | r["x"]),
-            tb.eq(Array([C(3, 3), C(4, 3), C(1, 3), C(1, 3)])[r["color"]]),
-            start.eq(r["texel_off"] + tb * t),
-            lcw.eq(Mux(r["log2bw"] > 0, r["log2bw"] - 1, 0)),
-            ct.eq(((r["y"] >> 1) << lcw) | (r["x"] >> 1)),
+            t.eq((self.y << self.log2bw) | self.x),
+            lcw.eq(Mux(self.log2bw > 0, self.log2bw - 1, 0)),
+            ct.eq(((self.y >> 1) << lcw) | (self.x >> 1)),
         ]
+        with m.Switch(self.color):
+            with m.Case(_RGB):
+                m.d.comb += tbt.eq((t << 1) + t)
+            with m.Case(_RGBA):
+                m.d.comb += tbt.eq(t << 2)
+            with m.Default():
+                m.d.comb += tbt.eq(t)
+        nwords = -(-(nbytes + 3) // 4) + 1     # 4-byte words of the padded entry (see stage 3)
+        addr_bits = (4 * nwords - 1).bit_length()
+        start = reg((self.texel_off + tbt)[:addr_bits], "start_read")
+        ustart = reg((self.u_off + ct)[:addr_bits], "ustart_read")
+        vstart = reg((self.v_off + ct)[:addr_bits], "vstart_read")
+        compressed = reg(self.compressed, "compressed_read")
+        color = reg(self.color, "color_read")
+
+        # Stage 2: the banks' data registers (in BankedROM); the fields follow.
+        start, ustart, vstart = reg(start, "start_data"), reg(ustart, "ustart_data"), reg(vstart, "vstart_data")
+        compressed, color = reg(compressed, "compressed_data"), reg(color, "color_data")
+
+        # Stage 3: per codebook bank, the 4-byte words holding the texel (two: a 64-bit window) and
+        # U and V. The entry is padded with three copies of its last byte, so that every byte
+        # address up to last + 3 reads what the golden model's clamp reads, then with zero words.
+        windows, u_words, v_words = [], [], []
+        for k in range(codebook.banks):
+            entry = codebook.data[k]
+            last = entry[(nbytes - 1) * 8:]
+            padded = Cat(entry, last, last, last)
+            padded = Cat(padded, C(0, nwords * 32 - len(padded)))
+            windows.append(reg(Cat(padded.word_select(start[2:], 32), padded.word_select(start[2:] + 1, 32)),
+                               f"window{k}"))
+            u_words.append(reg(padded.word_select(ustart[2:], 32), f"u_word{k}"))
+            v_words.append(reg(padded.word_select(vstart[2:], 32), f"v_word{k}"))
+        bank = reg(codebook.bank, "bank_window")
+        raw_word = reg(raw.word, "raw_window")
+        start, ustart, vstart = reg(start[:2], "start_window"), reg(ustart[:2], "ustart_window"), \
+            reg(vstart[:2], "vstart_window")
+        compressed, color = reg(compressed, "compressed_window"), reg(color, "color_window")
+
+        # Stage 4: the bank's words, then the bytes.
+        window = _pick(windows, bank)
         texel = Signal(32)
         u = Signal(8)
         v = Signal(8)
         m.d.comb += [
-            texel.eq(padded.bit_select(start << 3, 32)),
-            u.eq(padded.bit_select((r["u_off"] + ct) << 3, 8)),
-            v.eq(padded.bit_select((r["v_off"] + ct) << 3, 8)),
+            texel.eq(window.bit_select(start << 3, 32)),
+            u.eq(_pick(u_words, bank).bit_select(ustart << 3, 8)),
+            v.eq(_pick(v_words, bank).bit_select(vstart << 3, 8)),
         ]
         out = Signal(32)
-        with m.If(~r["compressed"]):
-            m.d.comb += out.eq(raw_rd.data)
-        with m.Elif(r["color"] == _YUV):
+        with m.If(~compressed):
+            m.d.comb += out.eq(raw_word)
+        with m.Elif(color == _YUV):
             m.d.comb += out.eq(Cat(texel[:8], u, v, texel[24:]))
         with m.Else():
             m.d.comb += out.eq(texel)
         with m.If(self.en):
             m.d.sync += [
                 self.samples.as_value().eq(out),
-                self.color_out.eq(Mux(r["compressed"], r["color"], _RGBA)),
+                self.color_out.eq(Mux(compressed, color, _RGBA)),
             ]
         return m

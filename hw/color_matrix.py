@@ -24,7 +24,7 @@ from .codebook_rom import SamplesLayout
 __all__ = ["ColorMatrix", "LATENCY"]
 
 #: Cycles from samples to RGBA.
-LATENCY = 2
+LATENCY = 3
 
 _RGB, _RGBA, _I8, _YUV = (COLOR_CODES[c] for c in ("rgb", "rgba", "intensity", "yuv411"))
 
@@ -32,12 +32,14 @@ _RGB, _RGBA, _I8, _YUV = (COLOR_CODES[c] for c in ("rgb", "rgba", "intensity", "
 class ColorMatrix(wiring.Component):
     """The colour matrix with its bypass.
 
-    1. *multiply*: ``x_k = in_k - off_k`` (signed 9 bits) and the nine products ``M[c][k] * x_k``
-       (``matrix.product_bits`` signed bits each, constant multipliers), registered.
-    2. *sum*: per output ``sum_k p[c][k] + bias`` (``matrix.sum_bits`` signed bits), arithmetic
-       shift right by ``F``, clamp to 0..255; or the bypass expansion; registered.
+    1. *offset*: ``x_k = in_k - off_k`` (signed 9 bits; an offset of 128 is the top bit inverted,
+       0 is nothing), registered.
+    2. *multiply*: the nine products ``M[c][k] * x_k`` (``matrix.product_bits`` signed bits each,
+       constant multipliers: a MULT18X18D between flip-flops, or shifts and adds), registered.
+    3. *sum*: per output ``sum_k p[c][k] + bias`` (``matrix.sum_bits`` signed bits), arithmetic
+       shift right by ``F``, clamp to 0..255 (by bit tests); or the bypass expansion; registered.
 
-    Latency 2 (both stages advance when ``en`` is high). Throughput: one texel per cycle.
+    Latency 3 (every stage advances when ``en`` is high). Throughput: one texel per cycle.
 
     Arguments
     ---------
@@ -85,37 +87,58 @@ class ColorMatrix(wiring.Component):
         mat = self._matrix
         pbits, sbits, F = mat.product_bits, mat.sum_bits, mat.frac_bits
 
-        # Stage 1: offsets and constant multiplications.
+        # Stage 1: offsets, registered (the multipliers' operands come straight from flip-flops).
         x = [Signal(signed(9), name=f"x{k}") for k in range(3)]
-        m.d.comb += [x[k].eq(self.samples[k] - mat.offsets[k]) for k in range(3)]
-        prod = [[Signal(signed(pbits), name=f"p_{'rgb'[c]}{'yuv'[k]}") for k in range(3)] for c in range(3)]
         samples_r = Signal(SamplesLayout)
         color_r = Signal(2)
+        with m.If(self.en):
+            for k in range(3):
+                sample, off = self.samples[k], mat.offsets[k]
+                if off == 0:
+                    m.d.sync += x[k].eq(sample)
+                elif off == 128:        # in - 128: the top bit inverted, read as signed (no adder)
+                    m.d.sync += x[k].eq(Cat(sample[:7], ~sample[7]).as_signed())
+                else:
+                    m.d.sync += x[k].eq(sample - off)
+            m.d.sync += [samples_r.eq(self.samples), color_r.eq(self.color)]
+
+        # Stage 2: constant multiplications.
+        prod = [[Signal(signed(pbits), name=f"p_{'rgb'[c]}{'yuv'[k]}") for k in range(3)] for c in range(3)]
+        samples_p = Signal(SamplesLayout)
+        color_p = Signal(2)
         with m.If(self.en):
             for c in range(3):
                 for k in range(3):
                     m.d.sync += prod[c][k].eq(x[k] * C(mat.coeffs[c][k], signed(19)))
-            m.d.sync += [samples_r.eq(self.samples), color_r.eq(self.color)]
+            m.d.sync += [samples_p.eq(samples_r), color_p.eq(color_r)]
 
         # Stage 2: sum + bias, shift, clamp; or bypass.
         acc = [Signal(signed(sbits), name=f"sum_{'rgb'[c]}") for c in range(3)]
-        shifted = [Signal(signed(sbits), name=f"shifted_{'rgb'[c]}") for c in range(3)]
+        shifted = [Signal(signed(max(sbits, 10)), name=f"shifted_{'rgb'[c]}") for c in range(3)]
         conv = [Signal(8, name=f"conv_{'rgb'[c]}") for c in range(3)]
         for c in range(3):
             m.d.comb += [
                 acc[c].eq(prod[c][0] + prod[c][1] + prod[c][2] + mat.bias),
                 shifted[c].eq(acc[c] >> F),
             ]
-            with m.If(shifted[c] < 0):
+            # Clamp by bit tests (no comparator): negative is the sign bit, above 255 is any bit
+            # between bit 8 and the sign set.
+            negative = Signal(name=f"negative_{'rgb'[c]}")
+            above = Signal(name=f"above_{'rgb'[c]}")
+            m.d.comb += [
+                negative.eq(shifted[c][-1]),
+                above.eq(shifted[c][8:-1] != 0),
+            ]
+            with m.If(negative):
                 m.d.comb += conv[c].eq(0)
-            with m.Elif(shifted[c] > 255):
+            with m.Elif(above):
                 m.d.comb += conv[c].eq(255)
             with m.Else():
                 m.d.comb += conv[c].eq(shifted[c][:8])
 
-        s = samples_r
+        s = samples_p
         out = Signal(SamplesLayout)
-        with m.Switch(color_r):
+        with m.Switch(color_p):
             with m.Case(_YUV):
                 m.d.comb += out.eq(Cat(conv[0], conv[1], conv[2], C(255, 8)))
             with m.Case(_I8):

@@ -7,42 +7,46 @@ Twin of :func:`golden.fetch.read_index`. The bit address ``k * b`` splits into t
 The index memory is split into an EVEN bank (words 0, 2, 4, ...) and an ODD bank (words 1, 3, ...):
 words ``w`` and ``w + 1`` always live in different banks, so both arrive in the same cycle and a
 straddling index costs nothing (the paper's "specialized addressing logic"). With ``one_port`` the
-memory is a single bank and a straddling index takes one extra cycle.
+memory is a single bank and a straddling index takes one extra cycle. Either memory is a
+:class:`hw.banked_rom.BankedROM` (512-word block RAM banks, each read registered).
 """
 
 from __future__ import annotations
 
 import numpy as np
 from amaranth import *
-from amaranth.lib import memory, wiring
+from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
+
+from .banked_rom import BANK_DEPTH, BankedROM
 
 __all__ = ["IndexReader", "INDEX_BITS", "LATENCY"]
 
 #: Width of an index (b is 1..16).
 INDEX_BITS = 16
 #: Cycles from the block number to the index.
-LATENCY = 2
-
-
-def _depth_bits(depth: int) -> int:
-    return max(0, (depth - 1).bit_length())
+LATENCY = 5
 
 
 class IndexReader(wiring.Component):
     """The packed index reader.
 
-    Two internal stages, both advancing in cycles where ``en`` is high:
+    Five internal stages, each a register:
 
-    1. *word address*: ``k * b``, word ``w``, offset ``off``; the banks are read (two-bank: even
-       bank at ``(w + 1) >> 1``, odd bank at ``w >> 1``; one-port: the single bank at ``w``, then
-       ``w + 1``).
-    2. *extract*: the two words are ordered by the parity of ``w`` (or, one-port, the word saved
-       from the first read and the second read), concatenated, shifted by ``off`` and masked.
+    1. *bit address*: ``k * b`` (a multiplier, registered), with ``base``, ``b`` and ``valid``.
+    2. *word*: ``w = base + (k*b >> log2 W)`` and ``off``; the memory is read (two-bank: even bank
+       at ``(w + 1) >> 1``, odd bank at ``w >> 1``; one-port: the single bank at ``w``, then
+       ``w + 1``) into the block RAMs' read registers.
+    3. *data*: the read data, registered per 512-word bank.
+    4. *pair*: the bank's word selected and the two words ordered by the parity of ``w`` (one-port:
+       the word of the first read, kept from the previous item, and the second read), registered as
+       the pair ``{word[w+1], word[w]}``.
+    5. *extract*: the pair shifted right by ``off`` and masked to ``b`` bits, registered.
 
-    Latency 2. Throughput: one index per cycle; with ``one_port``, a straddling index occupies
-    stage 1 for two advancing cycles: in the first, ``hold`` is high, the stages upstream must not
-    advance and stage 2 receives a bubble.
+    Latency 5; stages 2..5 advance when ``en`` is high, stage 1 when ``en & ~hold``. Throughput: one
+    index per cycle. With ``one_port``, a straddling index stays in stage 1 for two advancing
+    cycles: in the first, ``hold`` is high, stage 1 keeps its item and does not take the inputs (the
+    stages upstream must not advance either) and stage 2 receives a bubble (ahead of the item).
 
     Arguments
     ---------
@@ -56,11 +60,14 @@ class IndexReader(wiring.Component):
         Width of the level group's base word.
     one_port : bool
         One bank; a straddling index costs one extra cycle.
+    bank_depth : int
+        Words per block RAM bank of each memory (:class:`hw.banked_rom.BankedROM`).
 
     Members
     -------
     valid : In(1)
-        Stage 1 holds a request that reads an index (gates ``hold`` and ``straddle``).
+        The inputs are a request that reads an index (registered into stage 1; gates ``hold`` and
+        ``straddle``).
     k : In(k_bits)
         Block number.
     b : In(5)
@@ -70,12 +77,12 @@ class IndexReader(wiring.Component):
     en : In(1)
         Pipeline advance.
     straddle : Out(1)
-        Combinational: the index read in stage 1 straddles a word boundary (``valid`` and
-        ``off + b > W``).
+        Combinational: the index read of the item in stage 1 straddles a word boundary (its
+        ``valid`` and ``off + b > W``).
     hold : Out(1)
         Combinational, one-port only (else 0): stage 1 spends this cycle on the first of two reads.
     index : Out(16)
-        The index, registered (latency 2).
+        The index, registered (latency 5).
 
     Raises
     ------
@@ -83,13 +90,15 @@ class IndexReader(wiring.Component):
         If ``word_bits`` is not 16, 32 or 64.
     """
 
-    def __init__(self, words, *, word_bits: int, k_bits: int, base_bits: int, one_port: bool = False):
+    def __init__(self, words, *, word_bits: int, k_bits: int, base_bits: int, one_port: bool = False,
+                 bank_depth: int = BANK_DEPTH):
         if word_bits not in (16, 32, 64):
             raise ValueError(f"index word width {word_bits} is not 16, 32 or 64")
         self._words = [int(w) for w in np.asarray(words).astype(np.uint64).tolist()] or [0]
         self._word_bits = word_bits
         self._k_bits = k_bits
         self._one_port = bool(one_port)
+        self._bank_depth = bank_depth
         super().__init__({
             "valid": In(1),
             "k": In(k_bits),
@@ -114,68 +123,67 @@ class IndexReader(wiring.Component):
         W = self._word_bits
         log2W = W.bit_length() - 1
 
-        # Stage 1: bit address -> word and offset.
-        bit = Signal(self._k_bits + 5)
+        # Stage 1: the bit address k*b, registered (a multiplier's output goes straight to flops).
+        bit = Signal(self._k_bits + 5, name="bit")
+        base1 = Signal.like(self.base, name="base_bit")
+        b1 = Signal(5, name="b_bit")
+        valid1 = Signal(name="valid_bit")
+        with m.If(self.en & ~self.hold):
+            m.d.sync += [bit.eq(self.k * self.b), base1.eq(self.base), b1.eq(self.b), valid1.eq(self.valid)]
+
+        # Stage 2: word and offset; the memory read.
         w = Signal(max(len(self.base), self._k_bits + 5 - log2W) + 1)
         off = Signal(log2W)
         m.d.comb += [
-            bit.eq(self.k * self.b),
-            w.eq(self.base + (bit >> log2W)),
+            w.eq(base1 + (bit >> log2W)),
             off.eq(bit[:log2W]),
-            self.straddle.eq(self.valid & (off + self.b > W)),
+            self.straddle.eq(valid1 & (off + b1 > W)),
         ]
 
-        off_r = Signal(log2W)
-        b_r = Signal(5)
-        with m.If(self.en):
-            m.d.sync += [off_r.eq(off), b_r.eq(self.b)]
-
-        lo = Signal(W)
-        hi = Signal(W)
-        if not self._one_port:
-            even_words = self._words[0::2] or [0]
-            odd_words = self._words[1::2] or [0]
-            m.submodules.even_bank = even = memory.Memory(shape=W, depth=len(even_words), init=even_words)
-            m.submodules.odd_bank = odd = memory.Memory(shape=W, depth=len(odd_words), init=odd_words)
-            even_rd = even.read_port(domain="sync")
-            odd_rd = odd.read_port(domain="sync")
-            parity_r = Signal()
-            m.d.comb += [
-                even_rd.addr.eq((w + 1) >> 1),
-                odd_rd.addr.eq(w >> 1),
-                even_rd.en.eq(self.en),
-                odd_rd.en.eq(self.en),
-            ]
+        def reg(value, name):
+            """``value`` registered, enabled by ``en`` (one stage later)."""
+            r = Signal.like(value, name=name)
             with m.If(self.en):
-                m.d.sync += parity_r.eq(w[0])
-            # Stage 2: order the two words: word[w] is in the odd bank when w is odd.
+                m.d.sync += r.eq(value)
+            return r
+
+        lo = Signal(W, name="lo")           # stage 4: word[w]
+        hi = Signal(W, name="hi")           # stage 4: word[w + 1]
+        if not self._one_port:
+            m.submodules.even_bank = even = BankedROM(self._words[0::2] or [0], width=W, bank_depth=self._bank_depth)
+            m.submodules.odd_bank = odd = BankedROM(self._words[1::2] or [0], width=W, bank_depth=self._bank_depth)
             m.d.comb += [
-                lo.eq(Mux(parity_r, odd_rd.data, even_rd.data)),
-                hi.eq(Mux(parity_r, even_rd.data, odd_rd.data)),
+                even.addr.eq((w + 1) >> 1), even.en.eq(self.en),
+                odd.addr.eq(w >> 1), odd.en.eq(self.en),
             ]
+            parity = reg(reg(w[0], "parity_word"), "parity_data")
+            # Stage 4: word[w] is in the odd bank when w is odd.
+            with m.If(self.en):
+                m.d.sync += [
+                    lo.eq(Mux(parity, odd.word, even.word)),
+                    hi.eq(Mux(parity, even.word, odd.word)),
+                ]
         else:
-            m.submodules.bank = bank = memory.Memory(shape=W, depth=len(self._words), init=self._words)
-            rd = bank.read_port(domain="sync")
-            second = Signal()              # stage 1 is on the second read of a straddling index
-            saved = Signal(W)              # word[w] from the first read
-            straddled_r = Signal()
+            m.submodules.memory = mem = BankedROM(self._words, width=W, bank_depth=self._bank_depth)
+            second = Signal()               # stage 1 is on the second read of a straddling index
             m.d.comb += [
                 self.hold.eq(self.straddle & ~second),
-                rd.addr.eq(w + second),
-                rd.en.eq(self.en),
+                mem.addr.eq(w + second),
+                mem.en.eq(self.en),
             ]
             with m.If(self.en):
-                m.d.sync += [second.eq(self.hold), straddled_r.eq(self.straddle)]
-                with m.If(second):
-                    m.d.sync += saved.eq(rd.data)
-            m.d.comb += [
-                lo.eq(Mux(straddled_r, saved, rd.data)),
-                hi.eq(rd.data),
-            ]
+                m.d.sync += second.eq(self.hold)
+            straddled = reg(reg(self.straddle, "straddle_word"), "straddle_data")
+            # Stage 4: the first read (word w) went down the pipeline one item ahead, as the bubble;
+            # ``hi`` still holds it when the straddler's second read (word w + 1) arrives.
+            with m.If(self.en):
+                m.d.sync += [hi.eq(mem.word), lo.eq(Mux(straddled, hi, mem.word))]
 
-        # Stage 2: {hi, lo} >> off, masked to b bits.
+        # Stage 5: {hi, lo} >> off, masked to b bits.
+        off4 = reg(reg(reg(off, "off_word"), "off_data"), "off_pair")
+        b4 = reg(reg(reg(b1, "b_word"), "b_data"), "b_pair")
         mask = Signal(INDEX_BITS)
-        m.d.comb += mask.eq(~(C((1 << INDEX_BITS) - 1, INDEX_BITS) << b_r)[:INDEX_BITS])
+        m.d.comb += mask.eq(~(C((1 << INDEX_BITS) - 1, INDEX_BITS) << b4)[:INDEX_BITS])
         with m.If(self.en):
-            m.d.sync += self.index.eq((Cat(lo, hi) >> off_r)[:INDEX_BITS] & mask)
+            m.d.sync += self.index.eq((Cat(lo, hi) >> off4)[:INDEX_BITS] & mask)
         return m

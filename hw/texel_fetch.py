@@ -3,41 +3,57 @@
 A request (texture, level, i, j, tag) reads as a story through the blocks::
 
     descriptor table -> block address shifter -> index reader -> codebook ROM -> colour matrix
-      (1 cycle)          (1 cycle)                (2 cycles)      (2 cycles)      (2 cycles)
+      (1 cycle)          (1 cycle)                (5 cycles)      (4 cycles)      (3 cycles)
 
-and leaves as an RGBA8888 response with its tag, in request order, ``LATENCY`` = 8 cycles later.
+and leaves as an RGBA8888 response with its tag, in request order, ``LATENCY`` = 14 cycles later.
 Raw levels take the same path (the shifter computes the raw address, the codebook ROM stage reads
 the raw memory, the colour matrix passes the word through), so the latency does not depend on the
 request.
 
-Pipeline control is in one place (:meth:`TexelFetch.elaborate`): every register advances on
-``advance = ~o.valid | o.ready`` (the output register is empty or being emptied); with ``one_port``
-the stages upstream of the index reader's word-address stage also wait while it ``hold``\\ s.
+Pipeline control is in one place (:meth:`TexelFetch.elaborate`). Every register advances on
+``advance``, a flip-flop: ``advance`` is high in a cycle when the output was not stalled in the
+previous one (``o.valid & ~o.ready``); a response pushed out of the last stage in a stalled cycle
+waits in the skid register, which the output shows first. With ``one_port`` the stages up to the
+index reader's bit-address stage (``UPSTREAM_STAGES``) also wait while it ``hold``\\ s.
 """
 
 from __future__ import annotations
 
-import numpy as np
 from amaranth import *
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
 from golden.format import TextureSet
 
-from . import address, codebook_rom, color_matrix, descriptor, index_reader
+from . import codebook_rom, color_matrix, index_reader
 from .address import COORD_BITS, BlockAddress
+from .banked_rom import BANK_DEPTH
 from .codebook_rom import CodebookROM
 from .color_matrix import ColorMatrix
 from .descriptor import LEVEL_BITS, DescriptorTable, descriptor_widths, texture_bits
 from .index_reader import IndexReader
 
-__all__ = ["TexelFetch", "RequestLayout", "ResponseLayout", "LATENCY", "STAGES"]
+__all__ = ["TexelFetch", "RequestLayout", "ResponseLayout", "LATENCY", "STAGES", "REGISTERS",
+           "UPSTREAM_STAGES"]
 
-#: Pipeline registers in order; ``TexelFetch`` has a ``valid_<name>`` output for each.
-STAGES = ("descriptor", "address", "index_word", "index", "codebook", "texel", "color_product", "color")
+#: Pipeline registers in order, one per cycle of latency; ``TexelFetch`` has a ``valid_<name>``
+#: output for each.
+STAGES = (
+    "descriptor",                                                       # descriptor table
+    "address",                                                          # block address shifter
+    "index_bit", "index_word", "index_data", "index_pair", "index",     # index reader
+    "codebook", "codebook_data", "texel_window", "texel",               # codebook ROM
+    "color_offset", "color_product", "color",                           # colour matrix
+)
 #: Cycles from accepting a request to presenting its response (one per stage).
 LATENCY = len(STAGES)
 assert LATENCY == (1 + 1 + index_reader.LATENCY + codebook_rom.LATENCY + color_matrix.LATENCY)
+#: The first stages (descriptor, address, index_bit), which move on ``upstream``: with ``one_port``
+#: they and the input wait while the index reader's bit-address stage holds a straddling index.
+UPSTREAM_STAGES = 3
+#: Registers with a valid bit (a ``valid_<name>`` output and an occupancy entry in the
+#: simulation reports): the stages, then the skid register in front of the output.
+REGISTERS = STAGES + ("skid",)
 
 
 class RequestLayout(data.StructLayout):
@@ -88,8 +104,8 @@ def _addr_bits(depth: int) -> int:
 class TexelFetch(wiring.Component):
     """The texel-fetch unit holding the memories of one texture set.
 
-    Latency: ``LATENCY`` = 8 cycles, a constant. A request accepted in cycle ``t`` (``i.valid`` and
-    ``i.ready`` high) is presented on ``o`` (``o.valid`` high) in cycle ``t + 8`` when no
+    Latency: ``LATENCY`` = 14 cycles, a constant. A request accepted in cycle ``t`` (``i.valid`` and
+    ``i.ready`` high) is presented on ``o`` (``o.valid`` high) in cycle ``t + 14`` when no
     backpressure or one-port stall intervened.
 
     Throughput: one request per cycle whenever the output is not stalled, whatever the index width
@@ -99,12 +115,15 @@ class TexelFetch(wiring.Component):
     Cycle count: with requests presented back to back from cycle 0 and ``o.ready`` always high,
     N requests transfer their last response in cycle ``N - 1 + LATENCY``, i.e. in ``N + LATENCY``
     cycles counted from the first cycle ``i.valid`` is high up to and including the cycle the last
-    response transfers (``+ straddles`` with ``one_port``).
+    response transfers (``+ straddles`` with ``one_port``). In general every cycle is one of the
+    first ``LATENCY``, a transfer, a cycle of output backpressure or a one-port bubble at the output.
 
-    Backpressure: ``i.ready = advance & ~hold`` where ``advance = ~o.valid | o.ready``; every
-    pipeline register (including the memories' read registers) advances on ``advance``, so a
-    stalled output freezes the whole pipeline and no response is lost, duplicated or reordered.
-    ``i.ready`` depends combinationally on ``o.ready``.
+    Backpressure: every pipeline register (including the memories' read registers) advances on
+    ``advance``, a register set to ``~(o.valid & ~o.ready)`` in every cycle: the cycle after an
+    output stall, the pipeline waits. The response that left the last stage in the stalled cycle is
+    kept in a skid register, which drives ``o`` until it transfers; so no response is lost,
+    duplicated or reordered. ``i.ready = advance & ~hold`` and ``o.valid`` depend on flip-flops
+    only, not combinationally on ``o.ready``.
 
     Arguments
     ---------
@@ -114,6 +133,9 @@ class TexelFetch(wiring.Component):
         Single-bank index memory (reproduces the paper's straddle penalty in cycle counts).
     tag_width : int
         Width of the request tag carried to the response.
+    bank_depth : int
+        Words per block RAM bank of the index, codebook and raw memories (a power of two; default
+        512, one ECP5 DP16KD; see :class:`hw.banked_rom.BankedROM`).
 
     Members
     -------
@@ -129,26 +151,33 @@ class TexelFetch(wiring.Component):
         Strobe: a cycle spent on the extra read of a straddling index (one-port only).
     stall_output : Out(1)
         ``o.valid & ~o.ready``: a cycle of output backpressure.
-    valid_descriptor, valid_address, valid_index_word, valid_index, valid_codebook, valid_texel, valid_color_product, valid_color : Out(1)
-        Per-stage valid bits (``valid_color`` is ``o.valid``), for occupancy reports.
+    valid_descriptor, valid_address, valid_index_bit, valid_index_word, valid_index_data, valid_index_pair, valid_index, valid_codebook, valid_codebook_data, valid_texel_window, valid_texel, valid_color_offset, valid_color_product, valid_color, valid_skid : Out(1)
+        Valid bits of the registers (``REGISTERS``: the stages, then the skid register; ``o.valid``
+        is ``valid_color | valid_skid``), for occupancy reports.
 
     Raises
     ------
     TypeError
         If ``texture_set`` is not a TextureSet or ``tag_width`` is not a non-negative int.
+    ValueError
+        If ``bank_depth`` is not a power of two.
     golden.format.FormatError
         If the texture set's descriptors point outside its memories.
     """
 
-    def __init__(self, texture_set: TextureSet, *, one_port: bool = False, tag_width: int = 8):
+    def __init__(self, texture_set: TextureSet, *, one_port: bool = False, tag_width: int = 8,
+                 bank_depth: int = BANK_DEPTH):
         if not isinstance(texture_set, TextureSet):
             raise TypeError(f"texture_set must be a TextureSet, not {type(texture_set).__name__}")
         if not isinstance(tag_width, int) or tag_width < 0:
             raise TypeError(f"tag_width must be a non-negative integer, not {tag_width!r}")
+        if not isinstance(bank_depth, int) or bank_depth < 1 or bank_depth & (bank_depth - 1):
+            raise ValueError(f"bank_depth must be a power of two, not {bank_depth!r}")
         texture_set.validate()
         self._ts = texture_set
         self._one_port = bool(one_port)
         self._tag_width = tag_width
+        self._bank_depth = bank_depth
         self._texture_bits = texture_bits(texture_set)
         members = {
             "i": In(stream.Signature(RequestLayout(self._texture_bits, tag_width))),
@@ -157,12 +186,12 @@ class TexelFetch(wiring.Component):
             "stall_one_port": Out(1),
             "stall_output": Out(1),
         }
-        members.update({f"valid_{name}": Out(1) for name in STAGES})
+        members.update({f"valid_{name}": Out(1) for name in REGISTERS})
         super().__init__(members)
 
     @property
     def latency(self) -> int:
-        """Cycles from accepting a request to presenting its response: ``LATENCY`` (8)."""
+        """Cycles from accepting a request to presenting its response: ``LATENCY`` (14)."""
         return LATENCY
 
     @property
@@ -176,6 +205,10 @@ class TexelFetch(wiring.Component):
     @property
     def tag_width(self) -> int:
         return self._tag_width
+
+    @property
+    def bank_depth(self) -> int:
+        return self._bank_depth
 
     @property
     def texture_bits(self) -> int:
@@ -199,31 +232,40 @@ class TexelFetch(wiring.Component):
             base_bits=widths["base"], k_bits=self._k_bits(), raw_bits=_addr_bits(len(ts.raw_words)))
         m.submodules.index_reader = idx = IndexReader(
             ts.index_words, word_bits=ts.word_bits, k_bits=self._k_bits(), base_bits=widths["base"],
-            one_port=self._one_port)
+            one_port=self._one_port, bank_depth=self._bank_depth)
         m.submodules.codebook_rom = rom = CodebookROM(
             ts.codebook, ts.raw_words, cb_bits=widths["cb_base"], raw_bits=_addr_bits(len(ts.raw_words)),
-            off_bits=widths["texel_off"])
+            off_bits=widths["texel_off"], bank_depth=self._bank_depth)
         m.submodules.color_matrix = cm = ColorMatrix(ts.matrix)
 
         # -- pipeline control, all in one place ---------------------------------------------------
         valid = [Signal(name=f"valid_{name}") for name in STAGES]
-        advance = Signal()          # every register moves
-        upstream = Signal()         # registers upstream of the index reader's word stage move
+        advance = Signal(init=1)    # every register moves; a flip-flop: no output stall last cycle
+        upstream = Signal()         # the first UPSTREAM_STAGES registers and the input move
+        skid = Signal(self.o.p.shape(), name="skid")    # the response pushed out in a stalled cycle
+        skid_valid = Signal()
+        response = Signal(self.o.p.shape())             # the last stage's response
         m.d.comb += [
-            advance.eq(~self.o.valid | self.o.ready),
+            skid_valid.eq(~advance),
             upstream.eq(advance & ~idx.hold),
             self.i.ready.eq(upstream),
-            self.o.valid.eq(valid[-1]),
+            self.o.valid.eq(skid_valid | valid[-1]),
+            self.o.p.eq(Mux(skid_valid, skid, response)),
+            self.stall_output.eq(self.o.valid & ~self.o.ready),
             self.straddle.eq(idx.straddle & upstream),
             self.stall_one_port.eq(idx.hold & advance),
-            self.stall_output.eq(self.o.valid & ~self.o.ready),
         ]
-        m.d.comb += [getattr(self, f"valid_{name}").eq(v) for name, v in zip(STAGES, valid)]
-        with m.If(upstream):
-            m.d.sync += [valid[0].eq(self.i.valid), valid[1].eq(valid[0])]
+        m.d.sync += advance.eq(~self.stall_output)
         with m.If(advance):
-            m.d.sync += valid[2].eq(valid[1] & ~idx.hold)
-            m.d.sync += [valid[n].eq(valid[n - 1]) for n in range(3, len(STAGES))]
+            m.d.sync += skid.eq(response)
+        m.d.comb += [getattr(self, f"valid_{name}").eq(v) for name, v in zip(STAGES, valid)]
+        m.d.comb += self.valid_skid.eq(skid_valid)
+        with m.If(upstream):
+            m.d.sync += valid[0].eq(self.i.valid)
+            m.d.sync += [valid[n].eq(valid[n - 1]) for n in range(1, UPSTREAM_STAGES)]
+        with m.If(advance):
+            m.d.sync += valid[UPSTREAM_STAGES].eq(valid[UPSTREAM_STAGES - 1] & ~idx.hold)
+            m.d.sync += [valid[n].eq(valid[n - 1]) for n in range(UPSTREAM_STAGES + 1, len(STAGES))]
 
         # -- carried fields: registers beside the blocks' own, same enables ----------------------
         def carry(value, en, name):
@@ -253,7 +295,7 @@ class TexelFetch(wiring.Component):
         d2 = carry(row, upstream, "row_address")
         tag.append(carry(tag[-1], upstream, "tag_address"))
 
-        # Stages 3-4: index reader.
+        # Stages 3-7: index reader (stage 3 moves on upstream: the reader gates it with its hold).
         m.d.comb += [
             idx.valid.eq(valid[1] & d2.compressed),
             idx.k.eq(addr.k),
@@ -272,29 +314,30 @@ class TexelFetch(wiring.Component):
             side.log2bw.eq(d2.log2bw), side.color.eq(d2.color),
             side.texel_off.eq(d2.texel_off), side.u_off.eq(d2.u_off), side.v_off.eq(d2.v_off),
         ]
-        s3 = carry(side, advance, "side_index_word")
-        s4 = carry(s3, advance, "side_index")
-        for name in STAGES[2:4]:
-            tag.append(carry(tag[-1], advance, f"tag_{name}"))
+        index_stages = STAGES[2:2 + index_reader.LATENCY]
+        for n, name in enumerate(index_stages):
+            en = upstream if n + 2 < UPSTREAM_STAGES else advance
+            side = carry(side, en, f"side_{name}")
+            tag.append(carry(tag[-1], en, f"tag_{name}"))
 
-        # Stages 5-6: codebook ROM (and raw memory).
+        # Stages 8-11: codebook ROM (and raw memory).
         m.d.comb += [
-            rom.index.eq(idx.index), rom.cb_base.eq(s4.cb_base), rom.raw_addr.eq(s4.raw_addr),
-            rom.compressed.eq(s4.compressed), rom.x.eq(s4.x), rom.y.eq(s4.y),
-            rom.log2bw.eq(s4.log2bw), rom.color.eq(s4.color),
-            rom.texel_off.eq(s4.texel_off), rom.u_off.eq(s4.u_off), rom.v_off.eq(s4.v_off),
+            rom.index.eq(idx.index), rom.cb_base.eq(side.cb_base), rom.raw_addr.eq(side.raw_addr),
+            rom.compressed.eq(side.compressed), rom.x.eq(side.x), rom.y.eq(side.y),
+            rom.log2bw.eq(side.log2bw), rom.color.eq(side.color),
+            rom.texel_off.eq(side.texel_off), rom.u_off.eq(side.u_off), rom.v_off.eq(side.v_off),
             rom.en.eq(advance),
         ]
-        # Stages 7-8: colour matrix.
+        # Stages 12-14: colour matrix.
         m.d.comb += [
             cm.samples.eq(rom.samples), cm.color.eq(rom.color_out), cm.en.eq(advance),
         ]
-        for name in STAGES[4:]:
+        for name in STAGES[2 + index_reader.LATENCY:]:
             tag.append(carry(tag[-1], advance, f"tag_{name}"))
 
         m.d.comb += [
-            self.o.p.r.eq(cm.rgba[0]), self.o.p.g.eq(cm.rgba[1]),
-            self.o.p.b.eq(cm.rgba[2]), self.o.p.a.eq(cm.rgba[3]),
-            self.o.p.tag.eq(tag[-1]),
+            response.r.eq(cm.rgba[0]), response.g.eq(cm.rgba[1]),
+            response.b.eq(cm.rgba[2]), response.a.eq(cm.rgba[3]),
+            response.tag.eq(tag[-1]),
         ]
         return m

@@ -5,20 +5,31 @@ occupancy exactly (tests compare it with pysim), without simulating the datapath
 
 How the RTL moves (see ``docs/hardware.md``)
 ---------------------------------------------
-Eight registers ``R1..R8`` (``hw.texel_fetch.STAGES``); ``R8`` is the output (``o.valid``).
-In every cycle ``advance = ~o.valid | o.ready``. All registers move on ``advance``, except that with
-``one_port`` the word-address stage (``R2``, whose item the index reader is reading) *holds* for one
-advancing cycle when its item straddles a word boundary on the first of its two reads: ``R1``, ``R2``
-and the input wait, ``R3`` receives a bubble. Requests are presented back to back from cycle 0.
+``LATENCY`` = 14 registers ``R1..R14`` (``hw.texel_fetch.STAGES``), then a skid register in front of
+the output: ``o.valid = skid_valid | R14.valid``, and ``o`` shows the skid register when it is full.
+Every register moves on ``advance``, a flip-flop holding ``~(o.valid & ~o.ready)`` of the previous
+cycle; in an advancing cycle the skid register takes the response leaving ``R14`` (it counts as
+full if that response was valid and not taken), so ``skid_valid = ~advance``. With ``one_port`` the
+first ``UPSTREAM_STAGES`` = 3 registers (``R3`` holds the bit address the index reader is reading)
+and the input *hold* for one advancing cycle when ``R3``'s item straddles a word boundary on the
+first of its two reads: ``R4`` receives a bubble. Requests are presented back to back from cycle 0.
 
-So the items entering ``R3``, one per advance, are: 2 bubbles (the pipeline filling), then for each
-request a bubble if it is a one-port straddler, then the request. The output register shows that
-sequence 6 advances later. A bubble in the output register advances unconditionally (it is not
-valid); a request waits for a cycle with ``o.ready`` high. Hence the transfer cycle of request n::
+So the items entering ``R4``, one per advance, are: 3 bubbles (the pipeline filling), then for each
+request a bubble if it is a one-port straddler, then the request. The output shows that sequence in
+order, and a bubble there costs exactly one cycle: after a response transfers in cycle ``T``, the
+next item is at the output in cycle ``T + 1`` (in ``R14``, which either moved on in cycle ``T`` or
+was frozen behind the skid register), and a bubble in ``R14`` is never stalled (the skid register
+is empty then, ``advance`` is high). A response waits for a cycle with ``o.ready`` high. Hence the
+transfer cycle of request n::
 
     arrive[0] = LATENCY + bubble[0]
     T[n]      = first cycle >= arrive[n] with ready high
     arrive[n+1] = T[n] + 1 + bubble[n+1]
+
+the same recurrence as a pipeline whose last register is the output and which freezes
+combinationally on ``o.valid & ~o.ready``; the registered ``advance`` only moves the freeze one cycle
+later: ``advance[t] = ~stall[t-1]`` with ``stall = o.valid & ~o.ready``, and the skid register is
+full exactly in the cycles after a stall.
 
 Counting cycles
 ---------------
@@ -26,7 +37,8 @@ Cycle 0 is the first cycle the first request is presented (``i.valid`` high); ``
 cycles 0 .. T[N-1] inclusive, so with no backpressure ``cycles = N + LATENCY (+ straddles with
 one_port)``. ``output_backpressure`` counts cycles with ``o.valid & ~o.ready``; ``one_port_straddle``
 counts the extra read cycles (one per straddling request, one-port only). Occupancy of a stage is
-the fraction of those ``cycles`` in which its valid bit is high.
+the fraction of those ``cycles`` in which its valid bit is high; the skid register's (``"skid"``)
+is the fraction of cycles after an output stall, i.e. ``output_backpressure / cycles``.
 """
 
 from __future__ import annotations
@@ -38,10 +50,10 @@ from golden.format import TextureSet
 
 from .streams import pattern_length, ready_pattern
 
-__all__ = ["straddle_flags", "transfer_cycles", "run_cycles", "run_flags", "LATENCY", "STAGES"]
+__all__ = ["straddle_flags", "transfer_cycles", "run_cycles", "run_flags", "LATENCY", "STAGES", "REGISTERS"]
 
 # The RTL's constants (hw imports amaranth; these are plain ints and names).
-from hw.texel_fetch import LATENCY, STAGES  # noqa: E402
+from hw.texel_fetch import LATENCY, REGISTERS, STAGES, UPSTREAM_STAGES  # noqa: E402
 
 
 def straddle_flags(ts: TextureSet, requests: np.ndarray) -> np.ndarray:
@@ -90,8 +102,8 @@ def run_cycles(ts: TextureSet, requests: np.ndarray, *, stall: float = 0.0, seed
     """Cycles, stall cycles, straddles and occupancy of ``requests`` on ``TexelFetch(ts)``.
 
     Returns a dict with ``cycles``, ``stall_cycles`` ({"output_backpressure", "one_port_straddle"}),
-    ``straddles``, ``transfer`` (the transfer cycle of each request), ``occupancy`` (stage name ->
-    fraction, or None) and ``ready`` (the backpressure pattern over the counted cycles).
+    ``straddles``, ``transfer`` (the transfer cycle of each request), ``occupancy`` (register name ->
+    fraction, ``REGISTERS``, or None) and ``ready`` (the backpressure pattern over the counted cycles).
     """
     req = np.asarray(requests, dtype=np.int64).reshape(-1, 4)
     return run_flags(straddle_flags(ts, req), stall=stall, seed=seed, one_port=one_port,
@@ -138,11 +150,13 @@ def run_flags(strad: np.ndarray, *, stall: float = 0.0, seed: int = 0, one_port:
 
 
 def _occupancy(n, bubbles, ov, ready, cycles, latency):
-    """Per-stage valid fractions, from the sequence of items entering R3 (see the module doc)."""
-    adv = ~ov | ready
+    """Per-register valid fractions, from the sequence of items entering R4 (see the module doc)."""
+    h = UPSTREAM_STAGES
+    stall = ov & ~ready
+    adv = np.concatenate([[True], ~stall[:-1]])          # the registered advance
     A = np.concatenate([[0], np.cumsum(adv)[:-1]])       # advances before cycle t
-    # Sequence entering R3, one entry per advance: 2 fill bubbles, then [bubble] item per request.
-    pos_item = 2 + np.arange(n) + np.cumsum(bubbles)     # advance index at which item n enters R3
+    # Sequence entering R(h+1), one entry per advance: h fill bubbles, then [bubble] item per request.
+    pos_item = h + np.arange(n) + np.cumsum(bubbles)     # advance index at which item n enters R(h+1)
     seq_len = int(pos_item[-1]) + latency + 2 if n else latency + 2
     is_item = np.zeros(seq_len + cycles + 2, bool)
     is_item[pos_item] = True
@@ -150,11 +164,12 @@ def _occupancy(n, bubbles, ov, ready, cycles, latency):
     U = A - np.searchsorted(hold_adv, A, side="left")    # upstream advances before cycle t
     occ = {}
     for s, name in enumerate(STAGES, start=1):
-        if s <= 2:
+        if s <= h:
             idx = U - s
             valid = (idx >= 0) & (idx < n)
         else:
-            idx = A - 1 - (s - 3)
+            idx = A - 1 - (s - h - 1)
             valid = (idx >= 0) & is_item[np.clip(idx, 0, None)]
         occ[name] = float(valid.sum()) / cycles
+    occ["skid"] = float((~adv).sum()) / cycles
     return occ

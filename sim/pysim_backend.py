@@ -18,7 +18,7 @@ from amaranth import Cat, Module, Signal
 from amaranth.sim import Simulator
 
 from golden.format import TextureSet
-from hw.texel_fetch import LATENCY, STAGES, TexelFetch
+from hw.texel_fetch import LATENCY, REGISTERS, TexelFetch
 
 from .backend import SimResult
 from .streams import pattern_length, ready_pattern
@@ -44,8 +44,9 @@ def _pack_requests(dut: TexelFetch, req: np.ndarray) -> list:
 
 
 def run(ts: TextureSet, requests: np.ndarray, *, stall: float = 0.0, seed: int = 0,
-        one_port: bool = False, vcd: str | None = None) -> SimResult:
-    """Simulate ``requests`` ((N, 4) int) on ``TexelFetch(ts, one_port=one_port)``.
+        one_port: bool = False, vcd: str | None = None, bank_depth: int | None = None) -> SimResult:
+    """Simulate ``requests`` ((N, 4) int) on ``TexelFetch(ts, one_port=one_port)`` (with
+    ``bank_depth``, if given: small banks put the bank select to work on small texture sets).
 
     Raises
     ------
@@ -58,15 +59,16 @@ def run(ts: TextureSet, requests: np.ndarray, *, stall: float = 0.0, seed: int =
         return SimResult(responses=np.zeros((0, 4), np.uint8), cycles=0, requests=0, latency=LATENCY,
                          stall_cycles={"output_backpressure": 0, "one_port_straddle": 0}, straddles=0,
                          occupancy=None)
-    dut = TexelFetch(ts, one_port=one_port, tag_width=TAG_WIDTH)
+    unit = {} if bank_depth is None else {"bank_depth": bank_depth}
+    dut = TexelFetch(ts, one_port=one_port, tag_width=TAG_WIDTH, **unit)
     packed = _pack_requests(dut, req)
     rlayout = dut.o.payload.shape()
     fields = {name: rlayout[name].offset for name in ("r", "g", "b", "a", "tag")}
-    nstages = len(STAGES)
+    nstages = len(REGISTERS)
     # Everything the testbench watches, gathered into one signal inside the simulated design so
     # that each cycle costs one signal read instead of an expression evaluation.
     watched = Cat(dut.i.ready, dut.o.valid, dut.straddle, dut.stall_one_port,
-                  *[getattr(dut, f"valid_{s}") for s in STAGES], dut.o.payload.as_value())
+                  *[getattr(dut, f"valid_{s}") for s in REGISTERS], dut.o.payload.as_value())
     observe = Signal(len(watched), name="observe")
     top = Module()
     top.submodules.texel_fetch = dut
@@ -140,7 +142,7 @@ def run(ts: TextureSet, requests: np.ndarray, *, stall: float = 0.0, seed: int =
     else:
         sim.run()
     cycles = stats["cycles"]
-    occupancy = ({name: float(c) / cycles for name, c in zip(STAGES, stats["occupancy"])}
+    occupancy = ({name: float(c) / cycles for name, c in zip(REGISTERS, stats["occupancy"])}
                  if cycles else None)
     return SimResult(
         responses=out, cycles=cycles, requests=n, latency=dut.latency,

@@ -78,9 +78,11 @@ def run_lockstep(dut, inputs: dict, outputs: list, latency: int, *, en: str = "e
     ``inputs`` maps port names of ``dut`` to lists of ints (one per item); ``outputs`` names the
     ports to read. The item fed in the e-th cycle with ``en`` high appears on the outputs after
     ``latency`` enabled cycles. ``en_pattern`` (iterable of bools, default all high) drops ``en`` in
-    some cycles: the inputs then carry another (random) item's values and the outputs must hold. ``hold`` names a
-    combinational output (the one-port index reader's): while it is high the block keeps its input
-    item for one more enabled cycle and the item is not consumed.
+    some cycles: the inputs then carry another (random) item's values and the outputs must hold.
+    ``hold`` names a combinational output (the one-port index reader's): while it is high in an
+    enabled cycle, the block keeps the item it took in the previous enabled cycle in its first
+    stage, a bubble goes down the pipeline ahead of that item, and the inputs are not taken (the
+    same item is presented again).
 
     Returns ``{name: [int per item]}``.
     """
@@ -117,8 +119,12 @@ def run_lockstep(dut, inputs: dict, outputs: list, latency: int, *, en: str = "e
                 ctx.set(p, int(inputs[name][src]))
             ctx.set(port(en), int(on))
             if on:
-                held = hold is not None and item < n and ctx.get(port(hold))
-                if item < n and not held:
+                held = hold is not None and ctx.get(port(hold))
+                if held:                    # a bubble goes ahead of the item in the first stage
+                    fed.insert(len(fed) - 1, None)
+                    if last is not None:
+                        last += 1
+                elif item < n:
                     fed.append(item)
                     if item == n - 1:
                         last = len(fed) - 1

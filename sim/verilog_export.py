@@ -8,9 +8,10 @@ stream member is a port of its own instead of a packed payload vector::
     o_valid, o_ready, o_r, o_g, o_b, o_a, o_tag                     response stream
     straddle, stall_one_port, stall_output, valid_<stage>...        observability strobes
 
-``rst`` is synchronous and active high (Amaranth's ``sync`` domain); ``i_ready`` depends
-combinationally on ``o_ready``. The memories (descriptor table, even/odd index banks, codebook, raw
-texels) are initialised the way Amaranth/Yosys write them: one ``initial begin mem[k] = ...; end``
+``rst`` is synchronous and active high (Amaranth's ``sync`` domain); ``i_ready`` and ``o_valid``
+come from flip-flops (no combinational path from ``o_ready``). The memories (descriptor table,
+even/odd index banks, codebook, raw texels, each in 512-word banks ``bank0``, ``bank1``, ...) are
+initialised the way Amaranth/Yosys write them: one ``initial begin mem[k] = ...; end``
 block per memory in the module that owns it. Verilator, Icarus Verilog and FPGA synthesis tools
 (Yosys, Vivado, Quartus) all accept this for ROMs, and the file stands alone (no ``$readmemh``
 side files whose paths would have to be right at simulation time). The other constructs a

@@ -1,45 +1,57 @@
 """sim.cycle_model (vectorised) against a cycle-by-cycle replay of TexelFetch's pipeline control.
 
-The replay is the RTL's control written out per cycle (advance = ~o.valid | o.ready; the one-port
-hold of the word-address stage); the pysim tests tie both to the RTL itself on shorter traces."""
+The replay is the RTL's control written out per cycle (the registered advance = no output stall in
+the previous cycle, the skid register, the one-port hold of the bit-address stage); the pysim tests
+tie both to the RTL itself on shorter traces."""
 
 import numpy as np
 import pytest
 
-from hw.texel_fetch import LATENCY, STAGES
+from hw.texel_fetch import LATENCY, REGISTERS, UPSTREAM_STAGES
 from sim.cycle_model import run_flags
 from sim.streams import ready_pattern
 
 
 def replay(strad, *, stall, seed, one_port):
     n = len(strad)
+    h = UPSTREAM_STAGES
     ready = ready_pattern(seed, stall, 64 + 4 * (n + LATENCY) + int(20 * n * stall / (1 - stall)))
-    stage = [None] * LATENCY           # item id per register R1..R8, None = bubble
+    stage = [None] * LATENCY           # item id per register R1..R14, None = bubble
+    skid = None                        # the skid register's item
+    advance = True                     # the registered advance
     second = False
     n_in = n_out = cycle = 0
     backpressure = holds = 0
-    occ = np.zeros(LATENCY, np.int64)
+    transfers = []
+    occ = np.zeros(len(REGISTERS), np.int64)
     while n_out < n:
+        assert advance == (skid is None)
         r = bool(ready[cycle])
-        ov = stage[-1] is not None
-        occ += [s is not None for s in stage]
-        adv = (not ov) or r
-        hold = one_port and stage[1] is not None and bool(strad[stage[1]]) and not second
+        shown = skid if skid is not None else stage[-1]
+        ov = shown is not None
+        occ += [s is not None for s in stage] + [skid is not None]
+        hold = one_port and stage[h - 1] is not None and bool(strad[stage[h - 1]]) and not second
         if ov and r:
+            assert shown == n_out          # in order, none lost or duplicated
+            transfers.append(cycle)
             n_out += 1
         if ov and not r:
             backpressure += 1
-        if adv:
+        if advance:
+            skid = stage[-1] if not r else None
             holds += hold
-            stage[3:] = stage[2:-1]
-            stage[2] = None if hold else stage[1]
+            stage[h + 1:] = stage[h:-1]
+            stage[h] = None if hold else stage[h - 1]
             if not hold:
-                stage[1] = stage[0]
+                stage[1:h] = stage[:h - 1]
                 stage[0] = n_in if n_in < n else None
                 n_in += n_in < n
             second = hold
+        elif r:
+            skid = None
+        advance = not (ov and not r)
         cycle += 1
-    return cycle, backpressure, holds, occ / max(1, cycle)
+    return cycle, backpressure, holds, occ / max(1, cycle), transfers
 
 
 @pytest.mark.parametrize("one_port", [False, True])
@@ -51,12 +63,15 @@ def test_model_equals_cycle_by_cycle_replay(stall, one_port):
         strad = rng.random(n) < rng.random()
         seed = int(rng.integers(0, 1 << 30))
         m = run_flags(strad, stall=stall, seed=seed, one_port=one_port)
-        cycles, bp, holds, occ = replay(strad, stall=stall, seed=seed, one_port=one_port)
+        cycles, bp, holds, occ, transfers = replay(strad, stall=stall, seed=seed, one_port=one_port)
         assert m["cycles"] == cycles
         assert m["stall_cycles"] == {"output_backpressure": bp, "one_port_straddle": holds}
         assert m["straddles"] == int(strad.sum())
+        assert m["transfer"].tolist() == transfers
+        # every cycle is one of the first LATENCY, a transfer, a backpressure stall or a one-port bubble
+        assert cycles == (n + LATENCY + bp + holds if n else 0)
         if n:
-            assert [m["occupancy"][s] for s in STAGES] == pytest.approx(occ.tolist(), abs=1e-12)
+            assert [m["occupancy"][s] for s in REGISTERS] == pytest.approx(occ.tolist(), abs=1e-12)
             assert m["transfer"][-1] == cycles - 1
 
 

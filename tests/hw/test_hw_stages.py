@@ -1,5 +1,5 @@
 """Each hw stage against its golden.fetch twin: descriptor table, block address shifter, index reader,
-codebook ROM."""
+codebook ROM; and the banked ROM behind the last two."""
 
 import numpy as np
 import pytest
@@ -7,8 +7,9 @@ import pytest
 import hw_cases
 from golden.fetch import block_address, lookup_descriptor, read_codeword, read_index
 from golden.format import DESCRIPTOR_DTYPE, DESCRIPTOR_FIELDS, MAX_LEVELS, pack_indices
-from hw import codebook_rom, index_reader
+from hw import banked_rom, codebook_rom, index_reader
 from hw.address import BlockAddress
+from hw.banked_rom import BankedROM
 from hw.codebook_rom import CodebookROM
 from hw.descriptor import DescriptorTable, descriptor_widths
 from hw.index_reader import IndexReader
@@ -74,9 +75,10 @@ def _index_memory(word_bits, rng):
     return np.concatenate(parts).astype(f"<u{word_bits // 8}"), maps
 
 
+@pytest.mark.parametrize("bank_depth", [512, 16])
 @pytest.mark.parametrize("one_port", [False, True], ids=["two_bank", "one_port"])
 @pytest.mark.parametrize("word_bits", [16, 32, 64])
-def test_index_reader_every_width_and_offset(word_bits, one_port):
+def test_index_reader_every_width_and_offset(word_bits, one_port, bank_depth):
     rng = np.random.default_rng(word_bits + one_port)
     words, maps = _index_memory(word_bits, rng)
     reqs = np.array([(base, b, k) for base, b, n in maps for k in range(n)], dtype=np.int64)
@@ -84,7 +86,8 @@ def test_index_reader_every_width_and_offset(word_bits, one_port):
     d = np.zeros(len(reqs), DESCRIPTOR_DTYPE)
     d["base"], d["index_bits"] = reqs[:, 0], reqs[:, 1]
     want = read_index(_Words(words, word_bits), d, reqs[:, 2])
-    dut = IndexReader(words, word_bits=word_bits, k_bits=7, base_bits=12, one_port=one_port)
+    dut = IndexReader(words, word_bits=word_bits, k_bits=7, base_bits=12, one_port=one_port,
+                      bank_depth=bank_depth)
     en = rng.random(4 * len(reqs)) > 0.15 if word_bits == 32 else None
     res = run_lockstep(dut, {"base": reqs[:, 0].tolist(), "b": reqs[:, 1].tolist(), "k": reqs[:, 2].tolist(),
                              "valid": [1] * len(reqs)}, ["index"], index_reader.LATENCY,
@@ -92,8 +95,9 @@ def test_index_reader_every_width_and_offset(word_bits, one_port):
     assert res["index"] == want.tolist()
 
 
-@pytest.mark.parametrize("name", ["combined", "yuv_2x4_b12_mip_w64", "rgba_2x2_b7_mip_w16"])
-def test_codebook_rom_every_level(name):
+@pytest.mark.parametrize("name,bank_depth", [("combined", 512), ("combined", 8), ("yuv_2x4_b12_mip_w64", 512),
+                                             ("rgba_2x2_b7_mip_w16", 4)])
+def test_codebook_rom_every_level(name, bank_depth):
     ts = hw_cases.combined_set() if name == "combined" else hw_cases.texture_set(name)
     rng = np.random.default_rng(5)
     req = np.concatenate([hw_cases.random_requests(ts, 150, 6), hw_cases.adversarial_requests(ts, 7)])
@@ -108,7 +112,8 @@ def test_codebook_rom_every_level(name):
     want[comp] = read_codeword(ts, d[comp], index[comp], x[comp], y[comp])
     want[~comp] = ts.raw_words[raw_addr[~comp]].astype("<u4").view(np.uint8).reshape(-1, 4)
     w = descriptor_widths(ts)
-    dut = CodebookROM(ts.codebook, ts.raw_words, cb_bits=w["cb_base"], raw_bits=16, off_bits=w["texel_off"])
+    dut = CodebookROM(ts.codebook, ts.raw_words, cb_bits=w["cb_base"], raw_bits=16, off_bits=w["texel_off"],
+                      bank_depth=bank_depth)
     fields = {"index": index, "cb_base": d["cb_base"], "raw_addr": raw_addr, "compressed": d["compressed"],
               "x": x, "y": y, "log2bw": d["log2bw"], "color": d["color"],
               "texel_off": d["texel_off"], "u_off": d["u_off"], "v_off": d["v_off"]}
@@ -117,3 +122,22 @@ def test_codebook_rom_every_level(name):
     got = ((np.array(res["samples"], dtype=np.int64)[:, None] >> (8 * np.arange(4))) & 0xFF).astype(np.uint8)
     assert np.array_equal(got, want)
     assert res["color_out"] == np.where(comp, d["color"], 1).tolist()
+
+
+@pytest.mark.parametrize("depth,bank_depth", [(37, 8), (16, 8), (5, 512), (1, 4)])
+def test_banked_rom_reads_every_word(depth, bank_depth):
+    rng = np.random.default_rng(depth)
+    init = rng.integers(0, 1 << 20, depth).tolist()
+    dut = BankedROM(init, width=20, bank_depth=bank_depth)
+    assert dut.banks == -(-depth // bank_depth)
+    addr = np.concatenate([np.arange(depth), rng.integers(0, depth, 100)])
+    res = run_lockstep(dut, {"addr": addr.tolist()}, ["word"], banked_rom.LATENCY,
+                       en_pattern=rng.random(1000) > 0.3)
+    assert res["word"] == [init[a] for a in addr]
+
+
+def test_banked_rom_rejects_bad_bank_depth():
+    with pytest.raises(ValueError):
+        BankedROM([1, 2, 3], width=8, bank_depth=12)
+    with pytest.raises(TypeError):
+        BankedROM([1, 2, 3], width=0)

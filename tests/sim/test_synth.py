@@ -182,6 +182,10 @@ def test_run_nextpnr_reads_report_or_falls_back_to_log(monkeypatch, tmp_path):
     ("unit.fetch.codebook_rom.codebook.0.27_DOA9_LUT4_C_Z_PFUMX_BLUT_Z", "unit.fetch.codebook_rom.codebook",
      "codebook ROM"),
     ("unit.fetch.codebook_rom.codebook.0.8", "unit.fetch.codebook_rom.codebook", "codebook ROM"),
+    ("unit.fetch.codebook_rom.codebook.bank2.0.13", "unit.fetch.codebook_rom.codebook.bank2", "codebook ROM"),
+    ("unit.fetch.codebook_rom.window1_TRELLIS_FF_Q_40", "unit.fetch.codebook_rom.window1", "codebook ROM"),
+    ("unit.fetch.skid_TRELLIS_FF_Q_3", "unit.fetch.skid", "output skid register"),
+    ("unit.fetch.advance_TRELLIS_FF_Q", "unit.fetch.advance", "pipeline control"),
     ("unit.fetch.index_reader.parity_r_TRELLIS_FF_Q_DI_CCU2C_B0$CCU2_COMB1", "unit.fetch.index_reader.parity_r",
      "index reader"),
     ("unit.fetch.color_matrix.p_ru_TRELLIS_FF_Q_3", "unit.fetch.color_matrix.p_ru", "colour matrix"),
@@ -245,12 +249,15 @@ def test_report_area_tiny(tmp_path, capsys):
     assert u["luts"] == rep["cells"]["LUT4"] and u["brams"] == rep["cells"]["DP16KD"]
     # every port bit but the clock and reset has a harness flip-flop (constant ones may be removed)
     assert 0 < rep["harness_ffs"] <= rep["port_bits"]
-    # Block RAM inference: the raw memory (682 x 32 bits) is worth DP16KDs; the descriptor table
-    # (32 rows) and the tiny codebook (32 entries) are ROM logic (Yosys's cost model, docs/area.md).
+    # Block RAM inference: the raw memory (682 x 32 bits, banks of 512 and 170 words) is worth
+    # DP16KDs; the descriptor table (32 rows) and the tiny codebook (32 entries) are ROM logic
+    # (Yosys's cost model, docs/area.md).
     mem = rep["memories"]
-    assert mem["fetch.codebook_rom.raw"]["mapped_to"] == "block RAM" and mem["fetch.codebook_rom.raw"]["DP16KD"] > 0
-    assert mem["fetch.codebook_rom.raw"]["depth"] == 682
+    raw0 = mem["fetch.codebook_rom.raw.bank0"]
+    assert raw0["mapped_to"] == "block RAM" and raw0["DP16KD"] > 0 and (raw0["depth"], raw0["width"]) == (512, 32)
+    assert mem["fetch.codebook_rom.raw.bank1"]["depth"] == 170
     assert mem["fetch.descriptor.table"]["mapped_to"] == "logic"
+    assert rep["latency"] == 14
     assert sum(m["DP16KD"] for m in mem.values()) == u["brams"]
     t = rep["timing"]
     assert 10 < t["fmax_mhz"] < 500 and t["target_mhz"] == 150 and t["met"] == (t["fmax_mhz"] >= 150)

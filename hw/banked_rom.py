@@ -1,0 +1,119 @@
+"""Banked ROM: a read-only memory split into banks of at most 512 words, each read registered twice.
+
+An ECP5 DP16KD block RAM is 512 words deep at its widest (36 bits); Yosys builds a deeper memory from
+several of them and puts a LUT multiplexer on their read data in the same cycle as the block RAM's
+clock-to-out (4.26 ns of a 6.67 ns cycle at 150 MHz), and it does not use the block RAM's own output
+register. ``BankedROM`` makes the banks explicit: one ``amaranth.lib.memory.Memory`` per 512 words
+(``bank0``, ``bank1``, ...), each read port followed by a fabric register, and the bank number
+delayed beside them, so that the bank select happens after a register. It is the hardware's internal
+organisation only: the contents are the memory image word for word (word ``a`` is word
+``a % 512`` of bank ``a // 512``), and a run-time loader finds each bank by its name.
+"""
+
+from __future__ import annotations
+
+from amaranth import *
+from amaranth.lib import data, memory, wiring
+from amaranth.lib.wiring import In, Out
+
+__all__ = ["BankedROM", "BANK_DEPTH", "LATENCY"]
+
+#: Words per bank: the depth of one DP16KD at its 36-bit width.
+BANK_DEPTH = 512
+#: Cycles from the address to the banks' data: the memory's read register, then a fabric register.
+LATENCY = 2
+
+
+def _bits(n: int) -> int:
+    """Bits to address words 0..n-1 (at least 1)."""
+    return max(1, (max(1, n) - 1).bit_length())
+
+
+class BankedROM(wiring.Component):
+    """A ROM of ``len(init)`` words in banks of ``bank_depth`` words.
+
+    Latency 2 (both registers advance when ``en`` is high): the memory's synchronous read register,
+    then a fabric register per bank. Throughput: one read per cycle.
+
+    Arguments
+    ---------
+    init : list of int
+        The memory image (an empty image is one zero word).
+    width : int
+        Word width in bits.
+    bank_depth : int
+        Words per bank, a power of two (default ``BANK_DEPTH`` = 512; tests use small banks to
+        exercise the bank select with small memories).
+
+    Members
+    -------
+    addr : In(bits(len(init) - 1))
+        Word address.
+    en : In(1)
+        Pipeline advance: read enable of the memories and enable of every register.
+    data : Out(ArrayLayout(width, banks))
+        Each bank's word at ``addr % bank_depth``, registered twice.
+    bank : Out(max(1, bits(banks - 1)))
+        ``addr // bank_depth``, registered twice (beside ``data``; constant 0 for a single bank).
+    word : Out(width)
+        Combinational: ``data[bank]``, the word at ``addr``.
+
+    Raises
+    ------
+    TypeError
+        If ``width`` or ``bank_depth`` is not a positive integer.
+    ValueError
+        If ``bank_depth`` is not a power of two.
+    """
+
+    def __init__(self, init, *, width: int, bank_depth: int = BANK_DEPTH):
+        self._MustUse__silence = True       # (no "never used" warning for a rejected instance)
+        for name, v in (("width", width), ("bank_depth", bank_depth)):
+            if not isinstance(v, int) or v < 1:
+                raise TypeError(f"{name} must be a positive integer, not {v!r}")
+        if bank_depth & (bank_depth - 1):
+            raise ValueError(f"bank depth {bank_depth} is not a power of two")
+        self._MustUse__silence = False
+        self._init = [int(v) for v in init] or [0]
+        self._width = width
+        self._bank_depth = bank_depth
+        self._banks = -(-len(self._init) // bank_depth)
+        super().__init__({
+            "addr": In(_bits(len(self._init))),
+            "en": In(1),
+            "data": Out(data.ArrayLayout(width, self._banks)),
+            "bank": Out(unsigned(max(1, (self._banks - 1).bit_length()))),
+            "word": Out(width),
+        })
+
+    @property
+    def banks(self) -> int:
+        return self._banks
+
+    @property
+    def depth(self) -> int:
+        return len(self._init)
+
+    @property
+    def latency(self) -> int:
+        return LATENCY
+
+    def elaborate(self, platform):
+        m = Module()
+        d = self._bank_depth
+        offset_bits = (d - 1).bit_length() if self._banks > 1 else len(self.addr)
+        for k in range(self._banks):
+            part = self._init[k * d:(k + 1) * d]
+            m.submodules[f"bank{k}"] = mem = memory.Memory(shape=self._width, depth=len(part), init=part)
+            rd = mem.read_port(domain="sync")
+            m.d.comb += [rd.addr.eq(self.addr[:offset_bits]), rd.en.eq(self.en)]
+            with m.If(self.en):
+                m.d.sync += self.data[k].eq(rd.data)
+        if self._banks == 1:
+            m.d.comb += [self.word.eq(self.data[0]), self.bank.eq(0)]
+            return m
+        bank_r = Signal.like(self.bank, name="bank_r")
+        with m.If(self.en):
+            m.d.sync += [bank_r.eq(self.addr >> offset_bits), self.bank.eq(bank_r)]
+        m.d.comb += self.word.eq(self.data[self.bank])
+        return m
