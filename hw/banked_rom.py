@@ -16,12 +16,27 @@ from amaranth import *
 from amaranth.lib import data, memory, wiring
 from amaranth.lib.wiring import In, Out
 
-__all__ = ["BankedROM", "BANK_DEPTH", "LATENCY"]
+__all__ = ["BankedROM", "BANK_DEPTH", "LATENCY", "pick"]
 
 #: Words per bank: the depth of one DP16KD at its 36-bit width.
 BANK_DEPTH = 512
 #: Cycles from the address to the banks' data: the memory's read register, then a fabric register.
 LATENCY = 2
+
+
+def pick(values: list, index):
+    """``values[index]``, combinational: a balanced tree of 2:1 multiplexers on the bits of
+    ``index``, least significant first (what a shifter by whole values is, without its
+    out-of-range cases). The list is padded to a power of two with its last value; index bits
+    above the tree are ignored. One value: no multiplexer."""
+    values = list(values)
+    if len(values) > 1:
+        values += [values[-1]] * ((1 << (len(values) - 1).bit_length()) - len(values))
+    bit = 0
+    while len(values) > 1:
+        values = [Mux(index[bit], values[n + 1], values[n]) for n in range(0, len(values), 2)]
+        bit += 1
+    return values[0]
 
 
 def _bits(n: int) -> int:
@@ -102,18 +117,25 @@ class BankedROM(wiring.Component):
         m = Module()
         d = self._bank_depth
         offset_bits = (d - 1).bit_length() if self._banks > 1 else len(self.addr)
+        data = []
         for k in range(self._banks):
             part = self._init[k * d:(k + 1) * d]
             m.submodules[f"bank{k}"] = mem = memory.Memory(shape=self._width, depth=len(part), init=part)
             rd = mem.read_port(domain="sync")
             m.d.comb += [rd.addr.eq(self.addr[:offset_bits]), rd.en.eq(self.en)]
+            q = Signal(self._width, name=f"data{k}")
             with m.If(self.en):
-                m.d.sync += self.data[k].eq(rd.data)
+                m.d.sync += q.eq(rd.data)
+            data.append(q)
+        # A register of its own per bank, and ``data`` driven as one concatenation (pure wiring):
+        # simulators (CXXRTL) then read each bank's register directly instead of assembling and
+        # slicing one wide value every cycle.
+        m.d.comb += self.data.eq(Cat(*data))
         if self._banks == 1:
-            m.d.comb += [self.word.eq(self.data[0]), self.bank.eq(0)]
+            m.d.comb += [self.word.eq(data[0]), self.bank.eq(0)]
             return m
         bank_r = Signal.like(self.bank, name="bank_r")
         with m.If(self.en):
             m.d.sync += [bank_r.eq(self.addr >> offset_bits), self.bank.eq(bank_r)]
-        m.d.comb += self.word.eq(self.data[self.bank])
+        m.d.comb += self.word.eq(pick(data, self.bank))
         return m

@@ -17,7 +17,7 @@ from amaranth.lib.wiring import In, Out
 
 from golden.format import COLOR_CODES
 
-from .banked_rom import BANK_DEPTH, BankedROM
+from .banked_rom import BANK_DEPTH, BankedROM, pick
 
 __all__ = ["CodebookROM", "SamplesLayout", "LATENCY"]
 
@@ -28,15 +28,6 @@ LATENCY = 4
 SamplesLayout = data.ArrayLayout(unsigned(8), 4)
 
 _RGB, _RGBA, _YUV = (COLOR_CODES[c] for c in ("rgb", "rgba", "yuv411"))
-
-
-def _pick(values: list, index):
-    """``values[index]``, combinational; the list is padded to a power of two with its last value so
-    that every index selects something (one value: no multiplexer)."""
-    if len(values) == 1:
-        return values[0]
-    n = 1 << (len(values) - 1).bit_length()
-    return Array(values + [values[-1]] * (n - len(values)))[index]
 
 
 def _entry_ints(codebook: np.ndarray) -> list:
@@ -177,18 +168,20 @@ class CodebookROM(wiring.Component):
         compressed, color = reg(compressed, "compressed_data"), reg(color, "color_data")
 
         # Stage 3: per codebook bank, the 4-byte words holding the texel (two: a 64-bit window) and
-        # U and V. The entry is padded with three copies of its last byte, so that every byte
-        # address up to last + 3 reads what the golden model's clamp reads, then with zero words.
+        # U and V, each picked from a list of words by the word number (a multiplexer of whole
+        # words; no shifter). The entry is padded with three copies of its last byte, so that every
+        # byte address up to last + 3 reads what the golden model's clamp reads, then with zeros.
         windows, u_words, v_words = [], [], []
         for k in range(codebook.banks):
             entry = codebook.data[k]
             last = entry[(nbytes - 1) * 8:]
             padded = Cat(entry, last, last, last)
-            padded = Cat(padded, C(0, nwords * 32 - len(padded)))
-            windows.append(reg(Cat(padded.word_select(start[2:], 32), padded.word_select(start[2:] + 1, 32)),
+            words = [Cat(padded[32 * n:32 * n + 32], C(0, max(0, 32 * n + 32 - len(padded))))
+                     for n in range(nwords - 1)] + [C(0, 32)]
+            windows.append(reg(pick([Cat(words[n], words[n + 1]) for n in range(nwords - 1)], start[2:]),
                                f"window{k}"))
-            u_words.append(reg(padded.word_select(ustart[2:], 32), f"u_word{k}"))
-            v_words.append(reg(padded.word_select(vstart[2:], 32), f"v_word{k}"))
+            u_words.append(reg(pick(words, ustart[2:]), f"u_word{k}"))
+            v_words.append(reg(pick(words, vstart[2:]), f"v_word{k}"))
         bank = reg(codebook.bank, "bank_window")
         raw_word = reg(raw.word, "raw_window")
         start, ustart, vstart = reg(start[:2], "start_window"), reg(ustart[:2], "ustart_window"), \
@@ -196,14 +189,14 @@ class CodebookROM(wiring.Component):
         compressed, color = reg(compressed, "compressed_window"), reg(color, "color_window")
 
         # Stage 4: the bank's words, then the bytes.
-        window = _pick(windows, bank)
+        window = pick(windows, bank)
         texel = Signal(32)
         u = Signal(8)
         v = Signal(8)
         m.d.comb += [
             texel.eq(window.bit_select(start << 3, 32)),
-            u.eq(_pick(u_words, bank).bit_select(ustart << 3, 8)),
-            v.eq(_pick(v_words, bank).bit_select(vstart << 3, 8)),
+            u.eq(pick(u_words, bank).bit_select(ustart << 3, 8)),
+            v.eq(pick(v_words, bank).bit_select(vstart << 3, 8)),
         ]
         out = Signal(32)
         with m.If(~compressed):

@@ -93,6 +93,17 @@ class ResponseLayout(data.StructLayout):
         })
 
 
+def _pack(layout: data.StructLayout, fields: dict) -> Value:
+    """The bits of a ``layout`` value with these field values, as one concatenation: assigned in one
+    piece, it is plain wiring (field-by-field assignments make simulators such as CXXRTL assemble
+    the value with read-modify-writes every cycle)."""
+    parts = []
+    for name, field in sorted(layout, key=lambda item: item[1].offset):
+        v = Value.cast(fields[name])
+        parts.append(v[:field.width] if len(v) >= field.width else Cat(v, C(0, field.width - len(v))))
+    return Cat(*parts)
+
+
 def _bits(n: int) -> int:
     return max(1, int(n).bit_length())
 
@@ -240,13 +251,16 @@ class TexelFetch(wiring.Component):
 
         # -- pipeline control, all in one place ---------------------------------------------------
         valid = [Signal(name=f"valid_{name}") for name in STAGES]
+        # ``advance`` and ``skid_valid`` are the same information (the output was stalled in the
+        # previous cycle), in two flip-flops: ``advance`` drives the enables of the whole
+        # pipeline, ``skid_valid`` (stored inverted, so that synthesis does not merge the two) the
+        # output logic and the next state, away from that large net.
         advance = Signal(init=1)    # every register moves; a flip-flop: no output stall last cycle
+        skid_valid = Signal()       # the skid register holds the response shown on ``o``
         upstream = Signal()         # the first UPSTREAM_STAGES registers and the input move
         skid = Signal(self.o.p.shape(), name="skid")    # the response pushed out in a stalled cycle
-        skid_valid = Signal()
         response = Signal(self.o.p.shape())             # the last stage's response
         m.d.comb += [
-            skid_valid.eq(~advance),
             upstream.eq(advance & ~idx.hold),
             self.i.ready.eq(upstream),
             self.o.valid.eq(skid_valid | valid[-1]),
@@ -255,7 +269,7 @@ class TexelFetch(wiring.Component):
             self.straddle.eq(idx.straddle & upstream),
             self.stall_one_port.eq(idx.hold & advance),
         ]
-        m.d.sync += advance.eq(~self.stall_output)
+        m.d.sync += [advance.eq(~self.stall_output), skid_valid.eq(self.stall_output)]
         with m.If(advance):
             m.d.sync += skid.eq(response)
         m.d.comb += [getattr(self, f"valid_{name}").eq(v) for name, v in zip(STAGES, valid)]
@@ -308,12 +322,11 @@ class TexelFetch(wiring.Component):
             "x": 3, "y": 3, "log2bw": 2, "color": 2,
             "texel_off": len(d2.texel_off), "u_off": len(d2.u_off), "v_off": len(d2.v_off),
         }))
-        m.d.comb += [
-            side.compressed.eq(d2.compressed), side.cb_base.eq(d2.cb_base),
-            side.raw_addr.eq(addr.raw_addr), side.x.eq(addr.x), side.y.eq(addr.y),
-            side.log2bw.eq(d2.log2bw), side.color.eq(d2.color),
-            side.texel_off.eq(d2.texel_off), side.u_off.eq(d2.u_off), side.v_off.eq(d2.v_off),
-        ]
+        m.d.comb += side.eq(_pack(side.shape(), {
+            "compressed": d2.compressed, "cb_base": d2.cb_base, "raw_addr": addr.raw_addr,
+            "x": addr.x, "y": addr.y, "log2bw": d2.log2bw, "color": d2.color,
+            "texel_off": d2.texel_off, "u_off": d2.u_off, "v_off": d2.v_off,
+        }))
         index_stages = STAGES[2:2 + index_reader.LATENCY]
         for n, name in enumerate(index_stages):
             en = upstream if n + 2 < UPSTREAM_STAGES else advance
@@ -335,9 +348,6 @@ class TexelFetch(wiring.Component):
         for name in STAGES[2 + index_reader.LATENCY:]:
             tag.append(carry(tag[-1], advance, f"tag_{name}"))
 
-        m.d.comb += [
-            response.r.eq(cm.rgba[0]), response.g.eq(cm.rgba[1]),
-            response.b.eq(cm.rgba[2]), response.a.eq(cm.rgba[3]),
-            response.tag.eq(tag[-1]),
-        ]
+        m.d.comb += response.eq(_pack(response.shape(), {
+            "r": cm.rgba[0], "g": cm.rgba[1], "b": cm.rgba[2], "a": cm.rgba[3], "tag": tag[-1]}))
         return m

@@ -88,3 +88,23 @@ def test_cxxrtl_one_build_serves_same_shaped_sets(sets):
     assert la.library == lb.library
     req = random_requests(b, 300, seed=9)
     assert_same(simulate(b, req, backend="cxxrtl"), simulate(b, req, backend="golden"), "same shape, other texels")
+
+
+def test_memory_images_are_the_format_images_in_banks(sets):
+    """The compiled backends load every memory by its name; the banked memories (512 words per bank)
+    hold exactly golden.format's images, in order (banking is the hardware's internal organisation)."""
+    from sim.cxxrtl_backend import design_info
+    ts = sets["mixed"]
+    mems = {m.name: m for m in design_info(ts).memories}
+
+    def joined(prefix):
+        banks = sorted((n for n in mems if n.startswith(prefix + " bank")), key=lambda n: int(n.rsplit("bank", 1)[1]))
+        assert all(mems[n].depth <= 512 for n in banks)
+        return [v for n in banks for v in mems[n].init]
+
+    assert len([n for n in mems if n.startswith("codebook_rom raw bank")]) == 2      # 1023 raw words
+    assert joined("codebook_rom raw") == ts.raw_words.astype(int).tolist()
+    assert joined("index_reader even_bank") == ts.index_words[0::2].astype(int).tolist()
+    assert joined("index_reader odd_bank") == ts.index_words[1::2].astype(int).tolist()
+    entries = [int.from_bytes(bytes(row), "little") for row in ts.codebook]
+    assert joined("codebook_rom codebook") == entries
