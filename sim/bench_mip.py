@@ -31,7 +31,7 @@ def _textures():
     out = []
     for p in sorted(data.glob("*.png")):
         img = read_image(p)
-        if img.shape[0] >= 128 and img.shape[1] >= 128 and img.shape[2] >= 3:
+        if img.shape[0] >= 128 and img.shape[1] >= 128 and img.shape[2] == 3:
             out.append((p.stem, img[..., :3]))
     if not out:
         from golden.render.textures import generate
