@@ -42,7 +42,7 @@ __all__ = ["DesignInfo", "MemoryImage", "design_info", "cxxrtl_source", "build_c
 
 DRIVER_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "cxxrtl")
 #: Compiler flags of the CXXRTL library (see docs/simulation.md for the build time / speed trade).
-CXXFLAGS = ["-std=c++17", "-O2", "-fPIC", "-shared", "-fvisibility=hidden", "-DNDEBUG"]
+CXXFLAGS = ["-std=c++17", "-O3", "-fPIC", "-shared", "-fvisibility=hidden", "-DNDEBUG"]
 #: Observability strobes summed by the driver: port name -> counter slot name in batch.h.
 STROBES = {"stall_output": "VQ_C_STALL_OUTPUT", "stall_one_port": "VQ_C_STALL_ONE_PORT",
            "straddle": "VQ_C_STRADDLES"}
@@ -137,7 +137,6 @@ def design_info(ts, *, one_port: bool = False, tag_width: int = 8) -> DesignInfo
 
 def cxxrtl_source(info: DesignInfo) -> str:
     """C++ of the design with every memory blanked (contents are loaded at run time)."""
-    from amaranth.back import cxxrtl
     from amaranth.hdl import MemoryData, _mem
 
     def blank(f):
@@ -155,7 +154,7 @@ def cxxrtl_source(info: DesignInfo) -> str:
     save(info.fragment)
     try:
         blank(info.fragment)
-        src, _ = cxxrtl.convert_fragment(info.fragment, info.ports, "top", emit_src=False)
+        src = _write_cxxrtl(info)
     finally:
         for f, d in saved.values():
             f._data = d
@@ -163,6 +162,25 @@ def cxxrtl_source(info: DesignInfo) -> str:
     # cxxrtl::memory starts zeroed) so compile time does not grow with the memories. If CXXRTL's
     # output format changes and nothing matches, the zero initialisers stay: slower, still right.
     return _MEM_INIT.sub("", src)
+
+
+#: ``write_cxxrtl`` options. ``-g1``: debug information for the design's named wires and the
+#: memories only (the driver needs the memories' debug items, nothing else); the default ``-g2``
+#: adds alias and "outline" items that only make the C++ longer (build 6.0 -> 4.6 s, same speed).
+WRITE_CXXRTL = "write_cxxrtl -g1"
+
+
+def _write_cxxrtl(info: DesignInfo) -> str:
+    """``amaranth.back.cxxrtl.convert_fragment`` with our ``write_cxxrtl`` options (the same RTLIL,
+    the same Yosys)."""
+    from amaranth.back import cxxrtl, rtlil
+    try:
+        from amaranth._toolchain.yosys import find_yosys
+    except ImportError:                         # amaranth moved its private API: the default flow
+        return cxxrtl.convert_fragment(info.fragment, info.ports, "top", emit_src=False)[0]
+    text, _ = rtlil.convert_fragment(info.fragment, info.ports, "top", emit_src=False)
+    yosys = find_yosys(lambda ver: ver >= (0, 10))
+    return yosys.run(["-q", "-"], f"read_rtlil <<rtlil\n{text}\nrtlil\n{WRITE_CXXRTL}")
 
 
 _MEM_INIT = re.compile(r"\tstatic const value<\d+> (mem_init_\d+)\[\d+\] \{\n.*?\n\t\};\n"
@@ -193,6 +211,38 @@ def _fast_commit(src: str) -> str:
         else:
             return ""
     return "#define VQ_FAST_COMMIT(top) " + " ".join(body) + "\n"
+
+
+_SLICE = re.compile(r"\b([A-Za-z_]\w*(?:\.curr|\.next)?)\.slice<(\d+(?:,\d+)?)>\(\)(?:\.val\(\))?(?!\s*=[^=])")
+
+
+def _fast_slices(src: str) -> str:
+    """Every rvalue ``x.slice<stop, start>()`` of a named value (a wire's ``curr``/``next``, a local)
+    as ``vq_slice<stop, start>(x)`` (driver.cc): the same bits, without CXXRTL's copy and shift of
+    the whole operand (the 504-bit codebook registers are sliced a dozen times a cycle)."""
+    return _SLICE.sub(lambda m: f"vq_slice<{m.group(2)}>({m.group(1)})", src)
+
+
+_EVAL_BODY = re.compile(r"^bool p_top::eval\(performer \*performer\) \{\n.*?^\}\n", re.S | re.M)
+_ALIAS = re.compile(r"^\t(i_\w+) = (p_\w+\.curr);$", re.M)
+
+
+def _alias_locals(src: str) -> str:
+    """In ``eval()``, a local that is only ever a copy of a register's current value
+    (``value<N> i_x; ... i_x = p_r.curr;``, at the function's top level, assigned once) becomes a
+    reference to it (``const value<N> &i_x = p_r.curr;``): ``eval()`` writes only ``next``, so
+    the bits are the same and the 504-bit codebook registers are not copied every cycle."""
+    m = _EVAL_BODY.search(src)
+    if not m:
+        return src
+    body = m.group(0)
+    for name, wire in _ALIAS.findall(body):
+        decl = re.search(rf"^\tvalue<(\d+)> {name};\n", body, re.M)
+        if not decl or len(re.findall(rf"\b{name} =[^=]", body)) != 1 or decl.start() > body.find(f"\t{name} = "):
+            continue
+        body = body.replace(decl.group(0), "", 1)
+        body = body.replace(f"\t{name} = {wire};", f"\tconst value<{decl.group(1)}> &{name} = {wire};", 1)
+    return src[:m.start()] + body + src[m.end():]
 
 
 def _mangle_cxxrtl(name: str) -> str:
@@ -282,7 +332,9 @@ def build_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8, cxxflags=Non
     info = design_info(ts, one_port=one_port, tag_width=tag_width)
     steps = {"elaborate": time.perf_counter() - t0}
     drivers = _driver_sources("driver.cc", "batch.h")
-    quick = digest("cxxrtl-quick", _source_stamp(), one_port, tag_width, texture_set_digest(ts), flags,
+    with open(os.path.abspath(__file__), "rb") as f:    # the C++ rewrites below are part of the build
+        this = f.read()
+    quick = digest("cxxrtl-quick", _source_stamp(), this, one_port, tag_width, texture_set_digest(ts), flags,
                    tool_version(cxx), *drivers)
     key = index_get("cxxrtl", quick)
     if key and os.path.isfile(os.path.join(os_cache("cxxrtl"), key, "libvq.so")):
@@ -293,6 +345,7 @@ def build_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8, cxxflags=Non
     if "converged = false" in src:          # combinational feedback: see driver.cc
         header += "#define VQ_EXACT_STEP 1\n"
     header += _fast_commit(src)
+    src = _fast_slices(_alias_locals(src))
     steps["yosys"] = time.perf_counter() - t1
     key = digest("cxxrtl", src, header, *drivers, flags, tool_version(cxx))
     inc = cxxrtl_include_dir()
