@@ -449,30 +449,42 @@ def ready_pattern(seed: int, stall: float, ncycles: int) -> np.ndarray:
 
 
 def pack_requests(info: DesignInfo, requests: np.ndarray) -> np.ndarray:
-    req = np.asarray(requests, dtype=np.int64).reshape(-1, 4)
+    req = np.ascontiguousarray(np.asarray(requests).reshape(-1, 4))
+    # the same bits as unsigned (two's complement; every field is masked below): a view, no copy
+    req = (req if req.dtype in (np.int64, np.uint64) else req.astype(np.int64)).view(np.uint64)
     n = len(req)
     out = np.zeros(n, np.uint64)
+    tmp = np.empty(n, np.uint64)
     cols = {"texture": req[:, 0], "level": req[:, 1], "i": req[:, 2], "j": req[:, 3]}
     if info.tag_width:
-        cols["tag"] = np.arange(n, dtype=np.int64) & ((1 << info.tag_width) - 1)
+        cols["tag"] = np.arange(n, dtype=np.uint64)
     for name, (off, width) in info.request_fields.items():
         if width == 0 or name not in cols:
             continue
-        v = cols[name].astype(np.uint64) & np.uint64((1 << width) - 1)
-        out |= v << np.uint64(off)
+        np.bitwise_and(cols[name], np.uint64((1 << width) - 1), out=tmp)
+        if off:
+            np.left_shift(tmp, np.uint64(off), out=tmp)
+        np.bitwise_or(out, tmp, out=out)
     return out
 
 
+def _field(w: np.ndarray, off: int, width: int, dtype) -> np.ndarray:
+    """Bits off..off+width of every uint64 in ``w``; a byte-aligned byte is read through a view."""
+    if width == 8 and off % 8 == 0 and sys.byteorder == "little":
+        return w.view(np.uint8)[off // 8::8].astype(dtype)
+    return ((w >> np.uint64(off)) & np.uint64((1 << width) - 1)).astype(dtype)
+
+
 def unpack_responses(info: DesignInfo, words: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    w = np.asarray(words, dtype=np.uint64)
-    rgba = np.zeros((len(w), 4), np.uint8)
+    w = np.ascontiguousarray(words, dtype=np.uint64)
+    rgba = np.empty((len(w), 4), np.uint8)
     for c, name in enumerate("rgba"):
         off, width = info.response_fields[name]
-        rgba[:, c] = ((w >> np.uint64(off)) & np.uint64(0xFF)).astype(np.uint8)
+        rgba[:, c] = _field(w, off, 8, np.uint8)
     tags = np.zeros(len(w), np.int64)
     if info.tag_width:
         off, width = info.response_fields["tag"]
-        tags = ((w >> np.uint64(off)) & np.uint64((1 << width) - 1)).astype(np.int64)
+        tags = _field(w, off, width, np.int64)
     return rgba, tags
 
 
