@@ -22,7 +22,7 @@ import numpy as np
 
 from .format import COLOR_CODES, MAX_LEVELS, TextureSet, unpack_indices
 
-__all__ = ["fetch", "decode", "lookup_descriptor", "block_address", "read_index", "read_codeword",
+__all__ = ["fetch", "decode", "random_requests", "lookup_descriptor", "block_address", "read_index", "read_codeword",
            "convert_color", "straddles", "RequestError", "check_requests"]
 
 
@@ -47,6 +47,19 @@ def check_requests(ts: TextureSet, tex, level, i, j) -> None:
         n = int(np.argmax(bad))
         raise RequestError(f"request {n}: texel ({int(i[n])}, {int(j[n])}) is outside texture "
                            f"{int(tex[n])} level {int(level[n])} ({1 << int(d['log2w'][n])}x{1 << int(d['log2h'][n])})")
+
+
+def random_requests(ts: TextureSet, n: int, seed: int = 0) -> np.ndarray:
+    """``n`` valid requests (N, 4) int64 (texture, level, i, j) spread over every texture and level
+    of ``ts`` (seeded; for tests and benchmarks)."""
+    rng = np.random.default_rng(seed)
+    tex = rng.integers(0, ts.n_textures, n)
+    levels = np.array([t.levels for t in ts.textures])
+    lv = (rng.random(n) * levels[tex]).astype(np.int64)
+    d = ts.descriptors[tex, lv]
+    w = 1 << d["log2w"].astype(np.int64)
+    h = 1 << d["log2h"].astype(np.int64)
+    return np.stack([tex, lv, rng.integers(0, 1 << 30, n) % w, rng.integers(0, 1 << 30, n) % h], 1)
 
 
 def lookup_descriptor(ts: TextureSet, tex, level) -> np.ndarray:

@@ -18,24 +18,14 @@ import time
 
 import numpy as np
 
-__all__ = ["run", "default_unit", "random_requests"]
+from golden.fetch import random_requests
+
+__all__ = ["run", "default_unit"]
 
 
 def default_unit():
     from golden.render.scene import build_texture_set, load_scene
     return build_texture_set(load_scene("topspin"))
-
-
-def random_requests(ts, n: int, seed: int = 0) -> np.ndarray:
-    """``n`` valid requests spread over every texture and level of ``ts``."""
-    rng = np.random.default_rng(seed)
-    tex = rng.integers(0, ts.n_textures, n)
-    levels = np.array([t.levels for t in ts.textures])
-    lv = (rng.random(n) * levels[tex]).astype(np.int64)
-    d = ts.descriptors[tex, lv]
-    w = 1 << d["log2w"].astype(np.int64)
-    h = 1 << d["log2h"].astype(np.int64)
-    return np.stack([tex, lv, rng.integers(0, 1 << 30, n) % w, rng.integers(0, 1 << 30, n) % h], 1)
 
 
 def _timed(fn):

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from golden.encode import encode
-from golden.fetch import block_address, lookup_descriptor, straddles
+from golden.fetch import block_address, lookup_descriptor, random_requests, straddles  # noqa: F401 (re-exported to the tests)
 from golden.format import TextureSet
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -47,17 +47,6 @@ def texture_sets():
     mixed = TextureSet.combine([rgb12, yuv, rgba, inten])
     w16 = encode([image(5, 32)], codebook_size=32, block=(2, 2), mipmaps=True, index_bits=12, word_bits=16)
     return {"rgb12": rgb12, "mixed": mixed, "w16": w16}
-
-
-def random_requests(ts, n, seed=0):
-    rng = np.random.default_rng(seed)
-    tex = rng.integers(0, ts.n_textures, n)
-    levels = np.array([t.levels for t in ts.textures])
-    lv = (rng.random(n) * levels[tex]).astype(np.int64)
-    d = ts.descriptors[tex, lv]
-    w = 1 << d["log2w"].astype(np.int64)
-    h = 1 << d["log2h"].astype(np.int64)
-    return np.stack([tex, lv, rng.integers(0, 1 << 30, n) % w, rng.integers(0, 1 << 30, n) % h], 1)
 
 
 def adversarial_requests(ts, limit=200):
