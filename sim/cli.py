@@ -242,28 +242,17 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _extra_commands():
-    """Commands that live in their own modules (render, demo, export, report, bench)."""
-    out = []
-    for mod in ("sim.cmd_render", "sim.cmd_export", "sim.cmd_report", "sim.cmd_bench", "sim.experiments"):
-        try:
-            m = __import__(mod, fromlist=["add_parser"])
-        except ImportError:
-            continue
-        out.append(m.add_parser)
-    return out
+    """Commands that live in their own modules (render, demo, export, report, bench, experiments)."""
+    from sim import cmd_bench, cmd_export, cmd_render, cmd_report, experiments
+    return [m.add_parser for m in (cmd_render, cmd_export, cmd_report, cmd_bench, experiments)]
 
 
 def _user_errors():
     from golden.encode import EncodeError
     from golden.fetch import RequestError
     from golden.format import FormatError
-    errs = [CliError, FormatError, EncodeError, RequestError, OSError]
-    try:
-        from golden.render.scene import SceneError
-        errs.append(SceneError)
-    except ImportError:
-        pass
-    return tuple(errs)
+    from golden.render.scene import SceneError
+    return (CliError, FormatError, EncodeError, RequestError, SceneError, OSError)
 
 
 def main(argv=None) -> int:
