@@ -99,16 +99,11 @@ def _fields(layout) -> dict:
 def design_info(ts, *, one_port: bool = False, tag_width: int = 8) -> DesignInfo:
     """Elaborate ``TexelFetch(ts)`` and collect ports, payload layouts, stages and memory images."""
     from amaranth.hdl import _ast, _ir, _mem
-    from amaranth.lib import wiring
     from hw.texel_fetch import TexelFetch
+    from .verilog_export import port_map
 
     top = TexelFetch(ts, one_port=one_port, tag_width=tag_width)
-    ports = {}
-    for path, member, value in top.signature.flatten(top):
-        if isinstance(value, _ast.ValueCastable):
-            value = value.as_value()
-        ports["__".join(map(str, path))] = (
-            value, _ir.PortDirection.Input if member.flow == wiring.In else _ir.PortDirection.Output)
+    ports = port_map(top)
     frag = _ir.Fragment.get(top, None)
     memories = []
 

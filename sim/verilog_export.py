@@ -26,9 +26,22 @@ from amaranth import Module
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-__all__ = ["TexelFetchTop", "export_verilog", "request_ports", "response_ports", "TOP_NAME"]
+__all__ = ["TexelFetchTop", "export_verilog", "port_map", "request_ports", "response_ports", "TOP_NAME"]
 
 TOP_NAME = "texel_fetch"
+
+
+def port_map(top) -> dict:
+    """Top-level ports of a component for Amaranth's RTLIL/CXXRTL converters: ``name -> (value,
+    direction)``, one per signature member, named ``stream__member`` as Amaranth names them."""
+    from amaranth.hdl import _ast, _ir
+    ports = {}
+    for path, member, value in top.signature.flatten(top):
+        if isinstance(value, _ast.ValueCastable):
+            value = value.as_value()
+        ports["__".join(map(str, path))] = (
+            value, _ir.PortDirection.Input if member.flow == wiring.In else _ir.PortDirection.Output)
+    return ports
 
 
 def request_ports(fetch) -> dict:
@@ -109,14 +122,7 @@ def export_verilog(ts, *, one_port: bool = False, tag_width: int = 8, name: str 
     if dialect == "v2005":
         text = verilog.convert(top, name=name, emit_src=False, strip_internal_attrs=True)
     else:
-        from amaranth.hdl import _ast, _ir
-        port_map = {}
-        for path, member, value in top.signature.flatten(top):
-            if isinstance(value, _ast.ValueCastable):
-                value = value.as_value()
-            port_map["__".join(map(str, path))] = (
-                value, _ir.PortDirection.Input if member.flow == wiring.In else _ir.PortDirection.Output)
-        il, _ = rtlil.convert_fragment(Fragment.get(top, None), port_map, name, emit_src=False)
+        il, _ = rtlil.convert_fragment(Fragment.get(top, None), port_map(top), name, emit_src=False)
         # amaranth.back.verilog's own Yosys script, with write_verilog -sv.
         text = verilog._convert_rtlil_text(il, strip_internal_attrs=True, write_verilog_opts=("-sv",))
     head = (f"// {name}: vqtex texel-fetch unit (Beers, Agrawala, Chaddha 1996), "
