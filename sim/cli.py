@@ -8,6 +8,7 @@ partly written output file (outputs are written to a temporary file and renamed)
 from __future__ import annotations
 
 import argparse
+import io
 import json
 import os
 import sys
@@ -42,11 +43,17 @@ def _emit(obj: dict, as_json: bool, text: str) -> None:
         print(text)
 
 
-def _atomic_write(path: str, write) -> None:
-    """Call ``write(tmp_path)`` then rename over ``path``; never leave a partial file."""
+def _check_output(path: str) -> str:
+    """The folder of an output file; a CliError if it does not exist."""
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
         raise CliError(f"output folder {folder} does not exist")
+    return folder
+
+
+def _atomic_write(path: str, write) -> None:
+    """Call ``write(tmp_path)`` then rename over ``path``; never leave a partial file."""
+    folder = _check_output(path)
     suffix = os.path.splitext(path)[1]
     fd, tmp = tempfile.mkstemp(prefix=".vqtex-", suffix=suffix, dir=folder)
     os.close(fd)
@@ -56,6 +63,17 @@ def _atomic_write(path: str, write) -> None:
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+
+
+def _write_bytes(path: str, data: bytes) -> None:
+    def write(tmp):
+        with open(tmp, "wb") as f:
+            f.write(data)
+    _atomic_write(path, write)
+
+
+def _write_json(path: str, obj) -> None:
+    _write_bytes(path, json.dumps(obj, indent=2, sort_keys=True).encode())
 
 
 def _load_set(path: str):
@@ -136,7 +154,8 @@ def cmd_decode(args) -> int:
         raise CliError(f"texture {args.texture} has no level {args.level} (it has {levels})")
     img = decode(ts, args.texture, args.level)
     channels = {"rgb": 3, "yuv411": 3, "rgba": 4, "intensity": 1}[ts.textures[args.texture].color]
-    _atomic_write(args.output, lambda tmp: write_image(tmp, np.ascontiguousarray(img[..., :channels])))
+    _check_output(args.output)
+    write_image(args.output, np.ascontiguousarray(img[..., :channels]))          # atomic itself
     h, w = img.shape[:2]
     _emit({"texture": args.texture, "level": args.level, "width": w, "height": h, "output": args.output},
           args.json, f"wrote {args.output} ({w}x{h}, texture {args.texture} level {args.level})")
@@ -179,12 +198,15 @@ def cmd_sim(args) -> int:
         raise CliError(f"--stall {args.stall} must be in [0, 1)")
     from sim.backend import simulate
     res = simulate(ts, req, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port)
-    _atomic_write(args.output, lambda tmp: np.save(open(tmp, "wb"), res.responses.astype(np.uint8)))
+    buf = io.BytesIO()
+    np.save(buf, res.responses.astype(np.uint8))
+    _write_bytes(args.output, buf.getvalue())
     from sim.report import cycle_report, cycle_text
     report = cycle_report(res, backend=args.backend, one_port=args.one_port, stall=args.stall)
     if args.plot:
         from sim.report import cycle_plot
-        _atomic_write(args.plot, lambda tmp: cycle_plot(report, tmp))
+        _check_output(args.plot)
+        cycle_plot(report, args.plot)                                   # atomic (write_image)
     _emit(report, args.json, cycle_text(report) + f"\nwrote {args.output}")
     return 0
 

@@ -8,7 +8,6 @@ stream, so "the RTL frame is identical to the golden frame" is a pixel-for-pixel
 
 from __future__ import annotations
 
-import json
 import os
 import sys
 import time
@@ -86,7 +85,7 @@ def _frame_path(pattern: str, frame: int, many: bool) -> str:
 
 
 def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall=0.0, seed=0,
-                 one_port=False, reference=True, progress=None):
+                 one_port=False, reference=True, images=None, progress=None):
     """Render ``frames`` of ``scene`` from TextureSet ``ts``; yields one dict per frame with the frame,
     the golden frame when the backend is RTL (for comparison), cycle results and the reference MSE."""
     from golden.fetch import fetch
@@ -96,7 +95,8 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
     src = VQSource(ts)
     ref_src = None
     if reference:
-        images = [img for img, _ in scene.load_textures()]
+        if images is None:
+            images = [img for img, _ in scene.load_textures()]
         ref_src = ReferenceSource(images, levels=[len(ts.level_shapes(t)) for t in range(ts.n_textures)])
     for f in frames:
         out = {"frame": f}
@@ -125,13 +125,31 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
         yield out
 
 
-def _encode_scene(scene, progress_label="encoding textures"):
+def _encode_scene(scene, images):
     from golden.render.scene import build_texture_set
-    p = Progress(1, progress_label)
-    ts = build_texture_set(scene)
+    p = Progress(1, "encoding textures")
+    ts = build_texture_set(scene, images)
     p.step()
     p.done()
     return ts
+
+
+def _render_to_files(scene, ts, frames, path_of, images, *, backend, **kw):
+    """Render ``frames``, write frame ``f`` to ``path_of(f)`` (atomically, by write_image); returns
+    (per-frame reports, frames whose RTL image differs from the golden one)."""
+    from golden.render.imageio import write_image
+    prog = Progress(len(frames), f"rendering ({backend})")
+    per_frame, mismatches = [], []
+    for r in render_scene(scene, ts, frames, backend=backend, images=images, progress=prog, **kw):
+        path = path_of(r["frame"])
+        write_image(path, r["image"])
+        rep = _frame_report(r)
+        rep["output"] = path
+        per_frame.append(rep)
+        if r.get("identical_to_golden") is False:
+            mismatches.append(r["frame"])
+    prog.done()
+    return per_frame, mismatches
 
 
 def _frame_report(r: dict) -> dict:
@@ -149,30 +167,18 @@ def _frame_report(r: dict) -> dict:
 
 def cmd_render(args) -> int:
     from golden.format import TextureSet
-    from golden.render.imageio import write_image
     from golden.render.scene import load_scene
-    from sim.cli import CliError, _atomic_write, _emit
+    from sim.cli import CliError, _check_output, _emit, _write_json
     scene = load_scene(args.scene)
     frames = _parse_frames(args.frames, scene.frames)
-    ts = TextureSet.load(args.texture_set) if args.texture_set else _encode_scene(scene)
+    images = [img for img, _ in scene.load_textures()]
+    ts = TextureSet.load(args.texture_set) if args.texture_set else _encode_scene(scene, images)
     if ts.n_textures != len(scene.textures):
         raise CliError(f"{args.texture_set} holds {ts.n_textures} textures, the scene uses {len(scene.textures)}")
-    folder = os.path.dirname(os.path.abspath(args.output))
-    if not os.path.isdir(folder):
-        raise CliError(f"output folder {folder} does not exist")
-    prog = Progress(len(frames), f"rendering ({args.backend})")
-    per_frame, mismatches = [], []
-    for r in render_scene(scene, ts, frames, mode=args.mode, backend=args.backend, stall=args.stall,
-                          seed=args.seed, one_port=args.one_port, progress=prog):
-        path = _frame_path(args.output, r["frame"], len(frames) > 1)
-        img = r["image"]
-        _atomic_write(path, lambda tmp: write_image(tmp, img))
-        rep = _frame_report(r)
-        rep["output"] = path
-        per_frame.append(rep)
-        if r.get("identical_to_golden") is False:
-            mismatches.append(r["frame"])
-    prog.done()
+    _check_output(args.output)
+    per_frame, mismatches = _render_to_files(
+        scene, ts, frames, lambda f: _frame_path(args.output, f, len(frames) > 1), images,
+        mode=args.mode, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port)
     report = {
         "scene": scene.name, "mode": args.mode, "backend": args.backend, "frames": per_frame,
         "overall_rate": round(ts.rates()["overall"], 4),
@@ -182,7 +188,7 @@ def cmd_render(args) -> int:
         report["identical_to_golden"] = not mismatches
         report["cycles_per_frame"] = round(float(np.mean([f["cycles"] for f in per_frame])), 1)
     if args.report:
-        _atomic_write(args.report, lambda tmp: open(tmp, "w").write(json.dumps(report, indent=2, sort_keys=True)))
+        _write_json(args.report, report)
     text = [f"{scene.name}: {len(frames)} frame(s), {args.mode}, backend {args.backend}, "
             f"overall compression {report['overall_rate']:.2f}:1, mean frame MSE {report['mean_mse']:.3f}"]
     if args.backend != "golden":
@@ -197,29 +203,20 @@ def cmd_render(args) -> int:
 def cmd_demo(args) -> int:
     """Encode the bundled textures, render a few topspin frames with golden and compiled RTL,
     check they are identical, write the frames and a report, print a summary."""
-    from golden.render.imageio import write_image
     from golden.render.scene import load_scene
-    from sim.cli import CliError, _atomic_write, _emit
+    from sim.cli import CliError, _emit, _write_json
     t_start = time.perf_counter()
     os.makedirs(args.out_dir, exist_ok=True)
     scene = load_scene("topspin")
     frames = _parse_frames(args.frames, scene.frames)
+    images = [img for img, _ in scene.load_textures()]
     t0 = time.perf_counter()
-    ts = _encode_scene(scene, "encoding textures")
+    ts = _encode_scene(scene, images)
     encode_s = time.perf_counter() - t0
     ts.save(os.path.join(args.out_dir, "topspin.vqt"))
-    prog = Progress(len(frames), f"rendering ({args.backend})")
-    per_frame, mismatches = [], []
-    for r in render_scene(scene, ts, frames, mode="trilinear", backend=args.backend, progress=prog):
-        path = os.path.join(args.out_dir, f"topspin_{r['frame']:04d}.png")
-        img = r["image"]
-        _atomic_write(path, lambda tmp: write_image(tmp, img))
-        rep = _frame_report(r)
-        rep["output"] = path
-        per_frame.append(rep)
-        if not r.get("identical_to_golden", True):
-            mismatches.append(r["frame"])
-    prog.done()
+    per_frame, mismatches = _render_to_files(
+        scene, ts, frames, lambda f: os.path.join(args.out_dir, f"topspin_{f:04d}.png"), images,
+        mode="trilinear", backend=args.backend)
     rates = {t.name: round(ts.rates(k)["overall"], 3) for k, t in enumerate(ts.textures)}
     report = {
         "scene": "topspin", "frames": per_frame, "backend": args.backend,
@@ -229,11 +226,10 @@ def cmd_demo(args) -> int:
         "cycles_per_frame": round(float(np.mean([f.get("cycles", 0) for f in per_frame])), 1),
         "encode_seconds": round(encode_s, 2), "total_seconds": round(time.perf_counter() - t_start, 2),
     }
-    _atomic_write(os.path.join(args.out_dir, "report.json"),
-                  lambda tmp: open(tmp, "w").write(json.dumps(report, indent=2, sort_keys=True)))
+    _write_json(os.path.join(args.out_dir, "report.json"), report)
     lines = [
         f"vqtex demo: topspin, {len(frames)} frames {scene.width}x{scene.height}, trilinear mipmapping",
-        f"  textures: " + ", ".join(f"{n} {r:.1f}:1" for n, r in rates.items())
+        "  textures: " + ", ".join(f"{n} {r:.1f}:1" for n, r in rates.items())
         + f"  (overall {report['overall_rate']:.2f}:1)",
         f"  frame MSE vs uncompressed: {report['mean_mse']:.3f} (mean over frames)",
         f"  RTL ({args.backend}) frames identical to golden: {'yes' if not mismatches else 'NO ' + str(mismatches)}",

@@ -63,7 +63,6 @@ Any problem raises :class:`SceneError` with a one-line message ``FILE: where: pr
 
 from __future__ import annotations
 
-import inspect
 import math
 import os
 import tomllib
@@ -731,8 +730,6 @@ def build_texture_set(scene: Scene, images=None):
         bw, bh = (int(x) for x in enc["block"].split("x"))
         kwargs = dict(block=(bw, bh), codebook_size=enc["codebook_size"], color=enc["color"],
                       index_bits=enc["index_bits"], mipmaps=enc["mipmaps"], encoder=enc["encoder"],
-                      seed=enc["seed"])
-        if "names" in inspect.signature(encode).parameters:
-            kwargs["names"] = [t.name for t in members]
+                      seed=enc["seed"], names=[t.name for t in members])
         sets.append(encode([images[t.id] for t in members], **kwargs))
     return sets[0] if len(sets) == 1 else TextureSet.combine(sets)
