@@ -25,7 +25,7 @@ def _encode_groups(scene, images, overrides: dict | None = None, grouping: str =
     codebook per colour format: everything of one format shares).
     """
     from golden.encode import encode
-    from golden.format import TextureSet
+    from golden.format import TextureSet, default_index_bits
     keyfn = {"scene": lambda t: t.group, "separate": lambda t: t.name,
              "format": lambda t: t.encoding["color"]}[grouping]
     order = list(dict.fromkeys(keyfn(t) for t in scene.textures))
@@ -36,7 +36,6 @@ def _encode_groups(scene, images, overrides: dict | None = None, grouping: str =
         enc.update(overrides or {})
         bw, bh = enc["block"] if isinstance(enc["block"], tuple) else (int(x) for x in str(enc["block"]).split("x"))
         ib = enc.get("index_bits")
-        from golden.format import default_index_bits
         if ib is not None and ib < default_index_bits(enc["codebook_size"]):
             ib = None
         sets.append(encode([images[t.id] for t in members], block=(bw, bh), codebook_size=enc["codebook_size"],
@@ -53,8 +52,7 @@ class _Permuted:
 
     def __init__(self, ts, ids):
         self.ts = ts
-        self.pos = np.argsort(ids)            # scene id -> set id
-        self.map = np.asarray(self.pos)
+        self.map = np.argsort(ids)            # scene texture id -> texture id in the set
 
     def level_shapes(self, tex):
         return self.ts.level_shapes(int(self.map[tex]))
