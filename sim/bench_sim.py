@@ -37,7 +37,6 @@ def _timed(fn):
 def run(json_out: bool = False, *, n_compiled: int = 4_000_000, n_pysim: int = 3000, stall: float = 0.0,
         backends=("pysim", "cxxrtl", "verilator")) -> dict:
     """Run the benchmark, print a table (or one JSON object) and return the numbers."""
-    from golden.fetch import fetch
     from sim.backend import simulate
     from sim.toolchain import ToolchainError
 

@@ -9,7 +9,6 @@ mip structure), so the MSE measures compression alone.
 
 from __future__ import annotations
 
-import copy
 import json
 import time
 

@@ -502,7 +502,7 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
             "tag_width": tag_width,
             "latency": LATENCY,
             "textures": ts.n_textures,
-            "memories": {"index_words": int(len(ts.index_words)), "word_bits": int(ts.word_bits),
+            "memory_images": {"index_words": int(len(ts.index_words)), "word_bits": int(ts.word_bits),
                          "codebook_entries": int(len(ts.codebook)), "entry_bytes": int(ts.entry_bytes),
                          "raw_words": int(len(ts.raw_words))},
             "utilisation": unit.get("headline", {}),

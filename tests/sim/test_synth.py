@@ -240,7 +240,7 @@ def test_report_area_tiny(tmp_path, capsys):
     assert code == 0, err
     assert out.count("\n") == 1                              # one JSON object
     rep = json.loads(out)
-    assert set(rep) >= {"design", "device", "index_reader", "textures", "memories", "utilisation", "cells",
+    assert set(rep) >= {"design", "device", "index_reader", "textures", "memories", "memory_images", "utilisation", "cells",
                         "harness_ffs", "timing", "seconds"}
     assert rep["device"] == "LFE5U-85F-8 CABGA381" and rep["textures"] == 2
     u = rep["utilisation"]
