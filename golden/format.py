@@ -343,8 +343,9 @@ class TextureSet:
                 elif int(row["base"]) + w * h > len(self.raw_words):
                     raise FormatError(f"texture {t} level {L}: raw level runs past the raw memory")
 
-    def max_index(self) -> None:
-        """Raise FormatError if an index in any map points past its codebook."""
+    def check_indices(self) -> None:
+        """Raise FormatError if an index in any map points past its codebook (the hardware would
+        read another codebook's entry, or past the memory)."""
         for t, info in enumerate(self.textures):
             if info.codebook < 0:
                 continue
@@ -482,6 +483,7 @@ class TextureSet:
                 matrix=ColorMatrix.from_dict(header["matrix"]),
             )
             ts.validate()
+            ts.check_indices()
         except FormatError:
             raise
         except (KeyError, IndexError, TypeError, ValueError, AttributeError, UnicodeDecodeError) as e:

@@ -116,3 +116,16 @@ def test_paper_rates():
     # 12-bit indices: 4x4 RGB at 32:1 base
     ts3 = encode([img[:64, :64]], codebook_size=256, index_bits=12, encoder="tsvq")
     assert ts3.rates(0)["base"] == pytest.approx(32.0)
+
+
+def test_container_rejects_index_past_codebook():
+    """Checksum right, descriptors in range, but an index names a codeword the codebook lacks."""
+    import struct, zlib
+    rng = np.random.default_rng(1)
+    ts = encode([rng.integers(0, 256, (32, 32, 3), dtype=np.uint8)], codebook_size=8, index_bits=5,
+                encoder="tsvq")
+    TextureSet.from_bytes(ts.to_bytes())                        # fine as made
+    ts.index_words[0] |= 31                                     # index 0 := 31 (codebook has 8)
+    body = ts.to_bytes()[:-4]
+    with pytest.raises(FormatError, match="past codebook"):
+        TextureSet.from_bytes(body + struct.pack("<I", zlib.crc32(body)))
