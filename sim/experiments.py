@@ -46,29 +46,27 @@ def _encode_groups(scene, images, overrides: dict | None = None, grouping: str =
     return ts, ids
 
 
-class _Permuted:
-    """TextureSource over a TextureSet whose texture order differs from the scene's."""
+def _permuted(ts, ids):
+    """A TextureSource over ``ts`` addressed by scene texture id (``ids[k]`` is the scene id of set
+    texture ``k``): returns (source, scene id -> set id map)."""
+    from sim.cmd_render import VQSource
+    to_set = np.argsort(ids)
 
-    def __init__(self, ts, ids):
-        self.ts = ts
-        self.map = np.argsort(ids)            # scene texture id -> texture id in the set
+    class Permuted(VQSource):
+        def level_shapes(self, tex):
+            return super().level_shapes(int(to_set[tex]))
 
-    def level_shapes(self, tex):
-        return self.ts.level_shapes(int(self.map[tex]))
+        def fetch(self, tex, level, i, j):
+            return super().fetch(to_set[np.asarray(tex, np.int64)], level, i, j)
 
-    def set_ids(self, tex):
-        return self.map[np.asarray(tex, np.int64)]
-
-    def fetch(self, tex, level, i, j):
-        from golden.fetch import fetch
-        return fetch(self.ts, self.set_ids(tex), level, i, j)
+    return Permuted(ts), to_set
 
 
 def _render_mse(scene, images, ts, ids, frames, mode):
     from golden.render.frame import frame_requests
     from golden.render.metrics import frame_mse
     from golden.render.pyramid import ReferenceSource
-    src = _Permuted(ts, ids)
+    src, _ = _permuted(ts, ids)
     ref = ReferenceSource(images, levels=[len(src.level_shapes(t.id)) for t in scene.textures])
     mses, secs = [], []
     for f in frames:
@@ -151,7 +149,7 @@ def table5(frames=(0, 25), backend: str = "golden") -> list[dict]:
                           ("12-bit", dict(index_bits=12))):
             ov = dict(ov, mipmaps=(mode == "trilinear"))
             ts, ids = _encode_groups(scene, images, ov)
-            src = _Permuted(ts, ids)
+            src, to_set = _permuted(ts, ids)
             if label == "uncompressed":
                 from golden.render.pyramid import ReferenceSource
                 soft = ReferenceSource(images, levels=[len(src.level_shapes(t.id)) for t in scene.textures])
@@ -168,7 +166,7 @@ def table5(frames=(0, 25), backend: str = "golden") -> list[dict]:
                     s2.resolve(soft.fetch(*r2.T))
                     best = min(best, time.perf_counter() - t0)
                 secs.append(best)
-                hw = np.column_stack([src.set_ids(reqs[:, 0]), reqs[:, 1:]])
+                hw = np.column_stack([to_set[reqs[:, 0]], reqs[:, 1:]])
                 for port, one in (("two-bank", False), ("one-port", True)):
                     res = simulate(ts, hw, backend=backend, one_port=one)
                     cycles[port] += res.cycles
