@@ -34,10 +34,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .cxxrtl_inplace import inplace_cycle
 from .toolchain import (ToolchainError, cached_build, digest, find_tool, index_get, index_put, run_tool,
                         tool_version)
 
-__all__ = ["DesignInfo", "MemoryImage", "design_info", "cxxrtl_source", "build_cxxrtl", "BatchLibrary",
+__all__ = ["DesignInfo", "MemoryImage", "design_info", "cxxrtl_source", "cxxrtl_program", "write_cxxrtl",
+           "rewrite", "build_cxxrtl", "BatchLibrary",
            "run_batch", "run", "CXXFLAGS", "ready_pattern", "DRIVER_DIR"]
 
 DRIVER_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "cxxrtl")
@@ -149,7 +151,7 @@ def cxxrtl_source(info: DesignInfo) -> str:
     save(info.fragment)
     try:
         blank(info.fragment)
-        src = _write_cxxrtl(info)
+        src = write_cxxrtl(info.fragment, info.ports)
     finally:
         for f, d in saved.values():
             f._data = d
@@ -165,15 +167,15 @@ def cxxrtl_source(info: DesignInfo) -> str:
 WRITE_CXXRTL = "write_cxxrtl -g1"
 
 
-def _write_cxxrtl(info: DesignInfo) -> str:
+def write_cxxrtl(fragment, ports) -> str:
     """``amaranth.back.cxxrtl.convert_fragment`` with our ``write_cxxrtl`` options (the same RTLIL,
     the same Yosys)."""
     from amaranth.back import cxxrtl, rtlil
     try:
         from amaranth._toolchain.yosys import find_yosys
     except ImportError:                         # amaranth moved its private API: the default flow
-        return cxxrtl.convert_fragment(info.fragment, info.ports, "top", emit_src=False)[0]
-    text, _ = rtlil.convert_fragment(info.fragment, info.ports, "top", emit_src=False)
+        return cxxrtl.convert_fragment(fragment, ports, "top", emit_src=False)[0]
+    text, _ = rtlil.convert_fragment(fragment, ports, "top", emit_src=False)
     yosys = find_yosys(lambda ver: ver >= (0, 10))
     return yosys.run(["-q", "-"], f"read_rtlil <<rtlil\n{text}\nrtlil\n{WRITE_CXXRTL}")
 
@@ -238,6 +240,27 @@ def _alias_locals(src: str) -> str:
         body = body.replace(decl.group(0), "", 1)
         body = body.replace(f"\t{name} = {wire};", f"\tconst value<{decl.group(1)}> &{name} = {wire};", 1)
     return src[:m.start()] + body + src[m.end():]
+
+
+def rewrite(src: str) -> tuple[str, str]:
+    """The generated C++ as the driver compiles it, and the macros that go with it: every rewrite
+    below (exact, checked by the tests against golden and against CXXRTL's own stepping)."""
+    macros = ""
+    if "converged = false" in src:          # combinational feedback: see driver.cc
+        macros += "#define VQ_EXACT_STEP 1\n"
+    macros += _fast_commit(src)
+    src = _fast_slices(_alias_locals(src))
+    inplace = inplace_cycle(src)
+    if inplace is not None:
+        src = inplace
+        macros += "#define VQ_INPLACE 1\n"
+    return src, macros
+
+
+def cxxrtl_program(info: DesignInfo) -> tuple[str, str]:
+    """(design.cc, ports.h) of the CXXRTL library for this design."""
+    src, macros = rewrite(cxxrtl_source(info))
+    return src, ports_header(info, _mangle_cxxrtl) + macros
 
 
 def _mangle_cxxrtl(name: str) -> str:
@@ -326,21 +349,18 @@ def build_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8, cxxflags=Non
     t0 = time.perf_counter()
     info = design_info(ts, one_port=one_port, tag_width=tag_width)
     steps = {"elaborate": time.perf_counter() - t0}
-    drivers = _driver_sources("driver.cc", "batch.h")
-    with open(os.path.abspath(__file__), "rb") as f:    # the C++ rewrites below are part of the build
-        this = f.read()
+    drivers = _driver_sources("driver.cc", "batch.h", "vq_slice.h")
+    this = b""
+    for mod in (__file__, inplace_cycle.__code__.co_filename):    # the C++ rewrites are part of the build
+        with open(os.path.abspath(mod), "rb") as f:
+            this += f.read()
     quick = digest("cxxrtl-quick", _source_stamp(), this, one_port, tag_width, texture_set_digest(ts), flags,
                    tool_version(cxx), *drivers)
     key = index_get("cxxrtl", quick)
     if key and os.path.isfile(os.path.join(os_cache("cxxrtl"), key, "libvq.so")):
         return Build(os.path.join(os_cache("cxxrtl"), key, "libvq.so"), 0.0, True, info, key, steps)
     t1 = time.perf_counter()
-    src = cxxrtl_source(info)
-    header = ports_header(info, _mangle_cxxrtl)
-    if "converged = false" in src:          # combinational feedback: see driver.cc
-        header += "#define VQ_EXACT_STEP 1\n"
-    header += _fast_commit(src)
-    src = _fast_slices(_alias_locals(src))
+    src, header = cxxrtl_program(info)
     steps["yosys"] = time.perf_counter() - t1
     key = digest("cxxrtl", src, header, *drivers, flags, tool_version(cxx))
     inc = cxxrtl_include_dir()

@@ -43,8 +43,10 @@ enum {
     VQ_C_STRADDLES, VQ_C_RESERVED0, VQ_C_RESERVED1, VQ_C_OCCUPANCY
 };
 
-// Adapter: reset(), set_inputs(i_valid, i_payload, o_ready), settle(), i_ready(), o_valid(),
-// o_payload(), strobes(uint64_t *counters), occupancy(uint64_t *sums), posedge().
+// Adapter: reset(), set_inputs(i_valid, i_payload, o_ready), cycle(sample), i_ready(), o_valid(),
+// o_payload(), strobes(uint64_t *counters), occupancy(uint64_t *sums). cycle(sample) settles the
+// combinational logic, calls sample() (which reads the ports through the other methods), then
+// clocks a rising edge.
 template<class A>
 static int vq_run_batch(A &a, uint64_t n, const uint64_t *req, const uint8_t *ready, uint64_t n_ready,
                         uint64_t max_cycles, uint64_t *resp, uint64_t *counters) {
@@ -67,14 +69,14 @@ static int vq_run_batch(A &a, uint64_t n, const uint64_t *req, const uint8_t *re
         }
         bool i_valid = sent < n;
         a.set_inputs(i_valid, i_valid ? req[sent] : 0, o_ready);
-        a.settle();
-        if (a.o_valid() && o_ready)
-            resp[got++] = a.o_payload();
-        if (i_valid && a.i_ready())
-            sent++;
-        a.strobes(counters);
-        a.occupancy(counters + VQ_C_OCCUPANCY);
-        a.posedge();
+        a.cycle([&]() {
+            if (a.o_valid() && o_ready)
+                resp[got++] = a.o_payload();
+            if (i_valid && a.i_ready())
+                sent++;
+            a.strobes(counters);
+            a.occupancy(counters + VQ_C_OCCUPANCY);
+        });
         c++;
     }
     counters[VQ_C_CYCLES] = c;

@@ -34,6 +34,7 @@ struct Sim {
     }
     void settle() { top->clk = 0; top->eval(); }
     void posedge() { top->clk = 1; top->eval(); }
+    template<class F> void cycle(F &&sample) { settle(); sample(); posedge(); }
     bool i_ready() { return top->i_ready; }
     bool o_valid() { return top->o_valid; }
     uint64_t o_payload() { return VQ_GET_RESPONSE(top); }

@@ -1,0 +1,161 @@
+"""One clock cycle of the CXXRTL model with the registers updated in place (no next-state copies).
+
+CXXRTL simulates a clock edge in two steps: ``eval()`` computes every register's next state into
+``wire.next`` from the current states ``wire.curr``, then ``commit()`` copies ``next`` into ``curr``
+for every register. For this design the copy was a third of the run time (139 registers, four of
+them 504 bits wide). This module rewrites the generated ``eval()`` into one member function
+
+    template<class F> void p_top::vq_cycle(F &&sample)
+
+that does the same clock cycle with ``rst`` low:
+
+1. the *combinational* statements of ``eval()`` (every top-level statement that is not a register
+   or memory-read-port update), in their order: they read only register states (``curr``), inputs
+   and each other, so they give this cycle's outputs;
+2. ``sample()``: the driver reads the ports (outputs, strobes, the stages' valid bits);
+3. the register updates (the ``if (posedge_p_clk) { ... }`` blocks), writing ``curr`` directly, in
+   an order in which every register is written only after every update that reads its current state
+   (readers first: for a pipeline, the last stage first). Registers that read each other in a cycle
+   read a copy taken before the updates. ``p_rst`` is the constant 0 in this function, so the
+   compiler drops the reset multiplexers.
+
+The result is the same as ``eval(); commit();`` bit for bit (tested against CXXRTL's own stepping and
+against golden). It is built only from the generated code's regular shape; anything unexpected (a
+combinational loop, a memory write port, a statement of another form) makes :func:`inplace_cycle`
+return ``None`` and the driver keeps CXXRTL's own ``eval()``/``commit()``.
+"""
+
+from __future__ import annotations
+
+import heapq
+import re
+
+__all__ = ["inplace_cycle", "CLASS_DECL"]
+
+_EVAL = re.compile(r"^bool p_top::eval\(performer \*performer\) \{\n(.*?)^\}\n", re.S | re.M)
+#: The member declaration added to ``struct p_top`` (after ``eval``'s).
+CLASS_DECL = "\ttemplate<class F> void vq_cycle(F &&sample);\n"
+_EVAL_DECL = "\tbool eval(performer *performer = nullptr) override;\n"
+_SKIP = {"\tbool converged = true;", "\tbool posedge_p_clk = this->posedge_p_clk();", "\treturn converged;"}
+_COMB = re.compile(r"^\t(?:value<\d+> \w+|const value<\d+> &?\w+ = [\w.]+|\w+ = .*);$")
+_ALIAS = re.compile(r"^\tconst value<(?P<width>\d+)> &(?P<dst>\w+) = (?P<src>\w+\.curr);$")
+_NEXT = re.compile(r"\b(\w+)\.next\b")
+_CURR = re.compile(r"\b(\w+)\.curr\b")
+_IDENT = re.compile(r"\b[A-Za-z_]\w*\b")
+
+
+def _items(body: str):
+    """Top-level statements of ``eval()``: ("comb", line) or ("reg", inner lines), comments dropped.
+    None if a statement has an unexpected form."""
+    items = []
+    lines = body.split("\n")
+    k = 0
+    while k < len(lines):
+        line = lines[k]
+        k += 1
+        if not line or line.startswith("\t// ") or line in _SKIP:
+            continue
+        if line == "\tif (posedge_p_clk) {":
+            inner = []
+            while k < len(lines) and lines[k] != "\t}":
+                if not lines[k].startswith("\t\t"):
+                    return None
+                inner.append(lines[k])
+                k += 1
+            if k == len(lines):
+                return None
+            k += 1
+            items.append(("reg", inner))
+        elif _COMB.match(line) and ".next" not in line:
+            items.append(("comb", line))
+        else:
+            return None
+    return items
+
+
+def _order(reads, writes):
+    """Register updates in an order where each wire is written after every *other* update reading
+    it (ties: the generated order); returns (order, wires to snapshot). A wire read by an update
+    that cannot come before its writer (a cycle) is snapshotted: its reads then no longer
+    constrain the order."""
+    n = len(reads)
+    writer = {w: i for i in range(n) for w in writes[i]}
+    snap = set()
+    while True:
+        succ = [set() for _ in range(n)]         # r -> w: r reads a wire that w writes (r first)
+        indeg = [0] * n
+        for r in range(n):
+            for name in reads[r] - snap:
+                w = writer.get(name)
+                if w is not None and w != r and w not in succ[r]:
+                    succ[r].add(w)
+                    indeg[w] += 1
+        heap = [i for i in range(n) if indeg[i] == 0]
+        heapq.heapify(heap)
+        order = []
+        while heap:
+            i = heapq.heappop(heap)
+            order.append(i)
+            for j in succ[i]:
+                indeg[j] -= 1
+                if indeg[j] == 0:
+                    heapq.heappush(heap, j)
+        if len(order) == n:
+            return order, snap
+        left = set(range(n)) - set(order)
+        snap |= {w for i in left for w in writes[i] if any(w in reads[r] for r in left if r != i)}
+
+
+def inplace_cycle(src: str) -> str | None:
+    """The generated C++ with ``p_top::vq_cycle`` added (see the module docstring), or None."""
+    if _EVAL_DECL not in src:
+        return None
+    m = _EVAL.search(src)
+    if not m or "converged = false" in m.group(1):
+        return None
+    items = _items(m.group(1))
+    if items is None:
+        return None
+    widths = {name: int(w) for w, name in re.findall(r"^\t(?:/\*\w+\*/ )?wire<(\d+)> (\w+);$", src, re.M)}
+    combs = [text for kind, text in items if kind == "comb"]
+    aliases = {}                                # local -> the register it is a reference to
+    for line in combs:
+        a = _ALIAS.match(line)
+        if a:
+            aliases[a.group("dst")] = a.group("src").removesuffix(".curr")
+    bodies, writes, reads = [], [], []
+    for kind, inner in items:
+        if kind != "reg":
+            continue
+        text = "\n".join(inner)
+        w = set(_NEXT.findall(text))
+        if not w or not w <= widths.keys():
+            return None
+        bodies.append(text)
+        writes.append(w)
+        reads.append(set(_CURR.findall(text)) | {aliases[i] for i in _IDENT.findall(text) if i in aliases})
+    written = set().union(*writes) if writes else set()
+    for line in combs:                          # the combinational part never writes a register
+        if any(re.search(rf"^\t{w} = ", line) for w in written):
+            return None
+    order, snap = _order(reads, writes)
+
+    out = ["template<class F> void p_top::vq_cycle(F &&sample) {",
+           "\tconst value<1> p_rst{0u};\t// vq_cycle is a cycle with rst low"]
+    for line in combs:
+        a = _ALIAS.match(line)
+        if a and aliases[a.group("dst")] in snap:   # a reference would see the update: a copy
+            line = f"\tconst value<{a.group('width')}> {a.group('dst')} = {a.group('src')};"
+        out.append(line)
+    out.append("\tsample();")
+    for w in sorted(snap):                      # copies taken before any register changes
+        out.append(f"\tconst value<{widths[w]}> vq_old_{w} = {w}.curr;")
+    for i in order:
+        text = bodies[i]
+        for w in snap:
+            text = re.sub(rf"\b{w}\.curr\b", f"vq_old_{w}", text)
+        out.append("\t{\n" + _NEXT.sub(lambda mm: f"{mm.group(1)}.curr", text) + "\n\t}")
+    out.append("}\n")
+    # the definition goes right after eval()'s (inside the design's namespace)
+    src = src[:m.end()] + "\n" + "\n".join(out) + src[m.end():]
+    return src.replace(_EVAL_DECL, _EVAL_DECL + CLASS_DECL, 1)
