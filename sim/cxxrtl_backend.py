@@ -213,6 +213,15 @@ def _fast_commit(src: str) -> str:
 _SLICE = re.compile(r"\b([A-Za-z_]\w*(?:\.curr|\.next)?)\.slice<(\d+(?:,\d+)?)>\(\)(?:\.val\(\))?(?!\s*=[^=])")
 
 
+_SHIFT = re.compile(r"\b(shl_uu|shr_uu|shift_uu)<")
+
+
+def _fast_shifts(src: str) -> str:
+    """Every ``shl_uu``/``shr_uu``/``shift_uu`` as the ``vq_`` one of vq_ops.h (one machine shift
+    when the operands fit in 64 bits; the index reader's 64-bit funnel shift is one of them)."""
+    return _SHIFT.sub(lambda m: f"vq_{m.group(1)}<", src)
+
+
 def _fast_slices(src: str) -> str:
     """Every rvalue ``x.slice<stop, start>()`` of a named value (a wire's ``curr``/``next``, a local)
     as ``vq_slice<stop, start>(x)`` (driver.cc): the same bits, without CXXRTL's copy and shift of
@@ -249,7 +258,7 @@ def rewrite(src: str) -> tuple[str, str]:
     if "converged = false" in src:          # combinational feedback: see driver.cc
         macros += "#define VQ_EXACT_STEP 1\n"
     macros += _fast_commit(src)
-    src = _fast_slices(_alias_locals(src))
+    src = _fast_shifts(_fast_slices(_alias_locals(src)))
     inplace = inplace_cycle(src)
     if inplace is not None:
         src = inplace
@@ -349,7 +358,7 @@ def build_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8, cxxflags=Non
     t0 = time.perf_counter()
     info = design_info(ts, one_port=one_port, tag_width=tag_width)
     steps = {"elaborate": time.perf_counter() - t0}
-    drivers = _driver_sources("driver.cc", "batch.h", "vq_slice.h")
+    drivers = _driver_sources("driver.cc", "batch.h", "vq_ops.h")
     this = b""
     for mod in (__file__, inplace_cycle.__code__.co_filename):    # the C++ rewrites are part of the build
         with open(os.path.abspath(mod), "rb") as f:
