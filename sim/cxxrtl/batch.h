@@ -50,21 +50,25 @@ enum {
 template<class A>
 static int vq_run_batch(A &a, uint64_t n, const uint64_t *req, const uint8_t *ready, uint64_t n_ready,
                         uint64_t max_cycles, uint64_t *resp, uint64_t *counters) {
-    for (int k = 0; k < VQ_C_OCCUPANCY + VQ_STAGE_COUNT; k++)
-        counters[k] = 0;
-    a.reset();
+    // The sums are kept in a local array (the compiler may keep it in registers: nothing the
+    // design writes can alias it) and copied to counters[] on every return.
+    uint64_t sums[VQ_C_OCCUPANCY + VQ_STAGE_COUNT] = {};
     uint64_t sent = 0, got = 0, c = 0;
+    auto done = [&](int rc) {
+        sums[VQ_C_CYCLES] = c;
+        sums[VQ_C_ACCEPTED] = sent;
+        sums[VQ_C_RESPONSES] = got;
+        std::memcpy(counters, sums, sizeof(sums));
+        return rc;
+    };
+    a.reset();
     while (got < n) {
-        if (c >= max_cycles) {
-            counters[VQ_C_CYCLES] = c;
-            return 2;
-        }
+        if (c >= max_cycles)
+            return done(2);
         bool o_ready = true;
         if (ready) {
-            if (c >= n_ready) {
-                counters[VQ_C_CYCLES] = c;
-                return 1;
-            }
+            if (c >= n_ready)
+                return done(1);
             o_ready = ready[c] != 0;
         }
         bool i_valid = sent < n;
@@ -74,13 +78,10 @@ static int vq_run_batch(A &a, uint64_t n, const uint64_t *req, const uint8_t *re
                 resp[got++] = a.o_payload();
             if (i_valid && a.i_ready())
                 sent++;
-            a.strobes(counters);
-            a.occupancy(counters + VQ_C_OCCUPANCY);
+            a.strobes(sums);
+            a.occupancy(sums + VQ_C_OCCUPANCY);
         });
         c++;
     }
-    counters[VQ_C_CYCLES] = c;
-    counters[VQ_C_ACCEPTED] = sent;
-    counters[VQ_C_RESPONSES] = got;
-    return 0;
+    return done(0);
 }
