@@ -1,0 +1,20 @@
+"""``vqtex bench sim`` on a short stream: every backend agrees with golden and every rate is reported."""
+
+import json
+
+from hw.texel_fetch import LATENCY
+from sim import bench_sim
+
+from backend_fixtures import need
+
+
+def test_bench_sim_reports_agreeing_rates(capsys):
+    need("g++")
+    report = bench_sim.run(json_out=True, n_compiled=3000, n_pysim=40, backends=("pysim", "cxxrtl"))
+    printed = json.loads(capsys.readouterr().out)
+    assert printed == json.loads(json.dumps(report, sort_keys=True))
+    rows = report["backends"]
+    assert rows["pysim"]["agrees_with_golden"] and rows["cxxrtl"]["agrees_with_golden"]
+    assert rows["cxxrtl"]["cycles"] == 3000 + LATENCY
+    assert rows["cxxrtl"]["cycles_per_s"] > 0 and rows["cxxrtl"]["cycles_per_s_in_library"] > 0
+    assert rows["cxxrtl"]["speedup_vs_pysim"] > 1
