@@ -213,6 +213,13 @@ def _fast_commit(src: str) -> str:
 _SLICE = re.compile(r"\b([A-Za-z_]\w*(?:\.curr|\.next)?)\.slice<(\d+(?:,\d+)?)>\(\)(?:\.val\(\))?(?!\s*=[^=])")
 
 
+def _fast_slices(src: str) -> str:
+    """Every rvalue ``x.slice<stop, start>()`` of a named value (a wire's ``curr``/``next``, a local)
+    as ``vq_slice<stop, start>(x)`` (vq_ops.h): the same bits, without CXXRTL's copy and shift of
+    the whole operand (the 504-bit codebook registers are sliced a dozen times a cycle)."""
+    return _SLICE.sub(lambda m: f"vq_slice<{m.group(2)}>({m.group(1)})", src)
+
+
 _SHIFT = re.compile(r"\b(shl_uu|shr_uu|shift_uu)<")
 
 
@@ -220,13 +227,6 @@ def _fast_shifts(src: str) -> str:
     """Every ``shl_uu``/``shr_uu``/``shift_uu`` as the ``vq_`` one of vq_ops.h (one machine shift
     when the operands fit in 64 bits; the index reader's 64-bit funnel shift is one of them)."""
     return _SHIFT.sub(lambda m: f"vq_{m.group(1)}<", src)
-
-
-def _fast_slices(src: str) -> str:
-    """Every rvalue ``x.slice<stop, start>()`` of a named value (a wire's ``curr``/``next``, a local)
-    as ``vq_slice<stop, start>(x)`` (driver.cc): the same bits, without CXXRTL's copy and shift of
-    the whole operand (the 504-bit codebook registers are sliced a dozen times a cycle)."""
-    return _SLICE.sub(lambda m: f"vq_slice<{m.group(2)}>({m.group(1)})", src)
 
 
 _EVAL_BODY = re.compile(r"^bool p_top::eval\(performer \*performer\) \{\n.*?^\}\n", re.S | re.M)
@@ -237,7 +237,10 @@ def _alias_locals(src: str) -> str:
     """In ``eval()``, a local that is only ever a copy of a register's current value
     (``value<N> i_x; ... i_x = p_r.curr;``, at the function's top level, assigned once) becomes a
     reference to it (``const value<N> &i_x = p_r.curr;``): ``eval()`` writes only ``next``, so
-    the bits are the same and the 504-bit codebook registers are not copied every cycle."""
+    the bits are the same and the 504-bit codebook registers are not copied every cycle. (The
+    in-place cycle made from this ``eval()``, :mod:`sim.cxxrtl_inplace`, counts a read of such a
+    reference as a read of the register, and turns it back into a copy if the register's update
+    cannot wait for its readers.)"""
     m = _EVAL_BODY.search(src)
     if not m:
         return src
