@@ -135,9 +135,8 @@ def inplace_cycle(src: str) -> str | None:
         writes.append(w)
         reads.append(set(_CURR.findall(text)) | {aliases[i] for i in _IDENT.findall(text) if i in aliases})
     written = set().union(*writes) if writes else set()
-    for line in combs:                          # the combinational part never writes a register
-        if any(re.search(rf"^\t{w} = ", line) for w in written):
-            return None
+    if any(line.split(" = ", 1)[0].strip() in written for line in combs):
+        return None                             # the combinational part never writes a register
     order, snap = _order(reads, writes)
 
     out = ["template<class F> void p_top::vq_cycle(F &&sample) {",

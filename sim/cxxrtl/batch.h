@@ -85,3 +85,17 @@ static int vq_run_batch(A &a, uint64_t n, const uint64_t *req, const uint8_t *re
     }
     return done(0);
 }
+
+// The exports both drivers share, for an adapter class A (one simulator instance per handle);
+// each driver defines vq_load_memory itself. RUNTIME_MEMORIES: what vq_runtime_memories() returns.
+#define VQ_BATCH_EXPORTS(A, RUNTIME_MEMORIES)                                                       \
+    VQ_EXPORT void *vq_open(void) { return new A(); }                                               \
+    VQ_EXPORT void vq_close(void *h) { delete static_cast<A *>(h); }                                \
+    VQ_EXPORT int vq_api_version(void) { return VQ_API_VERSION; }                                   \
+    VQ_EXPORT int vq_runtime_memories(void) { return RUNTIME_MEMORIES; }                            \
+    VQ_EXPORT int vq_stage_count(void) { return VQ_STAGE_COUNT; }                                   \
+    VQ_EXPORT const char *vq_port_names(void) { return VQ_PORT_NAMES; }                             \
+    VQ_EXPORT int vq_run(void *h, uint64_t n, const uint64_t *req, const uint8_t *ready, uint64_t n_ready, \
+                         uint64_t max_cycles, uint64_t *resp, uint64_t *counters) {                 \
+        return vq_run_batch(*static_cast<A *>(h), n, req, ready, n_ready, max_cycles, resp, counters); \
+    }

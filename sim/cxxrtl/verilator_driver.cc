@@ -43,14 +43,5 @@ struct Sim {
 };
 }
 
-VQ_EXPORT void *vq_open(void) { return new Sim(); }
-VQ_EXPORT void vq_close(void *h) { delete static_cast<Sim *>(h); }
-VQ_EXPORT int vq_api_version(void) { return VQ_API_VERSION; }
-VQ_EXPORT int vq_runtime_memories(void) { return 0; }
-VQ_EXPORT int vq_stage_count(void) { return VQ_STAGE_COUNT; }
-VQ_EXPORT const char *vq_port_names(void) { return VQ_PORT_NAMES; }
+VQ_BATCH_EXPORTS(Sim, 0)
 VQ_EXPORT int vq_load_memory(void *, const char *, const uint32_t *, uint64_t, uint32_t) { return -3; }
-VQ_EXPORT int vq_run(void *h, uint64_t n, const uint64_t *req, const uint8_t *ready, uint64_t n_ready,
-                     uint64_t max_cycles, uint64_t *resp, uint64_t *counters) {
-    return vq_run_batch(*static_cast<Sim *>(h), n, req, ready, n_ready, max_cycles, resp, counters);
-}
