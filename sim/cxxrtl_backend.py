@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .cxxrtl_inplace import inplace_cycle
-from .toolchain import (ToolchainError, cached_build, digest, find_tool, index_get, index_put, run_tool,
+from .toolchain import (ToolchainError, cached_build, digest, find_cxx, index_get, index_put, run_tool,
                         tool_version)
 
 __all__ = ["DesignInfo", "MemoryImage", "design_info", "cxxrtl_source", "cxxrtl_program", "write_cxxrtl",
@@ -356,7 +356,7 @@ def build_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8, cxxflags=Non
     """The CXXRTL library for this design (built or taken from the cache). With ``compile=False``
     nothing is compiled: the result names the library the build would produce (``cached`` tells
     whether it exists)."""
-    cxx = find_tool("g++")
+    cxx = find_cxx()
     flags = list(cxxflags or CXXFLAGS)
     t0 = time.perf_counter()
     info = design_info(ts, one_port=one_port, tag_width=tag_width)

@@ -125,3 +125,24 @@ def test_cli_sim_cxxrtl_bad_requests(tmp_path, small_set, capsys):
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1 and "outside" in err
     assert not (tmp_path / "o.npy").exists()
+
+
+def test_cxx_preference(tmp_path, monkeypatch):
+    """The CXXRTL model is built by $CXX when set, else clang++ when installed, else g++."""
+    from sim.toolchain import find_cxx
+    bin_ = tmp_path / "bin"
+    bin_.mkdir()
+    for name in ("g++", "clang++", "my-c++"):
+        (bin_ / name).write_text("#!/bin/sh\n")
+        (bin_ / name).chmod(0o755)
+    monkeypatch.setenv("PATH", str(bin_))
+    monkeypatch.delenv("CXX", raising=False)
+    assert find_cxx() == str(bin_ / "clang++")
+    (bin_ / "clang++").unlink()
+    assert find_cxx() == str(bin_ / "g++")
+    monkeypatch.setenv("CXX", "my-c++")
+    assert find_cxx() == str(bin_ / "my-c++")
+    (bin_ / "g++").unlink()
+    monkeypatch.delenv("CXX")
+    with pytest.raises(ToolchainError, match="g\\+\\+ not found: install a C\\+\\+ compiler"):
+        find_cxx()
