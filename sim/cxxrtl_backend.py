@@ -475,23 +475,28 @@ def ready_pattern(seed: int, stall: float, ncycles: int) -> np.ndarray:
     return np.asarray(pattern(seed, stall, ncycles)).astype(np.uint8)
 
 
-def pack_requests(info: DesignInfo, requests: np.ndarray) -> np.ndarray:
+def pack_requests(info: DesignInfo, requests: np.ndarray, *, block: int = 1 << 15) -> np.ndarray:
+    """The ``i.payload`` words of (texture, level, i, j) requests, tag = request number. Packed in
+    blocks of ``block`` requests so that the temporaries stay in the cache (half the time of
+    whole-array passes on 4e6 requests)."""
     req = np.ascontiguousarray(np.asarray(requests).reshape(-1, 4))
     # the same bits as unsigned (two's complement; every field is masked below): a view, no copy
     req = (req if req.dtype in (np.int64, np.uint64) else req.astype(np.int64)).view(np.uint64)
     n = len(req)
     out = np.zeros(n, np.uint64)
-    tmp = np.empty(n, np.uint64)
-    cols = {"texture": req[:, 0], "level": req[:, 1], "i": req[:, 2], "j": req[:, 3]}
-    if info.tag_width:
-        cols["tag"] = np.arange(n, dtype=np.uint64)
-    for name, (off, width) in info.request_fields.items():
-        if width == 0 or name not in cols:
-            continue
-        np.bitwise_and(cols[name], np.uint64((1 << width) - 1), out=tmp)
-        if off:
-            np.left_shift(tmp, np.uint64(off), out=tmp)
-        np.bitwise_or(out, tmp, out=out)
+    tmp = np.empty(min(n, block), np.uint64)
+    columns = {"texture": 0, "level": 1, "i": 2, "j": 3}
+    fields = [(columns.get(name), np.uint64(off), np.uint64((1 << width) - 1))
+              for name, (off, width) in info.request_fields.items()
+              if width and (name in columns or (name == "tag" and info.tag_width))]
+    for s in range(0, n, block):
+        e = min(n, s + block)
+        o, t = out[s:e], tmp[:e - s]
+        for col, off, mask in fields:
+            np.bitwise_and(req[s:e, col] if col is not None else np.arange(s, e, dtype=np.uint64), mask, out=t)
+            if off:
+                np.left_shift(t, off, out=t)
+            np.bitwise_or(o, t, out=o)
     return out
 
 

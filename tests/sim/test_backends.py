@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from backend_fixtures import adversarial_requests, assert_same, need, random_requests, shared_cache_dir, texture_sets
+from sim import cxxrtl_backend as cb
 from sim.backend import simulate
 
 
@@ -108,3 +109,18 @@ def test_memory_images_are_the_format_images_in_banks(sets):
     assert joined("index_reader odd_bank") == ts.index_words[1::2].astype(int).tolist()
     entries = [int.from_bytes(bytes(row), "little") for row in ts.codebook]
     assert joined("codebook_rom codebook") == entries
+
+
+def test_pack_requests_blocks():
+    """The payload words hold each field at its offset, tag = request number, whatever the block."""
+    ts = texture_sets()["mixed"]
+    info = cb.design_info(ts)
+    req = random_requests(ts, 1001)
+    words = cb.pack_requests(info, req, block=64)
+    assert np.array_equal(words, cb.pack_requests(info, req))
+    for n in (0, 63, 64, 1000):
+        w = int(words[n])
+        got = {name: (w >> off) & ((1 << width) - 1) for name, (off, width) in info.request_fields.items()}
+        want = dict(zip(("texture", "level", "i", "j"), (int(v) for v in req[n])), tag=n & 0xff)
+        assert got == want
+    assert w >> info.request_width == 0

@@ -128,3 +128,4 @@ def test_unexpected_code_falls_back(damage):
     src = _toy_source()
     assert inplace_cycle(src) is not None
     assert inplace_cycle(damage(src)) is None
+
