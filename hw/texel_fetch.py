@@ -36,8 +36,8 @@ from .index_reader import IndexReader
 __all__ = ["TexelFetch", "RequestLayout", "ResponseLayout", "LATENCY", "STAGES", "REGISTERS",
            "UPSTREAM_STAGES"]
 
-#: Pipeline registers in order, one per cycle of latency; ``TexelFetch`` has a ``valid_<name>``
-#: output for each.
+#: Pipeline registers in order, one per cycle of latency; bit ``k`` of ``TexelFetch.valid`` is the
+#: valid bit of ``STAGES[k]``.
 STAGES = (
     "descriptor",                                                       # descriptor table
     "address",                                                          # block address shifter
@@ -51,8 +51,9 @@ assert LATENCY == (1 + 1 + index_reader.LATENCY + codebook_rom.LATENCY + color_m
 #: The first stages (descriptor, address, index_bit), which move on ``upstream``: with ``one_port``
 #: they and the input wait while the index reader's bit-address stage holds a straddling index.
 UPSTREAM_STAGES = 3
-#: Registers with a valid bit (a ``valid_<name>`` output and an occupancy entry in the
-#: simulation reports): the stages, then the skid register in front of the output.
+#: Registers with a valid bit (bit ``k`` of the ``valid`` output is ``REGISTERS[k]``, and each has
+#: an occupancy entry in the simulation reports): the stages, then the skid register in front of
+#: the output.
 REGISTERS = STAGES + ("skid",)
 
 
@@ -162,9 +163,10 @@ class TexelFetch(wiring.Component):
         Strobe: a cycle spent on the extra read of a straddling index (one-port only).
     stall_output : Out(1)
         ``o.valid & ~o.ready``: a cycle of output backpressure.
-    valid_descriptor, valid_address, valid_index_bit, valid_index_word, valid_index_data, valid_index_pair, valid_index, valid_codebook, valid_codebook_data, valid_texel_window, valid_texel, valid_color_offset, valid_color_product, valid_color, valid_skid : Out(1)
-        Valid bits of the registers (``REGISTERS``: the stages, then the skid register; ``o.valid``
-        is ``valid_color | valid_skid``), for occupancy reports.
+    valid : Out(len(REGISTERS))
+        Valid bits of the registers, bit ``k`` for ``REGISTERS[k]`` (the 14 stages, then the skid
+        register; ``o.valid`` is ``valid[13] | valid[14]``), for occupancy reports. One vector, so
+        that a simulator samples every stage with one read.
 
     Raises
     ------
@@ -197,7 +199,7 @@ class TexelFetch(wiring.Component):
             "stall_one_port": Out(1),
             "stall_output": Out(1),
         }
-        members.update({f"valid_{name}": Out(1) for name in REGISTERS})
+        members["valid"] = Out(len(REGISTERS))
         super().__init__(members)
 
     @property
@@ -250,7 +252,8 @@ class TexelFetch(wiring.Component):
         m.submodules.color_matrix = cm = ColorMatrix(ts.matrix)
 
         # -- pipeline control, all in one place ---------------------------------------------------
-        valid = [Signal(name=f"valid_{name}") for name in STAGES]
+        # The stages' valid bits, one register (a shift register: bit n is stage STAGES[n]).
+        valid = Signal(len(STAGES), name="valid_stages")
         # ``advance`` and ``skid_valid`` are the same information (the output was stalled in the
         # previous cycle), in two flip-flops: ``advance`` drives the enables of the whole
         # pipeline, ``skid_valid`` (stored inverted, so that synthesis does not merge the two) the
@@ -272,14 +275,14 @@ class TexelFetch(wiring.Component):
         m.d.sync += [advance.eq(~self.stall_output), skid_valid.eq(self.stall_output)]
         with m.If(advance):
             m.d.sync += skid.eq(response)
-        m.d.comb += [getattr(self, f"valid_{name}").eq(v) for name, v in zip(STAGES, valid)]
-        m.d.comb += self.valid_skid.eq(skid_valid)
-        with m.If(upstream):
-            m.d.sync += valid[0].eq(self.i.valid)
-            m.d.sync += [valid[n].eq(valid[n - 1]) for n in range(1, UPSTREAM_STAGES)]
-        with m.If(advance):
-            m.d.sync += valid[UPSTREAM_STAGES].eq(valid[UPSTREAM_STAGES - 1] & ~idx.hold)
-            m.d.sync += [valid[n].eq(valid[n - 1]) for n in range(UPSTREAM_STAGES + 1, len(STAGES))]
+        m.d.comb += self.valid.eq(Cat(valid, skid_valid))
+        # The first UPSTREAM_STAGES bits shift on ``upstream``, the rest on ``advance`` (a held
+        # straddling index enters the index reader's word stage as a bubble). One assignment of the
+        # whole register: simulators (CXXRTL) then update it with one statement, not one per bit.
+        u = UPSTREAM_STAGES
+        m.d.sync += valid.eq(Cat(
+            Mux(upstream, Cat(self.i.valid, valid[:u - 1]), valid[:u]),
+            Mux(advance, Cat(valid[u - 1] & ~idx.hold, valid[u:-1]), valid[u:])))
 
         # -- carried fields: registers beside the blocks' own, same enables ----------------------
         def carry(value, en, name):

@@ -88,7 +88,7 @@ class DesignInfo:
     request_width: int
     response_width: int
     tag_width: int
-    stages: list                # stage names, in pipeline order (from valid_<stage> ports)
+    stages: list                # registers with a valid bit, bit k of the ``valid`` port (REGISTERS)
     strobes: list               # strobe ports present (keys of STROBES)
     memories: list = field(default_factory=list)
     latency: int = 0
@@ -101,7 +101,7 @@ def _fields(layout) -> dict:
 def design_info(ts, *, one_port: bool = False, tag_width: int = 8) -> DesignInfo:
     """Elaborate ``TexelFetch(ts)`` and collect ports, payload layouts, stages and memory images."""
     from amaranth.hdl import _ast, _ir, _mem
-    from hw.texel_fetch import TexelFetch
+    from hw.texel_fetch import REGISTERS, TexelFetch
     from .verilog_export import port_map
 
     top = TexelFetch(ts, one_port=one_port, tag_width=tag_width)
@@ -124,7 +124,7 @@ def design_info(ts, *, one_port: bool = False, tag_width: int = 8) -> DesignInfo
         top=top, fragment=frag, ports=ports,
         request_fields=_fields(req), response_fields=_fields(resp),
         request_width=req.size, response_width=resp.size, tag_width=tag_width,
-        stages=[n[len("valid_"):] for n in names if n.startswith("valid_")],
+        stages=list(REGISTERS),
         strobes=[n for n in STROBES if n in names], memories=memories, latency=int(top.latency))
     for what, width in (("request", info.request_width), ("response", info.response_width)):
         if width > 64:
@@ -287,12 +287,10 @@ def ports_header(info: DesignInfo, access) -> str:
     lines.append(f"#define VQ_PREV_CLK prev_{access('clk')}")
     for macro, port in (("CLK", "clk"), ("RST", "rst"), ("I_VALID", "i__valid"), ("I_READY", "i__ready"),
                         ("I_PAYLOAD", "i__payload"), ("O_VALID", "o__valid"), ("O_READY", "o__ready"),
-                        ("O_PAYLOAD", "o__payload")):
+                        ("O_PAYLOAD", "o__payload"), ("VALID", "valid")):
         lines.append(f"#define VQ_{macro} {access(port)}")
     strobes = " ".join(f"c[{STROBES[s]}] += vq_get(top.{access(s)});" for s in info.strobes)
-    occ = " ".join(f"s[{n}] += vq_get(top.{access('valid_' + st)});" for n, st in enumerate(info.stages))
     lines.append(f"#define VQ_STROBES(top, c) {strobes}")
-    lines.append(f"#define VQ_OCCUPANCY(top, s) {occ}")
     return "\n".join(lines) + "\n"
 
 

@@ -68,7 +68,7 @@ def run(ts: TextureSet, requests: np.ndarray, *, stall: float = 0.0, seed: int =
     # Everything the testbench watches, gathered into one signal inside the simulated design so
     # that each cycle costs one signal read instead of an expression evaluation.
     watched = Cat(dut.i.ready, dut.o.valid, dut.straddle, dut.stall_one_port,
-                  *[getattr(dut, f"valid_{s}") for s in REGISTERS], dut.o.payload.as_value())
+                  dut.valid, dut.o.payload.as_value())
     observe = Signal(len(watched), name="observe")
     top = Module()
     top.submodules.texel_fetch = dut

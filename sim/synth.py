@@ -438,7 +438,7 @@ _TOP_FIELDS = [
     (r"^(rgba|o__)", "colour matrix"),
     (r"^(advance|upstream)\b", "pipeline control"),
     (r"^(skid|response)\b", "output skid register"),
-    (r"^valid_", "pipeline control"),
+    (r"^valid(_|$|\[)", "pipeline control"),
     (r"^tag_", "tag carry"),
     (r"^(i|j)_descriptor", "descriptor (carried i, j)"),
     (r"^row_address", "block address (carried descriptor row)"),

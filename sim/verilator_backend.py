@@ -59,9 +59,8 @@ def ports_header(info, fetch_top) -> str:
     slots = {"stall_output": "VQ_C_STALL_OUTPUT", "stall_one_port": "VQ_C_STALL_ONE_PORT",
              "straddle": "VQ_C_STRADDLES"}
     strobes = " ".join(f"c[{slots[s]}] += top->{s};" for s in info.strobes)
-    occ = " ".join(f"s[{k}] += top->valid_{st};" for k, st in enumerate(info.stages))
     lines += [f"#define VQ_SET_REQUEST(top, p) {sets}", f"#define VQ_GET_RESPONSE(top) ({gets or '0'})",
-              f"#define VQ_STROBES(top, c) {strobes}", f"#define VQ_OCCUPANCY(top, s) {occ}"]
+              f"#define VQ_STROBES(top, c) {strobes}"]
     return "\n".join(lines) + "\n"
 
 

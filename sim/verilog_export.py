@@ -6,7 +6,8 @@ stream member is a port of its own instead of a packed payload vector::
     clk, rst
     i_valid, i_ready, i_texture, i_level, i_i, i_j, i_tag          request stream
     o_valid, o_ready, o_r, o_g, o_b, o_a, o_tag                     response stream
-    straddle, stall_one_port, stall_output, valid_<stage>...        observability strobes
+    straddle, stall_one_port, stall_output, valid                   observability strobes
+                                         (valid[k]: register hw.texel_fetch.REGISTERS[k])
 
 ``rst`` is synchronous and active high (Amaranth's ``sync`` domain); ``i_ready`` and ``o_valid``
 come from flip-flops (no combinational path from ``o_ready``). The memories (descriptor table,

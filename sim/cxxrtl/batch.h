@@ -44,9 +44,46 @@ enum {
 };
 
 // Adapter: reset(), set_inputs(i_valid, i_payload, o_ready), cycle(sample), i_ready(), o_valid(),
-// o_payload(), strobes(uint64_t *counters), occupancy(uint64_t *sums). cycle(sample) settles the
-// combinational logic, calls sample() (which reads the ports through the other methods), then
-// clocks a rising edge.
+// o_payload(), strobes(uint64_t *counters), valid() (the design's valid port: bit k is stage k,
+// VQ_STAGE_COUNT bits). cycle(sample) settles the combinational logic, calls sample() (which reads
+// the ports through the other methods), then clocks a rising edge.
+// Per-stage occupancy sums, accumulated in byte lanes: stage k is byte k % 8 of lanes[k / 8], and
+// one cycle adds vq_spread[8 valid bits] to each lane word (one table read and one add per 8 stages
+// instead of one add per stage). A lane holds at most 255, so the lanes are emptied into the 64-bit
+// sums every 255 cycles and at the end. Exact: the sums equal per-cycle per-stage counting.
+struct vq_lane_table {
+    uint64_t t[256];
+    constexpr vq_lane_table() : t() {
+        for (int v = 0; v < 256; v++) {
+            uint64_t x = 0;
+            for (int b = 0; b < 8; b++)
+                if (v >> b & 1)
+                    x |= uint64_t(1) << (8 * b);
+            t[v] = x;
+        }
+    }
+};
+static constexpr vq_lane_table vq_spread{};
+
+struct vq_occupancy {
+    static constexpr int words = (VQ_STAGE_COUNT + 7) / 8;
+    uint64_t lanes[words] = {};
+    unsigned filled = 0;
+    inline void add(uint32_t valid, uint64_t *sums) {
+        for (int w = 0; w < words; w++)
+            lanes[w] += vq_spread.t[(valid >> (8 * w)) & 0xff];
+        if (++filled == 255)
+            flush(sums);
+    }
+    void flush(uint64_t *sums) {
+        for (int k = 0; k < VQ_STAGE_COUNT; k++)
+            sums[k] += (lanes[k / 8] >> (8 * (k % 8))) & 0xff;
+        for (int w = 0; w < words; w++)
+            lanes[w] = 0;
+        filled = 0;
+    }
+};
+
 template<class A>
 static int vq_run_batch(A &a, uint64_t n, const uint64_t *req, const uint8_t *ready, uint64_t n_ready,
                         uint64_t max_cycles, uint64_t *resp, uint64_t *counters) {
@@ -54,7 +91,9 @@ static int vq_run_batch(A &a, uint64_t n, const uint64_t *req, const uint8_t *re
     // design writes can alias it) and copied to counters[] on every return.
     uint64_t sums[VQ_C_OCCUPANCY + VQ_STAGE_COUNT] = {};
     uint64_t sent = 0, got = 0, c = 0;
+    vq_occupancy occ;
     auto done = [&](int rc) {
+        occ.flush(sums + VQ_C_OCCUPANCY);
         sums[VQ_C_CYCLES] = c;
         sums[VQ_C_ACCEPTED] = sent;
         sums[VQ_C_RESPONSES] = got;
@@ -79,7 +118,7 @@ static int vq_run_batch(A &a, uint64_t n, const uint64_t *req, const uint8_t *re
             if (i_valid && a.i_ready())
                 sent++;
             a.strobes(sums);
-            a.occupancy(sums + VQ_C_OCCUPANCY);
+            occ.add(a.valid(), sums + VQ_C_OCCUPANCY);
         });
         c++;
     }

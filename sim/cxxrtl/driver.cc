@@ -77,7 +77,7 @@ struct Sim {
     bool o_valid() { return vq_get(top.VQ_O_VALID); }
     uint64_t o_payload() { return vq_get(top.VQ_O_PAYLOAD); }
     void strobes(uint64_t *c) { VQ_STROBES(top, c) }
-    void occupancy(uint64_t *s) { VQ_OCCUPANCY(top, s) }
+    uint32_t valid() { return vq_get(top.VQ_VALID); }
 };
 }
 

@@ -39,7 +39,7 @@ struct Sim {
     bool o_valid() { return top->o_valid; }
     uint64_t o_payload() { return VQ_GET_RESPONSE(top); }
     void strobes(uint64_t *c) { VQ_STROBES(top, c) }
-    void occupancy(uint64_t *s) { VQ_OCCUPANCY(top, s) }
+    uint32_t valid() { return top->valid; }
 };
 }
 

@@ -190,7 +190,7 @@ def test_run_nextpnr_reads_report_or_falls_back_to_log(monkeypatch, tmp_path):
      "index reader"),
     ("unit.fetch.color_matrix.p_ru_TRELLIS_FF_Q_3", "unit.fetch.color_matrix.p_ru", "colour matrix"),
     ("unit.fetch.tag_texel_TRELLIS_FF_Q", "unit.fetch.tag_texel", "tag carry"),
-    ("unit.fetch.valid_codebook_TRELLIS_FF_Q", "unit.fetch.valid_codebook", "pipeline control"),
+    ("unit.fetch.valid_stages_TRELLIS_FF_Q_7", "unit.fetch.valid_stages", "pipeline control"),
     ("unit.fetch.samples$84[1]_TRELLIS_FF_Q_7", "unit.fetch.samples$84[1]", "codebook ROM"),
     ("unit.fetch.o__valid_TRELLIS_FF_Q", "unit.fetch.o__valid", "pipeline control"),
     ("o_ready_TRELLIS_FF_Q", "o_ready", "harness"),
