@@ -48,8 +48,10 @@ CXXFLAGS = ["-std=c++17", "-O3", "-fPIC", "-shared", "-fvisibility=hidden", "-DN
 #: Observability strobes summed by the driver: port name -> counter slot name in batch.h.
 STROBES = {"stall_output": "VQ_C_STALL_OUTPUT", "stall_one_port": "VQ_C_STALL_ONE_PORT",
            "straddle": "VQ_C_STRADDLES"}
-C_CYCLES, C_ACCEPTED, C_RESPONSES, C_STALL_OUTPUT, C_STALL_ONE_PORT, C_STRADDLES = range(6)
+C_CYCLES, C_ACCEPTED, C_RESPONSES, C_STALL_OUTPUT, C_STALL_ONE_PORT, C_STRADDLES, C_BAD_TAG, C_BAD_TAG_VALUE = range(8)
 C_OCCUPANCY = 8
+#: VQ_API_VERSION of sim/cxxrtl/batch.h that this module speaks.
+API_VERSION = 2
 
 
 # ---------------------------------------------------------------------------------------------
@@ -402,6 +404,7 @@ def os_cache(kind: str) -> str:
 # Running (shared with the Verilator backend)
 
 _u64p = ctypes.POINTER(ctypes.c_uint64)
+_i64p = ctypes.POINTER(ctypes.c_int64)
 _u32p = ctypes.POINTER(ctypes.c_uint32)
 _u8p = ctypes.POINTER(ctypes.c_uint8)
 
@@ -420,10 +423,10 @@ class BatchLibrary:
             lib.vq_port_names.restype = ctypes.c_char_p
             lib.vq_load_memory.argtypes = [ctypes.c_void_p, ctypes.c_char_p, _u32p, ctypes.c_uint64,
                                            ctypes.c_uint32]
-            lib.vq_run.argtypes = [ctypes.c_void_p, ctypes.c_uint64, _u64p, _u8p, ctypes.c_uint64,
-                                   ctypes.c_uint64, _u64p, _u64p]
-            if lib.vq_api_version() != 1:
-                raise ToolchainError(f"{path}: batch API version {lib.vq_api_version()}, expected 1")
+            lib.vq_run.argtypes = [ctypes.c_void_p, ctypes.c_uint64, _i64p, _u32p, _u8p, ctypes.c_uint64,
+                                   ctypes.c_uint64, _u32p, _u64p]
+            if lib.vq_api_version() != API_VERSION:
+                raise ToolchainError(f"{path}: batch API version {lib.vq_api_version()}, expected {API_VERSION}")
             BatchLibrary._loaded[path] = lib
         self.lib = lib
         self.path = path
@@ -450,27 +453,44 @@ class BatchLibrary:
             if rc != 0:
                 raise ToolchainError(f"{self.path}: cannot load memory {mem.name!r} (code {rc})")
 
-    def run(self, payloads: np.ndarray, ready, max_cycles: int):
-        """Run packed requests. ``ready``: uint8 array (or None for always ready).
-        Returns (return code, responses uint64 array, counters uint64 array)."""
-        n = len(payloads)
-        req = np.ascontiguousarray(payloads, dtype=np.uint64)
-        resp = np.zeros(n, np.uint64)
+    def run(self, requests: np.ndarray, layout: np.ndarray, ready, max_cycles: int):
+        """Run (texture, level, i, j) requests (int64, shape (n, 4)) with the payload ``layout``
+        (:func:`batch_layout`). ``ready``: uint8 array (or None for always ready). Returns (return
+        code, RGBA uint8 array (n, 4), counters uint64 array)."""
+        req = np.ascontiguousarray(requests, dtype=np.int64).reshape(-1, 4)
+        n = len(req)
+        lay = np.ascontiguousarray(layout, dtype=np.uint32)
+        if lay.shape != (12,):
+            raise ValueError("batch layout must be 12 uint32 (offset, width pairs)")
+        rgba = np.zeros(n, np.uint32)
         counters = np.zeros(C_OCCUPANCY + self.stage_count, np.uint64)
         if ready is not None:
             ready = np.ascontiguousarray(ready, dtype=np.uint8)
             rp, nr = ready.ctypes.data_as(_u8p), len(ready)
         else:
             rp, nr = None, 0
-        rc = self.lib.vq_run(self.handle, n, req.ctypes.data_as(_u64p), rp, nr, max_cycles,
-                             resp.ctypes.data_as(_u64p), counters.ctypes.data_as(_u64p))
-        return rc, resp, counters
+        rc = self.lib.vq_run(self.handle, n, req.ctypes.data_as(_i64p), lay.ctypes.data_as(_u32p), rp, nr,
+                             max_cycles, rgba.ctypes.data_as(_u32p), counters.ctypes.data_as(_u64p))
+        if sys.byteorder == "little":
+            return rc, rgba.view(np.uint8).reshape(n, 4), counters
+        return rc, np.stack([(rgba >> (8 * k)) & 0xFF for k in range(4)], 1).astype(np.uint8), counters
 
 
 def ready_pattern(seed: int, stall: float, ncycles: int) -> np.ndarray:
     """The output's ready pattern, as every backend sees it (:func:`sim.streams.ready_pattern`)."""
     from sim.streams import ready_pattern as pattern
     return np.asarray(pattern(seed, stall, ncycles)).astype(np.uint8)
+
+
+def batch_layout(info: DesignInfo) -> np.ndarray:
+    """``vq_run``'s ``layout``: (offset, width) in ``i.payload`` of texture, level, i, j and the tag,
+    then of the tag in ``o.payload`` (batch.h). The response's r, g, b, a are its bits 0..31."""
+    if [info.response_fields[c] for c in "rgba"] != [(0, 8), (8, 8), (16, 8), (24, 8)]:
+        raise ToolchainError("the response layout does not start with the r, g, b, a bytes")
+    fields = [info.request_fields.get(f, (0, 0)) for f in ("texture", "level", "i", "j")]
+    fields.append(info.request_fields.get("tag", (0, 0)) if info.tag_width else (0, 0))
+    fields.append(info.response_fields.get("tag", (0, 0)) if info.tag_width else (0, 0))
+    return np.array([v for f in fields for v in f], np.uint32)
 
 
 def pack_requests(info: DesignInfo, requests: np.ndarray, *, block: int = 1 << 15) -> np.ndarray:
@@ -498,26 +518,6 @@ def pack_requests(info: DesignInfo, requests: np.ndarray, *, block: int = 1 << 1
     return out
 
 
-def _field(w: np.ndarray, off: int, width: int, dtype) -> np.ndarray:
-    """Bits off..off+width of every uint64 in ``w``; a byte-aligned byte is read through a view."""
-    if width == 8 and off % 8 == 0 and sys.byteorder == "little":
-        return w.view(np.uint8)[off // 8::8].astype(dtype)
-    return ((w >> np.uint64(off)) & np.uint64((1 << width) - 1)).astype(dtype)
-
-
-def unpack_responses(info: DesignInfo, words: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    w = np.ascontiguousarray(words, dtype=np.uint64)
-    rgba = np.empty((len(w), 4), np.uint8)
-    for c, name in enumerate("rgba"):
-        off, width = info.response_fields[name]
-        rgba[:, c] = _field(w, off, 8, np.uint8)
-    tags = np.zeros(len(w), np.int64)
-    if info.tag_width:
-        off, width = info.response_fields["tag"]
-        tags = _field(w, off, width, np.int64)
-    return rgba, tags
-
-
 def _sim_result(**kw):
     try:
         from sim.backend import SimResult
@@ -535,26 +535,24 @@ def run_batch(lib: BatchLibrary, info: DesignInfo, requests, *, stall: float = 0
         return _sim_result(responses=np.zeros((0, 4), np.uint8), cycles=0, requests=0, latency=info.latency,
                            stall_cycles={"output_backpressure": 0, "one_port_straddle": 0}, straddles=0,
                            occupancy=None)
-    payloads = pack_requests(info, requests)
+    layout = batch_layout(info)
     worst = 2 * n + info.latency + 16           # one-port: at most two cycles per request
     if stall <= 0:
-        rc, resp, counters = lib.run(payloads, None, worst + 16)
+        rc, rgba, counters = lib.run(requests, layout, None, worst + 16)
     else:
         length = pattern_length(n, stall, 2 * info.latency)
         while True:
-            rc, resp, counters = lib.run(payloads, ready_pattern(seed, stall, length), length)
+            rc, rgba, counters = lib.run(requests, layout, ready_pattern(seed, stall, length), length)
             if rc != 1:
                 break
             length *= 2
     if rc != 0:
         raise ToolchainError(f"{os.path.basename(lib.path)}: the simulation did not finish (code {rc}, "
                              f"{int(counters[C_RESPONSES])} of {n} responses)")
-    rgba, tags = unpack_responses(info, resp)
-    if info.tag_width:
-        want = np.arange(n, dtype=np.int64) & ((1 << info.tag_width) - 1)
-        if not np.array_equal(tags, want):
-            bad = int(np.argmax(tags != want))
-            raise ToolchainError(f"response {bad} carries tag {int(tags[bad])}, expected {int(want[bad])}")
+    if counters[C_BAD_TAG]:
+        bad = int(counters[C_BAD_TAG]) - 1
+        raise ToolchainError(f"response {bad} carries tag {int(counters[C_BAD_TAG_VALUE])}, expected "
+                             f"{bad & ((1 << info.tag_width) - 1)}")
     cycles = int(counters[C_CYCLES])
     occ = {st: float(counters[C_OCCUPANCY + k]) / cycles for k, st in enumerate(info.stages)} if cycles else None
     return _sim_result(

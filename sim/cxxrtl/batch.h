@@ -14,20 +14,27 @@
 //                          uint32_t chunks_per_row);
 //           replace a memory's contents (rows of 32-bit little-endian chunks), applied after every
 //           reset; 0 ok, -1 unknown memory, -2 shape mismatch, -3 not supported by this backend
-//   int     vq_run(void *h, uint64_t n, const uint64_t *requests, const uint8_t *ready,
-//                  uint64_t n_ready, uint64_t max_cycles, uint64_t *responses, uint64_t *counters);
+//   int     vq_run(void *h, uint64_t n, const int64_t *requests, const uint32_t *layout,
+//                  const uint8_t *ready, uint64_t n_ready, uint64_t max_cycles, uint32_t *rgba,
+//                  uint64_t *counters);
+//
+// requests: n rows of (texture, level, i, j). layout[VQ_L_*]: the (offset, width) in i.payload of
+// texture, level, i, j and the tag (request k carries tag k mod 2^width), then the (offset, width)
+// of the tag in o.payload. vq_run packs each request into i.payload as it is presented.
 //
 // vq_run resets the design (rst high for one clock edge), then clocks it: in counted cycle c
 // (c = 0 is the first cycle i.valid is high) it drives i.valid = (requests left), i.payload = the
-// next request (packed by Python from the request layout), o.ready = ready[c] (all ones when
-// ready == NULL), lets the combinational logic settle, samples every port, counts the transfers
-// and strobes, and clocks a rising edge. It stops after the cycle in which the n-th response
-// transfers. Counting therefore runs from the first cycle i.valid is high up to and including the
-// cycle the last response transfers (the TexelFetch docstring's definition).
+// next request, o.ready = ready[c] (all ones when ready == NULL), lets the combinational logic
+// settle, samples every port, counts the transfers and strobes, and clocks a rising edge. It stops
+// after the cycle in which the n-th response transfers. Counting therefore runs from the first
+// cycle i.valid is high up to and including the cycle the last response transfers (the
+// TexelFetch docstring's definition). rgba[k] is bits 0..31 of the k-th response's o.payload
+// (bytes r, g, b, a); its tag is checked against k.
 //
 // counters[VQ_C_*]: cycles, requests accepted, responses, output-backpressure cycles
 // (stall_output strobe), one-port stall cycles (stall_one_port strobe), straddling index reads
-// (straddle strobe), then from VQ_C_OCCUPANCY one sum of each stage's valid bit over the cycles.
+// (straddle strobe), 1 + the number of the first response whose tag is not its request's (0: all
+// right) and that tag, then from VQ_C_OCCUPANCY one sum of each stage's valid bit over the cycles.
 // Return: 0 done; 1 the ready pattern ran out (call again with a longer one); 2 max_cycles passed.
 #pragma once
 #include <cstdint>
@@ -36,11 +43,32 @@
 #include <string>
 #include <vector>
 
-#define VQ_API_VERSION 1
+#define VQ_API_VERSION 2
 #define VQ_EXPORT extern "C" __attribute__((visibility("default")))
 enum {
     VQ_C_CYCLES = 0, VQ_C_ACCEPTED, VQ_C_RESPONSES, VQ_C_STALL_OUTPUT, VQ_C_STALL_ONE_PORT,
-    VQ_C_STRADDLES, VQ_C_RESERVED0, VQ_C_RESERVED1, VQ_C_OCCUPANCY
+    VQ_C_STRADDLES, VQ_C_BAD_TAG, VQ_C_BAD_TAG_VALUE, VQ_C_OCCUPANCY
+};
+enum { VQ_L_TEXTURE = 0, VQ_L_LEVEL = 2, VQ_L_I = 4, VQ_L_J = 6, VQ_L_TAG = 8, VQ_L_RESPONSE_TAG = 10,
+       VQ_L_SIZE = 12 };
+
+// The request packing and response tag of layout[] (see vq_run above).
+struct vq_layout {
+    uint32_t off[6];
+    uint64_t mask[6];
+    explicit vq_layout(const uint32_t *l) {
+        for (int f = 0; f < 6; f++) {
+            off[f] = l[2 * f];
+            mask[f] = l[2 * f + 1] >= 64 ? ~uint64_t(0) : (uint64_t(1) << l[2 * f + 1]) - 1;
+        }
+    }
+    uint64_t pack(const int64_t *row, uint64_t k) const {
+        uint64_t p = (k & mask[4]) << off[4];
+        for (int f = 0; f < 4; f++)
+            p |= (uint64_t(row[f]) & mask[f]) << off[f];
+        return p;
+    }
+    uint64_t tag(uint64_t payload) const { return (payload >> off[5]) & mask[5]; }
 };
 
 // Adapter: reset(), set_inputs(i_valid, i_payload, o_ready), cycle(sample), i_ready(), o_valid(),
@@ -85,18 +113,22 @@ struct vq_occupancy {
 };
 
 template<class A>
-static int vq_run_batch(A &a, uint64_t n, const uint64_t *req, const uint8_t *ready, uint64_t n_ready,
-                        uint64_t max_cycles, uint64_t *resp, uint64_t *counters) {
+static int vq_run_batch(A &a, uint64_t n, const int64_t *req, const uint32_t *layout, const uint8_t *ready,
+                        uint64_t n_ready, uint64_t max_cycles, uint32_t *rgba, uint64_t *counters) {
     // The sums are kept in a local array (the compiler may keep it in registers: nothing the
     // design writes can alias it) and copied to counters[] on every return.
     uint64_t sums[VQ_C_OCCUPANCY + VQ_STAGE_COUNT] = {};
-    uint64_t sent = 0, got = 0, c = 0;
+    uint64_t sent = 0, got = 0, c = 0, bad = 0, bad_tag = 0;
+    const vq_layout lay(layout);
+    uint64_t payload = n ? lay.pack(req, 0) : 0;       // the request on i.payload: number ``sent``
     vq_occupancy occ;
     auto done = [&](int rc) {
         occ.flush(sums + VQ_C_OCCUPANCY);
         sums[VQ_C_CYCLES] = c;
         sums[VQ_C_ACCEPTED] = sent;
         sums[VQ_C_RESPONSES] = got;
+        sums[VQ_C_BAD_TAG] = bad;
+        sums[VQ_C_BAD_TAG_VALUE] = bad_tag;
         std::memcpy(counters, sums, sizeof(sums));
         return rc;
     };
@@ -111,15 +143,29 @@ static int vq_run_batch(A &a, uint64_t n, const uint64_t *req, const uint8_t *re
             o_ready = ready[c] != 0;
         }
         bool i_valid = sent < n;
-        a.set_inputs(i_valid, i_valid ? req[sent] : 0, o_ready);
+        a.set_inputs(i_valid, payload, o_ready);
+        // sample() reads the ports into locals; the response is stored after the clock edge.
+        bool took = false, accepted = false;
+        uint64_t out = 0;
         a.cycle([&]() {
-            if (a.o_valid() && o_ready)
-                resp[got++] = a.o_payload();
-            if (i_valid && a.i_ready())
-                sent++;
+            took = a.o_valid() && o_ready;
+            out = a.o_payload();
+            accepted = i_valid && a.i_ready();
             a.strobes(sums);
             occ.add(a.valid(), sums + VQ_C_OCCUPANCY);
         });
+        if (took) {
+            rgba[got] = uint32_t(out);
+            if (lay.tag(out) != (got & lay.mask[5]) && !bad) {
+                bad = got + 1;
+                bad_tag = lay.tag(out);
+            }
+            got++;
+        }
+        if (accepted) {
+            sent++;
+            payload = sent < n ? lay.pack(req + 4 * sent, sent) : 0;
+        }
         c++;
     }
     return done(0);
@@ -134,7 +180,9 @@ static int vq_run_batch(A &a, uint64_t n, const uint64_t *req, const uint8_t *re
     VQ_EXPORT int vq_runtime_memories(void) { return RUNTIME_MEMORIES; }                            \
     VQ_EXPORT int vq_stage_count(void) { return VQ_STAGE_COUNT; }                                   \
     VQ_EXPORT const char *vq_port_names(void) { return VQ_PORT_NAMES; }                             \
-    VQ_EXPORT int vq_run(void *h, uint64_t n, const uint64_t *req, const uint8_t *ready, uint64_t n_ready, \
-                         uint64_t max_cycles, uint64_t *resp, uint64_t *counters) {                 \
-        return vq_run_batch(*static_cast<A *>(h), n, req, ready, n_ready, max_cycles, resp, counters); \
+    VQ_EXPORT int vq_run(void *h, uint64_t n, const int64_t *req, const uint32_t *layout,            \
+                         const uint8_t *ready, uint64_t n_ready, uint64_t max_cycles, uint32_t *rgba, \
+                         uint64_t *counters) {                                                      \
+        return vq_run_batch(*static_cast<A *>(h), n, req, layout, ready, n_ready, max_cycles, rgba, \
+                            counters);                                                              \
     }

@@ -124,3 +124,26 @@ def test_pack_requests_blocks():
         want = dict(zip(("texture", "level", "i", "j"), (int(v) for v in req[n])), tag=n & 0xff)
         assert got == want
     assert w >> info.request_width == 0
+
+
+def test_batch_api_packs_requests_and_checks_tags(sets, monkeypatch):
+    """vq_run packs the (texture, level, i, j) rows itself and returns the RGBA bytes; a response
+    whose tag is not its request's is reported (here: the response tag read one bit too high)."""
+    need("g++")
+    monkeypatch.setenv("VQTEX_CACHE", shared_cache_dir())
+    from golden.fetch import fetch
+    ts = sets["mixed"]
+    lib, info, _ = cb.open_cxxrtl(ts)
+    req = random_requests(ts, 300, seed=4)
+    layout = cb.batch_layout(info)
+    rc, rgba, counters = lib.run(req, layout, None, 1000)
+    assert rc == 0 and counters[cb.C_RESPONSES] == 300 and counters[cb.C_BAD_TAG] == 0
+    assert np.array_equal(rgba, fetch(ts, *req.T))
+    wrong = layout.copy()
+    wrong[10] += 1                                  # the response tag's offset
+    rc, _, counters = lib.run(req, wrong, None, 1000)
+    first = next(k for k in range(300) if (k >> 1) & 0x7F != k & 0xFF)   # tag bits 1..7 + a zero
+    assert rc == 0 and counters[cb.C_BAD_TAG] == first + 1 and counters[cb.C_BAD_TAG_VALUE] == first >> 1
+    monkeypatch.setattr(cb, "batch_layout", lambda info: wrong)
+    with pytest.raises(cb.ToolchainError, match=f"response {first} carries tag {first >> 1}, expected {first}"):
+        cb.run_batch(lib, info, req)
