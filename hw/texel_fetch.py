@@ -300,7 +300,6 @@ class TexelFetch(wiring.Component):
         row = desc.row
         i1 = carry(self.i.p.i, upstream, "i_descriptor")
         j1 = carry(self.i.p.j, upstream, "j_descriptor")
-        tag = [carry(self.i.p.tag, upstream, "tag_descriptor")]
 
         # Stage 2: block address.
         m.d.comb += [
@@ -310,7 +309,6 @@ class TexelFetch(wiring.Component):
             addr.en.eq(upstream),
         ]
         d2 = carry(row, upstream, "row_address")
-        tag.append(carry(tag[-1], upstream, "tag_address"))
 
         # Stages 3-7: index reader (stage 3 moves on upstream: the reader gates it with its hold).
         m.d.comb += [
@@ -334,7 +332,6 @@ class TexelFetch(wiring.Component):
         for n, name in enumerate(index_stages):
             en = upstream if n + 2 < UPSTREAM_STAGES else advance
             side = carry(side, en, f"side_{name}")
-            tag.append(carry(tag[-1], en, f"tag_{name}"))
 
         # Stages 8-11: codebook ROM (and raw memory).
         m.d.comb += [
@@ -348,9 +345,17 @@ class TexelFetch(wiring.Component):
         m.d.comb += [
             cm.samples.eq(rom.samples), cm.color.eq(rom.color_out), cm.en.eq(advance),
         ]
-        for name in STAGES[2 + index_reader.LATENCY:]:
-            tag.append(carry(tag[-1], advance, f"tag_{name}"))
+        # The request's tag rides beside the stages: one shift register of a tag per stage, moving
+        # like the valid bits (the first UPSTREAM_STAGES on ``upstream``, the rest on ``advance``),
+        # assigned in one piece (one statement per cycle in CXXRTL instead of one per stage).
+        tw = self._tag_width
+        tags = Signal(len(STAGES) * tw, name="tag_stages")
+        if tw:
+            m.d.sync += tags.eq(Cat(
+                Mux(upstream, Cat(self.i.p.tag, tags[:(u - 1) * tw]), tags[:u * tw]),
+                Mux(advance, tags[(u - 1) * tw:-tw], tags[u * tw:])))
 
         m.d.comb += response.eq(_pack(response.shape(), {
-            "r": cm.rgba[0], "g": cm.rgba[1], "b": cm.rgba[2], "a": cm.rgba[3], "tag": tag[-1]}))
+            "r": cm.rgba[0], "g": cm.rgba[1], "b": cm.rgba[2], "a": cm.rgba[3],
+            "tag": tags[-tw:] if tw else C(0, 0)}))
         return m

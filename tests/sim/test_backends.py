@@ -147,3 +147,14 @@ def test_batch_api_packs_requests_and_checks_tags(sets, monkeypatch):
     monkeypatch.setattr(cb, "batch_layout", lambda info: wrong)
     with pytest.raises(cb.ToolchainError, match=f"response {first} carries tag {first >> 1}, expected {first}"):
         cb.run_batch(lib, info, req)
+
+
+@pytest.mark.parametrize("tag_width", [0, 3])
+def test_other_tag_widths(sets, tag_width):
+    """No tag, and a tag that wraps every 8 requests: same responses and cycles as golden (the
+    driver checks each response's tag against its request number mod 2^width)."""
+    need("g++")
+    ts = sets["mixed"]
+    req = random_requests(ts, 500, seed=2)
+    got = cb.run(ts, req, tag_width=tag_width, stall=0.3, seed=1)
+    assert_same(got, simulate(ts, req, backend="golden", stall=0.3, seed=1), f"tag width {tag_width}")
