@@ -112,9 +112,10 @@ struct vq_occupancy {
     }
 };
 
-template<class A>
-static int vq_run_batch(A &a, uint64_t n, const int64_t *req, const uint32_t *layout, const uint8_t *ready,
-                        uint64_t n_ready, uint64_t max_cycles, uint32_t *rgba, uint64_t *counters) {
+// AlwaysReady: ready == NULL, compiled as its own loop so that o.ready is a constant in it.
+template<bool AlwaysReady, class A>
+static int vq_run_loop(A &a, uint64_t n, const int64_t *req, const uint32_t *layout, const uint8_t *ready,
+                       uint64_t n_ready, uint64_t max_cycles, uint32_t *rgba, uint64_t *counters) {
     // The sums are kept in a local array (the compiler may keep it in registers: nothing the
     // design writes can alias it) and copied to counters[] on every return.
     uint64_t sums[VQ_C_OCCUPANCY + VQ_STAGE_COUNT] = {};
@@ -137,7 +138,7 @@ static int vq_run_batch(A &a, uint64_t n, const int64_t *req, const uint32_t *la
         if (c >= max_cycles)
             return done(2);
         bool o_ready = true;
-        if (ready) {
+        if (!AlwaysReady) {
             if (c >= n_ready)
                 return done(1);
             o_ready = ready[c] != 0;
@@ -169,6 +170,14 @@ static int vq_run_batch(A &a, uint64_t n, const int64_t *req, const uint32_t *la
         c++;
     }
     return done(0);
+}
+
+template<class A>
+static int vq_run_batch(A &a, uint64_t n, const int64_t *req, const uint32_t *layout, const uint8_t *ready,
+                        uint64_t n_ready, uint64_t max_cycles, uint32_t *rgba, uint64_t *counters) {
+    if (ready == nullptr)
+        return vq_run_loop<true>(a, n, req, layout, ready, n_ready, max_cycles, rgba, counters);
+    return vq_run_loop<false>(a, n, req, layout, ready, n_ready, max_cycles, rgba, counters);
 }
 
 // The exports both drivers share, for an adapter class A (one simulator instance per handle);
