@@ -39,7 +39,6 @@ def _timed(fn):
 
 def _library_seconds(lib, info, req, repeats: int = 3) -> float:
     """Best time of the ``vq_run`` call alone (it packs the requests and checks the tags itself)."""
-    import numpy as np
     from sim.cxxrtl_backend import batch_layout
     req = np.ascontiguousarray(req, dtype=np.int64).reshape(-1, 4)
     layout = batch_layout(info)

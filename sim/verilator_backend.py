@@ -18,8 +18,8 @@ import time
 
 import numpy as np
 
-from .cxxrtl_backend import (DRIVER_DIR, BatchLibrary, Build, _driver_sources, design_info, digest, run_batch,
-                             texture_set_digest, _source_stamp)
+from .cxxrtl_backend import (DRIVER_DIR, STROBES, BatchLibrary, Build, _driver_sources, design_info, digest,
+                             run_batch, texture_set_digest, _source_stamp)
 from .toolchain import ToolchainError, cached_build, find_tool, index_get, index_put, run_tool, tool_version
 
 __all__ = ["run", "build_verilator", "VERILATOR_FLAGS", "CXXFLAGS", "verilator_include_dir"]
@@ -56,9 +56,7 @@ def ports_header(info, fetch_top) -> str:
     sets = " ".join(f"top->i_{n} = (p >> {off}) & {hex((1 << w) - 1)}ULL;"
                     for n, (off, w) in info.request_fields.items() if w)
     gets = " | ".join(f"((uint64_t)top->o_{n} << {off})" for n, (off, w) in info.response_fields.items() if w)
-    slots = {"stall_output": "VQ_C_STALL_OUTPUT", "stall_one_port": "VQ_C_STALL_ONE_PORT",
-             "straddle": "VQ_C_STRADDLES"}
-    strobes = " ".join(f"c[{slots[s]}] += top->{s};" for s in info.strobes)
+    strobes = " ".join(f"c[{STROBES[s]}] += top->{s};" for s in info.strobes)
     lines += [f"#define VQ_SET_REQUEST(top, p) {sets}", f"#define VQ_GET_RESPONSE(top) ({gets or '0'})",
               f"#define VQ_STROBES(top, c) {strobes}"]
     return "\n".join(lines) + "\n"
