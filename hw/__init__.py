@@ -1,4 +1,6 @@
 """The texel-fetch hardware in Amaranth, one file per stage of the paper's pipeline:
 descriptor -> address (block address shifter) -> index_reader -> codebook_rom -> color_matrix,
-wired by texel_fetch.TexelFetch; banked_rom holds the index, codebook and raw memories in 512-word
+in two halves, front_end.FrontEnd (descriptor, address, index reader, pipeline control) and
+back_end.BackEnd (codebook ROM, colour matrix), joined by pipeline.LinkLayout and wired by
+texel_fetch.TexelFetch; banked_rom holds the index, codebook and raw memories in 512-word
 block RAM banks. See docs/hardware.md."""

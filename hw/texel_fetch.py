@@ -10,7 +10,10 @@ Raw levels take the same path (the shifter computes the raw address, the codeboo
 the raw memory, the colour matrix passes the word through), so the latency does not depend on the
 request.
 
-Pipeline control is in one place (:meth:`TexelFetch.elaborate`). Every register advances on
+The unit is two halves wired back to back (:mod:`hw.pipeline`): the front end
+(:class:`hw.front_end.FrontEnd`: descriptor, address, index reader and the pipeline control) and the
+back end (:class:`hw.back_end.BackEnd`: codebook ROM, colour matrix, the skid register's data),
+joined by one registered ``link``. Pipeline control is in one place (:class:`hw.front_end.FrontEnd`). Every register advances on
 ``advance``, a flip-flop: ``advance`` is high in a cycle when the output was not stalled in the
 previous one (``o.valid & ~o.ready``); a response pushed out of the last stage in a stalled cycle
 waits in the skid register, which the output shows first. With ``one_port`` the stages up to the
@@ -20,97 +23,20 @@ index reader's bit-address stage (``UPSTREAM_STAGES``) also wait while it ``hold
 from __future__ import annotations
 
 from amaranth import *
-from amaranth.lib import data, stream, wiring
+from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
 from golden.format import TextureSet
 
-from . import codebook_rom, color_matrix, index_reader
-from .address import COORD_BITS, BlockAddress
+from .back_end import BackEnd
 from .banked_rom import BANK_DEPTH
-from .codebook_rom import CodebookROM
-from .color_matrix import ColorMatrix
-from .descriptor import LEVEL_BITS, DescriptorTable, descriptor_widths, texture_bits
-from .index_reader import IndexReader
+from .descriptor import texture_bits
+from .front_end import FrontEnd
+from .pipeline import (FRONT_STAGES, LATENCY, REGISTERS, STAGES, UPSTREAM_STAGES, RequestLayout,
+                       ResponseLayout)
 
 __all__ = ["TexelFetch", "RequestLayout", "ResponseLayout", "LATENCY", "STAGES", "REGISTERS",
-           "UPSTREAM_STAGES"]
-
-#: Pipeline registers in order, one per cycle of latency; bit ``k`` of ``TexelFetch.valid`` is the
-#: valid bit of ``STAGES[k]``.
-STAGES = (
-    "descriptor",                                                       # descriptor table
-    "address",                                                          # block address shifter
-    "index_bit", "index_word", "index_data", "index_pair", "index",     # index reader
-    "codebook", "codebook_data", "texel_window", "texel",               # codebook ROM
-    "color_offset", "color_product", "color",                           # colour matrix
-)
-#: Cycles from accepting a request to presenting its response (one per stage).
-LATENCY = len(STAGES)
-assert LATENCY == (1 + 1 + index_reader.LATENCY + codebook_rom.LATENCY + color_matrix.LATENCY)
-#: The first stages (descriptor, address, index_bit), which move on ``upstream``: with ``one_port``
-#: they and the input wait while the index reader's bit-address stage holds a straddling index.
-UPSTREAM_STAGES = 3
-#: Registers with a valid bit (bit ``k`` of the ``valid`` output is ``REGISTERS[k]``, and each has
-#: an occupancy entry in the simulation reports): the stages, then the skid register in front of
-#: the output.
-REGISTERS = STAGES + ("skid",)
-
-
-class RequestLayout(data.StructLayout):
-    """A texel request: texture id, level, texel column ``i`` and row ``j`` inside the level, tag.
-
-    Arguments
-    ---------
-    texture_bits : int
-        Width of the texture id (``hw.descriptor.texture_bits(ts)``).
-    tag_width : int
-        Width of the tag (0 allowed).
-    """
-
-    def __init__(self, texture_bits: int, tag_width: int):
-        super().__init__({
-            "texture": unsigned(texture_bits),
-            "level": unsigned(LEVEL_BITS),
-            "i": unsigned(COORD_BITS),
-            "j": unsigned(COORD_BITS),
-            "tag": unsigned(tag_width),
-        })
-
-
-class ResponseLayout(data.StructLayout):
-    """A texel response: RGBA8888 and the request's tag.
-
-    Arguments
-    ---------
-    tag_width : int
-        Width of the tag (0 allowed).
-    """
-
-    def __init__(self, tag_width: int):
-        super().__init__({
-            "r": unsigned(8), "g": unsigned(8), "b": unsigned(8), "a": unsigned(8),
-            "tag": unsigned(tag_width),
-        })
-
-
-def _pack(layout: data.StructLayout, fields: dict) -> Value:
-    """The bits of a ``layout`` value with these field values, as one concatenation: assigned in one
-    piece, it is plain wiring (field-by-field assignments make simulators such as CXXRTL assemble
-    the value with read-modify-writes every cycle)."""
-    parts = []
-    for name, field in sorted(layout, key=lambda item: item[1].offset):
-        v = Value.cast(fields[name])
-        parts.append(v[:field.width] if len(v) >= field.width else Cat(v, C(0, field.width - len(v))))
-    return Cat(*parts)
-
-
-def _bits(n: int) -> int:
-    return max(1, int(n).bit_length())
-
-
-def _addr_bits(depth: int) -> int:
-    return max(1, (max(1, depth) - 1).bit_length())
+           "UPSTREAM_STAGES", "FRONT_STAGES"]
 
 
 class TexelFetch(wiring.Component):
@@ -227,135 +153,16 @@ class TexelFetch(wiring.Component):
     def texture_bits(self) -> int:
         return self._texture_bits
 
-    def _k_bits(self) -> int:
-        d = self._ts.descriptors
-        comp = (d["compressed"] != 0) & (d["valid"] != 0)
-        if not comp.any():
-            return 1
-        span = (d["log2w"].astype(int) - d["log2bw"] + d["log2h"] - d["log2bh"])[comp]
-        return max(1, int(span.max()))
-
     def elaborate(self, platform):
         m = Module()
-        ts = self._ts
-        widths = descriptor_widths(ts)
-
-        m.submodules.descriptor = desc = DescriptorTable(ts)
-        m.submodules.address = addr = BlockAddress(
-            base_bits=widths["base"], k_bits=self._k_bits(), raw_bits=_addr_bits(len(ts.raw_words)))
-        m.submodules.index_reader = idx = IndexReader(
-            ts.index_words, word_bits=ts.word_bits, k_bits=self._k_bits(), base_bits=widths["base"],
-            one_port=self._one_port, bank_depth=self._bank_depth)
-        m.submodules.codebook_rom = rom = CodebookROM(
-            ts.codebook, ts.raw_words, cb_bits=widths["cb_base"], raw_bits=_addr_bits(len(ts.raw_words)),
-            off_bits=widths["texel_off"], bank_depth=self._bank_depth)
-        m.submodules.color_matrix = cm = ColorMatrix(ts.matrix)
-
-        # -- pipeline control, all in one place ---------------------------------------------------
-        # The stages' valid bits, one register (a shift register: bit n is stage STAGES[n]).
-        valid = Signal(len(STAGES), name="valid_stages")
-        # ``advance`` and ``skid_valid`` are the same information (the output was stalled in the
-        # previous cycle), in two flip-flops: ``advance`` drives the enables of the whole
-        # pipeline, ``skid_valid`` (stored inverted, so that synthesis does not merge the two) the
-        # output logic and the next state, away from that large net.
-        advance = Signal(init=1)    # every register moves; a flip-flop: no output stall last cycle
-        skid_valid = Signal()       # the skid register holds the response shown on ``o``
-        upstream = Signal()         # the first UPSTREAM_STAGES registers and the input move
-        skid = Signal(self.o.p.shape(), name="skid")    # the response pushed out in a stalled cycle
-        response = Signal(self.o.p.shape())             # the last stage's response
+        m.submodules.front = front = FrontEnd(self._ts, one_port=self._one_port, tag_width=self._tag_width,
+                                              bank_depth=self._bank_depth)
+        m.submodules.back = back = BackEnd(self._ts, tag_width=self._tag_width, bank_depth=self._bank_depth)
         m.d.comb += [
-            upstream.eq(advance & ~idx.hold),
-            self.i.ready.eq(upstream),
-            self.o.valid.eq(skid_valid | valid[-1]),
-            self.o.p.eq(Mux(skid_valid, skid, response)),
-            self.stall_output.eq(self.o.valid & ~self.o.ready),
-            self.straddle.eq(idx.straddle & upstream),
-            self.stall_one_port.eq(idx.hold & advance),
+            front.i.valid.eq(self.i.valid), front.i.p.eq(self.i.p), self.i.ready.eq(front.i.ready),
+            self.o.valid.eq(front.o_valid), front.o_ready.eq(self.o.ready), self.o.p.eq(back.payload),
+            back.link.eq(front.link),
+            self.straddle.eq(front.straddle), self.stall_one_port.eq(front.stall_one_port),
+            self.stall_output.eq(front.stall_output), self.valid.eq(front.valid),
         ]
-        m.d.sync += [advance.eq(~self.stall_output), skid_valid.eq(self.stall_output)]
-        with m.If(advance):
-            m.d.sync += skid.eq(response)
-        m.d.comb += self.valid.eq(Cat(valid, skid_valid))
-        # The first UPSTREAM_STAGES bits shift on ``upstream``, the rest on ``advance`` (a held
-        # straddling index enters the index reader's word stage as a bubble). One assignment of the
-        # whole register: simulators (CXXRTL) then update it with one statement, not one per bit.
-        u = UPSTREAM_STAGES
-        m.d.sync += valid.eq(Cat(
-            Mux(upstream, Cat(self.i.valid, valid[:u - 1]), valid[:u]),
-            Mux(advance, Cat(valid[u - 1] & ~idx.hold, valid[u:-1]), valid[u:])))
-
-        # -- carried fields: registers beside the blocks' own, same enables ----------------------
-        def carry(value, en, name):
-            reg = Signal.like(value, name=name)
-            with m.If(en):
-                m.d.sync += reg.eq(value)
-            return reg
-
-        # Stage 1: descriptor.
-        m.d.comb += [
-            desc.texture.eq(self.i.p.texture),
-            desc.level.eq(self.i.p.level),
-            desc.en.eq(upstream),
-        ]
-        row = desc.row
-        i1 = carry(self.i.p.i, upstream, "i_descriptor")
-        j1 = carry(self.i.p.j, upstream, "j_descriptor")
-
-        # Stage 2: block address.
-        m.d.comb += [
-            addr.i.eq(i1), addr.j.eq(j1),
-            addr.log2w.eq(row.log2w), addr.log2bw.eq(row.log2bw), addr.log2bh.eq(row.log2bh),
-            addr.base.eq(row.base),
-            addr.en.eq(upstream),
-        ]
-        d2 = carry(row, upstream, "row_address")
-
-        # Stages 3-7: index reader (stage 3 moves on upstream: the reader gates it with its hold).
-        m.d.comb += [
-            idx.valid.eq(valid[1] & d2.compressed),
-            idx.k.eq(addr.k),
-            idx.b.eq(d2.index_bits),
-            idx.base.eq(d2.base),
-            idx.en.eq(advance),
-        ]
-        side = Signal(data.StructLayout({
-            "compressed": 1, "cb_base": len(d2.cb_base), "raw_addr": len(addr.raw_addr),
-            "x": 3, "y": 3, "log2bw": 2, "color": 2,
-            "texel_off": len(d2.texel_off), "u_off": len(d2.u_off), "v_off": len(d2.v_off),
-        }))
-        m.d.comb += side.eq(_pack(side.shape(), {
-            "compressed": d2.compressed, "cb_base": d2.cb_base, "raw_addr": addr.raw_addr,
-            "x": addr.x, "y": addr.y, "log2bw": d2.log2bw, "color": d2.color,
-            "texel_off": d2.texel_off, "u_off": d2.u_off, "v_off": d2.v_off,
-        }))
-        index_stages = STAGES[2:2 + index_reader.LATENCY]
-        for n, name in enumerate(index_stages):
-            en = upstream if n + 2 < UPSTREAM_STAGES else advance
-            side = carry(side, en, f"side_{name}")
-
-        # Stages 8-11: codebook ROM (and raw memory).
-        m.d.comb += [
-            rom.index.eq(idx.index), rom.cb_base.eq(side.cb_base), rom.raw_addr.eq(side.raw_addr),
-            rom.compressed.eq(side.compressed), rom.x.eq(side.x), rom.y.eq(side.y),
-            rom.log2bw.eq(side.log2bw), rom.color.eq(side.color),
-            rom.texel_off.eq(side.texel_off), rom.u_off.eq(side.u_off), rom.v_off.eq(side.v_off),
-            rom.en.eq(advance),
-        ]
-        # Stages 12-14: colour matrix.
-        m.d.comb += [
-            cm.samples.eq(rom.samples), cm.color.eq(rom.color_out), cm.en.eq(advance),
-        ]
-        # The request's tag rides beside the stages: one shift register of a tag per stage, moving
-        # like the valid bits (the first UPSTREAM_STAGES on ``upstream``, the rest on ``advance``),
-        # assigned in one piece (one statement per cycle in CXXRTL instead of one per stage).
-        tw = self._tag_width
-        tags = Signal(len(STAGES) * tw, name="tag_stages")
-        if tw:
-            m.d.sync += tags.eq(Cat(
-                Mux(upstream, Cat(self.i.p.tag, tags[:(u - 1) * tw]), tags[:u * tw]),
-                Mux(advance, tags[(u - 1) * tw:-tw], tags[u * tw:])))
-
-        m.d.comb += response.eq(_pack(response.shape(), {
-            "r": cm.rgba[0], "g": cm.rgba[1], "b": cm.rgba[2], "a": cm.rgba[3],
-            "tag": tags[-tw:] if tw else C(0, 0)}))
         return m

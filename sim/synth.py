@@ -243,7 +243,7 @@ _LIBMAP = re.compile(r"^(using FF mapping for memory|mapping memory) (\S+?)(?: v
 
 def parse_memory_mapping(log: str) -> dict:
     """Yosys ``memory_libmap`` decisions from its log: memory (name inside the unit, e.g.
-    ``fetch.codebook_rom.codebook``) -> ``"block RAM"`` or ``"logic"`` (flip-flops that hold
+    ``fetch.back.codebook_rom.codebook``) -> ``"block RAM"`` or ``"logic"`` (flip-flops that hold
     constants, i.e. LUTs: a ROM too small for a DP16KD to pay off)."""
     out = {}
     for kind, name, via in _LIBMAP.findall(log):
@@ -352,9 +352,9 @@ _SUFFIX = re.compile(r"(\$CCU2_COMB\d|\$CCU2_FCI_INT)$|_(TRELLIS_FF|LUT4|PFUMX|L
 
 def signal_of(cell: str) -> str:
     """The design signal a mapped cell stands for: Yosys names a cell after the signal it drives
-    plus the cell type and a port chain (``unit.fetch.address.k_TRELLIS_FF_Q_5`` ->
-    ``unit.fetch.address.k``; a block RAM ``unit.fetch.codebook_rom.codebook.0.8`` -> the memory
-    ``unit.fetch.codebook_rom.codebook``)."""
+    plus the cell type and a port chain (``unit.fetch.front.address.k_TRELLIS_FF_Q_5`` ->
+    ``unit.fetch.front.address.k``; a block RAM ``unit.fetch.back.codebook_rom.codebook.0.8`` -> the memory
+    ``unit.fetch.back.codebook_rom.codebook``)."""
     n = cell.lstrip("\\")
     n = _SUFFIX.sub("", n)
     m = re.match(r"^(.*)\.\d+\.\d+(_(DO|DI|AD)[AB]\d+)?$", n)      # memory blocks: <memory>.<row>.<col>
@@ -457,6 +457,8 @@ def stage_of(name: str) -> str:
     if parts[0] != "unit":
         return "harness"
     # unit.fetch.<submodule>.<signal> or unit.fetch.<signal> or unit.<port>
+    if len(parts) >= 3 and parts[1] == "fetch" and parts[2] in ("front", "back"):
+        parts = parts[:2] + parts[3:]           # the two halves (hw.pipeline): named by their blocks
     if len(parts) >= 3 and parts[1] == "fetch":
         if parts[2] in _SUBMODULES and len(parts) >= 4:
             return _SUBMODULES[parts[2]]
@@ -530,7 +532,7 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
 
 def design_memories(ts, *, one_port: bool = False, tag_width: int = 8) -> dict:
     """Every memory of ``TexelFetch(ts)`` -> ``(depth, width)``, named as Yosys names it inside the
-    unit (``fetch.codebook_rom.codebook.bank0``, ``fetch.descriptor.table``): the banks of
+    unit (``fetch.back.codebook_rom.codebook.bank0``, ``fetch.front.descriptor.table``): the banks of
     :class:`hw.banked_rom.BankedROM` are memories of their own."""
     from amaranth.hdl import _ast, _ir, _mem
     from hw.texel_fetch import TexelFetch

@@ -103,12 +103,12 @@ def test_memory_images_are_the_format_images_in_banks(sets):
         assert all(mems[n].depth <= 512 for n in banks)
         return [v for n in banks for v in mems[n].init]
 
-    assert len([n for n in mems if n.startswith("codebook_rom raw bank")]) == 2      # 1023 raw words
-    assert joined("codebook_rom raw") == ts.raw_words.astype(int).tolist()
-    assert joined("index_reader even_bank") == ts.index_words[0::2].astype(int).tolist()
-    assert joined("index_reader odd_bank") == ts.index_words[1::2].astype(int).tolist()
+    assert len([n for n in mems if n.startswith("back codebook_rom raw bank")]) == 2      # 1023 raw words
+    assert joined("back codebook_rom raw") == ts.raw_words.astype(int).tolist()
+    assert joined("front index_reader even_bank") == ts.index_words[0::2].astype(int).tolist()
+    assert joined("front index_reader odd_bank") == ts.index_words[1::2].astype(int).tolist()
     entries = [int.from_bytes(bytes(row), "little") for row in ts.codebook]
-    assert joined("codebook_rom codebook") == entries
+    assert joined("back codebook_rom codebook") == entries
 
 
 def test_pack_requests_blocks():

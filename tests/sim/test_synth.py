@@ -51,10 +51,10 @@ STAT_SAMPLE = r"""{
 }"""
 
 LIBMAP_SAMPLE = """3.28. Executing MEMORY_LIBMAP pass (mapping memories to cells).
-using FF mapping for memory vqtex_harness.unit.fetch.descriptor.table
-mapping memory vqtex_harness.unit.fetch.codebook_rom.raw via $__PDPW16KD_
-mapping memory vqtex_harness.unit.fetch.codebook_rom.codebook via $__PDPW16KD_
-using FF mapping for memory vqtex_harness.unit.fetch.index_reader.odd_bank
+using FF mapping for memory vqtex_harness.unit.fetch.front.descriptor.table
+mapping memory vqtex_harness.unit.fetch.back.codebook_rom.raw via $__PDPW16KD_
+mapping memory vqtex_harness.unit.fetch.back.codebook_rom.codebook via $__PDPW16KD_
+using FF mapping for memory vqtex_harness.unit.fetch.front.index_reader.odd_bank
 <suppressed ~720 debug messages>
 """
 
@@ -69,10 +69,10 @@ def _seg(kind, delay, frm, to, net=None):
     return d
 
 
-K = "unit.fetch.address.k_TRELLIS_FF_Q_5"
-MUL = "unit.fetch.index_reader.bit_MULT18X18D_P9"
-ADD = "unit.fetch.index_reader.parity_r_TRELLIS_FF_Q_DI_CCU2C_S0$CCU2_COMB1"
-DST = "unit.fetch.index_reader.even_rd__data_TRELLIS_FF_Q_4"
+K = "unit.fetch.front.address.k_TRELLIS_FF_Q_5"
+MUL = "unit.fetch.front.index_reader.bit_MULT18X18D_P9"
+ADD = "unit.fetch.front.index_reader.parity_r_TRELLIS_FF_Q_DI_CCU2C_S0$CCU2_COMB1"
+DST = "unit.fetch.front.index_reader.even_rd__data_TRELLIS_FF_Q_4"
 REPORT_SAMPLE = {
     "fmax": {CLK: {"achieved": 87.2752685546875, "constraint": 150}},
     "utilization": {"DP16KD": {"used": 2, "available": 208}, "MULT18X18D": {"used": 6, "available": 156},
@@ -81,11 +81,11 @@ REPORT_SAMPLE = {
     "critical_paths": [
         {"from": f"posedge {CLK}", "to": f"posedge {CLK}", "path": [
             _seg("clk-to-q", 0.395, (K, "Q"), (K, "Q")),
-            _seg("routing", 1.357, (K, "Q"), (MUL, "A5"), "unit.fetch.address.k[5]"),
+            _seg("routing", 1.357, (K, "Q"), (MUL, "A5"), "unit.fetch.front.address.k[5]"),
             _seg("logic", 3.066, (MUL, "A5"), (MUL, "P5")),
-            _seg("routing", 1.361, (MUL, "P5"), (ADD, "A"), "unit.fetch.index_reader.bit[5]"),
+            _seg("routing", 1.361, (MUL, "P5"), (ADD, "A"), "unit.fetch.front.index_reader.bit[5]"),
             _seg("logic", 0.293, (ADD, "A"), (ADD, "F")),
-            _seg("routing", 0.118, (ADD, "F"), (DST, "DI"), "unit.fetch.index_reader.even_rd__data_TRELLIS_FF_Q_4_DI"),
+            _seg("routing", 0.118, (ADD, "F"), (DST, "DI"), "unit.fetch.front.index_reader.even_rd__data_TRELLIS_FF_Q_4_DI"),
             _seg("setup", 0.0, (DST, "DI"), (DST, "DI")),
         ]},
         {"from": "<async>", "to": f"posedge {CLK}", "path": [
@@ -100,7 +100,7 @@ LOG_SAMPLE = f"""Info: Max frequency for clock '{CLK}': 81.50 MHz (FAIL at 150.0
 Info: Critical path report for clock '{CLK}' (posedge -> posedge):
 Info:       type curr  total name
 Info:   clk-to-q  0.40  0.40 Source {K}.Q
-Info:    routing  1.36  1.75 Net unit.fetch.address.k[5] (71,42) -> (78,34)
+Info:    routing  1.36  1.75 Net unit.fetch.front.address.k[5] (71,42) -> (78,34)
 Info:                          Sink {MUL}.A5
 Info:      logic  3.07  4.82 Source {MUL}.P5
 Info:    routing  0.12  4.94 Net x (78,34) -> (78,35)
@@ -134,13 +134,13 @@ def test_parse_yosys_stat():
 
 def test_parse_memory_mapping():
     assert synth.parse_memory_mapping(LIBMAP_SAMPLE) == {
-        "fetch.descriptor.table": "logic", "fetch.codebook_rom.raw": "block RAM",
-        "fetch.codebook_rom.codebook": "block RAM", "fetch.index_reader.odd_bank": "logic"}
+        "fetch.front.descriptor.table": "logic", "fetch.back.codebook_rom.raw": "block RAM",
+        "fetch.back.codebook_rom.codebook": "block RAM", "fetch.front.index_reader.odd_bank": "logic"}
     net = {"modules": {"vqtex_harness.unit": {"cells": {
-        "fetch.codebook_rom.raw.0.0": {"type": "DP16KD"}, "fetch.codebook_rom.raw.0.1": {"type": "DP16KD"},
-        "fetch.index_reader.even_bank.1.0": {"type": "DP16KD"}, "x_LUT4_Z": {"type": "LUT4"}}}}}
+        "fetch.back.codebook_rom.raw.0.0": {"type": "DP16KD"}, "fetch.back.codebook_rom.raw.0.1": {"type": "DP16KD"},
+        "fetch.front.index_reader.even_bank.1.0": {"type": "DP16KD"}, "x_LUT4_Z": {"type": "LUT4"}}}}}
     assert synth.count_memory_blocks(net, "vqtex_harness.unit") == {
-        "fetch.codebook_rom.raw": 2, "fetch.index_reader.even_bank": 1}
+        "fetch.back.codebook_rom.raw": 2, "fetch.front.index_reader.even_bank": 1}
 
 
 def test_parse_nextpnr_report():
@@ -149,10 +149,10 @@ def test_parse_nextpnr_report():
     assert rep["utilisation"]["DP16KD"] == {"used": 2, "available": 208}
     cp = rep["critical_path"]
     # the register-to-register path, not the pad path listed after it
-    assert cp["from_signal"] == "unit.fetch.address.k" and cp["to_signal"] == "unit.fetch.index_reader.even_rd__data"
+    assert cp["from_signal"] == "unit.fetch.front.address.k" and cp["to_signal"] == "unit.fetch.front.index_reader.even_rd__data"
     assert cp["from_stage"] == "block address" and cp["to_stage"] == "index reader"
     assert cp["stages"] == ["block address", "index reader"]
-    assert "unit.fetch.index_reader.bit" in cp["cells"]       # the k*b multiplier, by the signal it drives
+    assert "unit.fetch.front.index_reader.bit" in cp["cells"]       # the k*b multiplier, by the signal it drives
     assert cp["delay_ns"] == pytest.approx(6.59, abs=1e-3)
     assert cp["logic_ns"] == pytest.approx(3.754, abs=1e-3) and cp["routing_ns"] == pytest.approx(2.836, abs=1e-3)
     assert [s["type"] for s in cp["steps"]][:3] == ["clk-to-q", "routing", "logic"]
@@ -178,17 +178,17 @@ def test_run_nextpnr_reads_report_or_falls_back_to_log(monkeypatch, tmp_path):
 
 
 @pytest.mark.parametrize("cell, signal, stage", [
-    ("unit.fetch.address.k_TRELLIS_FF_Q_5", "unit.fetch.address.k", "block address"),
-    ("unit.fetch.codebook_rom.codebook.0.27_DOA9_LUT4_C_Z_PFUMX_BLUT_Z", "unit.fetch.codebook_rom.codebook",
+    ("unit.fetch.front.address.k_TRELLIS_FF_Q_5", "unit.fetch.front.address.k", "block address"),
+    ("unit.fetch.back.codebook_rom.codebook.0.27_DOA9_LUT4_C_Z_PFUMX_BLUT_Z", "unit.fetch.back.codebook_rom.codebook",
      "codebook ROM"),
-    ("unit.fetch.codebook_rom.codebook.0.8", "unit.fetch.codebook_rom.codebook", "codebook ROM"),
-    ("unit.fetch.codebook_rom.codebook.bank2.0.13", "unit.fetch.codebook_rom.codebook.bank2", "codebook ROM"),
-    ("unit.fetch.codebook_rom.window1_TRELLIS_FF_Q_40", "unit.fetch.codebook_rom.window1", "codebook ROM"),
+    ("unit.fetch.back.codebook_rom.codebook.0.8", "unit.fetch.back.codebook_rom.codebook", "codebook ROM"),
+    ("unit.fetch.back.codebook_rom.codebook.bank2.0.13", "unit.fetch.back.codebook_rom.codebook.bank2", "codebook ROM"),
+    ("unit.fetch.back.codebook_rom.window1_TRELLIS_FF_Q_40", "unit.fetch.back.codebook_rom.window1", "codebook ROM"),
     ("unit.fetch.skid_TRELLIS_FF_Q_3", "unit.fetch.skid", "output skid register"),
     ("unit.fetch.advance_TRELLIS_FF_Q", "unit.fetch.advance", "pipeline control"),
-    ("unit.fetch.index_reader.parity_r_TRELLIS_FF_Q_DI_CCU2C_B0$CCU2_COMB1", "unit.fetch.index_reader.parity_r",
+    ("unit.fetch.front.index_reader.parity_r_TRELLIS_FF_Q_DI_CCU2C_B0$CCU2_COMB1", "unit.fetch.front.index_reader.parity_r",
      "index reader"),
-    ("unit.fetch.color_matrix.p_ru_TRELLIS_FF_Q_3", "unit.fetch.color_matrix.p_ru", "colour matrix"),
+    ("unit.fetch.back.color_matrix.p_ru_TRELLIS_FF_Q_3", "unit.fetch.back.color_matrix.p_ru", "colour matrix"),
     ("unit.fetch.tag_texel_TRELLIS_FF_Q", "unit.fetch.tag_texel", "tag carry"),
     ("unit.fetch.valid_stages_TRELLIS_FF_Q_7", "unit.fetch.valid_stages", "pipeline control"),
     ("unit.fetch.samples$84[1]_TRELLIS_FF_Q_7", "unit.fetch.samples$84[1]", "codebook ROM"),
@@ -253,10 +253,10 @@ def test_report_area_tiny(tmp_path, capsys):
     # DP16KDs; the descriptor table (32 rows) and the tiny codebook (32 entries) are ROM logic
     # (Yosys's cost model, docs/area.md).
     mem = rep["memories"]
-    raw0 = mem["fetch.codebook_rom.raw.bank0"]
+    raw0 = mem["fetch.back.codebook_rom.raw.bank0"]
     assert raw0["mapped_to"] == "block RAM" and raw0["DP16KD"] > 0 and (raw0["depth"], raw0["width"]) == (512, 32)
-    assert mem["fetch.codebook_rom.raw.bank1"]["depth"] == 170
-    assert mem["fetch.descriptor.table"]["mapped_to"] == "logic"
+    assert mem["fetch.back.codebook_rom.raw.bank1"]["depth"] == 170
+    assert mem["fetch.front.descriptor.table"]["mapped_to"] == "logic"
     assert rep["latency"] == 14
     assert sum(m["DP16KD"] for m in mem.values()) == u["brams"]
     t = rep["timing"]

@@ -1,0 +1,188 @@
+"""FrontEnd: request -> codebook index, and the pipeline control (stages 1-7 of TexelFetch).
+
+descriptor table -> block address shifter -> index reader, with every valid bit, the ``advance``
+flip-flop, the skid register's valid bit and the request tags. Its ``link`` output
+(:class:`hw.pipeline.LinkLayout`) is all that :class:`hw.back_end.BackEnd` needs from it; nothing
+comes back (see :mod:`hw.pipeline`).
+"""
+
+from __future__ import annotations
+
+from amaranth import *
+from amaranth.lib import stream, wiring
+from amaranth.lib.wiring import In, Out
+
+from golden.format import TextureSet
+
+from . import index_reader
+from .address import BlockAddress
+from .banked_rom import BANK_DEPTH
+from .descriptor import DescriptorTable, descriptor_widths, texture_bits
+from .index_reader import IndexReader
+from .pipeline import STAGES, UPSTREAM_STAGES, REGISTERS, LinkLayout, RequestLayout, SideLayout, addr_bits, pack
+
+__all__ = ["FrontEnd"]
+
+
+def k_bits(ts: TextureSet) -> int:
+    """Width of the block number ``k``: enough for the largest compressed level."""
+    d = ts.descriptors
+    comp = (d["compressed"] != 0) & (d["valid"] != 0)
+    if not comp.any():
+        return 1
+    span = (d["log2w"].astype(int) - d["log2bw"] + d["log2h"] - d["log2bh"])[comp]
+    return max(1, int(span.max()))
+
+
+class FrontEnd(wiring.Component):
+    """Stages 1-7 (descriptor, address, the index reader's five) and the pipeline control.
+
+    Latency: the index of a request accepted in cycle ``t`` is on ``link.index`` in cycle ``t + 7``
+    when the pipeline advanced in between. Throughput: one request per advancing cycle (one-port:
+    a straddling index costs one more).
+
+    Control (the rules of :class:`hw.texel_fetch.TexelFetch`): ``advance`` is a flip-flop set to
+    ``~(o_valid & ~o_ready)``; ``skid_valid`` to ``o_valid & ~o_ready``; ``upstream = advance &
+    ~hold`` moves the first ``UPSTREAM_STAGES`` registers and the input; ``o_valid`` is the last
+    stage's valid bit or ``skid_valid``. All of it is here, so ``o_valid`` and ``i.ready`` depend on
+    the front end's flip-flops and ``o_ready`` only.
+
+    Arguments
+    ---------
+    texture_set : TextureSet
+        Descriptor table and index memory (and the widths of the side fields).
+    one_port, tag_width, bank_depth
+        As for :class:`hw.texel_fetch.TexelFetch`.
+
+    Members
+    -------
+    i : In(stream.Signature(RequestLayout))
+        Requests.
+    o_valid : Out(1)
+        The response on the output (the back end's ``payload``) is valid.
+    o_ready : In(1)
+        The output's ready.
+    straddle, stall_one_port, stall_output : Out(1)
+        Strobes, as for ``TexelFetch``.
+    valid : Out(len(REGISTERS))
+        Valid bits of the registers, bit ``k`` for ``REGISTERS[k]``.
+    link : Out(LinkLayout)
+        To the back end: ``advance``, ``skid_valid``, the index, its side fields, the last stage's tag.
+    """
+
+    def __init__(self, texture_set: TextureSet, *, one_port: bool = False, tag_width: int = 8,
+                 bank_depth: int = BANK_DEPTH):
+        self._ts = texture_set
+        self._one_port = bool(one_port)
+        self._tag_width = tag_width
+        self._bank_depth = bank_depth
+        super().__init__({
+            "i": In(stream.Signature(RequestLayout(texture_bits(texture_set), tag_width))),
+            "o_valid": Out(1),
+            "o_ready": In(1),
+            "straddle": Out(1),
+            "stall_one_port": Out(1),
+            "stall_output": Out(1),
+            "valid": Out(len(REGISTERS)),
+            "link": Out(LinkLayout(texture_set, tag_width)),
+        })
+
+    def elaborate(self, platform):
+        m = Module()
+        ts = self._ts
+        widths = descriptor_widths(ts)
+        kb = k_bits(ts)
+
+        m.submodules.descriptor = desc = DescriptorTable(ts)
+        m.submodules.address = addr = BlockAddress(
+            base_bits=widths["base"], k_bits=kb, raw_bits=addr_bits(len(ts.raw_words)))
+        m.submodules.index_reader = idx = IndexReader(
+            ts.index_words, word_bits=ts.word_bits, k_bits=kb, base_bits=widths["base"],
+            one_port=self._one_port, bank_depth=self._bank_depth)
+
+        # -- pipeline control, all in one place ---------------------------------------------------
+        # The stages' valid bits, one register (a shift register: bit n is stage STAGES[n]).
+        valid = Signal(len(STAGES), name="valid_stages")
+        # ``advance`` and ``skid_valid`` are the same information (the output was stalled in the
+        # previous cycle), in two flip-flops: ``advance`` drives the enables of the whole
+        # pipeline, ``skid_valid`` the output logic and the next state, away from that large net.
+        advance = Signal(init=1)    # every register moves; a flip-flop: no output stall last cycle
+        skid_valid = Signal()       # the skid register holds the response shown on ``o``
+        upstream = Signal()         # the first UPSTREAM_STAGES registers and the input move
+        m.d.comb += [
+            upstream.eq(advance & ~idx.hold),
+            self.i.ready.eq(upstream),
+            self.o_valid.eq(skid_valid | valid[-1]),
+            self.stall_output.eq(self.o_valid & ~self.o_ready),
+            self.straddle.eq(idx.straddle & upstream),
+            self.stall_one_port.eq(idx.hold & advance),
+        ]
+        m.d.sync += [advance.eq(~self.stall_output), skid_valid.eq(self.stall_output)]
+        m.d.comb += self.valid.eq(Cat(valid, skid_valid))
+        # The first UPSTREAM_STAGES bits shift on ``upstream``, the rest on ``advance`` (a held
+        # straddling index enters the index reader's word stage as a bubble). One assignment of the
+        # whole register: simulators (CXXRTL) then update it with one statement, not one per bit.
+        u = UPSTREAM_STAGES
+        m.d.sync += valid.eq(Cat(
+            Mux(upstream, Cat(self.i.valid, valid[:u - 1]), valid[:u]),
+            Mux(advance, Cat(valid[u - 1] & ~idx.hold, valid[u:-1]), valid[u:])))
+
+        # -- carried fields: registers beside the blocks' own, same enables ----------------------
+        def carry(value, en, name):
+            reg = Signal.like(value, name=name)
+            with m.If(en):
+                m.d.sync += reg.eq(value)
+            return reg
+
+        # Stage 1: descriptor.
+        m.d.comb += [
+            desc.texture.eq(self.i.p.texture),
+            desc.level.eq(self.i.p.level),
+            desc.en.eq(upstream),
+        ]
+        row = desc.row
+        i1 = carry(self.i.p.i, upstream, "i_descriptor")
+        j1 = carry(self.i.p.j, upstream, "j_descriptor")
+
+        # Stage 2: block address.
+        m.d.comb += [
+            addr.i.eq(i1), addr.j.eq(j1),
+            addr.log2w.eq(row.log2w), addr.log2bw.eq(row.log2bw), addr.log2bh.eq(row.log2bh),
+            addr.base.eq(row.base),
+            addr.en.eq(upstream),
+        ]
+        d2 = carry(row, upstream, "row_address")
+
+        # Stages 3-7: index reader (stage 3 moves on upstream: the reader gates it with its hold).
+        m.d.comb += [
+            idx.valid.eq(valid[1] & d2.compressed),
+            idx.k.eq(addr.k),
+            idx.b.eq(d2.index_bits),
+            idx.base.eq(d2.base),
+            idx.en.eq(advance),
+        ]
+        side = Signal(SideLayout(ts))
+        m.d.comb += side.eq(pack(side.shape(), {
+            "compressed": d2.compressed, "cb_base": d2.cb_base, "raw_addr": addr.raw_addr,
+            "x": addr.x, "y": addr.y, "log2bw": d2.log2bw, "color": d2.color,
+            "texel_off": d2.texel_off, "u_off": d2.u_off, "v_off": d2.v_off,
+        }))
+        index_stages = STAGES[2:2 + index_reader.LATENCY]
+        for n, name in enumerate(index_stages):
+            en = upstream if n + 2 < UPSTREAM_STAGES else advance
+            side = carry(side, en, f"side_{name}")
+
+        # The request's tag rides beside the stages: one shift register of a tag per stage, moving
+        # like the valid bits (the first UPSTREAM_STAGES on ``upstream``, the rest on ``advance``),
+        # assigned in one piece (one statement per cycle in CXXRTL instead of one per stage).
+        tw = self._tag_width
+        tags = Signal(len(STAGES) * tw, name="tag_stages")
+        if tw:
+            m.d.sync += tags.eq(Cat(
+                Mux(upstream, Cat(self.i.p.tag, tags[:(u - 1) * tw]), tags[:u * tw]),
+                Mux(advance, tags[(u - 1) * tw:-tw], tags[u * tw:])))
+
+        m.d.comb += self.link.eq(pack(self.link.shape(), {
+            "advance": advance, "skid_valid": skid_valid, "index": idx.index, "side": side,
+            "tag": tags[-tw:] if tw else C(0, 0)}))
+        return m

@@ -1,0 +1,146 @@
+"""The texel-fetch pipeline's shared vocabulary: its stages, the request and response layouts, and the
+*link* between its two halves.
+
+:class:`hw.texel_fetch.TexelFetch` is two components wired back to back (see docs/hardware.md):
+
+* the **front end** (:class:`hw.front_end.FrontEnd`): descriptor table, block address shifter, index
+  reader (stages 1-7) and all the pipeline control (valid bits, ``advance``, the skid register's
+  valid bit, the request tags);
+* the **back end** (:class:`hw.back_end.BackEnd`): codebook ROM, colour matrix (stages 8-14) and the
+  skid register's data.
+
+Everything the back end needs from the front end in a cycle is one registered value, the ``link``
+(:class:`LinkLayout`). Nothing flows back: the front end's next state depends on its inputs and its
+own state only (the output's valid bit is the control's, not the data path's). That is what lets a
+simulator run the two halves as two programs, the back end a few thousand cycles behind the front
+end on another core, and still be exact (see docs/simulation.md).
+"""
+
+from __future__ import annotations
+
+from amaranth import *
+from amaranth.lib import data
+
+from . import codebook_rom, color_matrix, index_reader
+from .address import COORD_BITS
+from .descriptor import LEVEL_BITS, descriptor_widths
+
+__all__ = ["STAGES", "LATENCY", "UPSTREAM_STAGES", "REGISTERS", "FRONT_STAGES", "RequestLayout",
+           "ResponseLayout", "SideLayout", "LinkLayout", "pack", "addr_bits"]
+
+#: Pipeline registers in order, one per cycle of latency; bit ``k`` of ``TexelFetch.valid`` is the
+#: valid bit of ``STAGES[k]``.
+STAGES = (
+    "descriptor",                                                       # descriptor table
+    "address",                                                          # block address shifter
+    "index_bit", "index_word", "index_data", "index_pair", "index",     # index reader
+    "codebook", "codebook_data", "texel_window", "texel",               # codebook ROM
+    "color_offset", "color_product", "color",                           # colour matrix
+)
+#: Cycles from accepting a request to presenting its response (one per stage).
+LATENCY = len(STAGES)
+assert LATENCY == (1 + 1 + index_reader.LATENCY + codebook_rom.LATENCY + color_matrix.LATENCY)
+#: The stages of the front end (the rest are the back end's).
+FRONT_STAGES = 2 + index_reader.LATENCY
+#: The first stages (descriptor, address, index_bit), which move on ``upstream``: with ``one_port``
+#: they and the input wait while the index reader's bit-address stage holds a straddling index.
+UPSTREAM_STAGES = 3
+#: Registers with a valid bit (bit ``k`` of the ``valid`` output is ``REGISTERS[k]``, and each has
+#: an occupancy entry in the simulation reports): the stages, then the skid register in front of
+#: the output.
+REGISTERS = STAGES + ("skid",)
+
+
+def addr_bits(depth: int) -> int:
+    """Bits of an address into ``depth`` words (at least 1)."""
+    return max(1, (max(1, depth) - 1).bit_length())
+
+
+class RequestLayout(data.StructLayout):
+    """A texel request: texture id, level, texel column ``i`` and row ``j`` inside the level, tag.
+
+    Arguments
+    ---------
+    texture_bits : int
+        Width of the texture id (``hw.descriptor.texture_bits(ts)``).
+    tag_width : int
+        Width of the tag (0 allowed).
+    """
+
+    def __init__(self, texture_bits: int, tag_width: int):
+        super().__init__({
+            "texture": unsigned(texture_bits),
+            "level": unsigned(LEVEL_BITS),
+            "i": unsigned(COORD_BITS),
+            "j": unsigned(COORD_BITS),
+            "tag": unsigned(tag_width),
+        })
+
+
+class ResponseLayout(data.StructLayout):
+    """A texel response: RGBA8888 and the request's tag.
+
+    Arguments
+    ---------
+    tag_width : int
+        Width of the tag (0 allowed).
+    """
+
+    def __init__(self, tag_width: int):
+        super().__init__({
+            "r": unsigned(8), "g": unsigned(8), "b": unsigned(8), "a": unsigned(8),
+            "tag": unsigned(tag_width),
+        })
+
+
+class SideLayout(data.StructLayout):
+    """The fields the codebook ROM needs beside the index, carried through the index reader's
+    stages: the descriptor's codebook base, format and plane offsets, and the block address
+    shifter's offset in the block and raw address.
+
+    Arguments
+    ---------
+    ts : TextureSet
+        Sets the widths (``hw.descriptor.descriptor_widths``, the raw memory's address).
+    """
+
+    def __init__(self, ts):
+        w = descriptor_widths(ts)
+        super().__init__({
+            "compressed": 1, "cb_base": w["cb_base"], "raw_addr": addr_bits(len(ts.raw_words)),
+            "x": 3, "y": 3, "log2bw": 2, "color": 2,
+            "texel_off": w["texel_off"], "u_off": w["u_off"], "v_off": w["v_off"],
+        })
+
+
+class LinkLayout(data.StructLayout):
+    """What the front end gives the back end in every cycle, all of it flip-flops of the front end:
+
+    * ``advance``: the pipeline moves this cycle (the enable of every back-end register);
+    * ``skid_valid``: the skid register holds the response that ``o`` shows;
+    * ``index``: the index reader's output (stage 7);
+    * ``side``: the fields beside it (:class:`SideLayout`);
+    * ``tag``: the tag of the request in the last stage (stage 14).
+
+    Arguments
+    ---------
+    ts : TextureSet
+    tag_width : int
+    """
+
+    def __init__(self, ts, tag_width: int):
+        super().__init__({
+            "advance": 1, "skid_valid": 1, "index": index_reader.INDEX_BITS,
+            "side": SideLayout(ts), "tag": unsigned(tag_width),
+        })
+
+
+def pack(layout: data.StructLayout, fields: dict) -> Value:
+    """The bits of a ``layout`` value with these field values, as one concatenation: assigned in one
+    piece, it is plain wiring (field-by-field assignments make simulators such as CXXRTL assemble
+    the value with read-modify-writes every cycle)."""
+    parts = []
+    for name, field in sorted(layout, key=lambda item: item[1].offset):
+        v = Value.cast(fields[name])
+        parts.append(v[:field.width] if len(v) >= field.width else Cat(v, C(0, field.width - len(v))))
+    return Cat(*parts)
