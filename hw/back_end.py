@@ -1,6 +1,7 @@
 """BackEnd: codebook index -> RGBA response (stages 8-14 of TexelFetch).
 
-codebook ROM -> colour matrix -> the skid register's data and the output multiplexer, every register
+codebook ROM -> colour matrix -> the colour part of the skid register and the output multiplexer
+(the tags are the front end's), every register
 enabled by the front end's ``advance``. Its only input is the ``link`` of
 :class:`hw.front_end.FrontEnd` (:class:`hw.pipeline.LinkLayout`).
 """
@@ -17,41 +18,40 @@ from .banked_rom import BANK_DEPTH
 from .codebook_rom import CodebookROM
 from .color_matrix import ColorMatrix
 from .descriptor import descriptor_widths
-from .pipeline import LinkLayout, ResponseLayout, addr_bits, pack
+from .pipeline import LinkLayout, RGBALayout, addr_bits
 
 __all__ = ["BackEnd"]
 
 
 class BackEnd(wiring.Component):
-    """Stages 8-11 (codebook ROM), 12-14 (colour matrix) and the skid register's data.
+    """Stages 8-11 (codebook ROM), 12-14 (colour matrix) and the colour part of the skid register.
 
-    Latency: the response to the index on ``link.index`` in cycle ``t`` is the last stage's
-    response in cycle ``t + 7`` when the pipeline advanced in between. Throughput: one per cycle.
-    ``payload`` shows the skid register when ``link.skid_valid``, else the last stage (with
-    ``link.tag``); the skid register takes the last stage's response in every advancing cycle.
+    Latency: the colour for the index on ``link.index`` in cycle ``t`` is the last stage's in cycle
+    ``t + 7`` when the pipeline advanced in between. Throughput: one per cycle. ``rgba`` shows the
+    skid register when ``link.skid_valid``, else the last stage; the skid register takes the last
+    stage's colour in every advancing cycle.
 
     Arguments
     ---------
     texture_set : TextureSet
         Codebook memory, raw memory, colour matrix.
-    tag_width, bank_depth
+    bank_depth
         As for :class:`hw.texel_fetch.TexelFetch`.
 
     Members
     -------
     link : In(LinkLayout)
         From the front end.
-    payload : Out(ResponseLayout)
-        The response shown on the output.
+    rgba : Out(RGBALayout)
+        The colour shown on the output (r, g, b, a).
     """
 
-    def __init__(self, texture_set: TextureSet, *, tag_width: int = 8, bank_depth: int = BANK_DEPTH):
+    def __init__(self, texture_set: TextureSet, *, bank_depth: int = BANK_DEPTH):
         self._ts = texture_set
-        self._tag_width = tag_width
         self._bank_depth = bank_depth
         super().__init__({
-            "link": In(LinkLayout(texture_set, tag_width)),
-            "payload": Out(ResponseLayout(tag_width)),
+            "link": In(LinkLayout(texture_set)),
+            "rgba": Out(RGBALayout),
         })
 
     def elaborate(self, platform):
@@ -77,12 +77,9 @@ class BackEnd(wiring.Component):
         m.d.comb += [
             cm.samples.eq(rom.samples), cm.color.eq(rom.color_out), cm.en.eq(link.advance),
         ]
-        # The output: the skid register (the response pushed out in a stalled cycle) or the last stage.
-        response = Signal(self.payload.shape())
-        skid = Signal(self.payload.shape(), name="skid")
-        m.d.comb += response.eq(pack(response.shape(), {
-            "r": cm.rgba[0], "g": cm.rgba[1], "b": cm.rgba[2], "a": cm.rgba[3], "tag": link.tag}))
+        # The output: the skid register (the colour pushed out in a stalled cycle) or the last stage.
+        skid = Signal(32, name="skid")
         with m.If(link.advance):
-            m.d.sync += skid.eq(response)
-        m.d.comb += self.payload.eq(Mux(link.skid_valid, skid, response))
+            m.d.sync += skid.eq(cm.rgba.as_value())
+        m.d.comb += self.rgba.as_value().eq(Mux(link.skid_valid, skid, cm.rgba.as_value()))
         return m

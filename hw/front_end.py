@@ -66,8 +66,11 @@ class FrontEnd(wiring.Component):
         Strobes, as for ``TexelFetch``.
     valid : Out(len(REGISTERS))
         Valid bits of the registers, bit ``k`` for ``REGISTERS[k]``.
+    o_tag : Out(tag_width)
+        The tag of the response on the output: the skid register's tag when ``skid_valid``, else the
+        last stage's (the tags never enter the back end).
     link : Out(LinkLayout)
-        To the back end: ``advance``, ``skid_valid``, the index, its side fields, the last stage's tag.
+        To the back end: ``advance``, ``skid_valid``, the index and its side fields.
     """
 
     def __init__(self, texture_set: TextureSet, *, one_port: bool = False, tag_width: int = 8,
@@ -84,7 +87,8 @@ class FrontEnd(wiring.Component):
             "stall_one_port": Out(1),
             "stall_output": Out(1),
             "valid": Out(len(REGISTERS)),
-            "link": Out(LinkLayout(texture_set, tag_width)),
+            "o_tag": Out(tag_width),
+            "link": Out(LinkLayout(texture_set)),
         })
 
     def elaborate(self, platform):
@@ -182,7 +186,12 @@ class FrontEnd(wiring.Component):
                 Mux(upstream, Cat(self.i.p.tag, tags[:(u - 1) * tw]), tags[:u * tw]),
                 Mux(advance, tags[(u - 1) * tw:-tw], tags[u * tw:])))
 
+        if tw:
+            skid_tag = Signal(tw, name="skid_tag")     # the tag part of the skid register
+            with m.If(advance):
+                m.d.sync += skid_tag.eq(tags[-tw:])
+            m.d.comb += self.o_tag.eq(Mux(skid_valid, skid_tag, tags[-tw:]))
+
         m.d.comb += self.link.eq(pack(self.link.shape(), {
-            "advance": advance, "skid_valid": skid_valid, "index": idx.index, "side": side,
-            "tag": tags[-tw:] if tw else C(0, 0)}))
+            "advance": advance, "skid_valid": skid_valid, "index": idx.index, "side": side}))
         return m

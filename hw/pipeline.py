@@ -5,7 +5,7 @@
 
 * the **front end** (:class:`hw.front_end.FrontEnd`): descriptor table, block address shifter, index
   reader (stages 1-7) and all the pipeline control (valid bits, ``advance``, the skid register's
-  valid bit, the request tags);
+  valid bit), and the request tags (with the tag part of the skid register);
 * the **back end** (:class:`hw.back_end.BackEnd`): codebook ROM, colour matrix (stages 8-14) and the
   skid register's data.
 
@@ -26,7 +26,7 @@ from .address import COORD_BITS
 from .descriptor import LEVEL_BITS, descriptor_widths
 
 __all__ = ["STAGES", "LATENCY", "UPSTREAM_STAGES", "REGISTERS", "FRONT_STAGES", "RequestLayout",
-           "ResponseLayout", "SideLayout", "LinkLayout", "pack", "addr_bits"]
+           "ResponseLayout", "RGBALayout", "SideLayout", "LinkLayout", "pack", "addr_bits"]
 
 #: Pipeline registers in order, one per cycle of latency; bit ``k`` of ``TexelFetch.valid`` is the
 #: valid bit of ``STAGES[k]``.
@@ -93,6 +93,10 @@ class ResponseLayout(data.StructLayout):
         })
 
 
+#: A colour: the r, g, b, a bytes of a response.
+RGBALayout = data.StructLayout({"r": unsigned(8), "g": unsigned(8), "b": unsigned(8), "a": unsigned(8)})
+
+
 class SideLayout(data.StructLayout):
     """The fields the codebook ROM needs beside the index, carried through the index reader's
     stages: the descriptor's codebook base, format and plane offsets, and the block address
@@ -119,19 +123,19 @@ class LinkLayout(data.StructLayout):
     * ``advance``: the pipeline moves this cycle (the enable of every back-end register);
     * ``skid_valid``: the skid register holds the response that ``o`` shows;
     * ``index``: the index reader's output (stage 7);
-    * ``side``: the fields beside it (:class:`SideLayout`);
-    * ``tag``: the tag of the request in the last stage (stage 14).
+    * ``side``: the fields beside it (:class:`SideLayout`).
+
+    The request tags stay in the front end (with the tag part of the skid register): the back end
+    computes the colour only.
 
     Arguments
     ---------
     ts : TextureSet
-    tag_width : int
     """
 
-    def __init__(self, ts, tag_width: int):
+    def __init__(self, ts):
         super().__init__({
-            "advance": 1, "skid_valid": 1, "index": index_reader.INDEX_BITS,
-            "side": SideLayout(ts), "tag": unsigned(tag_width),
+            "advance": 1, "skid_valid": 1, "index": index_reader.INDEX_BITS, "side": SideLayout(ts),
         })
 
 

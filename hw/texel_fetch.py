@@ -33,7 +33,7 @@ from .banked_rom import BANK_DEPTH
 from .descriptor import texture_bits
 from .front_end import FrontEnd
 from .pipeline import (FRONT_STAGES, LATENCY, REGISTERS, STAGES, UPSTREAM_STAGES, RequestLayout,
-                       ResponseLayout)
+                       ResponseLayout, pack)
 
 __all__ = ["TexelFetch", "RequestLayout", "ResponseLayout", "LATENCY", "STAGES", "REGISTERS",
            "UPSTREAM_STAGES", "FRONT_STAGES"]
@@ -157,10 +157,12 @@ class TexelFetch(wiring.Component):
         m = Module()
         m.submodules.front = front = FrontEnd(self._ts, one_port=self._one_port, tag_width=self._tag_width,
                                               bank_depth=self._bank_depth)
-        m.submodules.back = back = BackEnd(self._ts, tag_width=self._tag_width, bank_depth=self._bank_depth)
+        m.submodules.back = back = BackEnd(self._ts, bank_depth=self._bank_depth)
         m.d.comb += [
             front.i.valid.eq(self.i.valid), front.i.p.eq(self.i.p), self.i.ready.eq(front.i.ready),
-            self.o.valid.eq(front.o_valid), front.o_ready.eq(self.o.ready), self.o.p.eq(back.payload),
+            self.o.valid.eq(front.o_valid), front.o_ready.eq(self.o.ready),
+            self.o.p.eq(pack(self.o.p.shape(), {
+                "r": back.rgba.r, "g": back.rgba.g, "b": back.rgba.b, "a": back.rgba.a, "tag": front.o_tag})),
             back.link.eq(front.link),
             self.straddle.eq(front.straddle), self.stall_one_port.eq(front.stall_one_port),
             self.stall_output.eq(front.stall_output), self.valid.eq(front.valid),

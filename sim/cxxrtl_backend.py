@@ -38,7 +38,7 @@ from .cxxrtl_inplace import inplace_cycle
 from .toolchain import (ToolchainError, cached_build, digest, find_cxx, index_get, index_put, run_tool,
                         tool_version)
 
-__all__ = ["DesignInfo", "MemoryImage", "design_info", "cxxrtl_source", "cxxrtl_program", "write_cxxrtl",
+__all__ = ["DesignInfo", "MemoryImage", "design_info", "cxxrtl_sources", "cxxrtl_program", "write_cxxrtl",
            "rewrite", "build_cxxrtl", "BatchLibrary",
            "run_batch", "run", "CXXFLAGS", "ready_pattern", "DRIVER_DIR"]
 
@@ -50,6 +50,8 @@ STROBES = {"stall_output": "VQ_C_STALL_OUTPUT", "stall_one_port": "VQ_C_STALL_ON
            "straddle": "VQ_C_STRADDLES"}
 C_CYCLES, C_ACCEPTED, C_RESPONSES, C_STALL_OUTPUT, C_STALL_ONE_PORT, C_STRADDLES, C_BAD_TAG, C_BAD_TAG_VALUE = range(8)
 C_OCCUPANCY = 8
+#: The halves of the unit (hw.pipeline), each its own CXXRTL model (sim/cxxrtl/driver.cc).
+HALVES = ("front", "back")
 #: VQ_API_VERSION of sim/cxxrtl/batch.h that this module speaks.
 API_VERSION = 2
 
@@ -94,6 +96,8 @@ class DesignInfo:
     strobes: list               # strobe ports present (keys of STROBES)
     memories: list = field(default_factory=list)
     latency: int = 0
+    halves: dict = field(default_factory=dict)  # "front"/"back" -> (fragment, ports) of hw.pipeline's halves
+    link_width: int = 0
 
 
 def _fields(layout) -> dict:
@@ -119,6 +123,13 @@ def design_info(ts, *, one_port: bool = False, tag_width: int = 8) -> DesignInfo
         for sub, name, _ in f.subfragments:
             walk(sub, path + (str(name),))
     walk(frag, ())
+    halves = {}
+    for sub, name, _ in frag.subfragments:      # FrontEnd and BackEnd, each converted as its own model
+        if str(name) in HALVES:
+            ports = {k: v for k, v in port_map(sub.origins[0]).items() if len(v[0])}  # (no 0-bit tag)
+            halves[str(name)] = (sub, ports)
+    if set(halves) != set(HALVES):
+        raise ToolchainError("TexelFetch is not made of the front and back halves this backend runs")
     req = top.i.p.shape()
     resp = top.o.p.shape()
     names = list(top.signature.members.keys())
@@ -127,40 +138,39 @@ def design_info(ts, *, one_port: bool = False, tag_width: int = 8) -> DesignInfo
         request_fields=_fields(req), response_fields=_fields(resp),
         request_width=req.size, response_width=resp.size, tag_width=tag_width,
         stages=list(REGISTERS),
-        strobes=[n for n in STROBES if n in names], memories=memories, latency=int(top.latency))
+        strobes=[n for n in STROBES if n in names], memories=memories, latency=int(top.latency),
+        halves=halves, link_width=len(halves["front"][1]["link"][0]))
     for what, width in (("request", info.request_width), ("response", info.response_width)):
         if width > 64:
             raise ToolchainError(f"{what} payload of {width} bits: the compiled backends take at most 64")
     return info
 
 
-def cxxrtl_source(info: DesignInfo) -> str:
-    """C++ of the design with every memory blanked (contents are loaded at run time)."""
+def cxxrtl_sources(info: DesignInfo) -> dict:
+    """C++ of each half of the design (``HALVES``) with every memory blanked (contents are loaded at
+    run time): half -> CXXRTL's output."""
     from amaranth.hdl import MemoryData, _mem
+    saved = []
 
     def blank(f):
         if isinstance(f, _mem.MemoryInstance):
+            saved.append((f, f._data))
             f._data = MemoryData(shape=f._data._shape, depth=f._data._depth, init=[])
         for sub, _, _ in f.subfragments:
             blank(sub)
-    saved = {}
-
-    def save(f):
-        if isinstance(f, _mem.MemoryInstance):
-            saved[id(f)] = (f, f._data)
-        for sub, _, _ in f.subfragments:
-            save(sub)
-    save(info.fragment)
+    out = {}
     try:
         blank(info.fragment)
-        src = write_cxxrtl(info.fragment, info.ports)
+        for half in HALVES:
+            frag, ports = info.halves[half]
+            out[half] = write_cxxrtl(frag, ports)
     finally:
-        for f, d in saved.values():
+        for f, d in saved:
             f._data = d
     # The blank memories still come with all-zero initialisers of their full depth; drop them (a
     # cxxrtl::memory starts zeroed) so compile time does not grow with the memories. If CXXRTL's
     # output format changes and nothing matches, the zero initialisers stay: slower, still right.
-    return _MEM_INIT.sub("", src)
+    return {half: _MEM_INIT.sub("", src) for half, src in out.items()}
 
 
 #: ``write_cxxrtl`` options. ``-g1``: debug information for the design's named wires and the
@@ -187,31 +197,6 @@ _MEM_INIT = re.compile(r"\tstatic const value<\d+> (mem_init_\d+)\[\d+\] \{\n.*?
                        re.S)
 
 
-_COMMIT_BODY = re.compile(r"\tbool commit\(ObserverT &observer\) \{\n\t\tbool changed = false;\n(.*?)"
-                          r"\t\treturn changed;\n\t\}", re.S)
-_COMMIT_WIRE = re.compile(r"\t\tif \((\w+)\.commit\(observer\)\) changed = true;")
-_COMMIT_PREV = re.compile(r"\t\t(prev_\w+) = (\w+);")
-
-
-def _fast_commit(src: str) -> str:
-    """``VQ_FAST_COMMIT(top)``: the generated ``commit()`` as plain copies (``curr = next`` for every
-    wire, no compare, no branch), when it consists of wire commits and clock-edge bookkeeping only
-    (no memory write queues). Otherwise nothing, and the driver calls ``commit()``."""
-    m = _COMMIT_BODY.search(src)
-    if not m:
-        return ""
-    body = []
-    for line in m.group(1).splitlines():
-        w, p = _COMMIT_WIRE.fullmatch(line), _COMMIT_PREV.fullmatch(line)
-        if w:
-            body.append(f"top.{w.group(1)}.curr = top.{w.group(1)}.next;")
-        elif p:
-            body.append(f"top.{p.group(1)} = top.{p.group(2)};")
-        else:
-            return ""
-    return "#define VQ_FAST_COMMIT(top) " + " ".join(body) + "\n"
-
-
 _SLICE = re.compile(r"\b([A-Za-z_]\w*(?:\.curr|\.next)?)\.slice<(\d+(?:,\d+)?)>\(\)(?:\.val\(\))?(?!\s*=[^=])")
 
 
@@ -229,6 +214,65 @@ def _fast_shifts(src: str) -> str:
     """Every ``shl_uu``/``shr_uu``/``shift_uu`` as the ``vq_`` one of vq_ops.h (one machine shift
     when the operands fit in 64 bits; the index reader's 64-bit funnel shift is one of them)."""
     return _SHIFT.sub(lambda m: f"vq_{m.group(1)}<", src)
+
+
+_MEM_DECL = re.compile(r"^\tmemory<(\d+)> (memory_\w+) \{ (\d+)u \};$", re.M)
+_MEM_READ = re.compile(
+    r"^(?P<ind>\t+)auto (?P<tmp>tmp_\d+) = memory_index\((?P<addr>.+), 0, \d+\);\n"
+    r"(?P=ind)if \((?P<en>[\w.]+)\) \{\n"
+    r"(?P=ind)\tCXXRTL_ASSERT\((?P=tmp)\.valid && \"out of bounds read\"\);\n"
+    r"(?P=ind)\tif\((?P=tmp)\.valid\) \{\n"
+    r"(?P=ind)\t\t(?P<dst>[\w.]+) = (?P<mem>memory_\w+)\[(?P=tmp)\.index\];\n"
+    r"(?P=ind)\t\} else \{\n"
+    r"(?P=ind)\t\t(?P=dst) = value<\d+> \{\};\n"
+    r"(?P=ind)\t\}\n"
+    r"(?P=ind)\}$", re.M)
+_WIDTH_CALL = re.compile(r"^(?:vq_slice<(\d+),(\d+)>|\w+<(\d+)>)\(")
+
+
+def _address_width(expr: str):
+    """Width of an address expression that is one call with its result width in its template
+    arguments (``vq_slice<8,0>(...)``, ``xor_uu<4>(...)``), else None."""
+    m = _WIDTH_CALL.match(expr)
+    if not m:
+        return None
+    depth = 0
+    for k in range(m.end() - 1, len(expr)):
+        depth += {"(": 1, ")": -1}.get(expr[k], 0)
+        if depth == 0:
+            if k != len(expr) - 1:
+                return None                     # the call is only part of the expression
+            break
+    return int(m[1]) - int(m[2]) + 1 if m[1] else int(m[3])
+
+
+def _padded_memories(src: str) -> str:
+    """Every memory read through a ``w``-bit address (one call of known width) from a memory shallower than
+    ``2**w`` words, without its bounds check: the memory is declared ``2**w`` words deep, the rows
+    past its depth stay zero (what CXXRTL reads out of bounds), and the read is one indexed load.
+    The check was a branch on the address, which mispredicts on random addresses (the last,
+    partial bank of a banked memory: 81 of 128 index words, 341 of 512 raw words). Memories read in
+    any other way keep their depth and their checks."""
+    reads = list(_MEM_READ.finditer(src))
+    depth = {m.group(2): int(m.group(3)) for m in _MEM_DECL.finditer(src)}
+    width: dict = {}
+    for m in reads:
+        width.setdefault(m["mem"], set()).add(_address_width(m["addr"]))
+    other = set(re.findall(r"\b(memory_\w+)\[", src)) - {m["mem"] for m in reads}
+    pad = {mem: 1 << max(w) for mem, w in width.items()
+           if mem in depth and mem not in other and None not in w and len(w) == 1 and (1 << max(w)) >= depth[mem]}
+
+    def read(m):
+        if m["mem"] not in pad:
+            return m.group(0)
+        ind = m["ind"]
+        return (f"{ind}if ({m['en']}) {{\n"
+                f"{ind}\t{m['dst']} = {m['mem']}[size_t(({m['addr']}).data[0])];\n{ind}}}")
+
+    def decl(m):
+        d = pad.get(m.group(2))
+        return m.group(0) if d is None else f"\tmemory<{m.group(1)}> {m.group(2)} {{ {d}u }};"
+    return _MEM_DECL.sub(decl, _MEM_READ.sub(read, src))
 
 
 _EVAL_BODY = re.compile(r"^bool p_top::eval\(performer \*performer\) \{\n.*?^\}\n", re.S | re.M)
@@ -257,13 +301,13 @@ def _alias_locals(src: str) -> str:
 
 
 def rewrite(src: str) -> tuple[str, str]:
-    """The generated C++ as the driver compiles it, and the macros that go with it: every rewrite
-    below (exact, checked by the tests against golden and against CXXRTL's own stepping)."""
+    """The generated C++ of one model as the driver compiles it, and the macros that go with it
+    (``VQ_EXACT_STEP``, ``VQ_INPLACE``; see driver.cc): every rewrite below (exact, checked by the
+    tests against golden and against CXXRTL's own stepping)."""
     macros = ""
     if "converged = false" in src:          # combinational feedback: see driver.cc
         macros += "#define VQ_EXACT_STEP 1\n"
-    macros += _fast_commit(src)
-    src = _fast_shifts(_fast_slices(_alias_locals(src)))
+    src = _padded_memories(_fast_shifts(_fast_slices(_alias_locals(src))))
     inplace = inplace_cycle(src)
     if inplace is not None:
         src = inplace
@@ -271,25 +315,54 @@ def rewrite(src: str) -> tuple[str, str]:
     return src, macros
 
 
+_NAMESPACE = re.compile(r"^namespace cxxrtl_design \{$(.*)^\} // namespace cxxrtl_design$", re.S | re.M)
+
+
+def _in_namespace(src: str, name: str) -> str:
+    """One model's C++ with its ``cxxrtl_design`` namespace renamed ``name`` and CXXRTL's C API entry
+    point (``cxxrtl_design_create``) dropped, so that both halves compile in one translation unit."""
+    m = _NAMESPACE.search(src)
+    if not m:
+        raise ToolchainError("unexpected CXXRTL output: no cxxrtl_design namespace")
+    return src[:m.start()] + f"namespace {name} {{{m.group(1)}}} // namespace {name}\n"
+
+
 def cxxrtl_program(info: DesignInfo) -> tuple[str, str]:
-    """(design.cc, ports.h) of the CXXRTL library for this design."""
-    src, macros = rewrite(cxxrtl_source(info))
-    return src, ports_header(info, _mangle_cxxrtl) + macros
+    """(design.cc, ports.h) of the CXXRTL library for this design: both halves, the front end in
+    namespace ``vq_front`` and the back end in ``vq_back``, and their macros (``VQ_FRONT_INPLACE``,
+    ``VQ_BACK_EXACT_STEP``, ...)."""
+    sources = cxxrtl_sources(info)
+    parts, macros = [], ""
+    for half in HALVES:
+        src, flags = rewrite(sources[half])
+        parts.append(_in_namespace(src, f"vq_{half}"))
+        macros += flags.replace("#define VQ_", f"#define VQ_{half.upper()}_")
+    return "\n".join(parts), ports_header(info, _mangle_cxxrtl, link=True) + macros
 
 
 def _mangle_cxxrtl(name: str) -> str:
     return "p_" + name.replace("_", "__")
 
 
-def ports_header(info: DesignInfo, access) -> str:
-    """``ports.h`` for a driver; ``access(port)`` gives the C++ expression (member) of a port."""
+def ports_header(info: DesignInfo, access, *, link: bool = False) -> str:
+    """``ports.h`` for a driver; ``access(port)`` gives the C++ expression (member) of a port. With
+    ``link``, the ports of the two halves (CXXRTL): the front end's ``o_valid``, ``o_ready``,
+    ``link`` and the back end's ``link``, ``payload``, and ``VQ_LINK_BITS``."""
     lines = ["// generated by sim/cxxrtl_backend.py: ports of TexelFetch", "#pragma once",
              f"#define VQ_STAGE_COUNT {len(info.stages)}",
              f'#define VQ_PORT_NAMES "{",".join(info.stages)};{",".join(info.strobes)}"']
     lines.append(f"#define VQ_PREV_CLK prev_{access('clk')}")
-    for macro, port in (("CLK", "clk"), ("RST", "rst"), ("I_VALID", "i__valid"), ("I_READY", "i__ready"),
-                        ("I_PAYLOAD", "i__payload"), ("O_VALID", "o__valid"), ("O_READY", "o__ready"),
-                        ("O_PAYLOAD", "o__payload"), ("VALID", "valid")):
+    names = [("CLK", "clk"), ("RST", "rst"), ("I_VALID", "i__valid"), ("I_READY", "i__ready"),
+             ("I_PAYLOAD", "i__payload"), ("O_VALID", "o__valid"), ("O_READY", "o__ready"),
+             ("O_PAYLOAD", "o__payload"), ("VALID", "valid")]
+    if link:
+        names = [n for n in names if n[0] != "O_PAYLOAD"]
+        names = [(m, {"o__valid": "o_valid", "o__ready": "o_ready"}.get(p, p)) for m, p in names]
+        names += [("LINK", "link"), ("RGBA", "rgba")] + ([("O_TAG", "o_tag")] if info.tag_width else [])
+        lines.append(f"#define VQ_LINK_BITS {info.link_width}")
+        if info.tag_width:                      # where TexelFetch puts the front end's o_tag in o.payload
+            lines.append(f"#define VQ_O_TAG_OFFSET {info.response_fields['tag'][0]}")
+    for macro, port in names:
         lines.append(f"#define VQ_{macro} {access(port)}")
     strobes = " ".join(f"c[{STROBES[s]}] += vq_get(top.{access(s)});" for s in info.strobes)
     lines.append(f"#define VQ_STROBES(top, c) {strobes}")
@@ -425,6 +498,8 @@ class BatchLibrary:
                                            ctypes.c_uint32]
             lib.vq_run.argtypes = [ctypes.c_void_p, ctypes.c_uint64, _i64p, _u32p, _u8p, ctypes.c_uint64,
                                    ctypes.c_uint64, _u32p, _u64p]
+            if hasattr(lib, "vq_set_threads"):         # CXXRTL only (the two halves: driver.cc)
+                lib.vq_set_threads.argtypes = [ctypes.c_void_p, ctypes.c_int]
             if lib.vq_api_version() != API_VERSION:
                 raise ToolchainError(f"{path}: batch API version {lib.vq_api_version()}, expected {API_VERSION}")
             BatchLibrary._loaded[path] = lib
@@ -433,6 +508,15 @@ class BatchLibrary:
         self.handle = lib.vq_open()
         self.stage_count = lib.vq_stage_count()
         self.runtime_memories = bool(lib.vq_runtime_memories())
+        self.threads = 1
+        self.set_threads(default_threads())
+
+    def set_threads(self, threads: int) -> int:
+        """Threads ``vq_run`` may use: 2 runs the back end of the unit on a second thread (CXXRTL;
+        the Verilator library always uses one). Returns the number in use."""
+        if hasattr(self.lib, "vq_set_threads"):
+            self.threads = int(self.lib.vq_set_threads(self.handle, int(threads)))
+        return self.threads
 
     def close(self):
         if self.handle:
@@ -474,6 +558,22 @@ class BatchLibrary:
         if sys.byteorder == "little":
             return rc, rgba.view(np.uint8).reshape(n, 4), counters
         return rc, np.stack([(rgba >> (8 * k)) & 0xFF for k in range(4)], 1).astype(np.uint8), counters
+
+
+def default_threads() -> int:
+    """Threads a compiled simulation uses: ``$VQTEX_SIM_THREADS`` if set, else 2 when this process
+    may run on two or more CPUs, else 1."""
+    env = os.environ.get("VQTEX_SIM_THREADS", "").strip()
+    if env:
+        try:
+            return max(1, int(env))
+        except ValueError:
+            raise ToolchainError(f"VQTEX_SIM_THREADS must be a number, not {env!r}") from None
+    try:
+        cpus = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        cpus = os.cpu_count() or 1
+    return 2 if cpus >= 2 else 1
 
 
 def ready_pattern(seed: int, stall: float, ncycles: int) -> np.ndarray:

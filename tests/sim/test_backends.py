@@ -58,14 +58,33 @@ def test_backends_agree(sets, name, one_port, stall, with_verilator):
             assert_same(ver, gold, what + " verilator")
 
 
-def test_long_stream_compiled_only(sets):
-    """A longer stream with heavy backpressure (pattern regrown by the driver) on the compiled backends."""
+@pytest.mark.parametrize("threads", [1, 2])
+def test_long_stream_compiled_only(sets, threads, monkeypatch):
+    """A longer stream with heavy backpressure (pattern regrown by the driver) on the compiled
+    backend, its halves on one thread and on two (the back end then runs behind the front end
+    through the ring of link records: 20000 requests are many turns of it)."""
     need("g++")
+    monkeypatch.setenv("VQTEX_SIM_THREADS", str(threads))
     ts = sets["mixed"]
     req = random_requests(ts, 20000, seed=3)
     gold = simulate(ts, req, backend="golden", stall=0.7, seed=11)
     assert_same(simulate(ts, req, backend="cxxrtl", stall=0.7, seed=11), gold, "cxxrtl long")
     assert gold.stall_cycles["output_backpressure"] > 20000
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_long_one_port_stream_threads(sets, threads, monkeypatch):
+    """One-port (the front end holds its first stages on a straddle), light backpressure, no
+    backpressure: both thread counts equal golden, cycle for cycle."""
+    need("g++")
+    monkeypatch.setenv("VQTEX_SIM_THREADS", str(threads))
+    ts = sets["w16"]
+    req = random_requests(ts, 12000, seed=8)
+    for stall in (0.0, 0.2):
+        gold = simulate(ts, req, backend="golden", stall=stall, seed=3, one_port=True)
+        assert gold.straddles > 0
+        got = simulate(ts, req, backend="cxxrtl", stall=stall, seed=3, one_port=True)
+        assert_same(got, gold, f"one-port stall {stall} threads {threads}")
 
 
 def test_empty_and_single_request(sets):
