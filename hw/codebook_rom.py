@@ -157,15 +157,18 @@ class CodebookROM(wiring.Component):
                 m.d.comb += tbt.eq(t)
         nwords = -(-(nbytes + 3) // 4) + 1     # 4-byte words of the padded entry (see stage 3)
         addr_bits = (4 * nwords - 1).bit_length()
-        start = reg((self.texel_off + tbt)[:addr_bits], "start_read")
-        ustart = reg((self.u_off + ct)[:addr_bits], "ustart_read")
-        vstart = reg((self.v_off + ct)[:addr_bits], "vstart_read")
-        compressed = reg(self.compressed, "compressed_read")
-        color = reg(self.color, "color_read")
+        # The fields that ride beside the memories, one register per stage (assigned in one piece:
+        # one register update per stage in a simulator instead of five).
+        carried = data.StructLayout({"start": addr_bits, "ustart": addr_bits, "vstart": addr_bits,
+                                     "compressed": 1, "color": 2})
+        f1 = Signal(carried, name="fields_read")
+        with m.If(self.en):
+            m.d.sync += f1.eq(Cat((self.texel_off + tbt)[:addr_bits], (self.u_off + ct)[:addr_bits],
+                                  (self.v_off + ct)[:addr_bits], self.compressed, self.color))
 
         # Stage 2: the banks' data registers (in BankedROM); the fields follow.
-        start, ustart, vstart = reg(start, "start_data"), reg(ustart, "ustart_data"), reg(vstart, "vstart_data")
-        compressed, color = reg(compressed, "compressed_data"), reg(color, "color_data")
+        f2 = reg(f1, "fields_data")
+        start, ustart, vstart = f2.start, f2.ustart, f2.vstart
 
         # Stage 3: per codebook bank, the 4-byte words holding the texel (two: a 64-bit window) and
         # U and V, each picked from a list of words by the word number (a multiplexer of whole
@@ -184,9 +187,8 @@ class CodebookROM(wiring.Component):
             v_words.append(reg(pick(words, vstart[2:]), f"v_word{k}"))
         bank = reg(codebook.bank, "bank_window")
         raw_word = reg(raw.word, "raw_window")
-        start, ustart, vstart = reg(start[:2], "start_window"), reg(ustart[:2], "ustart_window"), \
-            reg(vstart[:2], "vstart_window")
-        compressed, color = reg(compressed, "compressed_window"), reg(color, "color_window")
+        f3 = reg(Cat(start[:2], ustart[:2], vstart[:2], f2.compressed, f2.color), "fields_window")
+        start, ustart, vstart, compressed, color = f3[0:2], f3[2:4], f3[4:6], f3[6], f3[7:9]
 
         # Stage 4: the bank's words, then the bytes.
         window = pick(windows, bank)

@@ -89,8 +89,8 @@ class ColorMatrix(wiring.Component):
 
         # Stage 1: offsets, registered (the multipliers' operands come straight from flip-flops).
         x = [Signal(signed(9), name=f"x{k}") for k in range(3)]
-        samples_r = Signal(SamplesLayout)
-        color_r = Signal(2)
+        # The samples and their format ride beside, one register per stage (one update each).
+        carried_r = Signal(len(self.samples.as_value()) + 2, name="carried_r")
         with m.If(self.en):
             for k in range(3):
                 sample, off = self.samples[k], mat.offsets[k]
@@ -100,17 +100,17 @@ class ColorMatrix(wiring.Component):
                     m.d.sync += x[k].eq(Cat(sample[:7], ~sample[7]).as_signed())
                 else:
                     m.d.sync += x[k].eq(sample - off)
-            m.d.sync += [samples_r.eq(self.samples), color_r.eq(self.color)]
+            m.d.sync += carried_r.eq(Cat(self.samples, self.color))
 
         # Stage 2: constant multiplications.
         prod = [[Signal(signed(pbits), name=f"p_{'rgb'[c]}{'yuv'[k]}") for k in range(3)] for c in range(3)]
-        samples_p = Signal(SamplesLayout)
-        color_p = Signal(2)
+        carried_p = Signal.like(carried_r, name="carried_p")
         with m.If(self.en):
             for c in range(3):
                 for k in range(3):
                     m.d.sync += prod[c][k].eq(x[k] * C(mat.coeffs[c][k], signed(19)))
-            m.d.sync += [samples_p.eq(samples_r), color_p.eq(color_r)]
+            m.d.sync += carried_p.eq(carried_r)
+        samples_p, color_p = SamplesLayout(carried_p[:-2]), carried_p[-2:]
 
         # Stage 2: sum + bias, shift, clamp; or bypass.
         acc = [Signal(signed(sbits), name=f"sum_{'rgb'[c]}") for c in range(3)]

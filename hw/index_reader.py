@@ -124,12 +124,13 @@ class IndexReader(wiring.Component):
         log2W = W.bit_length() - 1
 
         # Stage 1: the bit address k*b, registered (a multiplier's output goes straight to flops).
+        # The fields beside it are one register (one update per cycle in a simulator), as are the
+        # fields carried through each later stage.
         bit = Signal(self._k_bits + 5, name="bit")
-        base1 = Signal.like(self.base, name="base_bit")
-        b1 = Signal(5, name="b_bit")
-        valid1 = Signal(name="valid_bit")
+        fields1 = Signal(len(self.base) + 6, name="fields_bit")
+        base1, b1, valid1 = fields1[:len(self.base)], fields1[len(self.base):-1], fields1[-1]
         with m.If(self.en & ~self.hold):
-            m.d.sync += [bit.eq(self.k * self.b), base1.eq(self.base), b1.eq(self.b), valid1.eq(self.valid)]
+            m.d.sync += [bit.eq(self.k * self.b), fields1.eq(Cat(self.base, self.b, self.valid))]
 
         # Stage 2: word and offset; the memory read.
         w = Signal(max(len(self.base), self._k_bits + 5 - log2W) + 1)
@@ -156,7 +157,8 @@ class IndexReader(wiring.Component):
                 even.addr.eq((w + 1) >> 1), even.en.eq(self.en),
                 odd.addr.eq(w >> 1), odd.en.eq(self.en),
             ]
-            parity = reg(reg(w[0], "parity_word"), "parity_data")
+            fields3 = reg(reg(Cat(off, b1, w[0]), "fields_word"), "fields_data")
+            parity = fields3[-1]
             # Stage 4: word[w] is in the odd bank when w is odd.
             with m.If(self.en):
                 m.d.sync += [
@@ -173,15 +175,16 @@ class IndexReader(wiring.Component):
             ]
             with m.If(self.en):
                 m.d.sync += second.eq(self.hold)
-            straddled = reg(reg(self.straddle, "straddle_word"), "straddle_data")
+            fields3 = reg(reg(Cat(off, b1, self.straddle), "fields_word"), "fields_data")
+            straddled = fields3[-1]
             # Stage 4: the first read (word w) went down the pipeline one item ahead, as the bubble;
             # ``hi`` still holds it when the straddler's second read (word w + 1) arrives.
             with m.If(self.en):
                 m.d.sync += [hi.eq(mem.word), lo.eq(Mux(straddled, hi, mem.word))]
 
         # Stage 5: {hi, lo} >> off, masked to b bits.
-        off4 = reg(reg(reg(off, "off_word"), "off_data"), "off_pair")
-        b4 = reg(reg(reg(b1, "b_word"), "b_data"), "b_pair")
+        fields4 = reg(fields3[:-1], "fields_pair")
+        off4, b4 = fields4[:log2W], fields4[log2W:]
         mask = Signal(INDEX_BITS)
         m.d.comb += mask.eq(~(C((1 << INDEX_BITS) - 1, INDEX_BITS) << b4)[:INDEX_BITS])
         with m.If(self.en):

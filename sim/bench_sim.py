@@ -8,7 +8,9 @@ second of the run (end to end: ``run_batch``, the numpy side and ``vq_run``, bes
 compiled backends), of ``vq_run`` alone ("in library", best of three, without backpressure; it
 packs the requests and checks the response tags itself), and the build times of a *first* build (a
 fresh, temporary cache: Yosys or Verilator plus the C++ compiler) and of a cached build (a second
-process would see the same).
+process would see the same). The CXXRTL library runs the unit's two halves on two threads when the
+machine has two CPUs (``VQTEX_SIM_THREADS``); the same library on one thread is measured in the same
+run and printed as ``cxxrtl 1t``.
 Responses and cycle counts of every backend are checked against the golden model on the way.
 """
 
@@ -91,6 +93,14 @@ def run(json_out: bool = False, *, n_compiled: int = 4_000_000, n_pysim: int = 3
                     secs = min(secs, t)
                 if stall <= 0:
                     lib_s = _library_seconds(lib, info, req)
+                threads, one = lib.threads, None
+                if threads > 1:             # the same library, one thread, side by side
+                    lib.set_threads(1)
+                    one = float("inf")
+                    for _ in range(3):
+                        r1, t = _timed(lambda: run_batch(lib, info, req, stall=stall))
+                        one = min(one, t)
+                    one_ok = bool(np.array_equal(r1.responses, golden.responses) and r1.cycles == golden.cycles)
                 lib.close()
         except ToolchainError as e:
             rows[name] = {"error": str(e)}
@@ -107,10 +117,15 @@ def run(json_out: bool = False, *, n_compiled: int = 4_000_000, n_pysim: int = 3
                       "agrees_with_golden": bool(np.array_equal(res.responses, golden.responses)
                                                  and res.cycles == golden.cycles
                                                  and res.stall_cycles == golden.stall_cycles
-                                                 and res.straddles == golden.straddles)}
+                                                 and res.straddles == golden.straddles),
+                      "threads": threads}
+        if one is not None:
+            rows[f"{name} 1t"] = {"cycles": r1.cycles, "run_s": one, "cycles_per_s": r1.cycles / one,
+                                  "cycles_per_s_in_library": None, "build_first_s": t_first,
+                                  "build_cached_s": t_cached, "threads": 1, "agrees_with_golden": one_ok}
     if "pysim" in rows:
-        for name in ("cxxrtl", "verilator"):
-            if "cycles_per_s" in rows.get(name, {}):
+        for name in list(rows):
+            if name != "pysim" and "cycles_per_s" in rows[name]:
                 rows[name]["speedup_vs_pysim"] = rows[name]["cycles_per_s"] / rows["pysim"]["cycles_per_s"]
     if json_out:
         print(json.dumps(report, sort_keys=True))

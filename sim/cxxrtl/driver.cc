@@ -158,9 +158,17 @@ struct alignas(64) FrontRun {
         if (n == 0)
             rc = 0;
     }
-    // Up to ``limit`` more cycles (fewer when the run ends); returns the cycle count so far.
+    // Up to ``limit`` more cycles (fewer when the run ends); returns the cycle count so far. The
+    // loop works on local copies of the state (written back at the end): the model's stores could
+    // alias members, which would make the compiler reload and store them every cycle.
     uint64_t run(uint64_t limit) {
         auto &top = s.front.top;
+        const vq_layout lay = this->lay;
+        uint64_t sent = this->sent, got = this->got, c = this->c, payload = this->payload;
+        uint64_t bad = this->bad, bad_tag = this->bad_tag;
+        uint64_t strobes[VQ_C_OCCUPANCY] = {};
+        vq_occupancy occ = this->occ;
+        Record *ring = s.ring.data();
         for (uint64_t end = c + limit; c < end; c++) {
             if (got >= n) { rc = 0; break; }
             if (c >= max_cycles) { rc = 2; break; }
@@ -175,7 +183,7 @@ struct alignas(64) FrontRun {
             vq_put(top.VQ_O_READY, o_ready);
             bool took = false, accepted = false;
             uint64_t tag = 0;
-            Record &r = s.ring[c % VQ_RING];
+            Record &r = ring[c % VQ_RING];
             s.front.cycle([&]() {
                 took = vq_get(top.VQ_O_VALID) && o_ready;
                 accepted = i_valid && vq_get(top.VQ_I_READY);
@@ -183,7 +191,7 @@ struct alignas(64) FrontRun {
                 tag = lay.tag(vq_get(top.VQ_O_TAG) << VQ_O_TAG_OFFSET);   // as if read from o.payload
 #endif
                 r.link = vq_val(top.VQ_LINK);
-                VQ_STROBES(top, sums)
+                VQ_STROBES(top, strobes)
                 occ.add(uint32_t(vq_get(top.VQ_VALID)), sums + VQ_C_OCCUPANCY);
             });
             r.took = took;
@@ -201,6 +209,11 @@ struct alignas(64) FrontRun {
         }
         if (rc < 0 && got >= n)
             rc = 0;
+        for (int k = 0; k < VQ_C_OCCUPANCY; k++)
+            sums[k] += strobes[k];
+        this->sent = sent; this->got = got; this->c = c; this->payload = payload;
+        this->bad = bad; this->bad_tag = bad_tag;
+        this->occ = occ;
         return c;
     }
 };
