@@ -330,13 +330,14 @@ def _in_namespace(src: str, name: str) -> str:
 def cxxrtl_program(info: DesignInfo) -> tuple[str, str]:
     """(design.cc, ports.h) of the CXXRTL library for this design: both halves, the front end in
     namespace ``vq_front`` and the back end in ``vq_back``, and their macros (``VQ_FRONT_INPLACE``,
-    ``VQ_BACK_EXACT_STEP``, ...)."""
+    ``VQ_BACK_EXACT_STEP``, ..., each 0 or 1)."""
     sources = cxxrtl_sources(info)
     parts, macros = [], ""
     for half in HALVES:
         src, flags = rewrite(sources[half])
         parts.append(_in_namespace(src, f"vq_{half}"))
-        macros += flags.replace("#define VQ_", f"#define VQ_{half.upper()}_")
+        for flag in ("INPLACE", "EXACT_STEP"):     # 0 or 1 each: driver.cc's Half<> arguments
+            macros += f"#define VQ_{half.upper()}_{flag} {int(f'#define VQ_{flag} 1' in flags)}\n"
     return "\n".join(parts), ports_header(info, _mangle_cxxrtl, link=True) + macros
 
 

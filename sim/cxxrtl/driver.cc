@@ -85,27 +85,6 @@ struct Half {
     }
 };
 
-#ifdef VQ_FRONT_INPLACE
-constexpr bool front_inplace = true;
-#else
-constexpr bool front_inplace = false;
-#endif
-#ifdef VQ_FRONT_EXACT_STEP
-constexpr bool front_exact = true;
-#else
-constexpr bool front_exact = false;
-#endif
-#ifdef VQ_BACK_INPLACE
-constexpr bool back_inplace = true;
-#else
-constexpr bool back_inplace = false;
-#endif
-#ifdef VQ_BACK_EXACT_STEP
-constexpr bool back_exact = true;
-#else
-constexpr bool back_exact = false;
-#endif
-
 // What the back end needs of cycle c: the link and whether a response transfers.
 struct Record {
     value<VQ_LINK_BITS> link;
@@ -129,8 +108,8 @@ template<class P> static inline void vq_wait(P &&ready) {
 }
 
 struct Sim {
-    Half<vq_front::p_top, front_inplace, front_exact> front;
-    Half<vq_back::p_top, back_inplace, back_exact> back;
+    Half<vq_front::p_top, VQ_FRONT_INPLACE, VQ_FRONT_EXACT_STEP> front;
+    Half<vq_back::p_top, VQ_BACK_INPLACE, VQ_BACK_EXACT_STEP> back;
     std::vector<Record> ring = std::vector<Record>(VQ_RING);
     int threads = 1;
 
