@@ -12,7 +12,7 @@ from amaranth import *
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from golden.format import TextureSet
+from vqtex.golden.format import TextureSet
 
 from .banked_rom import BANK_DEPTH
 from .codebook_rom import CodebookROM

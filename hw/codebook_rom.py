@@ -15,7 +15,7 @@ from amaranth import *
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
-from golden.format import COLOR_CODES
+from vqtex.golden.format import COLOR_CODES
 
 from .banked_rom import BANK_DEPTH, BankedROM, pick
 

@@ -16,8 +16,8 @@ from amaranth import *
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from golden.color import ColorMatrix as ColorMatrixSpec
-from golden.format import COLOR_CODES
+from vqtex.golden.color import ColorMatrix as ColorMatrixSpec
+from vqtex.golden.format import COLOR_CODES
 
 from .codebook_rom import SamplesLayout
 

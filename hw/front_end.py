@@ -12,7 +12,7 @@ from amaranth import *
 from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from golden.format import TextureSet
+from vqtex.golden.format import TextureSet
 
 from . import index_reader
 from .address import BlockAddress

@@ -26,7 +26,7 @@ from amaranth import *
 from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from golden.format import TextureSet
+from vqtex.golden.format import TextureSet
 
 from .back_end import BackEnd
 from .banked_rom import BANK_DEPTH

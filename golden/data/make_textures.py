@@ -9,15 +9,13 @@ the renderer only reads the PNGs it wrote. Output is deterministic.
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import numpy as np
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent.parent))
+from vqtex.golden.render.imageio import write_image
 
-from golden.render.imageio import write_image  # noqa: E402
+HERE = Path(__file__).resolve().parent
 
 
 def fit(img: np.ndarray, width: int, height: int) -> np.ndarray:

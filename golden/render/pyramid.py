@@ -20,9 +20,9 @@ from typing import Protocol, Sequence
 
 import numpy as np
 
-from golden.mipmap import build_pyramid, downsample, to_rgba  # noqa: F401 (re-exported)
+from ..mipmap import build_pyramid, downsample, to_rgba  # noqa: F401 (re-exported)
 
-__all__ = ["TextureSource", "to_rgba", "downsample", "build_pyramid", "ReferenceSource"]
+__all__ = ["TextureSource", "to_rgba", "downsample", "build_pyramid", "ReferenceSource", "VQSource"]
 
 
 class TextureSource(Protocol):
@@ -98,3 +98,17 @@ class ReferenceSource:
         if (i < 0).any() or (j < 0).any() or (i >= w).any() or (j >= h).any():
             raise ValueError("fetch: (i, j) outside the level (or level missing)")
         return self._texels[self._base[tex, level] + j * w + i]
+
+
+class VQSource:
+    """golden.render's TextureSource over a compressed TextureSet (texels from golden.fetch)."""
+
+    def __init__(self, ts):
+        self.ts = ts
+
+    def level_shapes(self, tex: int):
+        return self.ts.level_shapes(tex)
+
+    def fetch(self, tex, level, i, j):
+        from ..fetch import fetch
+        return fetch(self.ts, tex, level, i, j)

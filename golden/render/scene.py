@@ -444,7 +444,7 @@ def _encoding(ctx, where, table, base: dict) -> dict:
 
 def _known_encoders() -> tuple[str, ...] | None:
     try:
-        from golden.encode import ENCODERS  # lazily: the encoder may be absent
+        from ..encode import ENCODERS  # lazily: the encoder may be absent
         return tuple(ENCODERS)
     except Exception:  # noqa: BLE001
         return None
@@ -718,8 +718,8 @@ def build_texture_set(scene: Scene, images=None):
     One ``golden.encode.encode`` call per group (its textures share a codebook), then
     ``golden.format.TextureSet.combine`` in group order (texture ids were assigned group by group).
     """
-    from golden.encode import encode  # lazily: the encoder is another package
-    from golden.format import TextureSet
+    from ..encode import encode  # lazily: the encoder is another package
+    from ..format import TextureSet
 
     if images is None:
         images = [img for img, _ in scene.load_textures()]

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from golden import codebook as cb
+from vqtex.golden import codebook as cb
 
 
 def _brute(x, c):

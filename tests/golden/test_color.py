@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from golden.color import (DREAMCAST_YUV422, JFIF_BT601, ColorMatrix, rgb_to_yuv, yuv_to_rgb_float)
+from vqtex.golden.color import (DREAMCAST_YUV422, JFIF_BT601, ColorMatrix, rgb_to_yuv, yuv_to_rgb_float)
 
 
 def _all_inputs(step=3):

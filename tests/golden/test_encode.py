@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from golden.encode import EncodeError, encode, reference_pyramid
-from golden.fetch import decode
-from golden.render.imageio import read_image
+from vqtex.golden.encode import EncodeError, encode, reference_pyramid
+from vqtex.golden.fetch import decode
+from vqtex.golden.render.imageio import read_image
 from pathlib import Path
 
 
@@ -103,9 +103,9 @@ def test_bad_images():
 
 def test_tsvq_encoder_uses_tree_search():
     """encoder="tsvq" is the paper's TSVQ: its index map is the tree search's, not a full search."""
-    from golden import codebook as vq
-    from golden.encode import block_vectors
-    from golden.format import unpack_indices
+    from vqtex.golden import codebook as vq
+    from vqtex.golden.encode import block_vectors
+    from vqtex.golden.format import unpack_indices
     img = _photo()
     if img.ndim == 2 or img.shape[2] == 1:
         img = np.repeat(img.reshape(img.shape[0], img.shape[1], 1), 3, axis=2)

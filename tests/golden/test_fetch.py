@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from golden.encode import encode, reference_pyramid
-from golden.mipmap import box_down as _box_down
-from golden.fetch import RequestError, check_requests, decode, fetch, straddles, lookup_descriptor, block_address
-from golden.format import TextureSet
+from vqtex.golden.encode import encode, reference_pyramid
+from vqtex.golden.mipmap import box_down as _box_down
+from vqtex.golden.fetch import RequestError, check_requests, decode, fetch, straddles, lookup_descriptor, block_address
+from vqtex.golden.format import TextureSet
 
 COLORS = ["rgb", "rgba", "intensity", "yuv411"]
 BLOCKS = [(2, 2), (4, 4), (4, 2), (2, 4), (4, 1), (1, 4), (8, 8), (1, 1)]

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from golden.encode import encode
-from golden.format import (FormatError, TextureSet, entry_layout, pack_indices, sub_levels,
+from vqtex.golden.encode import encode
+from vqtex.golden.format import (FormatError, TextureSet, entry_layout, pack_indices, sub_levels,
                            unpack_indices)
 
 
@@ -95,7 +95,7 @@ def test_container_rejects_damage(tmp_path):
 def test_container_rejects_inconsistent_descriptor():
     """A file whose checksum is right but whose descriptor points outside memory is rejected."""
     import json, struct, zlib
-    from golden.format import MAGIC
+    from vqtex.golden.format import MAGIC
     ts = _small_set()
     ts.descriptors["base"][0, 0] = 10 ** 6
     body = ts.to_bytes()[:-4]

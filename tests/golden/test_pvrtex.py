@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from golden import pvr
-from golden.color import DREAMCAST_YUV422, ColorMatrix
-from golden.render.imageio import read_image
+from vqtex.golden import pvr
+from vqtex.golden.color import DREAMCAST_YUV422, ColorMatrix
+from vqtex.golden.render.imageio import read_image
 
 DATA = Path(__file__).resolve().parent.parent / "data" / "pvrtex"
 GENERATED = sorted((DATA / "generated").glob("*.dt"))

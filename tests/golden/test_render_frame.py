@@ -5,14 +5,14 @@ import os
 import numpy as np
 import pytest
 
-from golden.render import textures
-from golden.render.frame import (
+from vqtex.golden.render import textures
+from vqtex.golden.render.frame import (
     frame_requests, load_requests, plan_frame, render_frame, resolve_frame, save_requests,
 )
-from golden.render.imageio import ImageIOError, read_image, write_image
-from golden.render.metrics import frame_mse, frame_psnr
-from golden.render.pyramid import ReferenceSource, build_pyramid, downsample
-from golden.render.scene import load_scene, parse_scene
+from vqtex.golden.render.imageio import ImageIOError, read_image, write_image
+from vqtex.golden.render.metrics import frame_mse, frame_psnr
+from vqtex.golden.render.pyramid import ReferenceSource, build_pyramid, downsample
+from vqtex.golden.render.scene import load_scene, parse_scene
 
 SMALL = """
 [scene]

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from golden.render.camera import Camera
-from golden.render.raster import SUBPIXEL_BITS, rasterize, rasterize_screen, snap
+from vqtex.golden.render.camera import Camera
+from vqtex.golden.render.raster import SUBPIXEL_BITS, rasterize, rasterize_screen, snap
 
 ONE = 1 << SUBPIXEL_BITS
 
@@ -241,7 +241,7 @@ def test_odd_frame_sizes(shape):
 
 
 def test_coverage_does_not_depend_on_the_chunk_size():
-    from golden.render.raster import coverage
+    from vqtex.golden.render.raster import coverage
 
     rng = np.random.default_rng(5)
     tris = snap(rng.uniform(-20, 90, (40, 3, 2)))

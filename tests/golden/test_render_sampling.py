@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from golden.render.camera import Camera
-from golden.render.pyramid import ReferenceSource, build_pyramid
-from golden.render.raster import Fragments, rasterize
-from golden.render.sampling import (
+from vqtex.golden.render.camera import Camera
+from vqtex.golden.render.pyramid import ReferenceSource, build_pyramid
+from vqtex.golden.render.raster import Fragments, rasterize
+from vqtex.golden.render.sampling import (
     FRAC_BITS, WEIGHT_BITS, Sampler, address, level_of_detail, quantize_lod, trilinear_weights,
 )
 

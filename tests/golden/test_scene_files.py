@@ -7,7 +7,7 @@ import types
 import numpy as np
 import pytest
 
-from golden.render.scene import (
+from vqtex.golden.render.scene import (
     BUILTIN_SCENES, DATA_DIR, SceneError, build_texture_set, convert_channels, load_scene, parse_scene,
 )
 
@@ -162,8 +162,8 @@ def _fake_encoder(monkeypatch):
                       tuple(names), tuple(im.shape[2] for im in images)))
         return FakeSet(len(images))
 
-    monkeypatch.setitem(sys.modules, "golden.encode", types.SimpleNamespace(encode=encode, ENCODERS=("gla",)))
-    monkeypatch.setitem(sys.modules, "golden.format", types.SimpleNamespace(TextureSet=FakeSet))
+    monkeypatch.setitem(sys.modules, "vqtex.golden.encode", types.SimpleNamespace(encode=encode, ENCODERS=("gla",)))
+    monkeypatch.setitem(sys.modules, "vqtex.golden.format", types.SimpleNamespace(TextureSet=FakeSet))
     return calls
 
 
@@ -203,11 +203,11 @@ group = "g1"
 
 def test_build_texture_set_with_the_real_encoder_renders():
     """Scene -> compressed TextureSet -> bit-exact fetch -> frame."""
-    import golden.encode as encode_mod
-    import golden.fetch as fetch_mod
+    import vqtex.golden.encode as encode_mod
+    import vqtex.golden.fetch as fetch_mod
     assert encode_mod
-    from golden.render.frame import render_frame
-    from golden.render.metrics import frame_mse
+    from vqtex.golden.render.frame import render_frame
+    from vqtex.golden.render.metrics import frame_mse
 
     text = BASE.replace('size = [16, 16]', 'size = [16, 16]\ncodebook_size = 4\nblock = "2x2"') + """
 [[texture]]

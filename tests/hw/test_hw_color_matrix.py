@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from golden.color import DREAMCAST_YUV422, JFIF_BT601, ColorMatrix as Spec
-from golden.fetch import convert_color
-from golden.format import COLOR_CODES
-from hw.color_matrix import LATENCY, ColorMatrix
-from sim.streams import run_lockstep
+from vqtex.golden.color import DREAMCAST_YUV422, JFIF_BT601, ColorMatrix as Spec
+from vqtex.golden.fetch import convert_color
+from vqtex.golden.format import COLOR_CODES
+from vqtex.hw.color_matrix import LATENCY, ColorMatrix
+from tests.support import run_lockstep
 
 #: A third matrix: floor, F = 0, odd offsets, big negative coefficients (exercises clamping both ways).
 ODD = Spec(coeffs=((3, -2, 1), (-1, 1, 0), (0, 2, -3)), offsets=(17, 200, 0), frac_bits=0, rounding=False)

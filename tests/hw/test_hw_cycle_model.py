@@ -1,4 +1,4 @@
-"""sim.cycle_model (vectorised) against a cycle-by-cycle replay of TexelFetch's pipeline control.
+"""sim.backends.cycle_model (vectorised) against a cycle-by-cycle replay of TexelFetch's pipeline control.
 
 The replay is the RTL's control written out per cycle (the registered advance = no output stall in
 the previous cycle, the skid register, the one-port hold of the bit-address stage); the pysim tests
@@ -7,9 +7,9 @@ tie both to the RTL itself on shorter traces."""
 import numpy as np
 import pytest
 
-from hw.texel_fetch import LATENCY, REGISTERS, UPSTREAM_STAGES
-from sim.cycle_model import run_flags
-from sim.streams import ready_pattern
+from vqtex.hw.texel_fetch import LATENCY, REGISTERS, UPSTREAM_STAGES
+from vqtex.sim.backends.cycle_model import run_flags
+from vqtex.sim.streams import ready_pattern
 
 
 def replay(strad, *, stall, seed, one_port):

@@ -4,20 +4,20 @@ codebook ROM; and the banked ROM behind the last two."""
 import numpy as np
 import pytest
 
-import hw_cases
-from golden.fetch import block_address, lookup_descriptor, read_codeword, read_index
-from golden.format import DESCRIPTOR_DTYPE, DESCRIPTOR_FIELDS, MAX_LEVELS, pack_indices
-from hw import banked_rom, codebook_rom, index_reader
-from hw.address import BlockAddress
-from hw.banked_rom import BankedROM
-from hw.codebook_rom import CodebookROM
-from hw.descriptor import DescriptorTable, descriptor_widths
-from hw.index_reader import IndexReader
-from sim.streams import run_lockstep
+from tests import support
+from vqtex.golden.fetch import block_address, lookup_descriptor, read_codeword, read_index
+from vqtex.golden.format import DESCRIPTOR_DTYPE, DESCRIPTOR_FIELDS, MAX_LEVELS, pack_indices
+from vqtex.hw import banked_rom, codebook_rom, index_reader
+from vqtex.hw.address import BlockAddress
+from vqtex.hw.banked_rom import BankedROM
+from vqtex.hw.codebook_rom import CodebookROM
+from vqtex.hw.descriptor import DescriptorTable, descriptor_widths
+from vqtex.hw.index_reader import IndexReader
+from tests.support import run_lockstep
 
 
 def test_descriptor_table_every_row():
-    ts = hw_cases.combined_set()
+    ts = support.combined_set()
     tex, lev = np.divmod(np.arange(ts.n_textures * MAX_LEVELS), MAX_LEVELS)
     dut = DescriptorTable(ts)
     res = run_lockstep(dut, {"texture": tex.tolist(), "level": lev.tolist()}, ["row"], 1,
@@ -98,9 +98,9 @@ def test_index_reader_every_width_and_offset(word_bits, one_port, bank_depth):
 @pytest.mark.parametrize("name,bank_depth", [("combined", 512), ("combined", 8), ("yuv_2x4_b12_mip_w64", 512),
                                              ("rgba_2x2_b7_mip_w16", 4)])
 def test_codebook_rom_every_level(name, bank_depth):
-    ts = hw_cases.combined_set() if name == "combined" else hw_cases.texture_set(name)
+    ts = support.combined_set() if name == "combined" else support.texture_set(name)
     rng = np.random.default_rng(5)
-    req = np.concatenate([hw_cases.random_requests(ts, 150, 6), hw_cases.adversarial_requests(ts, 7)])
+    req = np.concatenate([support.random_requests(ts, 150, 6), support.adversarial_requests(ts, 7)])
     d = lookup_descriptor(ts, req[:, 0], req[:, 1])
     comp = d["compressed"].astype(bool)
     k, x, y = block_address(d, req[:, 2], req[:, 3])

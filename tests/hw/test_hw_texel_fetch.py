@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 from amaranth.sim import Simulator
 
-import hw_cases
-from golden.fetch import RequestError, block_address, decode, fetch, lookup_descriptor, straddles
-from hw.texel_fetch import LATENCY, REGISTERS, STAGES, TexelFetch
-from sim.backend import simulate
-from sim.streams import stream_get, stream_put
+from tests import support
+from vqtex.golden.fetch import RequestError, block_address, decode, fetch, lookup_descriptor, straddles
+from vqtex.hw.texel_fetch import LATENCY, STAGES, TexelFetch
+from vqtex.sim.backends.interface import simulate
+from tests.support import compare_with_golden, stream_get, stream_put
 
 
 def _straddle_count(ts, req):
@@ -18,34 +18,19 @@ def _straddle_count(ts, req):
     return int(straddles(d[comp], k, ts.word_bits).sum())
 
 
-def _compare(ts, req, **kw):
-    """pysim and golden agree on everything a SimResult holds; returns the pysim result."""
-    p = simulate(ts, req, backend="pysim", **kw)
-    g = simulate(ts, req, backend="golden", **kw)
-    assert np.array_equal(p.responses, fetch(ts, req[:, 0], req[:, 1], req[:, 2], req[:, 3]))
-    assert np.array_equal(g.responses, p.responses)
-    assert (p.cycles, p.requests, p.latency, p.stall_cycles, p.straddles) == \
-           (g.cycles, g.requests, g.latency, g.stall_cycles, g.straddles)
-    assert p.occupancy.keys() == g.occupancy.keys() == set(REGISTERS)
-    assert all(p.occupancy[s] == pytest.approx(g.occupancy[s], abs=1e-12) for s in REGISTERS)
-    # Every cycle is a transfer, a backpressure stall, a one-port bubble or one of the first LATENCY.
-    assert p.cycles == len(req) + LATENCY + p.stall_cycles["output_backpressure"] + p.stall_cycles["one_port_straddle"]
-    return p
-
-
-SETS = list(hw_cases.CONFIGS) + ["combined"]
+SETS = list(support.CONFIGS) + ["combined"]
 
 
 def _set(name):
-    return hw_cases.combined_set() if name == "combined" else hw_cases.texture_set(name)
+    return support.combined_set() if name == "combined" else support.texture_set(name)
 
 
 @pytest.mark.parametrize("one_port", [False, True], ids=["two_bank", "one_port"])
 @pytest.mark.parametrize("name", SETS)
 def test_bit_exact_random_and_adversarial_with_backpressure(name, one_port):
     ts = _set(name)
-    adv = hw_cases.adversarial_requests(ts, seed=1)
-    req = np.concatenate([hw_cases.random_requests(ts, 300, seed=2 + one_port), adv])
+    adv = support.adversarial_requests(ts, seed=1)
+    req = np.concatenate([support.random_requests(ts, 300, seed=2 + one_port), adv])
     # the adversarial set reaches every bit offset an index of each compressed level can start at
     d = lookup_descriptor(ts, adv[:, 0], adv[:, 1])
     for b in set(d["index_bits"][d["compressed"].astype(bool)].tolist()):
@@ -53,8 +38,8 @@ def test_bit_exact_random_and_adversarial_with_backpressure(name, one_port):
         sel = d["compressed"].astype(bool) & (d["index_bits"] == b)
         small = any((1 << int(r["log2w"]) >> int(r["log2bw"])) * (1 << int(r["log2h"]) >> int(r["log2bh"]))
                     < ts.word_bits for r in d[sel])
-        assert small or reachable <= hw_cases.straddle_offsets(ts, adv[sel])
-    p = _compare(ts, req, stall=0.3 if one_port else 0.25, seed=3, one_port=one_port)
+        assert small or reachable <= support.straddle_offsets(ts, adv[sel])
+    p = compare_with_golden(ts, req, "pysim", stall=0.3 if one_port else 0.25, seed=3, one_port=one_port)
     assert p.straddles == _straddle_count(ts, req)
     assert p.stall_cycles["one_port_straddle"] == (p.straddles if one_port else 0)
 
@@ -62,9 +47,9 @@ def test_bit_exact_random_and_adversarial_with_backpressure(name, one_port):
 @pytest.mark.parametrize("one_port", [False, True], ids=["two_bank", "one_port"])
 def test_small_banks_end_to_end(one_port):
     """Every memory split into many small banks (the bank selects at work): same responses and cycles."""
-    from sim import pysim_backend
+    from vqtex.sim.backends import pysim as pysim_backend
     ts = _set("combined")
-    req = np.concatenate([hw_cases.random_requests(ts, 200, seed=12), hw_cases.adversarial_requests(ts, seed=13)])
+    req = np.concatenate([support.random_requests(ts, 200, seed=12), support.adversarial_requests(ts, seed=13)])
     p = pysim_backend.run(ts, req, stall=0.3, seed=14, one_port=one_port, bank_depth=8)
     g = simulate(ts, req, backend="golden", stall=0.3, seed=14, one_port=one_port)
     assert np.array_equal(p.responses, g.responses)
@@ -75,8 +60,8 @@ def test_small_banks_end_to_end(one_port):
 def test_throughput_one_per_cycle(name):
     """N requests with no backpressure complete in exactly N + LATENCY cycles, 8- and 12-bit alike."""
     ts = _set(name)
-    req = hw_cases.random_requests(ts, 250, seed=7)
-    p = _compare(ts, req)
+    req = support.random_requests(ts, 250, seed=7)
+    p = compare_with_golden(ts, req, "pysim")
     assert p.cycles == len(req) + LATENCY
     assert p.stall_cycles == {"output_backpressure": 0, "one_port_straddle": 0}
     assert p.straddles == _straddle_count(ts, req)
@@ -87,9 +72,9 @@ def test_throughput_one_per_cycle(name):
 @pytest.mark.parametrize("name", ["yuv_4x4_b12_mip", "rgb_4x4_b12_w16", "rgb_4x4_b8_mip"])
 def test_one_port_penalty_exactly_one_cycle_per_straddle(name):
     ts = _set(name)
-    req = hw_cases.random_requests(ts, 250, seed=8)
+    req = support.random_requests(ts, 250, seed=8)
     s = _straddle_count(ts, req)
-    p = _compare(ts, req, one_port=True)
+    p = compare_with_golden(ts, req, "pysim", one_port=True)
     assert p.cycles == len(req) + LATENCY + s
     assert p.stall_cycles == {"output_backpressure": 0, "one_port_straddle": s}
     if ts.textures[0].index_bits == 8:
@@ -98,7 +83,7 @@ def test_one_port_penalty_exactly_one_cycle_per_straddle(name):
 
 def test_decode_every_texel_of_a_level():
     """An independent path: every texel of a 32x32 yuv411 level equals golden.fetch.decode."""
-    ts = hw_cases.combined_set()
+    ts = support.combined_set()
     t = 2
     h, w = 32, 32
     jj, ii = np.mgrid[0:h, 0:w]
@@ -108,7 +93,7 @@ def test_decode_every_texel_of_a_level():
 
 
 def test_latency_of_a_single_request():
-    ts = hw_cases.texture_set("rgb_4x4_b8_mip")
+    ts = support.texture_set("rgb_4x4_b8_mip")
     dut = TexelFetch(ts)
     assert dut.latency == LATENCY == len(STAGES) == 14
     req = (0, 1, 5, 7)
@@ -144,8 +129,8 @@ def test_latency_of_a_single_request():
 
 def test_irregular_input_and_output_never_lose_duplicate_or_reorder():
     """Requests with idle gaps, responses taken with random backpressure (stream helpers)."""
-    ts = hw_cases.combined_set()
-    req = hw_cases.random_requests(ts, 120, seed=10)
+    ts = support.combined_set()
+    req = support.random_requests(ts, 120, seed=10)
     dut = TexelFetch(ts, one_port=True, tag_width=7)
     rng = np.random.default_rng(11)
     gaps_in = rng.integers(0, 3, len(req)).tolist()
@@ -180,7 +165,7 @@ def test_irregular_input_and_output_never_lose_duplicate_or_reorder():
 
 
 def test_simulate_rejects_bad_requests():
-    ts = hw_cases.texture_set("rgb_4x4_b8_mip")
+    ts = support.texture_set("rgb_4x4_b8_mip")
     with pytest.raises(RequestError):
         simulate(ts, np.array([[0, 0, 64, 0]]), backend="golden")
     with pytest.raises(RequestError):

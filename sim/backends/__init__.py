@@ -1,0 +1,17 @@
+"""Simulation backends: the RTL run against the golden model.
+
+``simulate(ts, requests, backend=...)`` (:mod:`.interface`) runs a request stream on one of
+
+- ``golden``: :func:`vqtex.golden.fetch.fetch` with the exact cycle model (:mod:`.cycle_model`);
+- ``pysim``: Amaranth's simulator (:mod:`.pysim`), for small tests;
+- ``cxxrtl``: the design compiled to C++ by CXXRTL (:mod:`.cxxrtl`, :mod:`.cxxrtl_inplace`), 2e7 cycles/s;
+- ``verilator``: the exported Verilog (:mod:`.verilog`) compiled by Verilator (:mod:`.verilator`).
+
+:mod:`.design` holds what the compiled backends and the Icarus cross-check need to know about the
+elaborated design (ports, payload layouts, memories, request packing); :mod:`.toolchain` finds the
+compilers and keeps the build cache; ``drivers/`` holds the C++ batch drivers the backends compile.
+"""
+
+from .interface import BACKENDS, SimResult, simulate
+
+__all__ = ["BACKENDS", "SimResult", "simulate"]

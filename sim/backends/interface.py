@@ -1,0 +1,112 @@
+"""The interface every simulation backend implements: ``simulate(ts, requests, ...) -> SimResult``.
+
+Backends
+--------
+``golden``
+    Responses from :func:`golden.fetch.fetch`; cycles, stalls, straddles and occupancy from
+    :mod:`sim.backends.cycle_model`, the exact cycle model of the RTL.
+``pysim``
+    Amaranth's simulator running ``hw.texel_fetch.TexelFetch`` (:mod:`sim.backends.pysim`).
+other names (``cxxrtl``, ``verilator``, ...)
+    The module ``vqtex.sim.backends.<name>`` providing ``run(ts, requests, *, stall, seed, one_port)``
+    that returns a :class:`SimResult`.
+
+Every backend presents the requests back to back from cycle 0 (``i.valid`` high while requests
+remain), drives ``o.ready`` from :func:`sim.streams.ready_pattern` ``(seed, stall, ...)`` and counts
+cycles from cycle 0 (the first cycle a request is presented) up to and including the cycle the last
+response transfers, so ``cycles == N + latency`` without backpressure (plus one cycle per straddling
+index read with ``one_port``). All backends return the same responses and the same counts.
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+
+import numpy as np
+
+from vqtex.golden.fetch import check_requests, fetch
+from vqtex.golden.format import TextureSet
+
+__all__ = ["SimResult", "simulate", "BACKENDS"]
+
+#: Backend names known here (others are looked up as ``vqtex.sim.backends.<name>``).
+BACKENDS = ("golden", "pysim", "cxxrtl", "verilator")
+
+
+@dataclass
+class SimResult:
+    """What a simulation run reports.
+
+    Members
+    -------
+    responses : ndarray uint8 (N, 4)
+        RGBA per request, in request order.
+    cycles : int
+        Cycles from the first cycle a request is presented to the cycle the last response transfers,
+        inclusive (0 for no requests).
+    requests : int
+        N.
+    latency : int
+        The pipeline's latency (``hw.texel_fetch.LATENCY``).
+    stall_cycles : dict
+        ``{"output_backpressure": cycles with o.valid & ~o.ready,
+        "one_port_straddle": extra index-read cycles (one-port only, else 0)}``.
+    straddles : int
+        Index reads that straddled a word boundary (counted in both index-reader modes).
+    occupancy : dict or None
+        Stage name (``hw.texel_fetch.STAGES``) -> fraction of ``cycles`` its valid bit was high.
+    """
+    responses: np.ndarray
+    cycles: int
+    requests: int
+    latency: int
+    stall_cycles: dict
+    straddles: int
+    occupancy: dict | None = None
+
+
+def _as_requests(requests) -> np.ndarray:
+    req = np.asarray(requests)
+    if req.size == 0:
+        return np.zeros((0, 4), np.int64)
+    if req.ndim != 2 or req.shape[1] != 4 or not np.issubdtype(req.dtype, np.integer):
+        raise ValueError("requests must be an integer array of shape (N, 4): texture, level, i, j")
+    return req.astype(np.int64)
+
+
+def _golden(ts: TextureSet, req: np.ndarray, *, stall: float, seed: int, one_port: bool) -> SimResult:
+    from . import cycle_model
+    model = cycle_model.run_cycles(ts, req, stall=stall, seed=seed, one_port=one_port)
+    responses = fetch(ts, req[:, 0], req[:, 1], req[:, 2], req[:, 3]) if len(req) else np.zeros((0, 4), np.uint8)
+    return SimResult(responses=responses, cycles=model["cycles"], requests=len(req),
+                     latency=cycle_model.LATENCY, stall_cycles=model["stall_cycles"],
+                     straddles=model["straddles"], occupancy=model["occupancy"])
+
+
+def simulate(ts: TextureSet, requests, *, backend: str = "golden", stall: float = 0.0, seed: int = 0,
+             one_port: bool = False) -> SimResult:
+    """Run ``requests`` ((N, 4) int: texture, level, i, j) through ``backend``.
+
+    Raises
+    ------
+    golden.fetch.RequestError
+        If a request is outside its texture (checked before any backend runs).
+    ValueError
+        If ``stall`` is not in [0, 1), the requests are malformed or the backend is unknown.
+    """
+    stall = float(stall)
+    if not 0.0 <= stall < 1.0:
+        raise ValueError(f"stall probability {stall} must be in [0, 1)")
+    req = _as_requests(requests)
+    if len(req):
+        check_requests(ts, req[:, 0], req[:, 1], req[:, 2], req[:, 3])
+    if backend == "golden":
+        return _golden(ts, req, stall=stall, seed=seed, one_port=one_port)
+    try:
+        module = importlib.import_module(f"vqtex.sim.backends.{backend}")
+    except ModuleNotFoundError as e:
+        if e.name == f"vqtex.sim.backends.{backend}":
+            raise ValueError(f"unknown simulation backend {backend!r}") from None
+        raise
+    return module.run(ts, req, stall=stall, seed=seed, one_port=one_port)

@@ -1,0 +1,7 @@
+"""``python -m vqtex.sim.cli ...``: the same as the ``vqtex`` command."""
+
+import sys
+
+from .entry import main
+
+sys.exit(main())

@@ -1,0 +1,38 @@
+"""``vqtex bench WHAT [--json]``: benchmarks that print numbers (never timed tests).
+
+encode  -- the codebook designer against scikit-learn's KMeans (needs the ``bench`` extra)
+mip     -- extended codewords: the paper's averages against joint training, per level
+sim     -- simulation backends: pysim, compiled CXXRTL, Verilator (cycles per second, build times)
+render  -- golden render time (uncompressed and VQ) and RTL cycles per frame, both built-in scenes
+"""
+
+from __future__ import annotations
+
+import importlib
+
+from .common import CliError
+
+__all__ = ["add_parser"]
+
+BENCHES = {
+    "encode": "sim.bench.encoder",
+    "mip": "sim.bench.mipmaps",
+    "sim": "sim.bench.simulation",
+    "render": "sim.bench.render",
+}
+
+
+def cmd_bench(args) -> int:
+    try:
+        mod = importlib.import_module(BENCHES[args.what])
+    except ImportError as e:
+        raise CliError(f"bench {args.what} needs {e.name} (pip install '.[bench]')") from None
+    mod.run(json_out=args.json)
+    return 0
+
+
+def add_parser(sub) -> None:
+    b = sub.add_parser("bench", help="benchmarks that print numbers")
+    b.add_argument("what", choices=sorted(BENCHES))
+    b.add_argument("--json", action="store_true", help="print one JSON object")
+    b.set_defaults(func=cmd_bench)

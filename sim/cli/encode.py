@@ -1,0 +1,42 @@
+"""``vqtex encode IMAGE... -o OUT.vqt``: compress images into a texture set with one shared codebook."""
+
+from __future__ import annotations
+
+import os
+
+from .common import block_size, emit
+from .info import info_report, info_text
+
+__all__ = ["add_parser", "cmd_encode"]
+
+
+def cmd_encode(args) -> int:
+    from vqtex.golden.encode import encode
+    from vqtex.golden.render.imageio import read_image
+    images = [read_image(p) for p in args.images]
+    names = [os.path.splitext(os.path.basename(p))[0] for p in args.images]
+    ts = encode(images, block=args.block, codebook_size=args.codebook_size, color=args.color,
+                index_bits=args.index_bits, mipmaps=args.mipmaps, encoder=args.encoder, seed=args.seed,
+                mip_training=args.mip_training, names=names, word_bits=args.word_bits)
+    ts.save(args.output)
+    report = info_report(ts)
+    emit(report, args.json, info_text(ts, report) + f"\nwrote {args.output}")
+    return 0
+
+
+def add_parser(sub) -> None:
+    e = sub.add_parser("encode", help="compress images into a .vqt texture set (one shared codebook)")
+    e.add_argument("images", nargs="+")
+    e.add_argument("-o", "--output", required=True)
+    e.add_argument("--block", type=block_size, default=(4, 4), help="block WxH, powers of two 1..8 (default 4x4)")
+    e.add_argument("--codebook-size", "-k", type=int, default=256, help="codewords, 2..4096 (default 256)")
+    e.add_argument("--color", choices=["rgb", "rgba", "intensity", "yuv411"], default="rgb")
+    e.add_argument("--index-bits", type=int, default=None, help="index width b, 1..16 (default ceil(log2 K))")
+    e.add_argument("--mipmaps", action="store_true", help="mip pyramid with extended codewords")
+    e.add_argument("--mip-training", choices=["average", "joint"], default="average",
+                   help="extended codewords: averages of level 0 (paper) or trained on all sub-levels")
+    e.add_argument("--encoder", choices=["gla", "tsvq"], default="gla")
+    e.add_argument("--seed", type=int, default=0)
+    e.add_argument("--word-bits", type=int, choices=[16, 32, 64], default=32)
+    e.add_argument("--json", action="store_true")
+    e.set_defaults(func=cmd_encode)

@@ -1,0 +1,58 @@
+"""The ``vqtex`` command line (see ``docs/usage.md``): the parser and the entry point.
+
+One module per subcommand (``encode``, ``info``, ``decode``, ``simulate`` for ``sim``, ``render``,
+``demo``, ``export``, ``report``, ``bench``, ``experiments``), each with ``add_parser(sub)``; the
+helpers they share are in :mod:`vqtex.sim.cli.common`. This module imports the subcommands, never the
+other way round.
+
+Every command that reports takes ``--json`` and then prints exactly one JSON object on stdout.
+Bad input ends with a one-line error on stderr and exit status 2, never a traceback and never a
+partly written output file (outputs are written to a temporary file and renamed).
+"""
+
+from __future__ import annotations
+
+import sys
+
+from . import bench, decode, demo, encode, experiments, export, info, render, report, simulate
+from .common import CliError, Parser
+
+__all__ = ["main", "build_parser", "COMMANDS"]
+
+#: The subcommand modules, in the order ``vqtex --help`` lists them.
+COMMANDS = (encode, info, decode, simulate, render, demo, export, report, bench, experiments)
+
+
+def build_parser() -> Parser:
+    """The ``vqtex`` argument parser with every subcommand."""
+    p = Parser(prog="vqtex", description="VQ texture compression and the texel-fetch hardware model")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
+    for command in COMMANDS:
+        command.add_parser(sub)
+    return p
+
+
+def _user_errors():
+    from vqtex.golden.encode import EncodeError
+    from vqtex.golden.fetch import RequestError
+    from vqtex.golden.format import FormatError
+    from vqtex.golden.render.scene import SceneError
+    return (CliError, FormatError, EncodeError, RequestError, SceneError, OSError)
+
+
+def main(argv=None) -> int:
+    """Run ``vqtex`` with ``argv``; returns the exit status (2 for a user error, 130 if interrupted)."""
+    try:
+        args = build_parser().parse_args(argv)
+        return args.func(args) or 0
+    except _user_errors() as e:
+        msg = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+        print(f"vqtex: error: {msg}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("vqtex: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

