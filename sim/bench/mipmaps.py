@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import json
 import time
-from pathlib import Path
 
 import numpy as np
 
@@ -27,7 +26,7 @@ def _psnr(a, b):
 
 def _textures():
     from vqtex.golden.render.imageio import read_image
-    data = Path(__file__).resolve().parents[1] / "golden" / "data"
+    from vqtex.golden.render.scene import DATA_DIR as data
     out = []
     for p in sorted(data.glob("*.png")):
         img = read_image(p)

@@ -90,7 +90,7 @@ def four_texture_set(size: int = 128, seed: int = 0):
     from vqtex.golden.encode import encode
     from vqtex.golden.format import TextureSet
     from vqtex.golden.render.imageio import read_image
-    here = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "golden", "data")
+    from vqtex.golden.render.scene import DATA_DIR as here
 
     def img(name):
         a = read_image(os.path.join(here, name + ".png"))
