@@ -32,6 +32,8 @@ __all__ = ["SimResult", "simulate", "BACKENDS"]
 
 #: Backend names known here (others are looked up as ``vqtex.sim.backends.<name>``).
 BACKENDS = ("golden", "pysim", "cxxrtl", "verilator")
+#: Requests the golden backend fetches at a time (golden.fetch's temporaries are ~180 bytes a request).
+GOLDEN_CHUNK = 1 << 18
 
 
 @dataclass
@@ -78,7 +80,10 @@ def _as_requests(requests) -> np.ndarray:
 def _golden(ts: TextureSet, req: np.ndarray, *, stall: float, seed: int, one_port: bool) -> SimResult:
     from . import cycle_model
     model = cycle_model.run_cycles(ts, req, stall=stall, seed=seed, one_port=one_port)
-    responses = fetch(ts, req[:, 0], req[:, 1], req[:, 2], req[:, 3]) if len(req) else np.zeros((0, 4), np.uint8)
+    responses = np.empty((len(req), 4), np.uint8)
+    for s in range(0, len(req), GOLDEN_CHUNK):           # bounded temporaries on long streams
+        r = req[s:s + GOLDEN_CHUNK]
+        responses[s:s + len(r)] = fetch(ts, r[:, 0], r[:, 1], r[:, 2], r[:, 3])
     return SimResult(responses=responses, cycles=model["cycles"], requests=len(req),
                      latency=cycle_model.LATENCY, stall_cycles=model["stall_cycles"],
                      straddles=model["straddles"], occupancy=model["occupancy"])
