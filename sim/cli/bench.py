@@ -4,6 +4,8 @@ encode  -- the codebook designer against scikit-learn's KMeans (needs the ``benc
 mip     -- extended codewords: the paper's averages against joint training, per level
 sim     -- simulation backends: pysim, compiled CXXRTL, Verilator (cycles per second, build times)
 render  -- golden render time (uncompressed and VQ) and RTL cycles per frame, both built-in scenes
+stability -- numerical stability and hostile input: the colour matrix on every input, long streams under
+           backpressure (and, as they land, mutated files and adversarial encoder cases)
 """
 
 from __future__ import annotations
@@ -15,10 +17,11 @@ from .common import CliError
 __all__ = ["add_parser"]
 
 BENCHES = {
-    "encode": "sim.bench.encoder",
-    "mip": "sim.bench.mipmaps",
-    "sim": "sim.bench.simulation",
-    "render": "sim.bench.render",
+    "encode": "vqtex.sim.bench.encoder",
+    "mip": "vqtex.sim.bench.mipmaps",
+    "sim": "vqtex.sim.bench.simulation",
+    "render": "vqtex.sim.bench.render",
+    "stability": "vqtex.sim.bench.stability",
 }
 
 

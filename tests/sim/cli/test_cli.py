@@ -141,3 +141,16 @@ def test_sim_plot_shows_where_cycles_went(tmp_path, images, capsys):
     assert abs(widths["backpressure"] - 639 * rep["stall_cycles"]["output_backpressure"] / total) <= 2
     assert abs(widths["straddle"] - 639 * rep["stall_cycles"]["one_port_straddle"] / total) <= 2
     assert rep["stall_cycles"]["one_port_straddle"] == rep["straddling_index_reads"] > 0
+
+
+def test_every_bench_module_imports():
+    """``vqtex bench WHAT`` finds its module by name: each name resolves to a module with ``run``."""
+    import importlib
+    from vqtex.sim.cli.bench import BENCHES
+    for what, name in BENCHES.items():
+        try:
+            mod = importlib.import_module(name)
+        except ImportError as e:          # only a missing optional extra is acceptable
+            assert e.name and not e.name.startswith(("vqtex", "sim", "golden", "hw")), f"{what}: {e}"
+            continue
+        assert callable(mod.run), what
