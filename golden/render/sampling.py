@@ -59,12 +59,14 @@ _ONE = 1 << FRAC_BITS
 
 
 def level_of_detail(frags: Fragments, width0: np.ndarray, height0: np.ndarray) -> np.ndarray:
-    """lambda (float64, may be -inf) per fragment, for level-0 sizes per fragment."""
+    """lambda (float64) per fragment, for level-0 sizes per fragment: -inf for zero derivatives, +inf for
+    derivatives whose square overflows, NaN for NaN ones; ``quantize_lod`` maps all three into range
+    (-inf and NaN to level 0, +inf to the last level)."""
     w = np.asarray(width0, np.float64)
     h = np.asarray(height0, np.float64)
-    rx = (frags.dsdx * w) ** 2 + (frags.dtdx * h) ** 2
-    ry = (frags.dsdy * w) ** 2 + (frags.dtdy * h) ** 2
-    with np.errstate(divide="ignore"):
+    with np.errstate(over="ignore", divide="ignore"):    # huge derivatives: +inf, zero ones: -inf
+        rx = (frags.dsdx * w) ** 2 + (frags.dtdx * h) ** 2
+        ry = (frags.dsdy * w) ** 2 + (frags.dtdy * h) ** 2
         return 0.5 * np.log2(np.maximum(rx, ry))
 
 

@@ -1,0 +1,109 @@
+"""Fixed-point sampling and geometry under stress (issue: numerical stability).
+
+- The eight trilinear weights sum to exactly 2^24 for every fraction and level blend.
+- The level of detail is defined and finite, and every request lands inside its level, for any
+  fragment: magnification, the last level, zero or infinite derivatives, NaN, coordinates of 1e6.
+- Degenerate triangles (zero area, edge-on, behind the camera, crossing the near plane, texture
+  coordinates of 1e6) rasterize to finite fragments whose requests are all in range.
+"""
+
+import numpy as np
+from hypothesis import given, strategies as st
+
+from vqtex.golden.render.camera import Camera
+from vqtex.golden.render.raster import Fragments, rasterize
+from vqtex.golden.render.sampling import FRAC_BITS, Sampler, quantize_lod, trilinear_weights
+
+ONE = 1 << FRAC_BITS
+SHAPES = [[(256, 128), (128, 64), (64, 32), (32, 16), (16, 8), (8, 4), (4, 2), (2, 1), (1, 1)],
+          [(1, 1)], [(4, 4), (2, 2), (1, 1)]]
+
+
+def test_trilinear_weights_sum_to_2_24_for_every_fraction():
+    """Exhaustive over (fu0, fv0) and the level blend f; fu1, fv1 swept beside them."""
+    fu, fv = (a.ravel() for a in np.meshgrid(np.arange(ONE), np.arange(ONE), indexing="ij"))
+    for f in range(ONE):
+        w = trilinear_weights(fu, fv, fv, fu, np.full(len(fu), f))
+        assert (w >= 0).all() and (w.sum(axis=1) == 1 << 24).all(), f"level blend {f}"
+
+
+@given(st.lists(st.tuples(*[st.integers(0, ONE - 1)] * 5), min_size=1, max_size=64))
+def test_trilinear_weights_sum_property(rows):
+    a = np.array(rows)
+    w = trilinear_weights(*a.T)
+    assert (w.sum(axis=1) == 1 << 24).all() and (w >= 0).all()
+
+
+_extreme = st.one_of(st.floats(allow_nan=True, allow_infinity=True, width=64),
+                     st.sampled_from([0.0, -0.0, 1e-300, 1e6, -1e6, 1e300, float("inf"), float("nan")]))
+_coord = st.one_of(st.floats(-1e6, 1e6, allow_nan=False), st.sampled_from([0.0, 0.5, 1.0, -1e6, 1e6]))
+
+
+def _fragments(s, t, d):
+    n = len(s)
+    z = np.zeros(n, np.int64)
+    return Fragments(8, (n + 7) // 8, np.arange(n, dtype=np.int64), z, z, np.array(s, np.float64),
+                     np.array(t, np.float64), *(np.full(n, v, np.float64) for v in d))
+
+
+@given(st.lists(st.tuples(_coord, _coord), min_size=1, max_size=16), st.tuples(*[_extreme] * 4),
+       st.integers(0, len(SHAPES) - 1), st.sampled_from(["wrap", "clamp", ("wrap", "clamp")]))
+def test_any_fragment_gives_requests_inside_their_level(coords, derivs, shape, addressing):
+    shapes = SHAPES[shape]
+    sampler = Sampler([shapes], address=[addressing], mode="trilinear")
+    s, t = zip(*coords)
+    frags = _fragments(s, t, derivs)
+    lam = quantize_lod(sampler.lod(frags), np.full(len(s), len(shapes)))
+    assert (lam >= 0).all() and (lam <= (len(shapes) - 1) * ONE).all()
+    reqs = sampler.requests(frags)
+    lv = reqs[:, 1]
+    assert (lv >= 0).all() and (lv < len(shapes)).all()
+    w = np.array([shapes[k][0] for k in lv])
+    h = np.array([shapes[k][1] for k in lv])
+    assert ((reqs[:, 2] >= 0) & (reqs[:, 2] < w) & (reqs[:, 3] >= 0) & (reqs[:, 3] < h)).all()
+    _, _, _, weights = sampler._plan
+    assert (weights.astype(np.int64).sum(axis=1) == 1 << 24).all()
+    frame = sampler.resolve(np.full((len(reqs), 4), 200, np.uint8))
+    assert (frame.reshape(-1, 4)[:len(s)] == 200).all()      # constant texels: exactly reproduced
+
+
+def _clip(cam, verts, w=32, h=32):
+    v = np.concatenate([np.asarray(verts, np.float64), np.ones((len(verts), 1))], 1)
+    return (cam.view_projection(w, h) @ v.T).T
+
+
+CAM = Camera(position=(0.0, 0.0, 3.0), target=(0.0, 0.0, 0.0), near=0.1)
+
+_vertex = st.tuples(*[st.one_of(st.floats(-5, 5, allow_nan=False), st.sampled_from([0.0, 1.0, -1.0, 2.9, 3.0, 3.1]))] * 3)
+
+
+@given(st.lists(st.tuples(_vertex, _vertex, _vertex), min_size=1, max_size=4),
+       st.sampled_from([1.0, 1e6]), st.booleans())
+def test_degenerate_triangles_give_finite_fragments_and_valid_requests(tris, st_scale, collapse):
+    """Zero area (collapse: a repeated vertex), edge-on, behind the camera (z > 3), crossing the near
+    plane (z near 2.9..3.1), texture coordinates up to 1e6."""
+    tris = np.array(tris, np.float64)
+    if collapse:
+        tris[:, 2] = tris[:, 1]
+    clip = np.stack([_clip(CAM, t) for t in tris])
+    st_ = np.tile(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]) * st_scale, (len(tris), 1, 1))
+    frags = rasterize(clip, st_, np.zeros(len(tris), np.int64), 32, 32, near=CAM.near)
+    for name in ("s", "t", "dsdx", "dsdy", "dtdx", "dtdy"):
+        assert np.isfinite(getattr(frags, name)).all(), name
+    sampler = Sampler([SHAPES[0]], mode="trilinear")
+    lam = sampler.lod(frags)
+    assert not np.isnan(lam).any() and not np.isposinf(lam).any()
+    reqs = sampler.requests(frags)
+    if len(reqs):
+        lv = reqs[:, 1]
+        w = np.array([SHAPES[0][k][0] for k in lv])
+        h = np.array([SHAPES[0][k][1] for k in lv])
+        assert ((reqs[:, 2] >= 0) & (reqs[:, 2] < w) & (reqs[:, 3] >= 0) & (reqs[:, 3] < h)).all()
+
+
+def test_edge_on_and_behind_the_camera_cover_nothing():
+    edge_on = [(0.0, -1.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, -2.0)]      # in the plane x = 0 through the eye
+    behind = [(-1.0, -1.0, 4.0), (1.0, -1.0, 4.0), (0.0, 1.0, 4.0)]
+    for tri in (edge_on, behind):
+        frags = rasterize(_clip(CAM, tri)[None], np.zeros((1, 3, 2)), np.zeros(1, np.int64), 32, 32, near=CAM.near)
+        assert len(frags) == 0
