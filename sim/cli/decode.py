@@ -4,28 +4,33 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import CliError, check_output, emit, load_set
+from .common import IMAGE_SUFFIXES, CliError, Outputs, emit, load_set
 
 __all__ = ["add_parser", "cmd_decode"]
 
 
 def cmd_decode(args) -> int:
-    from vqtex.golden.fetch import decode
     from vqtex.golden.render.imageio import write_image
-    ts = load_set(args.file)
+    with Outputs() as outs:
+        out = outs.add(args.output, IMAGE_SUFFIXES, "an image")
+        ts = load_set(args.file)
+        img, channels = _decoded(ts, args)
+        write_image(outs.path(out), np.ascontiguousarray(img[..., :channels]))
+    h, w = img.shape[:2]
+    emit({"texture": args.texture, "level": args.level, "width": w, "height": h, "output": args.output},
+         args.json, f"wrote {args.output} ({w}x{h}, texture {args.texture} level {args.level})")
+    return 0
+
+
+def _decoded(ts, args):
+    from vqtex.golden.fetch import decode
     if not 0 <= args.texture < ts.n_textures:
         raise CliError(f"texture {args.texture} does not exist (the file has {ts.n_textures})")
     levels = ts.textures[args.texture].levels
     if not 0 <= args.level < levels:
         raise CliError(f"texture {args.texture} has no level {args.level} (it has {levels})")
     img = decode(ts, args.texture, args.level)
-    channels = {"rgb": 3, "yuv411": 3, "rgba": 4, "intensity": 1}[ts.textures[args.texture].color]
-    check_output(args.output)
-    write_image(args.output, np.ascontiguousarray(img[..., :channels]))          # atomic itself
-    h, w = img.shape[:2]
-    emit({"texture": args.texture, "level": args.level, "width": w, "height": h, "output": args.output},
-          args.json, f"wrote {args.output} ({w}x{h}, texture {args.texture} level {args.level})")
-    return 0
+    return img, {"rgb": 3, "yuv411": 3, "rgba": 4, "intensity": 1}[ts.textures[args.texture].color]
 
 
 def add_parser(sub) -> None:

@@ -4,24 +4,30 @@ from __future__ import annotations
 
 import os
 
-from .common import block_size, emit
+from .common import Outputs, block_size, emit, write_bytes
 from .info import info_report, info_text
 
 __all__ = ["add_parser", "cmd_encode"]
 
 
 def cmd_encode(args) -> int:
-    from vqtex.golden.encode import encode
     from vqtex.golden.render.imageio import read_image
-    images = [read_image(p) for p in args.images]
+    with Outputs() as outs:
+        out = outs.add(args.output, (".vqt",), "a texture set")
+        ts = _encode(args, [read_image(p) for p in args.images])
+        write_bytes(outs.path(out), ts.to_bytes())
+    report = info_report(ts)
+    emit(report, args.json, info_text(ts, report) + f"\nwrote {args.output}")
+    return 0
+
+
+def _encode(args, images):
+    from vqtex.golden.encode import encode
     names = [os.path.splitext(os.path.basename(p))[0] for p in args.images]
     ts = encode(images, block=args.block, codebook_size=args.codebook_size, color=args.color,
                 index_bits=args.index_bits, mipmaps=args.mipmaps, encoder=args.encoder, seed=args.seed,
                 mip_training=args.mip_training, names=names, word_bits=args.word_bits)
-    ts.save(args.output)
-    report = info_report(ts)
-    emit(report, args.json, info_text(ts, report) + f"\nwrote {args.output}")
-    return 0
+    return ts
 
 
 def add_parser(sub) -> None:

@@ -14,7 +14,7 @@ import re
 import subprocess
 import tempfile
 
-from .common import atomic_write, emit, load_set
+from .common import Outputs, emit, load_set
 
 __all__ = ["add_parser", "cmd_export", "lint_verilog", "LINT_WAIVERS", "ExportError"]
 
@@ -53,15 +53,29 @@ def lint_verilog(path: str, top: str) -> list:
 
 
 def cmd_export(args) -> int:
-    from vqtex.golden.format import FormatError
-    from vqtex.sim.backends.verilog import export_verilog
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", args.name):
         raise ExportError(f"--name {args.name!r} is not a Verilog identifier")
     if not 0 <= args.tag_width <= 16:
         raise ExportError(f"--tag-width {args.tag_width} must be in 0..16")
-    folder = os.path.dirname(os.path.abspath(args.output))
-    if not os.path.isdir(folder):
-        raise ExportError(f"output folder {folder} does not exist")
+    with Outputs() as outs:
+        out = outs.add(args.output, (".v", ".sv"), "Verilog")
+        text, ports = _export(args, out)
+        with open(outs.path(out), "w") as f:
+            f.write(text)
+    from vqtex.hw.texel_fetch import LATENCY as latency
+    report = {"output": args.output, "module": args.name, "bytes": len(text.encode()),
+              "one_port": bool(args.one_port), "dialect": args.dialect, "tag_width": args.tag_width, "latency": latency,
+              "ports": ports, "lint": "clean" if args.lint else "not run"}
+    emit(report, args.json, f"wrote {args.output} (module {args.name}, {len(ports)} ports, "
+                             f"latency {latency}, {len(text.encode())} bytes"
+                             f"{', lint clean' if args.lint else ''})")
+    return 0
+
+
+def _export(args, out):
+    """The Verilog text and its ports; linted when ``--lint`` (an ExportError on a warning)."""
+    from vqtex.golden.format import FormatError
+    from vqtex.sim.backends.verilog import export_verilog
     ts = load_set(args.file)
     try:
         ts.validate()
@@ -70,27 +84,15 @@ def cmd_export(args) -> int:
     ports = {}
     text = export_verilog(ts, one_port=args.one_port, tag_width=args.tag_width, name=args.name,
                           dialect=args.dialect, ports=ports)
-    from vqtex.hw.texel_fetch import LATENCY as latency
-
-    def write(tmp):
-        with open(tmp, "w") as f:
-            f.write(text)
-    warnings = []
     if args.lint:
         with tempfile.TemporaryDirectory() as tmp:
-            path = os.path.join(tmp, os.path.basename(args.output) or "out.v")
-            write(path)
+            path = os.path.join(tmp, os.path.basename(out))
+            with open(path, "w") as f:
+                f.write(text)
             warnings = lint_verilog(path, args.name)
         if warnings:
             raise ExportError(f"verilator lint: {len(warnings)} warning(s), first: {warnings[0]}")
-    atomic_write(args.output, write)
-    report = {"output": args.output, "module": args.name, "bytes": len(text.encode()),
-              "one_port": bool(args.one_port), "dialect": args.dialect, "tag_width": args.tag_width, "latency": latency,
-              "ports": ports, "lint": "clean" if args.lint else "not run"}
-    emit(report, args.json, f"wrote {args.output} (module {args.name}, {len(ports)} ports, "
-                             f"latency {latency}, {len(text.encode())} bytes"
-                             f"{', lint clean' if args.lint else ''})")
-    return 0
+    return text, ports
 
 
 def add_parser(sub) -> None:

@@ -14,7 +14,7 @@ import time
 
 import numpy as np
 
-from .common import CliError, check_output, emit, write_json
+from .common import IMAGE_SUFFIXES, CliError, Outputs, emit, warn, write_json
 
 __all__ = ["add_parser", "cmd_render", "render_scene", "render_to_files", "encode_scene", "parse_frames", "Progress"]
 
@@ -49,17 +49,30 @@ class Progress:
 
 
 def parse_frames(text: str | None, total: int) -> list[int]:
-    """``--frames`` (``A:B`` slice or one frame number) as a list of frame numbers of a ``total``-frame scene."""
+    """``--frames`` as a list of frame numbers of a ``total``-frame scene: a Python slice ``A:B`` or
+    ``A:B:STEP`` (any part may be empty; negative numbers count from the end) or one frame number.
+
+    A slice reaching past the last frame is clamped with a warning; one that selects no frame, a
+    step of 0 or a frame number outside the scene is a CliError.
+    """
     if text is None:
         return list(range(total))
     try:
         if ":" in text:
-            a, b = text.split(":", 1)
-            frames = list(range(total))[slice(int(a) if a else None, int(b) if b else None)]
+            parts = text.split(":")
+            if len(parts) > 3:
+                raise ValueError
+            a, b, step = (int(v) if v.strip() else None for v in parts + [""] * (3 - len(parts)))
+            if step == 0:
+                raise CliError(f"--frames {text!r}: the step must not be 0")
+            frames = list(range(total))[slice(a, b, step)]
+            if frames and ((b is not None and b > total) or (a is not None and a >= total)):
+                warn(f"--frames {text}: the scene has {total} frames (0..{total - 1}); "
+                     f"rendering {len(frames)} of them")
         else:
             frames = [int(text)]
     except ValueError:
-        raise CliError(f"--frames {text!r} is not A:B or a frame number") from None
+        raise CliError(f"--frames {text!r} is not a slice A:B[:STEP] or a frame number") from None
     if not frames or any(not 0 <= f < total for f in frames):
         raise CliError(f"--frames {text!r} selects no frame of the scene's {total}")
     return frames
@@ -69,13 +82,14 @@ def _frame_path(pattern: str, frame: int, many: bool) -> str:
     if not many:
         return pattern
     root, ext = os.path.splitext(pattern)
-    return f"{root}_{frame:04d}{ext or '.png'}"
+    return f"{root}_{frame:04d}{ext}"
 
 
 def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall=0.0, seed=0,
-                 one_port=False, reference=True, images=None, progress=None):
+                 one_port=False, reference=True, images=None, progress=None, cycle_model=False):
     """Render ``frames`` of ``scene`` from TextureSet ``ts``; yields one dict per frame with the frame,
-    the golden frame when the backend is RTL (for comparison), cycle results and the reference MSE."""
+    the golden frame when the backend is RTL (for comparison), cycle results and the reference MSE.
+    With the golden backend and ``cycle_model``, the cycles come from the exact cycle model (no RTL)."""
     from vqtex.golden.fetch import fetch
     from vqtex.golden.render.frame import frame_requests
     from vqtex.golden.render.metrics import frame_mse
@@ -97,6 +111,10 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
         out["requests"] = int(len(reqs))
         if backend == "golden":
             out["image"] = golden_frame
+            if cycle_model and len(reqs):
+                from vqtex.sim.backends import simulate
+                out["sim"] = simulate(ts, reqs, backend="golden", stall=stall, seed=seed, one_port=one_port)
+                out["rtl_seconds"] = 0.0
         else:
             from vqtex.sim.backends import simulate
             t0 = time.perf_counter()
@@ -124,15 +142,16 @@ def encode_scene(scene, images):
     return ts
 
 
-def render_to_files(scene, ts, frames, path_of, images, *, backend, **kw):
-    """Render ``frames``, write frame ``f`` to ``path_of(f)`` (atomically, by write_image); returns
-    (per-frame reports, frames whose RTL image differs from the golden one)."""
+def render_to_files(scene, ts, frames, path_of, images, *, backend, outs, **kw):
+    """Render ``frames``; frame ``f`` goes to the registered output ``path_of(f)`` of ``outs`` (an
+    :class:`~vqtex.sim.cli.common.Outputs`, so it appears with the rest of the command's files).
+    Returns (per-frame reports, frames whose RTL image differs from the golden one)."""
     from vqtex.golden.render.imageio import write_image
     prog = Progress(len(frames), f"rendering ({backend})")
     per_frame, mismatches = [], []
     for r in render_scene(scene, ts, frames, backend=backend, images=images, progress=prog, **kw):
         path = path_of(r["frame"])
-        write_image(path, r["image"])
+        write_image(outs.path(path), r["image"])
         rep = _frame_report(r)
         rep["output"] = path
         per_frame.append(rep)
@@ -150,34 +169,40 @@ def _frame_report(r: dict) -> dict:
         s = r["sim"]
         d.update(rtl_seconds=round(r["rtl_seconds"], 4), cycles=int(s.cycles), latency=int(s.latency),
                  straddling_index_reads=int(s.straddles),
-                 stall_cycles={k: int(v) for k, v in s.stall_cycles.items()},
-                 identical_to_golden=r["identical_to_golden"])
+                 stall_cycles={k: int(v) for k, v in s.stall_cycles.items()})
+        if "identical_to_golden" in r:
+            d["identical_to_golden"] = r["identical_to_golden"]
     return d
 
 
 def cmd_render(args) -> int:
     from vqtex.golden.format import TextureSet
     from vqtex.golden.render.scene import load_scene
-    scene = load_scene(args.scene)
-    frames = parse_frames(args.frames, scene.frames)
-    images = [img for img, _ in scene.load_textures()]
-    ts = TextureSet.load(args.texture_set) if args.texture_set else encode_scene(scene, images)
-    if ts.n_textures != len(scene.textures):
-        raise CliError(f"{args.texture_set} holds {ts.n_textures} textures, the scene uses {len(scene.textures)}")
-    check_output(args.output)
-    per_frame, mismatches = render_to_files(
-        scene, ts, frames, lambda f: _frame_path(args.output, f, len(frames) > 1), images,
-        mode=args.mode, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port)
-    report = {
-        "scene": scene.name, "mode": args.mode, "backend": args.backend, "frames": per_frame,
-        "overall_rate": round(ts.rates()["overall"], 4),
-        "mean_mse": round(float(np.mean([f["mse"] for f in per_frame])), 4),
-    }
-    if args.backend != "golden":
-        report["identical_to_golden"] = not mismatches
-        report["cycles_per_frame"] = round(float(np.mean([f["cycles"] for f in per_frame])), 1)
-    if args.report:
-        write_json(args.report, report)
+    with Outputs() as outs:
+        outs.add(args.output, IMAGE_SUFFIXES, "a frame")
+        report_path = outs.add(args.report, (".json",), "the report") if args.report else None
+        scene = load_scene(args.scene)
+        frames = parse_frames(args.frames, scene.frames)
+        frame_paths = {f: _frame_path(args.output, f, len(frames) > 1) for f in frames}
+        for path in frame_paths.values():
+            outs.add(path)
+        images = [img for img, _ in scene.load_textures()]
+        ts = TextureSet.load(args.texture_set) if args.texture_set else encode_scene(scene, images)
+        if ts.n_textures != len(scene.textures):
+            raise CliError(f"{args.texture_set} holds {ts.n_textures} textures, the scene uses {len(scene.textures)}")
+        per_frame, mismatches = render_to_files(
+            scene, ts, frames, frame_paths.get, images, outs=outs,
+            mode=args.mode, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port)
+        report = {
+            "scene": scene.name, "mode": args.mode, "backend": args.backend, "frames": per_frame,
+            "overall_rate": round(ts.rates()["overall"], 4),
+            "mean_mse": round(float(np.mean([f["mse"] for f in per_frame])), 4),
+        }
+        if args.backend != "golden":
+            report["identical_to_golden"] = not mismatches
+            report["cycles_per_frame"] = round(float(np.mean([f["cycles"] for f in per_frame])), 1)
+        if report_path:
+            write_json(outs.path(report_path), report)
     text = [f"{scene.name}: {len(frames)} frame(s), {args.mode}, backend {args.backend}, "
             f"overall compression {report['overall_rate']:.2f}:1, mean frame MSE {report['mean_mse']:.3f}"]
     if args.backend != "golden":

@@ -9,10 +9,9 @@ the PyPI packages of the ``synth`` extra; without them the command fails with on
 
 from __future__ import annotations
 
-import os
 import time
 
-from .common import emit, load_set
+from .common import check_folder, emit, load_set
 
 __all__ = ["add_parser", "cmd_report_area", "BUILTINS", "ReportError"]
 
@@ -41,10 +40,7 @@ def cmd_report_area(args) -> int:
     if args.timeout is not None and args.timeout <= 0:
         raise ReportError(f"--timeout {args.timeout} must be positive")
     if args.keep:
-        try:
-            os.makedirs(args.keep, exist_ok=True)
-        except OSError as e:
-            raise ReportError(f"--keep {args.keep}: cannot create the folder ({e.strerror})") from None
+        check_folder(args.keep)
     ts = None
     if args.file is not None:                # a bad file is reported whether or not the tools exist
         ts = load_set(args.file)

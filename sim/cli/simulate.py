@@ -4,57 +4,75 @@ from __future__ import annotations
 
 import io
 import os
+import warnings
 
 import numpy as np
 
-from .common import CliError, check_output, emit, load_set, write_bytes
+from .common import CliError, Outputs, emit, load_set, write_bytes
 
 __all__ = ["add_parser", "cmd_sim", "read_requests"]
 
 
 def read_requests(path: str) -> np.ndarray:
-    """A request file (.npy without pickles, or CSV with an optional header row) as int64 (N, 4)."""
+    """A request file (.npy without pickles, or CSV with an optional header row) as int64 (N, 4), N >= 1.
+
+    Every way a file can fail to be one (missing, empty, header only, a text file named .npy, a
+    pickle, a wrong shape or type) is a one-line CliError naming the file.
+    """
     if not os.path.isfile(path):
         raise CliError(f"{path}: no such file")
+    if path.endswith(".npy"):
+        with open(path, "rb") as f:
+            magic = f.read(6)
+        if magic != b"\x93NUMPY":
+            raise CliError(f"{path}: not a .npy file (a CSV request file must not be named .npy)")
     try:
         if path.endswith(".npy"):
             req = np.load(path, allow_pickle=False)
         else:
-            req = np.loadtxt(path, delimiter=",", dtype=np.int64, ndmin=2,
-                             skiprows=_csv_header_rows(path))
-    except (ValueError, OSError, EOFError) as e:
+            with warnings.catch_warnings():
+                warnings.simplefilter("error")              # numpy warns on an empty file: an error here
+                req = np.loadtxt(path, delimiter=",", dtype=np.int64, ndmin=2,
+                                 skiprows=_csv_header_rows(path))
+    except (ValueError, OSError, EOFError, UserWarning) as e:
+        if isinstance(e, UserWarning) or "no data" in str(e):
+            raise CliError(f"{path}: no requests (the file is empty or holds only a header)") from None
+        if "allow_pickle" in str(e):
+            e = "it holds Python objects, not integers"
         raise CliError(f"{path}: cannot read requests ({str(e).splitlines()[0] if str(e) else type(e).__name__})") from None
     if req.ndim != 2 or req.shape[1] != 4 or not np.issubdtype(req.dtype, np.integer):
         raise CliError(f"{path}: requests must be an integer array of shape (N, 4): texture, level, i, j")
+    if len(req) == 0:
+        raise CliError(f"{path}: no requests")
     return req.astype(np.int64)
 
 
 def _csv_header_rows(path: str) -> int:
-    with open(path) as f:
+    with open(path, errors="replace") as f:
         first = f.readline()
     return 1 if any(c.isalpha() for c in first) else 0
 
 
 def cmd_sim(args) -> int:
     from vqtex.golden.fetch import check_requests
-    ts = load_set(args.file)
-    req = read_requests(args.requests)
-    if len(req) == 0:
-        raise CliError(f"{args.requests}: no requests")
-    check_requests(ts, req[:, 0], req[:, 1], req[:, 2], req[:, 3])
-    if not 0.0 <= args.stall < 1.0:
-        raise CliError(f"--stall {args.stall} must be in [0, 1)")
     from vqtex.sim.backends.interface import simulate
-    res = simulate(ts, req, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port)
-    buf = io.BytesIO()
-    np.save(buf, res.responses.astype(np.uint8))
-    write_bytes(args.output, buf.getvalue())
     from vqtex.sim.reports.cycles import cycle_report, cycle_text
-    report = cycle_report(res, backend=args.backend, one_port=args.one_port, stall=args.stall)
-    if args.plot:
-        from vqtex.sim.reports.cycles import cycle_plot
-        check_output(args.plot)
-        cycle_plot(report, args.plot)                                   # atomic (write_image)
+    with Outputs() as outs:
+        out = outs.add(args.output, (".npy",), "the responses (an (N, 4) uint8 array)")
+        plot = outs.add(args.plot, (".png",), "the cycle plot") if args.plot else None
+        if not 0.0 <= args.stall < 1.0:
+            raise CliError(f"--stall {args.stall} must be in [0, 1)")
+        ts = load_set(args.file)
+        req = read_requests(args.requests)
+        check_requests(ts, req[:, 0], req[:, 1], req[:, 2], req[:, 3])
+        res = simulate(ts, req, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port)
+        buf = io.BytesIO()
+        np.save(buf, res.responses.astype(np.uint8))
+        write_bytes(outs.path(out), buf.getvalue())
+        report = cycle_report(res, backend=args.backend, one_port=args.one_port, stall=args.stall)
+        if plot:
+            from vqtex.sim.reports.cycles import cycle_plot
+            cycle_plot(report, outs.path(plot))
     emit(report, args.json, cycle_text(report) + f"\nwrote {args.output}")
     return 0
 
