@@ -31,7 +31,7 @@ import sys
 import tempfile
 import threading
 
-__all__ = ["CliError", "Parser", "block_size", "emit", "warn", "Outputs", "check_folder", "IMAGE_SUFFIXES",
+__all__ = ["CliError", "Parser", "block_size", "emit", "warn", "warn_slow", "progress_enabled", "progress_line", "Outputs", "check_folder", "IMAGE_SUFFIXES",
            "atomic_write", "write_bytes", "write_json", "load_set", "with_default", "file_mode"]
 
 #: Image file extensions an output image may have (all hold RGBA except JPEG and BMP, which drop alpha).
@@ -81,6 +81,35 @@ def warn(message: str) -> None:
     """One line on stderr, ``vqtex: warning: ...``: the command goes on (exit 0) but the result is
     probably not what the user meant."""
     print(f"vqtex: warning: {message}", file=sys.stderr)
+
+
+#: Amaranth's simulator runs the unit at about this many cycles per second (docs/simulation.md);
+#: :func:`warn_slow` warns when a run would take longer than :data:`SLOW_SECONDS` at that rate.
+PYSIM_CYCLES_PER_SECOND = 2e3
+SLOW_SECONDS = 60
+
+
+def warn_slow(backend: str, requests: int) -> None:
+    """Warn (one line) when ``backend`` is pysim and ``requests`` texel requests would take more than
+    :data:`SLOW_SECONDS` (about one cycle per request)."""
+    seconds = requests / PYSIM_CYCLES_PER_SECOND
+    if backend == "pysim" and seconds > SLOW_SECONDS:
+        warn(f"pysim simulates about {PYSIM_CYCLES_PER_SECOND:.0f} cycles/s: {requests} requests take about "
+             f"{seconds / 60:.0f} minutes (--backend cxxrtl takes seconds)")
+
+
+def progress_enabled() -> bool:
+    """Whether progress lines are shown: ``$VQTEX_PROGRESS`` (1 or 0) when set, else when stderr is a
+    terminal (so logs and pipes get only results, warnings and errors)."""
+    env = os.environ.get("VQTEX_PROGRESS", "").strip()
+    return env == "1" if env in ("0", "1") else sys.stderr.isatty()
+
+
+def progress_line(message: str) -> None:
+    """``vqtex: MESSAGE`` on stderr when progress is shown: the step that starts now may be silent
+    for a while."""
+    if progress_enabled():
+        print(f"vqtex: {message}", file=sys.stderr, flush=True)
 
 
 def file_mode() -> int:

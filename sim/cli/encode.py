@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 
-from .common import Outputs, block_size, emit, write_bytes
+from .common import Outputs, block_size, emit, warn, write_bytes
 from .info import info_report, info_text
 
 __all__ = ["add_parser", "cmd_encode"]
@@ -22,11 +22,28 @@ def cmd_encode(args) -> int:
 
 
 def _encode(args, images):
+    """Encode; a warning for each setting that probably is not what the user meant: alpha that a
+    colour format without alpha drops, more codewords than blocks, a result larger than the images."""
     from vqtex.golden.encode import encode
     names = [os.path.splitext(os.path.basename(p))[0] for p in args.images]
+    if args.color != "rgba":
+        dropped = [p for p, img in zip(args.images, images)
+                   if img.ndim == 3 and img.shape[2] in (2, 4) and (img[..., -1] != 255).any()]
+        if dropped:
+            warn(f"--color {args.color} drops the alpha channel of {dropped[0]}"
+                 f"{f' and {len(dropped) - 1} more' if len(dropped) > 1 else ''} (use --color rgba to keep it)")
     ts = encode(images, block=args.block, codebook_size=args.codebook_size, color=args.color,
                 index_bits=args.index_bits, mipmaps=args.mipmaps, encoder=args.encoder, seed=args.seed,
                 mip_training=args.mip_training, names=names, word_bits=args.word_bits)
+    bw, bh = args.block
+    blocks = sum((img.shape[1] // bw) * (img.shape[0] // bh) for img in images)
+    if args.codebook_size > blocks:
+        warn(f"{args.codebook_size} codewords for {blocks} blocks: at least {args.codebook_size - blocks} "
+             f"codewords are never used (a smaller -k compresses better)")
+    rate = ts.rates()["overall"]
+    if rate < 1:
+        warn(f"the compression rate is {rate:.2f}:1, below 1:1: the texture set is larger than the images "
+             f"(the codebook dominates; use a smaller -k or larger images)")
     return ts
 
 

@@ -14,17 +14,17 @@ import time
 
 import numpy as np
 
-from .common import IMAGE_SUFFIXES, CliError, Outputs, emit, warn, write_json
+from .common import IMAGE_SUFFIXES, CliError, Outputs, emit, progress_enabled, warn, warn_slow, write_json
 
 __all__ = ["add_parser", "cmd_render", "render_scene", "render_to_files", "encode_scene", "parse_frames", "Progress"]
 
 
 class Progress:
-    """A one-line progress bar on stderr (only when stderr is a terminal, or when forced)."""
+    """A one-line progress bar on stderr (when :func:`~vqtex.sim.cli.common.progress_enabled`, or forced)."""
 
     def __init__(self, total: int, label: str, enabled: bool | None = None):
         self.total, self.label, self.n = max(1, total), label, 0
-        self.enabled = sys.stderr.isatty() if enabled is None else enabled
+        self.enabled = progress_enabled() if enabled is None else enabled
         self.t0 = time.perf_counter()
         self._draw()
 
@@ -117,6 +117,8 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
                 out["rtl_seconds"] = 0.0
         else:
             from vqtex.sim.backends import simulate
+            if f == frames[0]:
+                warn_slow(backend, len(reqs) * len(frames))
             t0 = time.perf_counter()
             res = simulate(ts, reqs, backend=backend, stall=stall, seed=seed, one_port=one_port) if len(reqs) else None
             out["rtl_seconds"] = time.perf_counter() - t0

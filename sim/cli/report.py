@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import time
 
-from .common import check_folder, emit, load_set
+from .common import check_folder, emit, load_set, progress_line
 
 __all__ = ["add_parser", "cmd_report_area", "BUILTINS", "ReportError"]
 
@@ -54,12 +54,13 @@ def cmd_report_area(args) -> int:
     t_set = None
     if ts is None:
         t0 = time.perf_counter()
+        progress_line(f"report area: encoding the built-in set {args.builtin}")
         ts = getattr(synth, BUILTINS[args.builtin][0])()
         t_set = round(time.perf_counter() - t0, 2)
         name = f"builtin {args.builtin}"
     rep = synth.area_report(ts, one_port=args.one_port, tag_width=args.tag_width, place=not args.no_pnr,
                             freq=args.freq, seed=args.seed, workdir=args.keep, timeout=args.timeout,
-                            name=name)
+                            name=name, progress=lambda m: progress_line(f"report area: {m}"))
     if t_set is not None:
         rep["seconds"] = {"encode": t_set, **rep["seconds"]}
     emit(rep, args.json, synth.area_text(rep))

@@ -8,7 +8,7 @@ import warnings
 
 import numpy as np
 
-from .common import CliError, Outputs, emit, load_set, write_bytes
+from .common import CliError, Outputs, emit, load_set, warn_slow, write_bytes
 
 __all__ = ["add_parser", "cmd_sim", "read_requests"]
 
@@ -65,6 +65,7 @@ def cmd_sim(args) -> int:
         ts = load_set(args.file)
         req = read_requests(args.requests)
         check_requests(ts, req[:, 0], req[:, 1], req[:, 2], req[:, 3])
+        warn_slow(args.backend, len(req))
         res = simulate(ts, req, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port)
         buf = io.BytesIO()
         np.save(buf, res.responses.astype(np.uint8))
