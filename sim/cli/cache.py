@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import time
 
-from .common import CliError, emit, with_default
+from .common import CliError, add_json, emit, with_default
 
 __all__ = ["add_parser", "cmd_cache"]
 
@@ -47,5 +47,5 @@ def add_parser(sub) -> None:
     c.add_argument("--keep-mb", type=float, default=0.0,
                    help=with_default("clean: keep the most recently used builds up to this many MB; "
                                      "0 deletes everything", 0))
-    c.add_argument("--json", action="store_true", help="print one JSON object")
+    add_json(c)
     c.set_defaults(func=cmd_cache)

@@ -31,7 +31,8 @@ import sys
 import tempfile
 import threading
 
-__all__ = ["CliError", "Parser", "block_size", "emit", "warn", "warn_slow", "progress_enabled", "progress_line", "Outputs", "check_folder", "IMAGE_SUFFIXES",
+__all__ = ["CliError", "Parser", "block_size", "BACKEND_HELP", "add_json", "add_texture_set", "add_backend",
+           "add_hardware_options", "add_tag_width", "emit", "warn", "warn_slow", "progress_enabled", "progress_line", "Outputs", "check_folder", "IMAGE_SUFFIXES",
            "atomic_write", "write_bytes", "write_json", "load_set", "with_default", "file_mode"]
 
 #: Image file extensions an output image may have (all hold RGBA except JPEG and BMP, which drop alpha).
@@ -58,6 +59,51 @@ class Parser(argparse.ArgumentParser):
 def with_default(text: str, default) -> str:
     """Help text ending with its default, as every argument's help shows it."""
     return f"{text} (default {default})"
+
+
+#: What each backend is, for --backend help texts.
+BACKEND_HELP = {
+    "golden": "golden (numpy fetch and the exact cycle model, no RTL)",
+    "pysim": "pysim (Amaranth's simulator, about 2e3 cycles/s: small traces)",
+    "cxxrtl": "cxxrtl (the RTL compiled with CXXRTL, about 1e7 cycles/s)",
+    "verilator": "verilator (the exported Verilog through Verilator)",
+}
+
+
+def add_json(p) -> None:
+    """``--json``: print one JSON object instead of text."""
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of text")
+
+
+def add_texture_set(p) -> None:
+    """The positional ``.vqt`` input."""
+    p.add_argument("file", metavar="FILE.vqt", help="a texture set written by vqtex encode")
+
+
+def add_backend(p, choices, default: str) -> None:
+    """``--backend`` with each choice explained."""
+    p.add_argument("--backend", choices=choices, default=default,
+                   help=with_default("what answers the texel requests: "
+                                     + "; ".join(BACKEND_HELP[c] for c in choices), default))
+
+
+def add_hardware_options(p, *, stall: bool = True) -> None:
+    """The unit's options shared by the simulating commands: ``--one-port``, and with ``stall`` the
+    output backpressure ``--stall`` and its pattern's seed ``--stall-seed`` (old spelling ``--seed``)."""
+    p.add_argument("--one-port", action="store_true",
+                   help="one-port index memory: one extra cycle per straddling index (the paper's penalty; "
+                        "default two banks, no penalty)")
+    if stall:
+        p.add_argument("--stall", type=float, default=0.0,
+                       help=with_default("probability, in [0, 1), that the consumer holds the output's ready "
+                                         "low in a cycle", 0.0))
+        p.add_argument("--stall-seed", "--seed", dest="seed", type=int, default=0,
+                       help=with_default("seed of the --stall pattern (--seed is the old spelling)", 0))
+
+
+def add_tag_width(p) -> None:
+    p.add_argument("--tag-width", type=int, default=8,
+                   help=with_default("bits of the request tag carried to the response, 0..16", 8))
 
 
 def block_size(text: str) -> tuple[int, int]:

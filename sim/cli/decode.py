@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import IMAGE_SUFFIXES, CliError, Outputs, emit, load_set
+from .common import IMAGE_SUFFIXES, CliError, Outputs, add_json, add_texture_set, emit, load_set, with_default
 
 __all__ = ["add_parser", "cmd_decode"]
 
@@ -35,9 +35,9 @@ def _decoded(ts, args):
 
 def add_parser(sub) -> None:
     d = sub.add_parser("decode", help="decode one level of one texture to an image")
-    d.add_argument("file")
-    d.add_argument("-o", "--output", required=True)
-    d.add_argument("--texture", type=int, default=0)
-    d.add_argument("--level", type=int, default=0)
-    d.add_argument("--json", action="store_true")
+    add_texture_set(d)
+    d.add_argument("-o", "--output", required=True, help="image to write (.png, .tif, .exr, ...)")
+    d.add_argument("--texture", type=int, default=0, help=with_default("texture number (vqtex info lists them)", 0))
+    d.add_argument("--level", type=int, default=0, help=with_default("mip level, 0 = full size", 0))
+    add_json(d)
     d.set_defaults(func=cmd_decode)

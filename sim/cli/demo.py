@@ -13,7 +13,7 @@ import time
 
 import numpy as np
 
-from .common import CliError, Outputs, emit, with_default, write_bytes, write_json
+from .common import CliError, Outputs, add_backend, add_json, emit, with_default, write_bytes, write_json
 from .render import encode_scene, parse_frames, render_to_files
 
 __all__ = ["add_parser", "cmd_demo"]
@@ -87,9 +87,6 @@ def add_parser(sub) -> None:
                                      "vqtex-demo"))
     d.add_argument("--frames", default="0:3", help=with_default("frames of topspin to render, a Python slice A:B[:STEP] "
                                                                "or one number", "0:3"))
-    d.add_argument("--backend", choices=BACKENDS, default="cxxrtl",
-                   help=with_default("what answers the texel requests: compiled RTL (cxxrtl, verilator), "
-                                     "Amaranth's simulator (pysim, slow) or golden (numpy and the cycle model, no RTL)",
-                                     "cxxrtl"))
-    d.add_argument("--json", action="store_true", help="print one JSON object")
+    add_backend(d, BACKENDS, "cxxrtl")
+    add_json(d)
     d.set_defaults(func=cmd_demo)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 
-from .common import Outputs, block_size, emit, warn, write_bytes
+from .common import Outputs, add_json, block_size, emit, warn, with_default, write_bytes
 from .info import info_report, info_text
 
 __all__ = ["add_parser", "cmd_encode"]
@@ -49,17 +49,26 @@ def _encode(args, images):
 
 def add_parser(sub) -> None:
     e = sub.add_parser("encode", help="compress images into a .vqt texture set (one shared codebook)")
-    e.add_argument("images", nargs="+")
-    e.add_argument("-o", "--output", required=True)
-    e.add_argument("--block", type=block_size, default=(4, 4), help="block WxH, powers of two 1..8 (default 4x4)")
-    e.add_argument("--codebook-size", "-k", type=int, default=256, help="codewords, 2..4096 (default 256)")
-    e.add_argument("--color", choices=["rgb", "rgba", "intensity", "yuv411"], default="rgb")
-    e.add_argument("--index-bits", type=int, default=None, help="index width b, 1..16 (default ceil(log2 K))")
-    e.add_argument("--mipmaps", action="store_true", help="mip pyramid with extended codewords")
+    e.add_argument("images", nargs="+", metavar="IMAGE",
+                   help="images (PNG, TIFF, ...), sides powers of two; all share one codebook")
+    e.add_argument("-o", "--output", required=True, help="the .vqt texture set to write")
+    e.add_argument("--block", type=block_size, default=(4, 4),
+                   help=with_default("block WxH, powers of two 1..8 per side", "4x4"))
+    e.add_argument("--codebook-size", "-k", type=int, default=256, help=with_default("codewords K, 2..4096", 256))
+    e.add_argument("--color", choices=["rgb", "rgba", "intensity", "yuv411"], default="rgb",
+                   help=with_default("colour format of the codewords (yuv411: U, V at half resolution)", "rgb"))
+    e.add_argument("--index-bits", type=int, default=None,
+                   help=with_default("index width b, 1..16", "ceil(log2 K)"))
+    e.add_argument("--mipmaps", action="store_true",
+                   help="mip pyramid with extended codewords (default: level 0 only)")
     e.add_argument("--mip-training", choices=["average", "joint"], default="average",
-                   help="extended codewords: averages of level 0 (paper) or trained on all sub-levels")
-    e.add_argument("--encoder", choices=["gla", "tsvq"], default="gla")
-    e.add_argument("--seed", type=int, default=0)
-    e.add_argument("--word-bits", type=int, choices=[16, 32, 64], default=32)
-    e.add_argument("--json", action="store_true")
+                   help=with_default("extended codewords: averages of the level-0 codeword (the paper) or "
+                                     "trained on all sub-levels", "average"))
+    e.add_argument("--encoder", choices=["gla", "tsvq"], default="gla",
+                   help=with_default("generalized Lloyd (TSVQ-initialised) or the paper's tree-structured VQ", "gla"))
+    e.add_argument("--encoder-seed", "--seed", dest="seed", type=int, default=0,
+                   help=with_default("seed of the codebook design (--seed is the old spelling)", 0))
+    e.add_argument("--word-bits", type=int, choices=[16, 32, 64], default=32,
+                   help=with_default("width of the index memory's words", 32))
+    add_json(e)
     e.set_defaults(func=cmd_encode)

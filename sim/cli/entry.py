@@ -17,7 +17,7 @@ import sys
 from . import bench, cache, decode, demo, encode, experiments, export, info, render, report, simulate
 from .common import CliError, Parser
 
-__all__ = ["main", "build_parser", "COMMANDS"]
+__all__ = ["main", "build_parser", "version", "COMMANDS"]
 
 #: The subcommand modules, in the order ``vqtex --help`` lists them.
 COMMANDS = (encode, info, decode, simulate, render, demo, export, report, bench, experiments, cache)
@@ -25,11 +25,23 @@ COMMANDS = (encode, info, decode, simulate, render, demo, export, report, bench,
 
 def build_parser() -> Parser:
     """The ``vqtex`` argument parser with every subcommand."""
-    p = Parser(prog="vqtex", description="VQ texture compression and the texel-fetch hardware model")
+    p = Parser(prog="vqtex", description="VQ texture compression and the texel-fetch hardware model "
+                                         "(docs/usage.md)")
+    p.add_argument("--version", action="version", version=f"vqtex {version()}", help="print the version and exit")
     sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
     for command in COMMANDS:
         command.add_parser(sub)
     return p
+
+
+def version() -> str:
+    """The installed distribution's version (``pyproject.toml``), or ``unknown`` when not installed."""
+    from importlib.metadata import PackageNotFoundError
+    from importlib.metadata import version as dist_version
+    try:
+        return dist_version("vqtex")
+    except PackageNotFoundError:
+        return "unknown"
 
 
 def _user_errors():

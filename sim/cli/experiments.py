@@ -8,7 +8,7 @@ import json
 
 from vqtex.sim.bench import experiments
 
-from .common import CliError, with_default
+from .common import CliError, add_json, with_default
 from .render import parse_frames
 
 __all__ = ["add_parser", "cmd_experiments", "print_table", "DEFAULT_FRAMES"]
@@ -61,8 +61,8 @@ def add_parser(sub) -> None:
                    help="frames to render, a Python slice A:B[:STEP] or one number (default "
                         + ", ".join(f"{t} {v}" for t, v in DEFAULT_FRAMES.items()) + ")")
     e.add_argument("--frame-step", type=int, default=None,
-                   help="render every Nth frame: the same as --frames ::N (default: see --frames)")
+                   help=with_default("render every Nth frame: the same as --frames ::N", "see --frames"))
     e.add_argument("--backend", choices=["golden", "cxxrtl", "verilator"], default="golden",
                    help=with_default("where Table 5's cycles come from (golden = the exact cycle model)", "golden"))
-    e.add_argument("--json", action="store_true", help="print one JSON object")
+    add_json(e)
     e.set_defaults(func=cmd_experiments)

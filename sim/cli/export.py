@@ -14,7 +14,7 @@ import re
 import subprocess
 import tempfile
 
-from .common import Outputs, emit, load_set
+from .common import Outputs, add_hardware_options, add_json, add_tag_width, add_texture_set, emit, load_set, with_default
 
 __all__ = ["add_parser", "cmd_export", "lint_verilog", "LINT_WAIVERS", "ExportError"]
 
@@ -97,13 +97,14 @@ def _export(args, out):
 
 def add_parser(sub) -> None:
     e = sub.add_parser("export", help="Verilog of the texel-fetch unit holding a .vqt's memories")
-    e.add_argument("file")
-    e.add_argument("-o", "--output", required=True, help="Verilog file to write")
-    e.add_argument("--one-port", action="store_true", help="one-port index memory (paper's penalty)")
-    e.add_argument("--tag-width", type=int, default=8, help="request tag width carried to the response")
-    e.add_argument("--name", default="texel_fetch", help="top module name (default texel_fetch)")
+    add_texture_set(e)
+    e.add_argument("-o", "--output", required=True, help="Verilog file to write (.v or .sv)")
+    add_hardware_options(e, stall=False)
+    add_tag_width(e)
+    e.add_argument("--name", default="texel_fetch", help=with_default("top module name", "texel_fetch"))
     e.add_argument("--dialect", choices=["sv", "v2005"], default="sv",
-                   help="sv: always_comb/always_ff (default; X-free in Icarus -g2012); v2005: plain Verilog")
-    e.add_argument("--lint", action="store_true", help="run verilator --lint-only -Wall (with waivers)")
-    e.add_argument("--json", action="store_true")
+                   help=with_default("sv: always_comb/always_ff (X-free in Icarus -g2012); v2005: plain Verilog", "sv"))
+    e.add_argument("--lint", action="store_true",
+                   help="also run verilator --lint-only -Wall on it and fail on any warning (default off)")
+    add_json(e)
     e.set_defaults(func=cmd_export)

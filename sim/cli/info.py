@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from .common import emit, load_set
+from .common import add_json, add_texture_set, emit, load_set
 
 __all__ = ["add_parser", "cmd_info", "info_report", "info_text"]
 
@@ -56,6 +56,6 @@ def cmd_info(args) -> int:
 
 def add_parser(sub) -> None:
     i = sub.add_parser("info", help="textures, levels, index bits and compression rates of a .vqt")
-    i.add_argument("file")
-    i.add_argument("--json", action="store_true")
+    add_texture_set(i)
+    add_json(i)
     i.set_defaults(func=cmd_info)

@@ -14,7 +14,8 @@ import time
 
 import numpy as np
 
-from .common import IMAGE_SUFFIXES, CliError, Outputs, emit, progress_enabled, warn, warn_slow, write_json
+from .common import (IMAGE_SUFFIXES, CliError, Outputs, add_backend, add_hardware_options, add_json, emit,
+                     progress_enabled, warn, warn_slow, with_default, write_json)
 
 __all__ = ["add_parser", "cmd_render", "render_scene", "render_to_files", "encode_scene", "parse_frames", "Progress"]
 
@@ -218,15 +219,18 @@ def cmd_render(args) -> int:
 
 def add_parser(sub) -> None:
     r = sub.add_parser("render", help="render a scene (TOML file or built-in name) from compressed textures")
-    r.add_argument("scene", help="scene file or built-in scene name (topspin, town)")
-    r.add_argument("-o", "--output", required=True, help="PNG; with several frames, _NNNN is added")
-    r.add_argument("--frames", help="A:B (Python slice) or one frame number (default: all)")
-    r.add_argument("--mode", choices=["point", "trilinear"], default="trilinear")
-    r.add_argument("--backend", choices=["golden", "pysim", "cxxrtl", "verilator"], default="golden")
-    r.add_argument("--texture-set", help="use this .vqt instead of encoding the scene's textures")
-    r.add_argument("--stall", type=float, default=0.0)
-    r.add_argument("--seed", type=int, default=0)
-    r.add_argument("--one-port", action="store_true")
-    r.add_argument("--report", help="write the JSON report here")
-    r.add_argument("--json", action="store_true")
+    r.add_argument("scene", help="scene file (docs/rendering.md) or built-in scene name (topspin, town)")
+    r.add_argument("-o", "--output", required=True,
+                   help="image to write (.png, ...); with several frames _NNNN is added before the extension")
+    r.add_argument("--frames", help=with_default("frames to render: a Python slice A:B[:STEP] or one frame number",
+                                                 "all"))
+    r.add_argument("--mode", choices=["point", "trilinear"], default="trilinear",
+                   help=with_default("point sampling of level 0, or trilinear mipmapping", "trilinear"))
+    add_backend(r, ["golden", "pysim", "cxxrtl", "verilator"], "golden")
+    r.add_argument("--texture-set", metavar="FILE.vqt",
+                   help=with_default("use this texture set instead of encoding the scene's textures",
+                                     "encode them with the scene's settings"))
+    add_hardware_options(r)
+    r.add_argument("--report", metavar="REPORT.json", help=with_default("also write the JSON report here", "none"))
+    add_json(r)
     r.set_defaults(func=cmd_render)

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import time
 
-from .common import check_folder, emit, load_set, progress_line
+from .common import add_hardware_options, add_json, add_tag_width, check_folder, emit, load_set, progress_line, with_default
 
 __all__ = ["add_parser", "cmd_report_area", "BUILTINS", "ReportError"]
 
@@ -23,8 +23,8 @@ class ReportError(OSError):
 
 #: Built-in texture sets: name -> (function in sim.reports.synth, description).
 BUILTINS = {
-    "four": ("four_texture_set", "the issue's 4-texture set: rgb 4x4 K=256 8-bit (x2, shared codebook), "
-                                 "yuv411 4x4 K=256 12-bit, rgb 2x2 K=1024 12-bit; 128x128, mipmapped"),
+    "four": ("four_texture_set", "four bundled images, 128x128 mipmapped: rgb 4x4 K=256 8-bit (x2, one shared "
+                                 "codebook), yuv411 4x4 K=256 12-bit, rgb 2x2 K=1024 12-bit (docs/area.md)"),
     "tiny": ("tiny_texture_set", "two 32x32 mipmapped textures (rgb 8-bit, yuv411 12-bit), K=16"),
 }
 
@@ -69,18 +69,22 @@ def cmd_report_area(args) -> int:
 
 def add_parser(sub) -> None:
     r = sub.add_parser("report", help="hardware reports (area: ECP5 synthesis, place and route)")
-    modes = r.add_subparsers(dest="mode", required=True, parser_class=type(r))
+    modes = r.add_subparsers(dest="mode", required=True, parser_class=type(r), metavar="{area}")
     a = modes.add_parser("area", help="LUTs, FFs, block RAMs, DSPs, Fmax and critical path on an ECP5-85 (-8)")
-    a.add_argument("file", nargs="?", help="a .vqt texture set (or use --builtin)")
+    a.add_argument("file", nargs="?", metavar="FILE.vqt", help="a texture set (or use --builtin)")
     a.add_argument("--builtin", choices=sorted(BUILTINS),
-                   help="; ".join(f"{k}: {v[1]}" for k, v in BUILTINS.items()))
-    a.add_argument("--one-port", action="store_true", help="one-port index memory (paper's penalty)")
-    a.add_argument("--tag-width", type=int, default=8, help="request tag width (default 8)")
-    a.add_argument("--freq", type=float, default=150.0, help="clock constraint in MHz (default 150)")
-    a.add_argument("--seed", type=int, default=1, help="nextpnr placer seed (default 1)")
-    a.add_argument("--no-pnr", action="store_true", help="synthesis only: utilisation, no Fmax")
+                   help=with_default("a built-in texture set instead of FILE.vqt: "
+                                     + "; ".join(f"{k}: {v[1]}" for k, v in BUILTINS.items()), "none"))
+    add_hardware_options(a, stall=False)
+    add_tag_width(a)
+    a.add_argument("--freq", type=float, default=150.0, help=with_default("clock constraint in MHz", 150))
+    a.add_argument("--placer-seed", "--seed", dest="seed", type=int, default=1,
+                   help=with_default("nextpnr's placement seed (--seed is the old spelling)", 1))
+    a.add_argument("--no-pnr", action="store_true",
+                   help="synthesis only: utilisation, no Fmax (default: also place and route)")
     a.add_argument("--keep", metavar="DIR", default=None,
-                   help="keep the tools' files (RTLIL, netlist, logs, nextpnr report) in DIR")
-    a.add_argument("--timeout", type=float, default=None, help="seconds allowed per tool run")
-    a.add_argument("--json", action="store_true")
+                   help=with_default("keep the tools' files (RTLIL, netlist, logs, nextpnr report) in DIR",
+                                     "a temporary folder, removed"))
+    a.add_argument("--timeout", type=float, default=None, help=with_default("seconds allowed per tool run", "none"))
+    add_json(a)
     a.set_defaults(func=cmd_report_area)

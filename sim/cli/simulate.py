@@ -8,7 +8,8 @@ import warnings
 
 import numpy as np
 
-from .common import CliError, Outputs, emit, load_set, warn_slow, write_bytes
+from .common import (CliError, Outputs, add_backend, add_hardware_options, add_json, add_texture_set, emit,
+                     load_set, warn_slow, with_default, write_bytes)
 
 __all__ = ["add_parser", "cmd_sim", "read_requests"]
 
@@ -80,13 +81,13 @@ def cmd_sim(args) -> int:
 
 def add_parser(sub) -> None:
     s = sub.add_parser("sim", help="trace-driven simulation of the texel-fetch unit")
-    s.add_argument("file")
-    s.add_argument("requests", help=".npy (N, 4) int array or CSV: texture, level, i, j")
-    s.add_argument("-o", "--output", required=True, help=".npy (N, 4) uint8 RGBA responses")
-    s.add_argument("--backend", choices=["golden", "pysim", "cxxrtl", "verilator"], default="golden")
-    s.add_argument("--stall", type=float, default=0.0, help="probability the output's ready is low")
-    s.add_argument("--seed", type=int, default=0)
-    s.add_argument("--one-port", action="store_true", help="one-port index memory (paper's penalty)")
-    s.add_argument("--plot", help="also draw where the cycles went (PNG)")
-    s.add_argument("--json", action="store_true")
+    add_texture_set(s)
+    s.add_argument("requests", metavar="REQUESTS",
+                   help=".npy (N, 4) integer array or CSV (header line allowed): texture, level, i, j")
+    s.add_argument("-o", "--output", required=True, help="the responses to write: .npy (N, 4) uint8 RGBA")
+    add_backend(s, ["golden", "pysim", "cxxrtl", "verilator"], "golden")
+    add_hardware_options(s)
+    s.add_argument("--plot", metavar="PLOT.png",
+                   help=with_default("also draw where the cycles went, a PNG (needs the plot extra)", "none"))
+    add_json(s)
     s.set_defaults(func=cmd_sim)
