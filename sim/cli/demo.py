@@ -14,11 +14,15 @@ import time
 import numpy as np
 
 from .common import CliError, Outputs, add_backend, add_json, emit, with_default, write_bytes, write_json
+from vqtex.sim.reports.quality import DEFAULT_VMAX, side_by_side
+
 from .render import encode_scene, parse_frames, render_to_files
 
 __all__ = ["add_parser", "cmd_demo"]
 
 BACKENDS = ["cxxrtl", "verilator", "pysim", "golden"]
+#: The side-by-side picture of the first frame.
+COMPARE_NAME = "topspin_compare.png"
 
 
 def cmd_demo(args) -> int:
@@ -30,22 +34,32 @@ def cmd_demo(args) -> int:
         out_dir = outs.folder(args.out_dir)
         scene = load_scene("topspin")
         frames = parse_frames(args.frames, scene.frames)
-        vqt, report_path = (outs.add(os.path.join(out_dir, n)) for n in ("topspin.vqt", "report.json"))
+        vqt, report_path, compare = (outs.add(os.path.join(out_dir, n))
+                                     for n in ("topspin.vqt", "report.json", COMPARE_NAME))
         frame_paths = {f: outs.add(os.path.join(out_dir, f"topspin_{f:04d}.png")) for f in frames}
         images = [img for img, _ in scene.load_textures()]
         t0 = time.perf_counter()
         ts = encode_scene(scene, images)
         encode_s = time.perf_counter() - t0
         write_bytes(outs.path(vqt), ts.to_bytes())
-        per_frame, mismatches = render_to_files(scene, ts, frames, frame_paths.get, images, outs=outs,
-                                                mode="trilinear", backend=args.backend, cycle_model=True)
+        per_frame, mismatches = render_to_files(
+            scene, ts, frames, frame_paths.get, images, outs=outs, mode="trilinear", backend=args.backend,
+            cycle_model=True, on_frame=lambda r: _compare(r, outs.path(compare)) if r["frame"] == frames[0] else None)
         report = _report(args, ts, per_frame, mismatches, encode_s)
+        report["comparison"] = {"file": COMPARE_NAME, "frame": frames[0], "difference_scale": DEFAULT_VMAX,
+                                "panels": ["uncompressed", "compressed", "difference"]}
         report["total_seconds"] = round(time.perf_counter() - t_start, 2)
         write_json(outs.path(report_path), report)
     emit(report, args.json, _summary(args, scene, frames, report, per_frame, mismatches))
     if mismatches:
         raise CliError(f"RTL frames {mismatches} differ from the golden frames")
     return 0
+
+
+def _compare(r, path):
+    """The side-by-side picture of frame ``r``: uncompressed | compressed | difference heat map."""
+    from vqtex.golden.render.imageio import write_image
+    write_image(path, side_by_side(r["reference"], r["image"]))
 
 
 def _report(args, ts, per_frame, mismatches, encode_s) -> dict:
@@ -76,6 +90,8 @@ def _summary(args, scene, frames, report, per_frame, mismatches) -> str:
         rtl,
         f"  cycles per frame: {report['cycles_per_frame']:.0f} for "
         f"{np.mean([f['requests'] for f in per_frame]):.0f} texel requests (latency {per_frame[0].get('latency', 0)})",
+        f"  {args.out_dir}/{COMPARE_NAME}: frame {frames[0]} uncompressed | compressed | difference "
+        f"(black 0 to white {DEFAULT_VMAX}+ levels, the scale under it)",
         f"  wrote {args.out_dir}/topspin_*.png, topspin.vqt and report.json in {report['total_seconds']:.1f} s",
     ])
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 
 from .common import Outputs, add_json, block_size, emit, warn, with_default, write_bytes
-from .info import info_report, info_text
+from .info import add_psnr, info_report, info_text
 
 __all__ = ["add_parser", "cmd_encode"]
 
@@ -14,9 +14,11 @@ def cmd_encode(args) -> int:
     from vqtex.golden.render.imageio import read_image
     with Outputs() as outs:
         out = outs.add(args.output, (".vqt",), "a texture set")
-        ts = _encode(args, [read_image(p) for p in args.images])
+        images = [read_image(p) for p in args.images]
+        ts = _encode(args, images)
         write_bytes(outs.path(out), ts.to_bytes())
     report = info_report(ts)
+    add_psnr(report, ts, images)
     emit(report, args.json, info_text(ts, report) + f"\nwrote {args.output}")
     return 0
 

@@ -145,9 +145,10 @@ def encode_scene(scene, images):
     return ts
 
 
-def render_to_files(scene, ts, frames, path_of, images, *, backend, outs, **kw):
+def render_to_files(scene, ts, frames, path_of, images, *, backend, outs, on_frame=None, **kw):
     """Render ``frames``; frame ``f`` goes to the registered output ``path_of(f)`` of ``outs`` (an
-    :class:`~vqtex.sim.cli.common.Outputs`, so it appears with the rest of the command's files).
+    :class:`~vqtex.sim.cli.common.Outputs`, so it appears with the rest of the command's files), then
+    ``on_frame(r)`` sees the frame's dict from :func:`render_scene` (to write more files).
     Returns (per-frame reports, frames whose RTL image differs from the golden one)."""
     from vqtex.golden.render.imageio import write_image
     prog = Progress(len(frames), f"rendering ({backend})")
@@ -157,11 +158,48 @@ def render_to_files(scene, ts, frames, path_of, images, *, backend, outs, **kw):
         write_image(outs.path(path), r["image"])
         rep = _frame_report(r)
         rep["output"] = path
+        if on_frame is not None:
+            rep.update(on_frame(r) or {})
         per_frame.append(rep)
         if r.get("identical_to_golden") is False:
             mismatches.append(r["frame"])
     prog.done()
     return per_frame, mismatches
+
+
+def _extra_outputs(args, outs, frames):
+    """``--reference`` and ``--diff``: their per-frame paths registered in ``outs``, and the
+    ``on_frame`` callback that writes them (None when neither is asked for)."""
+    many = len(frames) > 1
+    paths = {}
+    for opt in ("reference", "diff"):
+        pattern = getattr(args, opt)
+        if pattern:
+            outs.add(pattern, IMAGE_SUFFIXES if opt == "reference" else (".png",), f"--{opt}")
+            paths[opt] = {f: outs.add(_frame_path(pattern, f, many)) for f in frames}
+    if not paths:
+        return None
+    if "diff" in paths:
+        from vqtex.sim.reports.plotting import require
+        require()                                       # matplotlib, before any work
+
+    def write(r):
+        from vqtex.golden.render.imageio import write_image
+        from vqtex.sim.reports.plotting import save_difference_plot
+        from vqtex.sim.reports.quality import difference
+        done = {}
+        if "reference" in paths:
+            done["reference"] = paths["reference"][r["frame"]]
+            write_image(outs.path(done["reference"]), r["reference"])
+        if "diff" in paths:
+            diff = difference(r["image"], r["reference"])
+            done["diff"] = paths["diff"][r["frame"]]
+            done["diff_max"] = int(diff.max())
+            save_difference_plot(diff, outs.path(done["diff"]), vmax=args.diff_scale,
+                                 title=f"{args.scene} frame {r['frame']}: compressed vs uncompressed, "
+                                       f"MSE {r['mse']:.3f}, largest difference {int(diff.max())}")
+        return done
+    return write
 
 
 def _frame_report(r: dict) -> dict:
@@ -189,12 +227,15 @@ def cmd_render(args) -> int:
         frame_paths = {f: _frame_path(args.output, f, len(frames) > 1) for f in frames}
         for path in frame_paths.values():
             outs.add(path)
+        if args.diff_scale < 1:
+            raise CliError(f"--diff-scale {args.diff_scale} must be at least 1")
+        on_frame = _extra_outputs(args, outs, frames)
         images = [img for img, _ in scene.load_textures()]
         ts = TextureSet.load(args.texture_set) if args.texture_set else encode_scene(scene, images)
         if ts.n_textures != len(scene.textures):
             raise CliError(f"{args.texture_set} holds {ts.n_textures} textures, the scene uses {len(scene.textures)}")
         per_frame, mismatches = render_to_files(
-            scene, ts, frames, frame_paths.get, images, outs=outs,
+            scene, ts, frames, frame_paths.get, images, outs=outs, on_frame=on_frame,
             mode=args.mode, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port)
         report = {
             "scene": scene.name, "mode": args.mode, "backend": args.backend, "frames": per_frame,
@@ -232,5 +273,13 @@ def add_parser(sub) -> None:
                                      "encode them with the scene's settings"))
     add_hardware_options(r)
     r.add_argument("--report", metavar="REPORT.json", help=with_default("also write the JSON report here", "none"))
+    r.add_argument("--reference", metavar="REF.png",
+                   help=with_default("also write the frame rendered from the uncompressed textures "
+                                     "(_NNNN added like -o)", "none"))
+    r.add_argument("--diff", metavar="DIFF.png",
+                   help=with_default("also write the difference from the uncompressed frame as a heat map with "
+                                     "its colour scale (needs the plot extra; _NNNN added like -o)", "none"))
+    r.add_argument("--diff-scale", type=int, default=32,
+                   help=with_default("the heat map's top: differences of this many levels or more saturate", 32))
     add_json(r)
     r.set_defaults(func=cmd_render)

@@ -1,4 +1,8 @@
-"""``vqtex report area (FILE.vqt | --builtin four|tiny) [--one-port] [--json] ...``.
+"""``vqtex report area (FILE.vqt | --builtin four|tiny) [--one-port] [--json] ...`` and
+``vqtex report cycles FILE.vqt REQUESTS [--plot P.png] [--backend B] [--stall P] ...``.
+
+``cycles`` simulates a request trace as ``vqtex sim`` does and reports where the cycles went,
+with the figure of :mod:`vqtex.sim.reports.plotting` when ``--plot`` is given.
 
 Synthesizes the texel-fetch unit holding a texture set's memories for a Lattice ECP5 (LFE5U-85F,
 speed grade 8) with Yosys, places and routes it with nextpnr, and reports LUTs, flip-flops, block
@@ -11,9 +15,11 @@ from __future__ import annotations
 
 import time
 
-from .common import add_hardware_options, add_json, add_tag_width, check_folder, emit, load_set, progress_line, with_default
+from .common import (Outputs, add_hardware_options, add_json, add_tag_width, check_folder, emit, load_set,
+                     progress_line, with_default)
+from .simulate import add_trace_arguments, plot_output, run_trace
 
-__all__ = ["add_parser", "cmd_report_area", "BUILTINS", "ReportError"]
+__all__ = ["add_parser", "cmd_report_area", "cmd_report_cycles", "BUILTINS", "ReportError"]
 
 
 class ReportError(OSError):
@@ -67,9 +73,29 @@ def cmd_report_area(args) -> int:
     return 0
 
 
+def cmd_report_cycles(args) -> int:
+    """``vqtex report cycles FILE.vqt REQUESTS [--plot P.png]``: where the cycles of a request trace
+    go, as the cycle report and (with ``--plot``) the figure."""
+    from vqtex.sim.reports.cycles import cycle_plot, cycle_text
+    with Outputs() as outs:
+        plot = plot_output(outs, args.plot)
+        _, report = run_trace(args)
+        if plot:
+            cycle_plot(report, outs.path(plot))
+    emit(report, args.json, cycle_text(report) + (f"\nwrote {args.plot}" if plot else ""))
+    return 0
+
+
 def add_parser(sub) -> None:
-    r = sub.add_parser("report", help="hardware reports (area: ECP5 synthesis, place and route)")
-    modes = r.add_subparsers(dest="mode", required=True, parser_class=type(r), metavar="{area}")
+    r = sub.add_parser("report", help="hardware reports: area (ECP5 synthesis, place and route), cycles (and their plot)")
+    modes = r.add_subparsers(dest="mode", required=True, parser_class=type(r), metavar="{area,cycles}")
+    c = modes.add_parser("cycles", help="where the cycles of a request trace go: the cycle report and its plot")
+    add_trace_arguments(c)
+    c.add_argument("--plot", metavar="PLOT.png",
+                   help=with_default("draw where the cycles went: a bar split by cause, with title, axis and "
+                                     "legend (needs the plot extra)", "none"))
+    add_json(c)
+    c.set_defaults(func=cmd_report_cycles)
     a = modes.add_parser("area", help="LUTs, FFs, block RAMs, DSPs, Fmax and critical path on an ECP5-85 (-8)")
     a.add_argument("file", nargs="?", metavar="FILE.vqt", help="a texture set (or use --builtin)")
     a.add_argument("--builtin", choices=sorted(BUILTINS),

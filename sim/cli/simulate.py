@@ -11,7 +11,7 @@ import numpy as np
 from .common import (CliError, Outputs, add_backend, add_hardware_options, add_json, add_texture_set, emit,
                      load_set, warn_slow, with_default, write_bytes)
 
-__all__ = ["add_parser", "cmd_sim", "read_requests"]
+__all__ = ["add_parser", "cmd_sim", "read_requests", "run_trace", "plot_output", "add_trace_arguments"]
 
 
 def read_requests(path: str) -> np.ndarray:
@@ -54,39 +54,61 @@ def _csv_header_rows(path: str) -> int:
     return 1 if any(c.isalpha() for c in first) else 0
 
 
-def cmd_sim(args) -> int:
+def plot_output(outs, path):
+    """Register ``--plot`` (a .png) in ``outs`` and check matplotlib is there, before any work;
+    None when no plot is asked for."""
+    if not path:
+        return None
+    path = outs.add(path, (".png",), "the cycle plot")
+    from vqtex.sim.reports.plotting import require
+    require()
+    return path
+
+
+def run_trace(args):
+    """Load ``args.file`` and ``args.requests``, check them and simulate on ``args.backend``;
+    returns (SimResult, cycle report)."""
     from vqtex.golden.fetch import check_requests
     from vqtex.sim.backends.interface import simulate
-    from vqtex.sim.reports.cycles import cycle_report, cycle_text
+    from vqtex.sim.reports.cycles import cycle_report
+    if not 0.0 <= args.stall < 1.0:
+        raise CliError(f"--stall {args.stall} must be in [0, 1)")
+    ts = load_set(args.file)
+    req = read_requests(args.requests)
+    check_requests(ts, req[:, 0], req[:, 1], req[:, 2], req[:, 3])
+    warn_slow(args.backend, len(req))
+    res = simulate(ts, req, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port)
+    return res, cycle_report(res, backend=args.backend, one_port=args.one_port, stall=args.stall)
+
+
+def cmd_sim(args) -> int:
+    from vqtex.sim.reports.cycles import cycle_plot, cycle_text
     with Outputs() as outs:
         out = outs.add(args.output, (".npy",), "the responses (an (N, 4) uint8 array)")
-        plot = outs.add(args.plot, (".png",), "the cycle plot") if args.plot else None
-        if not 0.0 <= args.stall < 1.0:
-            raise CliError(f"--stall {args.stall} must be in [0, 1)")
-        ts = load_set(args.file)
-        req = read_requests(args.requests)
-        check_requests(ts, req[:, 0], req[:, 1], req[:, 2], req[:, 3])
-        warn_slow(args.backend, len(req))
-        res = simulate(ts, req, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port)
+        plot = plot_output(outs, args.plot)
+        res, report = run_trace(args)
         buf = io.BytesIO()
         np.save(buf, res.responses.astype(np.uint8))
         write_bytes(outs.path(out), buf.getvalue())
-        report = cycle_report(res, backend=args.backend, one_port=args.one_port, stall=args.stall)
         if plot:
-            from vqtex.sim.reports.cycles import cycle_plot
             cycle_plot(report, outs.path(plot))
-    emit(report, args.json, cycle_text(report) + f"\nwrote {args.output}")
+    emit(report, args.json, cycle_text(report) + f"\nwrote {args.output}" + (f" and {args.plot}" if plot else ""))
     return 0
+
+
+def add_trace_arguments(s) -> None:
+    """The texture set, the request file, the backend and the unit's options (sim, report cycles)."""
+    add_texture_set(s)
+    s.add_argument("requests", metavar="REQUESTS",
+                   help=".npy (N, 4) integer array or CSV (header line allowed): texture, level, i, j")
+    add_backend(s, ["golden", "pysim", "cxxrtl", "verilator"], "golden")
+    add_hardware_options(s)
 
 
 def add_parser(sub) -> None:
     s = sub.add_parser("sim", help="trace-driven simulation of the texel-fetch unit")
-    add_texture_set(s)
-    s.add_argument("requests", metavar="REQUESTS",
-                   help=".npy (N, 4) integer array or CSV (header line allowed): texture, level, i, j")
+    add_trace_arguments(s)
     s.add_argument("-o", "--output", required=True, help="the responses to write: .npy (N, 4) uint8 RGBA")
-    add_backend(s, ["golden", "pysim", "cxxrtl", "verilator"], "golden")
-    add_hardware_options(s)
     s.add_argument("--plot", metavar="PLOT.png",
                    help=with_default("also draw where the cycles went, a PNG (needs the plot extra)", "none"))
     add_json(s)

@@ -1,6 +1,7 @@
 """Outputs through the command line: checked before any work (one line, exit 2), complete or absent
 (also when interrupted), ordinary permissions, extensions that name the format."""
 
+import json
 import os
 import signal
 import subprocess
@@ -51,6 +52,9 @@ def _commands(w, out):
         "export": ["export", vqt, "-o", out],
         "render": ["render", scene, "--frames", "0", "-o", out],
         "render --report": ["render", scene, "--frames", "0", "-o", str(w / "ok.png"), "--report", out],
+        "render --diff": ["render", scene, "--frames", "0", "-o", str(w / "ok.png"), "--diff", out],
+        "render --reference": ["render", scene, "--frames", "0", "-o", str(w / "ok.png"), "--reference", out],
+        "report cycles --plot": ["report", "cycles", vqt, req, "--plot", out],
     }
 
 
@@ -166,8 +170,23 @@ def test_demo_complete_set(tmp_path, capsys):
     out = tmp_path / "d"
     assert main(["demo", "--backend", "golden", "--frames", "0:2", "-o", str(out)]) == 0
     text = capsys.readouterr().out
-    assert sorted(os.listdir(out)) == ["report.json", "topspin.vqt", "topspin_0000.png", "topspin_0001.png"]
+    assert sorted(os.listdir(out)) == ["report.json", "topspin.vqt", "topspin_0000.png", "topspin_0001.png",
+                                       "topspin_compare.png"]
     assert "RTL: not run" in text and "cycle model" in text
+    # the side-by-side picture, named in the summary: uncompressed | compressed | difference
+    assert f"{out}/topspin_compare.png: frame 0 uncompressed | compressed | difference" in text
+    from vqtex.golden.render.imageio import read_image
+    from vqtex.golden.render.scene import load_scene
+    from vqtex.golden.render import render_frame
+    from vqtex.sim.reports.quality import difference, heat
+    pic, frame = read_image(out / "topspin_compare.png"), read_image(out / "topspin_0000.png")
+    h, w = frame.shape[:2]
+    scene = load_scene("topspin")
+    ref = render_frame(scene, 0, scene.reference_source(), "trilinear")
+    assert pic.shape == (h + 16, 3 * w + 16, 3)
+    assert np.array_equal(pic[:h, :w], ref[..., :3]) and np.array_equal(pic[:h, w + 8:2 * w + 8], frame[..., :3])
+    assert np.array_equal(pic[:h, 2 * w + 16:], heat(difference(frame, ref)))
+    assert json.loads((out / "report.json").read_text())["comparison"]["file"] == "topspin_compare.png"
     assert (out.stat().st_mode & 0o777) == 0o777 & ~_umask()
     assert not _leftovers(tmp_path)
 
