@@ -2,7 +2,10 @@
 [--lint] [--json]``.
 
 Writes the Verilog of the texel-fetch unit holding that file's memories (see
-:mod:`sim.backends.verilog`); the file is written atomically. ``--lint`` also runs
+:mod:`sim.backends.verilog`) and, beside it, ``OUT.vlt``: the Verilator configuration file that
+waives the four rules Yosys's output trips (:data:`LINT_WAIVERS`, explained in docs/usage.md), so
+``verilator --lint-only -Wall OUT.vlt OUT.v`` is clean in the user's own flow. Both files appear
+together or not at all. ``--lint`` also runs
 ``verilator --lint-only -Wall`` with the project's documented waivers (docs/simulation.md) and fails
 (exit 2) on any remaining warning.
 """
@@ -16,7 +19,7 @@ import tempfile
 
 from .common import Outputs, add_hardware_options, add_json, add_tag_width, add_texture_set, emit, load_set, with_default
 
-__all__ = ["add_parser", "cmd_export", "lint_verilog", "LINT_WAIVERS", "ExportError"]
+__all__ = ["add_parser", "cmd_export", "lint_verilog", "waiver_path", "LINT_WAIVERS", "ExportError"]
 
 
 class ExportError(OSError):
@@ -33,7 +36,15 @@ lint_off -rule UNUSEDSIGNAL
 // Yosys writes arithmetic whose operands are narrower than the result and relies on Verilog's
 // context-determined widths (zero or sign extension); that is the intended meaning.
 lint_off -rule WIDTH
+// A memory of one word has a zero-width address; Yosys declares it as [-1:0] (only bit 0 is used,
+// and it is always 0).
+lint_off -rule LITENDIAN
 """
+
+
+def waiver_path(output: str) -> str:
+    """The waiver file written beside the exported Verilog: ``OUT.vlt`` for ``OUT.v`` or ``OUT.sv``."""
+    return os.path.splitext(output)[0] + ".vlt"
 
 
 def lint_verilog(path: str, top: str) -> list:
@@ -59,16 +70,20 @@ def cmd_export(args) -> int:
         raise ExportError(f"--tag-width {args.tag_width} must be in 0..16")
     with Outputs() as outs:
         out = outs.add(args.output, (".v", ".sv"), "Verilog")
+        vlt = outs.add(waiver_path(args.output))
         text, ports = _export(args, out)
         with open(outs.path(out), "w") as f:
             f.write(text)
+        with open(outs.path(vlt), "w") as f:
+            f.write(LINT_WAIVERS)
     from vqtex.hw.texel_fetch import LATENCY as latency
-    report = {"output": args.output, "module": args.name, "bytes": len(text.encode()),
+    report = {"output": args.output, "lint_waivers": waiver_path(args.output), "module": args.name, "bytes": len(text.encode()),
               "one_port": bool(args.one_port), "dialect": args.dialect, "tag_width": args.tag_width, "latency": latency,
               "ports": ports, "lint": "clean" if args.lint else "not run"}
     emit(report, args.json, f"wrote {args.output} (module {args.name}, {len(ports)} ports, "
                              f"latency {latency}, {len(text.encode())} bytes"
-                             f"{', lint clean' if args.lint else ''})")
+                             f"{', lint clean' if args.lint else ''}) and its Verilator lint waivers "
+                             f"{waiver_path(args.output)}")
     return 0
 
 
