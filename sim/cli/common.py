@@ -32,8 +32,9 @@ import tempfile
 import threading
 
 __all__ = ["CliError", "Parser", "block_size", "BACKEND_HELP", "add_json", "add_texture_set", "add_backend",
-           "add_hardware_options", "add_tag_width", "emit", "warn", "warn_slow", "progress_enabled", "progress_line", "Outputs", "check_folder", "IMAGE_SUFFIXES",
-           "atomic_write", "write_bytes", "write_json", "load_set", "with_default", "file_mode"]
+           "add_hardware_options", "add_tag_width", "emit", "warn", "warn_slow", "progress_enabled", "progress_line",
+           "Outputs", "check_folder", "IMAGE_SUFFIXES", "write_bytes", "write_json", "load_set", "with_default",
+           "file_mode", "PYSIM_CYCLES_PER_SECOND", "SLOW_SECONDS", "STAGING_PREFIX"]
 
 #: Image file extensions an output image may have (all hold RGBA except JPEG and BMP, which drop alpha).
 IMAGE_SUFFIXES = (".png", ".tif", ".tiff", ".exr", ".tga", ".bmp", ".jpg", ".jpeg")
@@ -297,12 +298,6 @@ class Outputs:
         for staging in self._staging.values():
             shutil.rmtree(staging, ignore_errors=True)
         self._staging.clear()
-
-
-def atomic_write(path: str, write) -> None:
-    """One output on its own: check ``path``, call ``write(staged_path)``, rename into place."""
-    with Outputs() as outs:
-        write(outs.path(outs.add(path)))
 
 
 def write_bytes(path: str, data: bytes) -> None:

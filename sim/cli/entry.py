@@ -7,7 +7,8 @@ other way round.
 
 Every command that reports takes ``--json`` and then prints exactly one JSON object on stdout.
 Bad input ends with a one-line error on stderr and exit status 2, never a traceback and never a
-partly written output file (outputs are written to a temporary file and renamed).
+partly written output file: every command's outputs are checked before any work and appear together
+or not at all (:class:`vqtex.sim.cli.common.Outputs`). Warnings are one line each on stderr.
 """
 
 from __future__ import annotations

@@ -14,7 +14,7 @@ import time
 
 import numpy as np
 
-from .common import (IMAGE_SUFFIXES, CliError, Outputs, add_backend, add_hardware_options, add_json, emit,
+from .common import (IMAGE_SUFFIXES, CliError, Outputs, add_backend, add_hardware_options, add_json, emit, load_set,
                      progress_enabled, warn, warn_slow, with_default, write_json)
 
 __all__ = ["add_parser", "cmd_render", "render_scene", "render_to_files", "encode_scene", "parse_frames", "Progress"]
@@ -217,7 +217,6 @@ def _frame_report(r: dict) -> dict:
 
 
 def cmd_render(args) -> int:
-    from vqtex.golden.format import TextureSet
     from vqtex.golden.render.scene import load_scene
     with Outputs() as outs:
         outs.add(args.output, IMAGE_SUFFIXES, "a frame")
@@ -231,7 +230,7 @@ def cmd_render(args) -> int:
             raise CliError(f"--diff-scale {args.diff_scale} must be at least 1")
         on_frame = _extra_outputs(args, outs, frames)
         images = [img for img, _ in scene.load_textures()]
-        ts = TextureSet.load(args.texture_set) if args.texture_set else encode_scene(scene, images)
+        ts = load_set(args.texture_set) if args.texture_set else encode_scene(scene, images)
         if ts.n_textures != len(scene.textures):
             raise CliError(f"{args.texture_set} holds {ts.n_textures} textures, the scene uses {len(scene.textures)}")
         per_frame, mismatches = render_to_files(
