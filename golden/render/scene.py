@@ -1,57 +1,8 @@
 """Scenes in TOML: camera and its animation, meshes, textures and their encoding groups.
 
-A scene file (see golden/data/topspin.toml and town.toml for complete examples)::
-
-    [scene]
-    name = "demo"            # default: the file's stem
-    frames = 50              # frame count (default 1)
-    size = [400, 400]        # width, height in pixels
-    background = [0, 0, 0]   # RGB or RGBA of uncovered pixels (default black)
-
-    [camera]
-    position = [0, 2, 5]
-    target = [0, 0, 0]
-    up = [0, 1, 0]           # default
-    fov = 45                 # vertical field of view, degrees (default 45)
-    near = 0.1               # near plane distance (default 0.1)
-    [camera.orbit]           # optional: the camera rig turns about an axis over the frames
-    center = [0, 0, 0]       # default: target
-    axis = [0, 1, 0]         # default: up
-    degrees = 360            # sweep over `frames` frames: angle = start + degrees * frame / frames
-    start = 0
-    # ...or instead of an orbit, keyframes (linear interpolation, held before the first / after
-    # the last): [[camera.keyframe]] frame = 0, position = [...], target = [...] (opt.), fov (opt.)
-
-    [groups.signs]           # encoding settings of a group: its textures share one codebook
-    block = "4x4"            # default "4x4"
-    codebook_size = 256      # default 256
-    color = "rgb"            # rgb | rgba | intensity | yuv411 (default rgb)
-    index_bits = 8           # default: ceil(log2(codebook_size))
-    mipmaps = true           # default true
-    encoder = "gla"          # default "gla"
-    seed = 0                 # encoder seed (default 0)
-
-    [[texture]]
-    name = "floor"
-    generator = "wood"       # wood | marble | checker | stripes ...   or   file = "brick.png"
-    size = [256, 256]        # required for a generator; checked against a file if given
-    seed = 1                 # generator seed (default 0)
-    params = { planks = 4 }  # extra generator parameters (optional)
-    address = "wrap"         # wrap | clamp | [s_mode, t_mode] (default wrap)
-    group = "signs"          # default: the texture's own name (a codebook of its own)
-    # any encoding key but seed may also be given here; all textures of a group must agree
-
-    [[mesh]]
-    name = "floor"
-    shape = "plane"          # plane quad box cylinder cone sphere top revolve triangles
-    texture = "floor"
-    size = [10, 10]          # shape parameters: see SHAPES
-    tiling = [4, 4]
-    translate = [0, 0, 0]    # model transform: translate * rotate (x, then y, then z, degrees)
-    rotate = [0, 0, 0]       #   * precession * spin * scale
-    scale = 1.0              # number or [sx, sy, sz]
-    spin = { axis = [0, 1, 0], degrees_per_frame = 30 }     # optional, about the model origin
-    precess = { tilt = 8, degrees_per_frame = 12 }          # optional: a tilted, wobbling axis
+The file format (every table and key, defaults, shapes and texture generators) is documented in
+docs/rendering.md, section "Scene files"; golden/data/topspin.toml and town.toml are complete
+examples.
 
 Texture ids are assigned group by group (groups in order of first appearance, textures in file
 order inside a group), so one encode() per group followed by TextureSet.combine gives a texture set

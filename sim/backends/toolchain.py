@@ -6,6 +6,14 @@ flags); it is built in a private temporary folder inside the cache and renamed i
 processes building the same entry at once both end with a complete entry and never see a partial one
 (the loser of the rename throws its copy away).
 
+The cache is bounded: after every new build, least-recently-used entries are deleted until the
+cache holds at most ``$VQTEX_CACHE_MAX_MB`` megabytes (default :data:`DEFAULT_MAX_MB`; 0 means no
+bound); the entry just built is never deleted. An entry is "used" when it is built or found (its
+folder's modification time is refreshed). ``vqtex cache info`` shows what the cache holds and
+``vqtex cache clean`` empties it (:func:`cache_info`, :func:`cache_clean`). An entry is deleted by
+renaming it aside first, so a build never sees half an entry; a process that already loaded an
+entry's library keeps running (Linux keeps a deleted file open).
+
 A missing tool raises :class:`ToolchainError`, an ``OSError``, so the command line prints it as one
 line and exits with status 2.
 """
@@ -21,7 +29,12 @@ import tempfile
 import time
 
 __all__ = ["ToolchainError", "find_tool", "find_cxx", "tool_version", "cache_dir", "digest", "cached_build",
-           "index_get", "index_put", "INSTALL_HINT"]
+           "index_get", "index_put", "INSTALL_HINT", "DEFAULT_MAX_MB", "cache_max_bytes", "cache_entries",
+           "cache_info", "cache_clean", "evict_lru"]
+
+#: The cache's default size bound in megabytes (``$VQTEX_CACHE_MAX_MB`` overrides it). One CXXRTL
+#: entry is 1-5 MB, one Verilator entry 5-15 MB.
+DEFAULT_MAX_MB = 1024
 
 #: What to install for each tool (Debian package names; scripts/install-sim-tools does it).
 INSTALL_HINT = {
@@ -108,6 +121,7 @@ def cached_build(kind: str, key: str, build, product: str) -> tuple[str, float, 
     final = os.path.join(root, key)
     target = os.path.join(final, product)
     if os.path.isfile(target):
+        _touch(final)
         return target, 0.0, True
     t0 = time.perf_counter()
     tmp = tempfile.mkdtemp(prefix=f".build-{key}-", dir=root)
@@ -131,7 +145,128 @@ def cached_build(kind: str, key: str, build, product: str) -> tuple[str, float, 
     finally:
         if os.path.isdir(tmp):
             shutil.rmtree(tmp, ignore_errors=True)
+    _touch(final)
+    evict_lru(cache_max_bytes(), keep=final)
     return target, time.perf_counter() - t0, False
+
+
+def _touch(folder: str) -> None:
+    try:
+        os.utime(folder)
+    except OSError:
+        pass
+
+
+def _size(folder: str) -> int:
+    total = 0
+    for root, _, files in os.walk(folder):
+        for f in files:
+            try:
+                total += os.lstat(os.path.join(root, f)).st_size
+            except OSError:
+                pass
+    return total
+
+
+def cache_max_bytes() -> int:
+    """The size bound in bytes: ``$VQTEX_CACHE_MAX_MB`` (0 = none) or :data:`DEFAULT_MAX_MB`.
+    Raises ToolchainError if the variable is not a number >= 0."""
+    text = os.environ.get("VQTEX_CACHE_MAX_MB", "")
+    try:
+        mb = float(text) if text.strip() else DEFAULT_MAX_MB
+        if not mb >= 0:
+            raise ValueError
+    except ValueError:
+        raise ToolchainError(f"VQTEX_CACHE_MAX_MB={text!r} is not a number of megabytes >= 0") from None
+    return int(mb * 2**20)
+
+
+def cache_entries() -> list[dict]:
+    """Every complete build entry: ``{"kind", "key", "path", "bytes", "last_used"}`` (a Unix time),
+    least recently used first. Folders starting with ``.`` (builds in progress) are not entries."""
+    root = cache_dir()
+    out = []
+    for kind in sorted(os.listdir(root)):
+        kdir = os.path.join(root, kind)
+        if kind == "index" or kind.startswith((".", "failed-")) or not os.path.isdir(kdir):
+            continue
+        for key in os.listdir(kdir):
+            path = os.path.join(kdir, key)
+            if key.startswith(".") or not os.path.isdir(path):
+                continue
+            try:
+                used = os.stat(path).st_mtime
+            except OSError:
+                continue
+            out.append({"kind": kind, "key": key, "path": path, "bytes": _size(path), "last_used": used})
+    return sorted(out, key=lambda e: e["last_used"])
+
+
+def _remove(path: str) -> bool:
+    """Delete a cache folder: renamed aside (atomically gone for everyone else), then removed."""
+    aside = os.path.join(os.path.dirname(path), f".stale-{os.path.basename(path)}-{os.getpid()}")
+    try:
+        os.rename(path, aside)
+    except OSError:
+        return False                                    # gone already, or in use by a rename
+    shutil.rmtree(aside, ignore_errors=True)
+    return True
+
+
+def evict_lru(max_bytes: int, keep: str | None = None) -> list[dict]:
+    """Delete least-recently-used entries (never ``keep``) until the entries total at most
+    ``max_bytes`` (0 = no bound: nothing is deleted). Returns the deleted entries."""
+    if max_bytes <= 0:
+        return []
+    entries = cache_entries()
+    total = sum(e["bytes"] for e in entries)
+    removed = []
+    for e in entries:
+        if total <= max_bytes:
+            break
+        if keep is not None and os.path.abspath(e["path"]) == os.path.abspath(keep):
+            continue
+        if _remove(e["path"]):
+            total -= e["bytes"]
+            removed.append(e)
+    return removed
+
+
+def cache_info() -> dict:
+    """What the cache holds: folder, bound, entries and bytes per kind, kept failed builds."""
+    root = cache_dir()
+    entries = cache_entries()
+    kinds: dict = {}
+    for e in entries:
+        k = kinds.setdefault(e["kind"], {"entries": 0, "bytes": 0})
+        k["entries"] += 1
+        k["bytes"] += e["bytes"]
+    failed = [os.path.join(root, n) for n in os.listdir(root) if n.startswith("failed-")]
+    return {"folder": root, "max_bytes": cache_max_bytes(), "bytes": sum(e["bytes"] for e in entries),
+            "entries": len(entries), "kinds": kinds, "failed_builds": len(failed),
+            "failed_bytes": sum(_size(f) for f in failed),
+            "oldest_use": min((e["last_used"] for e in entries), default=None),
+            "newest_use": max((e["last_used"] for e in entries), default=None)}
+
+
+def cache_clean(keep_bytes: int = 0) -> dict:
+    """Delete least-recently-used entries down to ``keep_bytes`` (0: all of them, the quick-key index
+    and the kept failed builds too). Returns ``{"removed", "freed_bytes", "bytes_left"}``."""
+    root = cache_dir()
+    if keep_bytes > 0:
+        removed = evict_lru(keep_bytes)
+        freed = sum(e["bytes"] for e in removed)
+        n = len(removed)
+    else:
+        entries = cache_entries()
+        n = sum(_remove(e["path"]) for e in entries)
+        freed = sum(e["bytes"] for e in entries)
+        for name in os.listdir(root):
+            path = os.path.join(root, name)
+            if name == "index" or name.startswith("failed-"):
+                freed += _size(path)
+                _remove(path)
+    return {"removed": n, "freed_bytes": freed, "bytes_left": sum(e["bytes"] for e in cache_entries())}
 
 
 def run_tool(cmd: list, cwd: str, what: str, log: str, env=None) -> None:
@@ -148,13 +283,17 @@ def run_tool(cmd: list, cwd: str, what: str, log: str, env=None) -> None:
 
 
 def index_get(kind: str, key: str) -> str | None:
-    """A small text value stored under ``kind/key`` (e.g. quick key -> source hash), or None."""
+    """A small text value stored under ``kind/key`` (e.g. quick key -> source hash), or None. Reading
+    it counts as a use of the build entry ``kind/value`` it names (for the least-recently-used bound)."""
     path = os.path.join(cache_dir(), "index", kind, key)
     try:
         with open(path) as f:
-            return f.read().strip() or None
+            value = f.read().strip() or None
     except OSError:
         return None
+    if value:
+        _touch(os.path.join(cache_dir(), kind, value))   # the entry it names (same kind) is in use
+    return value
 
 
 def index_put(kind: str, key: str, value: str) -> None:

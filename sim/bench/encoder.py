@@ -103,10 +103,12 @@ def _run_case(cid: int, spec: dict, seed: int, repeats: int | None, log) -> dict
     k = spec["k"]
     reps = spec["repeats"] if repeats is None else repeats
     ours_t, km_t = [], []
-    for _ in range(reps):
+    for rep in range(reps):
+        log(f"  case {cid}: ours   run {rep + 1}/{reps} ({len(x)} vectors, k={k}) ...")
         res, wall, cpu = _time(lambda: gla(x, k, seed=seed))
         ours_t.append((wall, cpu))
         log(f"  case {cid}: ours   {wall:8.3f} s")
+        log(f"  case {cid}: KMeans run {rep + 1}/{reps} (the slow one: up to minutes) ...")
         km, wall, cpu = _time(lambda: KMeans(n_clusters=k, init="k-means++", n_init=1,
                                              random_state=seed, algorithm="lloyd",
                                              max_iter=_KM_MAX_ITER).fit(x))

@@ -81,17 +81,26 @@ def _images(scene):
     return [img for img, _ in scene.load_textures()]
 
 
-def _frames(scene, step):
-    return list(range(0, scene.frames, step))
+def _frames(scene, step, frames=None):
+    """``frames`` when given, else every ``step``-th frame; a ValueError if that selects none."""
+    if frames is None:
+        if step < 1:
+            raise ValueError(f"frame step {step} must be at least 1")
+        frames = range(0, scene.frames, step)
+    frames = list(frames)
+    if not frames or any(not 0 <= f < scene.frames for f in frames):
+        raise ValueError(f"frames {frames} are not a non-empty selection of the scene's {scene.frames}")
+    return frames
 
 
 def table3(frame_step: int = 10, codebook_sizes=(256, 1024), blocks=("2x2", "4x4"),
-           colors=("rgb", "yuv411"), modes=("point", "trilinear")) -> list[dict]:
-    """topspin: overall rate and frame MSE for codebook size x block x colour x point/mipmap."""
+           colors=("rgb", "yuv411"), modes=("point", "trilinear"), frames=None) -> list[dict]:
+    """topspin: overall rate and frame MSE for codebook size x block x colour x point/mipmap, over
+    ``frames`` (default every ``frame_step``-th frame)."""
     from vqtex.golden.render.scene import load_scene
     scene = load_scene("topspin")
     images = _images(scene)
-    frames = _frames(scene, frame_step)
+    frames = _frames(scene, frame_step, frames)
     rows = []
     for mode in modes:
         for color in colors:
@@ -108,12 +117,13 @@ def table3(frame_step: int = 10, codebook_sizes=(256, 1024), blocks=("2x2", "4x4
     return rows
 
 
-def table4(frame_step: int = 10, codebook_sizes=(256, 1024)) -> list[dict]:
-    """town: separate codebooks, the paper's texture groups, one codebook per format."""
+def table4(frame_step: int = 10, codebook_sizes=(256, 1024), frames=None) -> list[dict]:
+    """town: separate codebooks, the paper's texture groups, one codebook per format, over ``frames``
+    (default every ``frame_step``-th frame)."""
     from vqtex.golden.render.scene import load_scene
     scene = load_scene("town")
     images = _images(scene)
-    frames = _frames(scene, frame_step)
+    frames = _frames(scene, frame_step, frames)
     rows = []
     for grouping in ("separate", "scene", "format"):
         for k in codebook_sizes:

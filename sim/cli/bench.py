@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import importlib
 
-from .common import CliError
+from .common import CliError, add_json
 
 __all__ = ["add_parser"]
 
@@ -35,7 +35,9 @@ def cmd_bench(args) -> int:
 
 
 def add_parser(sub) -> None:
-    b = sub.add_parser("bench", help="benchmarks that print numbers")
-    b.add_argument("what", choices=sorted(BENCHES))
-    b.add_argument("--json", action="store_true", help="print one JSON object")
+    b = sub.add_parser("bench", help="benchmarks that print numbers (speed and quality, not tests)")
+    b.add_argument("what", choices=sorted(BENCHES),
+                   help="encode: codebook design vs scikit-learn KMeans; mip: extended codewords; "
+                        "sim: simulation backends' speed; render: golden render time and RTL cycles per frame")
+    add_json(b)
     b.set_defaults(func=cmd_bench)

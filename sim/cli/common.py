@@ -1,9 +1,23 @@
 """What every ``vqtex`` subcommand shares: the user-error exception, the argument parser class,
-JSON or text output, checked atomic output files and loading a texture set with clean errors.
+JSON or text output, the command's output files and loading a texture set with clean errors.
 
-Outputs are written to a temporary file in the destination folder and renamed over the target, so a
-failing or interrupted command never leaves a partly written file. The subcommand modules import
-this module; it imports none of them.
+Outputs (:class:`Outputs`) follow one rule for every command:
+
+* **checked before work**: each output is registered (``add`` for a file, ``folder`` for an output
+  folder) before the command computes anything. A missing folder, a path that is a folder (or, for an
+  output folder, a file), a folder the user cannot write, an extension that does not name what is
+  written: one line (``vqtex: error: output folder ... does not exist``) and exit 2.
+* **complete or absent**: every file is written into a hidden staging folder (``.vqtex-staging-*``)
+  created at registration in the destination's own folder (so the final move is a rename on one file
+  system, and creating it is the writability check). Only when the command has finished its work are
+  the files renamed into place, together, with Ctrl-C held back for those few renames; an error or an
+  interrupt before that removes the staging folders and nothing of the set appears. A new output
+  folder (``vqtex demo -o DIR``) is staged whole and appears with one rename. Only a killed process
+  (SIGKILL, power loss) can leave a staging folder behind.
+* **ordinary permissions**: a written file gets ``0666 & ~umask`` (0644 under umask 022), whatever
+  the writer used for its temporary file (``mkstemp`` makes 0600).
+
+The subcommand modules import this module; it imports none of them.
 """
 
 from __future__ import annotations
@@ -11,10 +25,21 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
+import signal
+import sys
 import tempfile
+import threading
 
-__all__ = ["CliError", "Parser", "block_size", "emit", "check_output", "atomic_write", "write_bytes",
-           "write_json", "load_set"]
+__all__ = ["CliError", "Parser", "block_size", "BACKEND_HELP", "add_json", "add_texture_set", "add_backend",
+           "add_hardware_options", "add_tag_width", "emit", "warn", "warn_slow", "progress_enabled", "progress_line",
+           "Outputs", "check_folder", "IMAGE_SUFFIXES", "write_bytes", "write_json", "load_set", "with_default",
+           "file_mode", "PYSIM_CYCLES_PER_SECOND", "SLOW_SECONDS", "STAGING_PREFIX"]
+
+#: Image file extensions an output image may have (all hold RGBA except JPEG and BMP, which drop alpha).
+IMAGE_SUFFIXES = (".png", ".tif", ".tiff", ".exr", ".tga", ".bmp", ".jpg", ".jpeg")
+
+STAGING_PREFIX = ".vqtex-staging-"
 
 
 class CliError(Exception):
@@ -22,10 +47,64 @@ class CliError(Exception):
 
 
 class Parser(argparse.ArgumentParser):
-    """An ``ArgumentParser`` whose errors are one line and exit 2 (argparse would print the usage too)."""
+    """An ``ArgumentParser`` whose errors are one line and exit 2 (argparse would print the usage too).
+
+    The message names the subcommand once: ``vqtex: error: encode: the following arguments ...``.
+    """
 
     def error(self, message):
-        raise CliError(f"{self.prog}: {message}")
+        sub = self.prog.split(" ", 1)[1] if " " in self.prog else ""
+        raise CliError(f"{sub}: {message}" if sub else message)
+
+
+def with_default(text: str, default) -> str:
+    """Help text ending with its default, as every argument's help shows it."""
+    return f"{text} (default {default})"
+
+
+#: What each backend is, for --backend help texts.
+BACKEND_HELP = {
+    "golden": "golden (numpy fetch and the exact cycle model, no RTL)",
+    "pysim": "pysim (Amaranth's simulator, about 2e3 cycles/s: small traces)",
+    "cxxrtl": "cxxrtl (the RTL compiled with CXXRTL, about 1e7 cycles/s)",
+    "verilator": "verilator (the exported Verilog through Verilator)",
+}
+
+
+def add_json(p) -> None:
+    """``--json``: print one JSON object instead of text."""
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of text")
+
+
+def add_texture_set(p) -> None:
+    """The positional ``.vqt`` input."""
+    p.add_argument("file", metavar="FILE.vqt", help="a texture set written by vqtex encode")
+
+
+def add_backend(p, choices, default: str) -> None:
+    """``--backend`` with each choice explained."""
+    p.add_argument("--backend", choices=choices, default=default,
+                   help=with_default("what answers the texel requests: "
+                                     + "; ".join(BACKEND_HELP[c] for c in choices), default))
+
+
+def add_hardware_options(p, *, stall: bool = True) -> None:
+    """The unit's options shared by the simulating commands: ``--one-port``, and with ``stall`` the
+    output backpressure ``--stall`` and its pattern's seed ``--stall-seed`` (old spelling ``--seed``)."""
+    p.add_argument("--one-port", action="store_true",
+                   help="one-port index memory: one extra cycle per straddling index (the paper's penalty; "
+                        "default two banks, no penalty)")
+    if stall:
+        p.add_argument("--stall", type=float, default=0.0,
+                       help=with_default("probability, in [0, 1), that the consumer holds the output's ready "
+                                         "low in a cycle", 0.0))
+        p.add_argument("--stall-seed", "--seed", dest="seed", type=int, default=0,
+                       help=with_default("seed of the --stall pattern (--seed is the old spelling)", 0))
+
+
+def add_tag_width(p) -> None:
+    p.add_argument("--tag-width", type=int, default=8,
+                   help=with_default("bits of the request tag carried to the response, 0..16", 8))
 
 
 def block_size(text: str) -> tuple[int, int]:
@@ -45,42 +124,201 @@ def emit(obj: dict, as_json: bool, text: str) -> None:
         print(text)
 
 
-def check_output(path: str) -> str:
-    """The folder of an output file; a CliError if it does not exist."""
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
+def warn(message: str) -> None:
+    """One line on stderr, ``vqtex: warning: ...``: the command goes on (exit 0) but the result is
+    probably not what the user meant."""
+    print(f"vqtex: warning: {message}", file=sys.stderr)
+
+
+#: Amaranth's simulator runs the unit at about this many cycles per second (docs/simulation.md);
+#: :func:`warn_slow` warns when a run would take longer than :data:`SLOW_SECONDS` at that rate.
+PYSIM_CYCLES_PER_SECOND = 2e3
+SLOW_SECONDS = 60
+
+
+def warn_slow(backend: str, requests: int) -> None:
+    """Warn (one line) when ``backend`` is pysim and ``requests`` texel requests would take more than
+    :data:`SLOW_SECONDS` (about one cycle per request)."""
+    seconds = requests / PYSIM_CYCLES_PER_SECOND
+    if backend == "pysim" and seconds > SLOW_SECONDS:
+        warn(f"pysim simulates about {PYSIM_CYCLES_PER_SECOND:.0f} cycles/s: {requests} requests take about "
+             f"{seconds / 60:.0f} minutes (--backend cxxrtl takes seconds)")
+
+
+def progress_enabled() -> bool:
+    """Whether progress lines are shown: ``$VQTEX_PROGRESS`` (1 or 0) when set, else when stderr is a
+    terminal (so logs and pipes get only results, warnings and errors)."""
+    env = os.environ.get("VQTEX_PROGRESS", "").strip()
+    return env == "1" if env in ("0", "1") else sys.stderr.isatty()
+
+
+def progress_line(message: str) -> None:
+    """``vqtex: MESSAGE`` on stderr when progress is shown: the step that starts now may be silent
+    for a while."""
+    if progress_enabled():
+        print(f"vqtex: {message}", file=sys.stderr, flush=True)
+
+
+def file_mode() -> int:
+    """``0666 & ~umask``: the mode of an ordinary new file."""
+    mask = os.umask(0)
+    os.umask(mask)
+    return 0o666 & ~mask
+
+
+def _probe_writable(folder: str) -> None:
+    """A CliError unless ``folder`` exists, is a folder and a file can be created in it."""
+    if not os.path.exists(folder):
         raise CliError(f"output folder {folder} does not exist")
-    return folder
-
-
-def atomic_write(path: str, write) -> None:
-    """Call ``write(tmp_path)`` then rename over ``path``; never leave a partial file."""
-    folder = check_output(path)
-    suffix = os.path.splitext(path)[1]
-    fd, tmp = tempfile.mkstemp(prefix=".vqtex-", suffix=suffix, dir=folder)
-    os.close(fd)
+    if not os.path.isdir(folder):
+        raise CliError(f"output folder {folder} is not a folder")
     try:
-        write(tmp)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+        os.rmdir(tempfile.mkdtemp(prefix=STAGING_PREFIX, dir=folder))
+    except OSError as e:
+        raise CliError(f"output folder {folder} is not writable ({e.strerror})") from None
+
+
+def check_folder(path: str) -> str:
+    """An output folder whose files need not be complete-or-absent (``report area --keep``): its
+    parent must exist and be writable; created if missing. Returns it (absolute)."""
+    path = os.path.abspath(path)
+    if os.path.exists(path) and not os.path.isdir(path):
+        raise CliError(f"output folder {path} is a file")
+    if not os.path.isdir(path):
+        _probe_writable(os.path.dirname(path))
+        os.makedirs(path, exist_ok=True)
+    _probe_writable(path)
+    return path
+
+
+class Outputs:
+    """The files one command writes: checked at registration, staged, renamed into place together.
+
+    Use as a context manager::
+
+        with Outputs() as outs:
+            out = outs.add(args.output, (".npy",))      # before any work
+            ...                                         # the work
+            np.save(outs.path(out), data)               # write the staged file
+            outs.commit()                               # all files appear (also done at a clean exit)
+
+    Leaving the block by an exception (including ``KeyboardInterrupt``) removes every staged file.
+    """
+
+    def __init__(self):
+        self._staging: dict[str, str] = {}     # destination folder -> its staging folder
+        self._files: dict[str, str] = {}       # final path -> staged path (files in existing folders)
+        self._new_dirs: dict[str, str] = {}    # new output folder -> its staged copy
+        self._committed = False
+
+    def __enter__(self) -> "Outputs":
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        try:
+            if exc_type is None and not self._committed:
+                self.commit()
+        finally:
+            self._discard()
+
+    def _stage_in(self, folder: str) -> str:
+        if folder not in self._staging:
+            _probe_writable(folder)
+            self._staging[folder] = tempfile.mkdtemp(prefix=STAGING_PREFIX, dir=folder)
+        return self._staging[folder]
+
+    def folder(self, path: str) -> str:
+        """Register an output folder (created if new; its parent must exist). Returns it (absolute)."""
+        path = os.path.abspath(path)
+        if os.path.exists(path):
+            if not os.path.isdir(path):
+                raise CliError(f"output folder {path} is a file")
+            self._stage_in(path)
+        elif path not in self._new_dirs:
+            staged = os.path.join(self._stage_in(os.path.dirname(path)), os.path.basename(path))
+            os.mkdir(staged)
+            self._new_dirs[path] = staged
+        return path
+
+    def add(self, path: str, suffixes=None, what: str = "") -> str:
+        """Register the output file ``path`` (its extension one of ``suffixes``, case-insensitive,
+        when given; ``what`` names the content in that error). Returns it (absolute)."""
+        if os.path.isdir(path):
+            raise CliError(f"output {os.path.abspath(path)} is a folder")
+        if suffixes is not None:
+            ext = os.path.splitext(path)[1].lower()
+            if ext not in suffixes:
+                raise CliError(f"output {path}: the extension must be {' or '.join(suffixes)}"
+                               f"{' for ' + what if what else ''} (not {ext or 'none'})")
+        path = os.path.abspath(path)
+        folder = os.path.dirname(path)
+        if folder in self._new_dirs:
+            staged = os.path.join(self._new_dirs[folder], os.path.basename(path))
+        else:
+            staged = os.path.join(self._stage_in(folder), os.path.basename(path))
+            self._files[path] = staged
+        return path
+
+    def path(self, final: str) -> str:
+        """Where to write the registered output ``final`` now (its staged file)."""
+        final = os.path.abspath(final)
+        if final in self._files:
+            return self._files[final]
+        folder = os.path.dirname(final)
+        if folder in self._new_dirs:
+            return os.path.join(self._new_dirs[folder], os.path.basename(final))
+        raise KeyError(f"{final} was not registered as an output")
+
+    def commit(self) -> None:
+        """Rename every written file (and new folder) into place, Ctrl-C held back meanwhile; a
+        registered output that was not written is skipped."""
+        pending = []
+        main = threading.current_thread() is threading.main_thread()
+        old = signal.signal(signal.SIGINT, lambda *_: pending.append(1)) if main else None
+        try:
+            mode = file_mode()
+            staged = list(self._files.values()) + [
+                os.path.join(d, n) for d in self._new_dirs.values() for n in os.listdir(d)]
+            for f in staged:
+                if os.path.isfile(f):
+                    os.chmod(f, mode)
+            for final, staged_dir in self._new_dirs.items():
+                os.rename(staged_dir, final)
+            for final, f in self._files.items():
+                if os.path.exists(f):
+                    os.replace(f, final)
+            self._committed = True
+        finally:
+            if main:
+                signal.signal(signal.SIGINT, old)
+        if pending:
+            raise KeyboardInterrupt
+
+    def _discard(self) -> None:
+        for staging in self._staging.values():
+            shutil.rmtree(staging, ignore_errors=True)
+        self._staging.clear()
 
 
 def write_bytes(path: str, data: bytes) -> None:
-    """Write ``data`` to ``path`` atomically."""
-    def write(tmp):
-        with open(tmp, "wb") as f:
-            f.write(data)
-    atomic_write(path, write)
+    """Write ``data`` to ``path`` (which need not be registered: a staged path is written directly)."""
+    with open(path, "wb") as f:
+        f.write(data)
 
 
 def write_json(path: str, obj) -> None:
-    """Write ``obj`` as indented JSON to ``path`` atomically."""
+    """Write ``obj`` as indented JSON to ``path``."""
     write_bytes(path, json.dumps(obj, indent=2, sort_keys=True).encode())
 
 
 def load_set(path: str):
-    """The ``TextureSet`` in ``path``; ``golden.format.FormatError`` (one line) if it is not a valid one."""
-    from vqtex.golden.format import TextureSet
-    return TextureSet.load(path)
+    """The ``TextureSet`` in ``path``; ``golden.format.FormatError`` (one line, naming the file) if it
+    is not a valid one."""
+    from vqtex.golden.format import FormatError, TextureSet
+    try:
+        return TextureSet.load(path)
+    except FormatError as e:
+        msg = str(e).strip()
+        if str(path) in msg:
+            raise
+        raise FormatError(f"{path}: {msg}") from None

@@ -4,35 +4,40 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import CliError, check_output, emit, load_set
+from .common import IMAGE_SUFFIXES, CliError, Outputs, add_json, add_texture_set, emit, load_set, with_default
 
 __all__ = ["add_parser", "cmd_decode"]
 
 
 def cmd_decode(args) -> int:
-    from vqtex.golden.fetch import decode
     from vqtex.golden.render.imageio import write_image
-    ts = load_set(args.file)
+    with Outputs() as outs:
+        out = outs.add(args.output, IMAGE_SUFFIXES, "an image")
+        ts = load_set(args.file)
+        img, channels = _decoded(ts, args)
+        write_image(outs.path(out), np.ascontiguousarray(img[..., :channels]))
+    h, w = img.shape[:2]
+    emit({"texture": args.texture, "level": args.level, "width": w, "height": h, "output": args.output},
+         args.json, f"wrote {args.output} ({w}x{h}, texture {args.texture} level {args.level})")
+    return 0
+
+
+def _decoded(ts, args):
+    from vqtex.golden.fetch import decode
     if not 0 <= args.texture < ts.n_textures:
         raise CliError(f"texture {args.texture} does not exist (the file has {ts.n_textures})")
     levels = ts.textures[args.texture].levels
     if not 0 <= args.level < levels:
         raise CliError(f"texture {args.texture} has no level {args.level} (it has {levels})")
     img = decode(ts, args.texture, args.level)
-    channels = {"rgb": 3, "yuv411": 3, "rgba": 4, "intensity": 1}[ts.textures[args.texture].color]
-    check_output(args.output)
-    write_image(args.output, np.ascontiguousarray(img[..., :channels]))          # atomic itself
-    h, w = img.shape[:2]
-    emit({"texture": args.texture, "level": args.level, "width": w, "height": h, "output": args.output},
-          args.json, f"wrote {args.output} ({w}x{h}, texture {args.texture} level {args.level})")
-    return 0
+    return img, {"rgb": 3, "yuv411": 3, "rgba": 4, "intensity": 1}[ts.textures[args.texture].color]
 
 
 def add_parser(sub) -> None:
     d = sub.add_parser("decode", help="decode one level of one texture to an image")
-    d.add_argument("file")
-    d.add_argument("-o", "--output", required=True)
-    d.add_argument("--texture", type=int, default=0)
-    d.add_argument("--level", type=int, default=0)
-    d.add_argument("--json", action="store_true")
+    add_texture_set(d)
+    d.add_argument("-o", "--output", required=True, help="image to write (.png, .tif, .exr, ...)")
+    d.add_argument("--texture", type=int, default=0, help=with_default("texture number (vqtex info lists them)", 0))
+    d.add_argument("--level", type=int, default=0, help=with_default("mip level, 0 = full size", 0))
+    add_json(d)
     d.set_defaults(func=cmd_decode)

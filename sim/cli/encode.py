@@ -4,39 +4,73 @@ from __future__ import annotations
 
 import os
 
-from .common import block_size, emit
-from .info import info_report, info_text
+from .common import Outputs, add_json, block_size, emit, warn, with_default, write_bytes
+from .info import add_psnr, info_report, info_text
 
 __all__ = ["add_parser", "cmd_encode"]
 
 
 def cmd_encode(args) -> int:
-    from vqtex.golden.encode import encode
     from vqtex.golden.render.imageio import read_image
-    images = [read_image(p) for p in args.images]
-    names = [os.path.splitext(os.path.basename(p))[0] for p in args.images]
-    ts = encode(images, block=args.block, codebook_size=args.codebook_size, color=args.color,
-                index_bits=args.index_bits, mipmaps=args.mipmaps, encoder=args.encoder, seed=args.seed,
-                mip_training=args.mip_training, names=names, word_bits=args.word_bits)
-    ts.save(args.output)
+    with Outputs() as outs:
+        out = outs.add(args.output, (".vqt",), "a texture set")
+        images = [read_image(p) for p in args.images]
+        ts = _encode(args, images)
+        write_bytes(outs.path(out), ts.to_bytes())
     report = info_report(ts)
+    add_psnr(report, ts, images)
     emit(report, args.json, info_text(ts, report) + f"\nwrote {args.output}")
     return 0
 
 
+def _encode(args, images):
+    """Encode; a warning for each setting that probably is not what the user meant: alpha that a
+    colour format without alpha drops, more codewords than blocks, a result larger than the images."""
+    from vqtex.golden.encode import encode
+    names = [os.path.splitext(os.path.basename(p))[0] for p in args.images]
+    if args.color != "rgba":
+        dropped = [p for p, img in zip(args.images, images)
+                   if img.ndim == 3 and img.shape[2] in (2, 4) and (img[..., -1] != 255).any()]
+        if dropped:
+            warn(f"--color {args.color} drops the alpha channel of {dropped[0]}"
+                 f"{f' and {len(dropped) - 1} more' if len(dropped) > 1 else ''} (use --color rgba to keep it)")
+    ts = encode(images, block=args.block, codebook_size=args.codebook_size, color=args.color,
+                index_bits=args.index_bits, mipmaps=args.mipmaps, encoder=args.encoder, seed=args.seed,
+                mip_training=args.mip_training, names=names, word_bits=args.word_bits)
+    bw, bh = args.block
+    blocks = sum((img.shape[1] // bw) * (img.shape[0] // bh) for img in images)
+    if args.codebook_size > blocks:
+        warn(f"{args.codebook_size} codewords for {blocks} blocks: at least {args.codebook_size - blocks} "
+             f"codewords are never used (a smaller -k compresses better)")
+    rate = ts.rates()["overall"]
+    if rate < 1:
+        warn(f"the compression rate is {rate:.2f}:1, below 1:1: the texture set is larger than the images "
+             f"(the codebook dominates; use a smaller -k or larger images)")
+    return ts
+
+
 def add_parser(sub) -> None:
     e = sub.add_parser("encode", help="compress images into a .vqt texture set (one shared codebook)")
-    e.add_argument("images", nargs="+")
-    e.add_argument("-o", "--output", required=True)
-    e.add_argument("--block", type=block_size, default=(4, 4), help="block WxH, powers of two 1..8 (default 4x4)")
-    e.add_argument("--codebook-size", "-k", type=int, default=256, help="codewords, 2..4096 (default 256)")
-    e.add_argument("--color", choices=["rgb", "rgba", "intensity", "yuv411"], default="rgb")
-    e.add_argument("--index-bits", type=int, default=None, help="index width b, 1..16 (default ceil(log2 K))")
-    e.add_argument("--mipmaps", action="store_true", help="mip pyramid with extended codewords")
+    e.add_argument("images", nargs="+", metavar="IMAGE",
+                   help="images (PNG, TIFF, ...), sides powers of two; all share one codebook")
+    e.add_argument("-o", "--output", required=True, help="the .vqt texture set to write")
+    e.add_argument("--block", type=block_size, default=(4, 4),
+                   help=with_default("block WxH, powers of two 1..8 per side", "4x4"))
+    e.add_argument("--codebook-size", "-k", type=int, default=256, help=with_default("codewords K, 2..4096", 256))
+    e.add_argument("--color", choices=["rgb", "rgba", "intensity", "yuv411"], default="rgb",
+                   help=with_default("colour format of the codewords (yuv411: U, V at half resolution)", "rgb"))
+    e.add_argument("--index-bits", type=int, default=None,
+                   help=with_default("index width b, 1..16", "ceil(log2 K)"))
+    e.add_argument("--mipmaps", action="store_true",
+                   help="mip pyramid with extended codewords (default: level 0 only)")
     e.add_argument("--mip-training", choices=["average", "joint"], default="average",
-                   help="extended codewords: averages of level 0 (paper) or trained on all sub-levels")
-    e.add_argument("--encoder", choices=["gla", "tsvq"], default="gla")
-    e.add_argument("--seed", type=int, default=0)
-    e.add_argument("--word-bits", type=int, choices=[16, 32, 64], default=32)
-    e.add_argument("--json", action="store_true")
+                   help=with_default("extended codewords: averages of the level-0 codeword (the paper) or "
+                                     "trained on all sub-levels", "average"))
+    e.add_argument("--encoder", choices=["gla", "tsvq"], default="gla",
+                   help=with_default("generalized Lloyd (TSVQ-initialised) or the paper's tree-structured VQ", "gla"))
+    e.add_argument("--encoder-seed", "--seed", dest="seed", type=int, default=0,
+                   help=with_default("seed of the codebook design (--seed is the old spelling)", 0))
+    e.add_argument("--word-bits", type=int, choices=[16, 32, 64], default=32,
+                   help=with_default("width of the index memory's words", 32))
+    add_json(e)
     e.set_defaults(func=cmd_encode)

@@ -1,35 +1,48 @@
 """The ``vqtex`` command line (see ``docs/usage.md``): the parser and the entry point.
 
 One module per subcommand (``encode``, ``info``, ``decode``, ``simulate`` for ``sim``, ``render``,
-``demo``, ``export``, ``report``, ``bench``, ``experiments``), each with ``add_parser(sub)``; the
+``demo``, ``export``, ``report``, ``bench``, ``experiments``, ``cache``), each with ``add_parser(sub)``; the
 helpers they share are in :mod:`vqtex.sim.cli.common`. This module imports the subcommands, never the
 other way round.
 
 Every command that reports takes ``--json`` and then prints exactly one JSON object on stdout.
 Bad input ends with a one-line error on stderr and exit status 2, never a traceback and never a
-partly written output file (outputs are written to a temporary file and renamed).
+partly written output file: every command's outputs are checked before any work and appear together
+or not at all (:class:`vqtex.sim.cli.common.Outputs`). Warnings are one line each on stderr.
 """
 
 from __future__ import annotations
 
 import sys
 
-from . import bench, decode, demo, encode, experiments, export, info, render, report, simulate
+from . import bench, cache, decode, demo, encode, experiments, export, info, render, report, simulate
 from .common import CliError, Parser
 
-__all__ = ["main", "build_parser", "COMMANDS"]
+__all__ = ["main", "build_parser", "version", "COMMANDS"]
 
 #: The subcommand modules, in the order ``vqtex --help`` lists them.
-COMMANDS = (encode, info, decode, simulate, render, demo, export, report, bench, experiments)
+COMMANDS = (encode, info, decode, simulate, render, demo, export, report, bench, experiments, cache)
 
 
 def build_parser() -> Parser:
     """The ``vqtex`` argument parser with every subcommand."""
-    p = Parser(prog="vqtex", description="VQ texture compression and the texel-fetch hardware model")
+    p = Parser(prog="vqtex", description="VQ texture compression and the texel-fetch hardware model "
+                                         "(docs/usage.md)")
+    p.add_argument("--version", action="version", version=f"vqtex {version()}", help="print the version and exit")
     sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
     for command in COMMANDS:
         command.add_parser(sub)
     return p
+
+
+def version() -> str:
+    """The installed distribution's version (``pyproject.toml``), or ``unknown`` when not installed."""
+    from importlib.metadata import PackageNotFoundError
+    from importlib.metadata import version as dist_version
+    try:
+        return dist_version("vqtex")
+    except PackageNotFoundError:
+        return "unknown"
 
 
 def _user_errors():

@@ -2,7 +2,10 @@
 [--lint] [--json]``.
 
 Writes the Verilog of the texel-fetch unit holding that file's memories (see
-:mod:`sim.backends.verilog`); the file is written atomically. ``--lint`` also runs
+:mod:`sim.backends.verilog`) and, beside it, ``OUT.vlt``: the Verilator configuration file that
+waives the four rules Yosys's output trips (:data:`LINT_WAIVERS`, explained in docs/usage.md), so
+``verilator --lint-only -Wall OUT.vlt OUT.v`` is clean in the user's own flow. Both files appear
+together or not at all. ``--lint`` also runs
 ``verilator --lint-only -Wall`` with the project's documented waivers (docs/simulation.md) and fails
 (exit 2) on any remaining warning.
 """
@@ -14,9 +17,9 @@ import re
 import subprocess
 import tempfile
 
-from .common import atomic_write, emit, load_set
+from .common import Outputs, add_hardware_options, add_json, add_tag_width, add_texture_set, emit, load_set, with_default
 
-__all__ = ["add_parser", "cmd_export", "lint_verilog", "LINT_WAIVERS", "ExportError"]
+__all__ = ["add_parser", "cmd_export", "lint_verilog", "waiver_path", "LINT_WAIVERS", "ExportError"]
 
 
 class ExportError(OSError):
@@ -33,7 +36,15 @@ lint_off -rule UNUSEDSIGNAL
 // Yosys writes arithmetic whose operands are narrower than the result and relies on Verilog's
 // context-determined widths (zero or sign extension); that is the intended meaning.
 lint_off -rule WIDTH
+// A memory of one word has a zero-width address; Yosys declares it as [-1:0] (only bit 0 is used,
+// and it is always 0).
+lint_off -rule LITENDIAN
 """
+
+
+def waiver_path(output: str) -> str:
+    """The waiver file written beside the exported Verilog: ``OUT.vlt`` for ``OUT.v`` or ``OUT.sv``."""
+    return os.path.splitext(output)[0] + ".vlt"
 
 
 def lint_verilog(path: str, top: str) -> list:
@@ -53,15 +64,33 @@ def lint_verilog(path: str, top: str) -> list:
 
 
 def cmd_export(args) -> int:
-    from vqtex.golden.format import FormatError
-    from vqtex.sim.backends.verilog import export_verilog
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", args.name):
         raise ExportError(f"--name {args.name!r} is not a Verilog identifier")
     if not 0 <= args.tag_width <= 16:
         raise ExportError(f"--tag-width {args.tag_width} must be in 0..16")
-    folder = os.path.dirname(os.path.abspath(args.output))
-    if not os.path.isdir(folder):
-        raise ExportError(f"output folder {folder} does not exist")
+    with Outputs() as outs:
+        out = outs.add(args.output, (".v", ".sv"), "Verilog")
+        vlt = outs.add(waiver_path(args.output))
+        text, ports = _export(args, out)
+        with open(outs.path(out), "w") as f:
+            f.write(text)
+        with open(outs.path(vlt), "w") as f:
+            f.write(LINT_WAIVERS)
+    from vqtex.hw.texel_fetch import LATENCY as latency
+    report = {"output": args.output, "lint_waivers": waiver_path(args.output), "module": args.name, "bytes": len(text.encode()),
+              "one_port": bool(args.one_port), "dialect": args.dialect, "tag_width": args.tag_width, "latency": latency,
+              "ports": ports, "lint": "clean" if args.lint else "not run"}
+    emit(report, args.json, f"wrote {args.output} (module {args.name}, {len(ports)} ports, "
+                             f"latency {latency}, {len(text.encode())} bytes"
+                             f"{', lint clean' if args.lint else ''}) and its Verilator lint waivers "
+                             f"{waiver_path(args.output)}")
+    return 0
+
+
+def _export(args, out):
+    """The Verilog text and its ports; linted when ``--lint`` (an ExportError on a warning)."""
+    from vqtex.golden.format import FormatError
+    from vqtex.sim.backends.verilog import export_verilog
     ts = load_set(args.file)
     try:
         ts.validate()
@@ -70,38 +99,27 @@ def cmd_export(args) -> int:
     ports = {}
     text = export_verilog(ts, one_port=args.one_port, tag_width=args.tag_width, name=args.name,
                           dialect=args.dialect, ports=ports)
-    from vqtex.hw.texel_fetch import LATENCY as latency
-
-    def write(tmp):
-        with open(tmp, "w") as f:
-            f.write(text)
-    warnings = []
     if args.lint:
         with tempfile.TemporaryDirectory() as tmp:
-            path = os.path.join(tmp, os.path.basename(args.output) or "out.v")
-            write(path)
+            path = os.path.join(tmp, os.path.basename(out))
+            with open(path, "w") as f:
+                f.write(text)
             warnings = lint_verilog(path, args.name)
         if warnings:
             raise ExportError(f"verilator lint: {len(warnings)} warning(s), first: {warnings[0]}")
-    atomic_write(args.output, write)
-    report = {"output": args.output, "module": args.name, "bytes": len(text.encode()),
-              "one_port": bool(args.one_port), "dialect": args.dialect, "tag_width": args.tag_width, "latency": latency,
-              "ports": ports, "lint": "clean" if args.lint else "not run"}
-    emit(report, args.json, f"wrote {args.output} (module {args.name}, {len(ports)} ports, "
-                             f"latency {latency}, {len(text.encode())} bytes"
-                             f"{', lint clean' if args.lint else ''})")
-    return 0
+    return text, ports
 
 
 def add_parser(sub) -> None:
     e = sub.add_parser("export", help="Verilog of the texel-fetch unit holding a .vqt's memories")
-    e.add_argument("file")
-    e.add_argument("-o", "--output", required=True, help="Verilog file to write")
-    e.add_argument("--one-port", action="store_true", help="one-port index memory (paper's penalty)")
-    e.add_argument("--tag-width", type=int, default=8, help="request tag width carried to the response")
-    e.add_argument("--name", default="texel_fetch", help="top module name (default texel_fetch)")
+    add_texture_set(e)
+    e.add_argument("-o", "--output", required=True, help="Verilog file to write (.v or .sv)")
+    add_hardware_options(e, stall=False)
+    add_tag_width(e)
+    e.add_argument("--name", default="texel_fetch", help=with_default("top module name", "texel_fetch"))
     e.add_argument("--dialect", choices=["sv", "v2005"], default="sv",
-                   help="sv: always_comb/always_ff (default; X-free in Icarus -g2012); v2005: plain Verilog")
-    e.add_argument("--lint", action="store_true", help="run verilator --lint-only -Wall (with waivers)")
-    e.add_argument("--json", action="store_true")
+                   help=with_default("sv: always_comb/always_ff (X-free in Icarus -g2012); v2005: plain Verilog", "sv"))
+    e.add_argument("--lint", action="store_true",
+                   help="also run verilator --lint-only -Wall on it and fail on any warning (default off)")
+    add_json(e)
     e.set_defaults(func=cmd_export)

@@ -1,10 +1,11 @@
-"""``vqtex info FILE.vqt``: textures, levels, index bits and compression rates as the paper counts them."""
+"""``vqtex info FILE.vqt [--images IMAGE...]``: textures, levels, index bits and compression rates as the
+paper counts them; with the uncompressed images, PSNR per texture and mip level."""
 
 from __future__ import annotations
 
-from .common import emit, load_set
+from .common import CliError, add_json, add_texture_set, emit, load_set, with_default
 
-__all__ = ["add_parser", "cmd_info", "info_report", "info_text"]
+__all__ = ["add_parser", "cmd_info", "info_report", "info_text", "add_psnr"]
 
 
 def info_report(ts) -> dict:
@@ -34,6 +35,18 @@ def info_report(ts) -> dict:
     }
 
 
+def add_psnr(report: dict, ts, images) -> None:
+    """Add each texture's PSNR per level against its uncompressed image (``psnr_db``, a list by
+    level, ``None`` for an exact level) to ``report`` (from :func:`info_report`)."""
+    from vqtex.sim.reports.quality import texture_psnr
+    for t, p in zip(report["textures"], texture_psnr(ts, images)):
+        t["psnr_db"] = p["psnr_db"]
+
+
+def _psnr_text(values) -> str:
+    return " ".join("exact" if v is None else f"{v:.1f}" for v in values)
+
+
 def info_text(ts, report) -> str:
     """``info_report`` as the table ``vqtex info`` prints."""
     lines = [f"{'id':>3} {'name':<16} {'size':>10} {'lv':>3} {'color':<9} {'block':<5} {'b':>3} "
@@ -42,20 +55,36 @@ def info_text(ts, report) -> str:
         lines.append(f"{t['id']:>3} {t['name'][:16]:<16} {t['width']:>4}x{t['height']:<5} {t['levels']:>3} "
                      f"{t['color']:<9} {t['block']:<5} {t['index_bits']:>3} {t['codebook_size']:>5} "
                      f"{t['base_rate']:>7.2f}:1 {t['overall_rate']:>6.2f}:1")
+    if any("psnr_db" in t for t in report["textures"]):
+        lines.append("PSNR against the uncompressed image, dB, by mip level (0 first):")
+        lines += [f"{t['id']:>3} {t['name'][:16]:<16} {_psnr_text(t['psnr_db'])}" for t in report["textures"]]
     lines.append(f"overall compression rate {report['overall_rate']:.2f}:1 "
                  f"({len(ts.codebooks)} codebook(s), index words of {ts.word_bits} bits)")
     return "\n".join(lines)
 
 
 def cmd_info(args) -> int:
+    from vqtex.golden.render.imageio import read_image
     ts = load_set(args.file)
     report = info_report(ts)
+    if args.images:
+        if len(args.images) != ts.n_textures:
+            raise CliError(f"--images: {len(args.images)} image(s) for the file's {ts.n_textures} textures")
+        images = [read_image(p) for p in args.images]
+        for k, (img, info) in enumerate(zip(images, ts.textures)):
+            if img.shape[:2] != (info.height, info.width):
+                raise CliError(f"--images: {args.images[k]} is {img.shape[1]}x{img.shape[0]}, texture {k} is "
+                               f"{info.width}x{info.height}")
+        add_psnr(report, ts, images)
     emit(report, args.json, info_text(ts, report))
     return 0
 
 
 def add_parser(sub) -> None:
     i = sub.add_parser("info", help="textures, levels, index bits and compression rates of a .vqt")
-    i.add_argument("file")
-    i.add_argument("--json", action="store_true")
+    add_texture_set(i)
+    i.add_argument("--images", nargs="+", metavar="IMAGE",
+                   help=with_default("the uncompressed images, one per texture in order: also report PSNR per "
+                                     "texture and mip level", "none"))
+    add_json(i)
     i.set_defaults(func=cmd_info)

@@ -14,17 +14,18 @@ import time
 
 import numpy as np
 
-from .common import CliError, check_output, emit, write_json
+from .common import (IMAGE_SUFFIXES, CliError, Outputs, add_backend, add_hardware_options, add_json, emit, load_set,
+                     progress_enabled, warn, warn_slow, with_default, write_json)
 
 __all__ = ["add_parser", "cmd_render", "render_scene", "render_to_files", "encode_scene", "parse_frames", "Progress"]
 
 
 class Progress:
-    """A one-line progress bar on stderr (only when stderr is a terminal, or when forced)."""
+    """A one-line progress bar on stderr (when :func:`~vqtex.sim.cli.common.progress_enabled`, or forced)."""
 
     def __init__(self, total: int, label: str, enabled: bool | None = None):
         self.total, self.label, self.n = max(1, total), label, 0
-        self.enabled = sys.stderr.isatty() if enabled is None else enabled
+        self.enabled = progress_enabled() if enabled is None else enabled
         self.t0 = time.perf_counter()
         self._draw()
 
@@ -49,17 +50,30 @@ class Progress:
 
 
 def parse_frames(text: str | None, total: int) -> list[int]:
-    """``--frames`` (``A:B`` slice or one frame number) as a list of frame numbers of a ``total``-frame scene."""
+    """``--frames`` as a list of frame numbers of a ``total``-frame scene: a Python slice ``A:B`` or
+    ``A:B:STEP`` (any part may be empty; negative numbers count from the end) or one frame number.
+
+    A slice reaching past the last frame is clamped with a warning; one that selects no frame, a
+    step of 0 or a frame number outside the scene is a CliError.
+    """
     if text is None:
         return list(range(total))
     try:
         if ":" in text:
-            a, b = text.split(":", 1)
-            frames = list(range(total))[slice(int(a) if a else None, int(b) if b else None)]
+            parts = text.split(":")
+            if len(parts) > 3:
+                raise ValueError
+            a, b, step = (int(v) if v.strip() else None for v in parts + [""] * (3 - len(parts)))
+            if step == 0:
+                raise CliError(f"--frames {text!r}: the step must not be 0")
+            frames = list(range(total))[slice(a, b, step)]
+            if frames and ((b is not None and b > total) or (a is not None and a >= total)):
+                warn(f"--frames {text}: the scene has {total} frames (0..{total - 1}); "
+                     f"rendering {len(frames)} of them")
         else:
             frames = [int(text)]
     except ValueError:
-        raise CliError(f"--frames {text!r} is not A:B or a frame number") from None
+        raise CliError(f"--frames {text!r} is not a slice A:B[:STEP] or a frame number") from None
     if not frames or any(not 0 <= f < total for f in frames):
         raise CliError(f"--frames {text!r} selects no frame of the scene's {total}")
     return frames
@@ -69,13 +83,14 @@ def _frame_path(pattern: str, frame: int, many: bool) -> str:
     if not many:
         return pattern
     root, ext = os.path.splitext(pattern)
-    return f"{root}_{frame:04d}{ext or '.png'}"
+    return f"{root}_{frame:04d}{ext}"
 
 
 def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall=0.0, seed=0,
-                 one_port=False, reference=True, images=None, progress=None):
+                 one_port=False, reference=True, images=None, progress=None, cycle_model=False):
     """Render ``frames`` of ``scene`` from TextureSet ``ts``; yields one dict per frame with the frame,
-    the golden frame when the backend is RTL (for comparison), cycle results and the reference MSE."""
+    the golden frame when the backend is RTL (for comparison), cycle results and the reference MSE.
+    With the golden backend and ``cycle_model``, the cycles come from the exact cycle model (no RTL)."""
     from vqtex.golden.fetch import fetch
     from vqtex.golden.render.frame import frame_requests
     from vqtex.golden.render.metrics import frame_mse
@@ -97,8 +112,14 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
         out["requests"] = int(len(reqs))
         if backend == "golden":
             out["image"] = golden_frame
+            if cycle_model and len(reqs):
+                from vqtex.sim.backends import simulate
+                out["sim"] = simulate(ts, reqs, backend="golden", stall=stall, seed=seed, one_port=one_port)
+                out["rtl_seconds"] = 0.0
         else:
             from vqtex.sim.backends import simulate
+            if f == frames[0]:
+                warn_slow(backend, len(reqs) * len(frames))
             t0 = time.perf_counter()
             res = simulate(ts, reqs, backend=backend, stall=stall, seed=seed, one_port=one_port) if len(reqs) else None
             out["rtl_seconds"] = time.perf_counter() - t0
@@ -124,22 +145,61 @@ def encode_scene(scene, images):
     return ts
 
 
-def render_to_files(scene, ts, frames, path_of, images, *, backend, **kw):
-    """Render ``frames``, write frame ``f`` to ``path_of(f)`` (atomically, by write_image); returns
-    (per-frame reports, frames whose RTL image differs from the golden one)."""
+def render_to_files(scene, ts, frames, path_of, images, *, backend, outs, on_frame=None, **kw):
+    """Render ``frames``; frame ``f`` goes to the registered output ``path_of(f)`` of ``outs`` (an
+    :class:`~vqtex.sim.cli.common.Outputs`, so it appears with the rest of the command's files), then
+    ``on_frame(r)`` sees the frame's dict from :func:`render_scene` (to write more files).
+    Returns (per-frame reports, frames whose RTL image differs from the golden one)."""
     from vqtex.golden.render.imageio import write_image
     prog = Progress(len(frames), f"rendering ({backend})")
     per_frame, mismatches = [], []
     for r in render_scene(scene, ts, frames, backend=backend, images=images, progress=prog, **kw):
         path = path_of(r["frame"])
-        write_image(path, r["image"])
+        write_image(outs.path(path), r["image"])
         rep = _frame_report(r)
         rep["output"] = path
+        if on_frame is not None:
+            rep.update(on_frame(r) or {})
         per_frame.append(rep)
         if r.get("identical_to_golden") is False:
             mismatches.append(r["frame"])
     prog.done()
     return per_frame, mismatches
+
+
+def _extra_outputs(args, outs, frames):
+    """``--reference`` and ``--diff``: their per-frame paths registered in ``outs``, and the
+    ``on_frame`` callback that writes them (None when neither is asked for)."""
+    many = len(frames) > 1
+    paths = {}
+    for opt in ("reference", "diff"):
+        pattern = getattr(args, opt)
+        if pattern:
+            outs.add(pattern, IMAGE_SUFFIXES if opt == "reference" else (".png",), f"--{opt}")
+            paths[opt] = {f: outs.add(_frame_path(pattern, f, many)) for f in frames}
+    if not paths:
+        return None
+    if "diff" in paths:
+        from vqtex.sim.reports.plotting import require
+        require()                                       # matplotlib, before any work
+
+    def write(r):
+        from vqtex.golden.render.imageio import write_image
+        from vqtex.sim.reports.plotting import save_difference_plot
+        from vqtex.sim.reports.quality import difference
+        done = {}
+        if "reference" in paths:
+            done["reference"] = paths["reference"][r["frame"]]
+            write_image(outs.path(done["reference"]), r["reference"])
+        if "diff" in paths:
+            diff = difference(r["image"], r["reference"])
+            done["diff"] = paths["diff"][r["frame"]]
+            done["diff_max"] = int(diff.max())
+            save_difference_plot(diff, outs.path(done["diff"]), vmax=args.diff_scale,
+                                 title=f"{args.scene} frame {r['frame']}: compressed vs uncompressed, "
+                                       f"MSE {r['mse']:.3f}, largest difference {int(diff.max())}")
+        return done
+    return write
 
 
 def _frame_report(r: dict) -> dict:
@@ -150,34 +210,42 @@ def _frame_report(r: dict) -> dict:
         s = r["sim"]
         d.update(rtl_seconds=round(r["rtl_seconds"], 4), cycles=int(s.cycles), latency=int(s.latency),
                  straddling_index_reads=int(s.straddles),
-                 stall_cycles={k: int(v) for k, v in s.stall_cycles.items()},
-                 identical_to_golden=r["identical_to_golden"])
+                 stall_cycles={k: int(v) for k, v in s.stall_cycles.items()})
+        if "identical_to_golden" in r:
+            d["identical_to_golden"] = r["identical_to_golden"]
     return d
 
 
 def cmd_render(args) -> int:
-    from vqtex.golden.format import TextureSet
     from vqtex.golden.render.scene import load_scene
-    scene = load_scene(args.scene)
-    frames = parse_frames(args.frames, scene.frames)
-    images = [img for img, _ in scene.load_textures()]
-    ts = TextureSet.load(args.texture_set) if args.texture_set else encode_scene(scene, images)
-    if ts.n_textures != len(scene.textures):
-        raise CliError(f"{args.texture_set} holds {ts.n_textures} textures, the scene uses {len(scene.textures)}")
-    check_output(args.output)
-    per_frame, mismatches = render_to_files(
-        scene, ts, frames, lambda f: _frame_path(args.output, f, len(frames) > 1), images,
-        mode=args.mode, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port)
-    report = {
-        "scene": scene.name, "mode": args.mode, "backend": args.backend, "frames": per_frame,
-        "overall_rate": round(ts.rates()["overall"], 4),
-        "mean_mse": round(float(np.mean([f["mse"] for f in per_frame])), 4),
-    }
-    if args.backend != "golden":
-        report["identical_to_golden"] = not mismatches
-        report["cycles_per_frame"] = round(float(np.mean([f["cycles"] for f in per_frame])), 1)
-    if args.report:
-        write_json(args.report, report)
+    with Outputs() as outs:
+        outs.add(args.output, IMAGE_SUFFIXES, "a frame")
+        report_path = outs.add(args.report, (".json",), "the report") if args.report else None
+        scene = load_scene(args.scene)
+        frames = parse_frames(args.frames, scene.frames)
+        frame_paths = {f: _frame_path(args.output, f, len(frames) > 1) for f in frames}
+        for path in frame_paths.values():
+            outs.add(path)
+        if args.diff_scale < 1:
+            raise CliError(f"--diff-scale {args.diff_scale} must be at least 1")
+        on_frame = _extra_outputs(args, outs, frames)
+        images = [img for img, _ in scene.load_textures()]
+        ts = load_set(args.texture_set) if args.texture_set else encode_scene(scene, images)
+        if ts.n_textures != len(scene.textures):
+            raise CliError(f"{args.texture_set} holds {ts.n_textures} textures, the scene uses {len(scene.textures)}")
+        per_frame, mismatches = render_to_files(
+            scene, ts, frames, frame_paths.get, images, outs=outs, on_frame=on_frame,
+            mode=args.mode, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port)
+        report = {
+            "scene": scene.name, "mode": args.mode, "backend": args.backend, "frames": per_frame,
+            "overall_rate": round(ts.rates()["overall"], 4),
+            "mean_mse": round(float(np.mean([f["mse"] for f in per_frame])), 4),
+        }
+        if args.backend != "golden":
+            report["identical_to_golden"] = not mismatches
+            report["cycles_per_frame"] = round(float(np.mean([f["cycles"] for f in per_frame])), 1)
+        if report_path:
+            write_json(outs.path(report_path), report)
     text = [f"{scene.name}: {len(frames)} frame(s), {args.mode}, backend {args.backend}, "
             f"overall compression {report['overall_rate']:.2f}:1, mean frame MSE {report['mean_mse']:.3f}"]
     if args.backend != "golden":
@@ -191,15 +259,26 @@ def cmd_render(args) -> int:
 
 def add_parser(sub) -> None:
     r = sub.add_parser("render", help="render a scene (TOML file or built-in name) from compressed textures")
-    r.add_argument("scene", help="scene file or built-in scene name (topspin, town)")
-    r.add_argument("-o", "--output", required=True, help="PNG; with several frames, _NNNN is added")
-    r.add_argument("--frames", help="A:B (Python slice) or one frame number (default: all)")
-    r.add_argument("--mode", choices=["point", "trilinear"], default="trilinear")
-    r.add_argument("--backend", choices=["golden", "pysim", "cxxrtl", "verilator"], default="golden")
-    r.add_argument("--texture-set", help="use this .vqt instead of encoding the scene's textures")
-    r.add_argument("--stall", type=float, default=0.0)
-    r.add_argument("--seed", type=int, default=0)
-    r.add_argument("--one-port", action="store_true")
-    r.add_argument("--report", help="write the JSON report here")
-    r.add_argument("--json", action="store_true")
+    r.add_argument("scene", help="scene file (docs/rendering.md) or built-in scene name (topspin, town)")
+    r.add_argument("-o", "--output", required=True,
+                   help="image to write (.png, ...); with several frames _NNNN is added before the extension")
+    r.add_argument("--frames", help=with_default("frames to render: a Python slice A:B[:STEP] or one frame number",
+                                                 "all"))
+    r.add_argument("--mode", choices=["point", "trilinear"], default="trilinear",
+                   help=with_default("point sampling of level 0, or trilinear mipmapping", "trilinear"))
+    add_backend(r, ["golden", "pysim", "cxxrtl", "verilator"], "golden")
+    r.add_argument("--texture-set", metavar="FILE.vqt",
+                   help=with_default("use this texture set instead of encoding the scene's textures",
+                                     "encode them with the scene's settings"))
+    add_hardware_options(r)
+    r.add_argument("--report", metavar="REPORT.json", help=with_default("also write the JSON report here", "none"))
+    r.add_argument("--reference", metavar="REF.png",
+                   help=with_default("also write the frame rendered from the uncompressed textures "
+                                     "(_NNNN added like -o)", "none"))
+    r.add_argument("--diff", metavar="DIFF.png",
+                   help=with_default("also write the difference from the uncompressed frame as a heat map with "
+                                     "its colour scale (needs the plot extra; _NNNN added like -o)", "none"))
+    r.add_argument("--diff-scale", type=int, default=32,
+                   help=with_default("the heat map's top: differences of this many levels or more saturate", 32))
+    add_json(r)
     r.set_defaults(func=cmd_render)

@@ -1,4 +1,8 @@
-"""``vqtex report area (FILE.vqt | --builtin four|tiny) [--one-port] [--json] ...``.
+"""``vqtex report area (FILE.vqt | --builtin four|tiny) [--one-port] [--json] ...`` and
+``vqtex report cycles FILE.vqt REQUESTS [--plot P.png] [--backend B] [--stall P] ...``.
+
+``cycles`` simulates a request trace as ``vqtex sim`` does and reports where the cycles went,
+with the figure of :mod:`vqtex.sim.reports.plotting` when ``--plot`` is given.
 
 Synthesizes the texel-fetch unit holding a texture set's memories for a Lattice ECP5 (LFE5U-85F,
 speed grade 8) with Yosys, places and routes it with nextpnr, and reports LUTs, flip-flops, block
@@ -9,12 +13,13 @@ the PyPI packages of the ``synth`` extra; without them the command fails with on
 
 from __future__ import annotations
 
-import os
 import time
 
-from .common import emit, load_set
+from .common import (Outputs, add_hardware_options, add_json, add_tag_width, check_folder, emit, load_set,
+                     progress_line, with_default)
+from .simulate import add_trace_arguments, plot_output, run_trace
 
-__all__ = ["add_parser", "cmd_report_area", "BUILTINS", "ReportError"]
+__all__ = ["add_parser", "cmd_report_area", "cmd_report_cycles", "BUILTINS", "ReportError"]
 
 
 class ReportError(OSError):
@@ -24,8 +29,8 @@ class ReportError(OSError):
 
 #: Built-in texture sets: name -> (function in sim.reports.synth, description).
 BUILTINS = {
-    "four": ("four_texture_set", "the issue's 4-texture set: rgb 4x4 K=256 8-bit (x2, shared codebook), "
-                                 "yuv411 4x4 K=256 12-bit, rgb 2x2 K=1024 12-bit; 128x128, mipmapped"),
+    "four": ("four_texture_set", "four bundled images, 128x128 mipmapped: rgb 4x4 K=256 8-bit (x2, one shared "
+                                 "codebook), yuv411 4x4 K=256 12-bit, rgb 2x2 K=1024 12-bit (docs/area.md)"),
     "tiny": ("tiny_texture_set", "two 32x32 mipmapped textures (rgb 8-bit, yuv411 12-bit), K=16"),
 }
 
@@ -41,10 +46,7 @@ def cmd_report_area(args) -> int:
     if args.timeout is not None and args.timeout <= 0:
         raise ReportError(f"--timeout {args.timeout} must be positive")
     if args.keep:
-        try:
-            os.makedirs(args.keep, exist_ok=True)
-        except OSError as e:
-            raise ReportError(f"--keep {args.keep}: cannot create the folder ({e.strerror})") from None
+        check_folder(args.keep)
     ts = None
     if args.file is not None:                # a bad file is reported whether or not the tools exist
         ts = load_set(args.file)
@@ -58,32 +60,57 @@ def cmd_report_area(args) -> int:
     t_set = None
     if ts is None:
         t0 = time.perf_counter()
+        progress_line(f"report area: encoding the built-in set {args.builtin}")
         ts = getattr(synth, BUILTINS[args.builtin][0])()
         t_set = round(time.perf_counter() - t0, 2)
         name = f"builtin {args.builtin}"
     rep = synth.area_report(ts, one_port=args.one_port, tag_width=args.tag_width, place=not args.no_pnr,
                             freq=args.freq, seed=args.seed, workdir=args.keep, timeout=args.timeout,
-                            name=name)
+                            name=name, progress=lambda m: progress_line(f"report area: {m}"))
     if t_set is not None:
         rep["seconds"] = {"encode": t_set, **rep["seconds"]}
     emit(rep, args.json, synth.area_text(rep))
     return 0
 
 
+def cmd_report_cycles(args) -> int:
+    """``vqtex report cycles FILE.vqt REQUESTS [--plot P.png]``: where the cycles of a request trace
+    go, as the cycle report and (with ``--plot``) the figure."""
+    from vqtex.sim.reports.cycles import cycle_plot, cycle_text
+    with Outputs() as outs:
+        plot = plot_output(outs, args.plot)
+        _, report = run_trace(args)
+        if plot:
+            cycle_plot(report, outs.path(plot))
+    emit(report, args.json, cycle_text(report) + (f"\nwrote {args.plot}" if plot else ""))
+    return 0
+
+
 def add_parser(sub) -> None:
-    r = sub.add_parser("report", help="hardware reports (area: ECP5 synthesis, place and route)")
-    modes = r.add_subparsers(dest="mode", required=True, parser_class=type(r))
+    r = sub.add_parser("report", help="hardware reports: area (ECP5 synthesis, place and route), cycles (and their plot)")
+    modes = r.add_subparsers(dest="mode", required=True, parser_class=type(r), metavar="{area,cycles}")
+    c = modes.add_parser("cycles", help="where the cycles of a request trace go: the cycle report and its plot")
+    add_trace_arguments(c)
+    c.add_argument("--plot", metavar="PLOT.png",
+                   help=with_default("draw where the cycles went: a bar split by cause, with title, axis and "
+                                     "legend (needs the plot extra)", "none"))
+    add_json(c)
+    c.set_defaults(func=cmd_report_cycles)
     a = modes.add_parser("area", help="LUTs, FFs, block RAMs, DSPs, Fmax and critical path on an ECP5-85 (-8)")
-    a.add_argument("file", nargs="?", help="a .vqt texture set (or use --builtin)")
+    a.add_argument("file", nargs="?", metavar="FILE.vqt", help="a texture set (or use --builtin)")
     a.add_argument("--builtin", choices=sorted(BUILTINS),
-                   help="; ".join(f"{k}: {v[1]}" for k, v in BUILTINS.items()))
-    a.add_argument("--one-port", action="store_true", help="one-port index memory (paper's penalty)")
-    a.add_argument("--tag-width", type=int, default=8, help="request tag width (default 8)")
-    a.add_argument("--freq", type=float, default=150.0, help="clock constraint in MHz (default 150)")
-    a.add_argument("--seed", type=int, default=1, help="nextpnr placer seed (default 1)")
-    a.add_argument("--no-pnr", action="store_true", help="synthesis only: utilisation, no Fmax")
+                   help=with_default("a built-in texture set instead of FILE.vqt: "
+                                     + "; ".join(f"{k}: {v[1]}" for k, v in BUILTINS.items()), "none"))
+    add_hardware_options(a, stall=False)
+    add_tag_width(a)
+    a.add_argument("--freq", type=float, default=150.0, help=with_default("clock constraint in MHz", 150))
+    a.add_argument("--placer-seed", "--seed", dest="seed", type=int, default=1,
+                   help=with_default("nextpnr's placement seed (--seed is the old spelling)", 1))
+    a.add_argument("--no-pnr", action="store_true",
+                   help="synthesis only: utilisation, no Fmax (default: also place and route)")
     a.add_argument("--keep", metavar="DIR", default=None,
-                   help="keep the tools' files (RTLIL, netlist, logs, nextpnr report) in DIR")
-    a.add_argument("--timeout", type=float, default=None, help="seconds allowed per tool run")
-    a.add_argument("--json", action="store_true")
+                   help=with_default("keep the tools' files (RTLIL, netlist, logs, nextpnr report) in DIR",
+                                     "a temporary folder, removed"))
+    a.add_argument("--timeout", type=float, default=None, help=with_default("seconds allowed per tool run", "none"))
+    add_json(a)
     a.set_defaults(func=cmd_report_area)

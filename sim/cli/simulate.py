@@ -4,70 +4,112 @@ from __future__ import annotations
 
 import io
 import os
+import warnings
 
 import numpy as np
 
-from .common import CliError, check_output, emit, load_set, write_bytes
+from .common import (CliError, Outputs, add_backend, add_hardware_options, add_json, add_texture_set, emit,
+                     load_set, warn_slow, with_default, write_bytes)
 
-__all__ = ["add_parser", "cmd_sim", "read_requests"]
+__all__ = ["add_parser", "cmd_sim", "read_requests", "run_trace", "plot_output", "add_trace_arguments"]
 
 
 def read_requests(path: str) -> np.ndarray:
-    """A request file (.npy without pickles, or CSV with an optional header row) as int64 (N, 4)."""
+    """A request file (.npy without pickles, or CSV with an optional header row) as int64 (N, 4), N >= 1.
+
+    Every way a file can fail to be one (missing, empty, header only, a text file named .npy, a
+    pickle, a wrong shape or type) is a one-line CliError naming the file.
+    """
     if not os.path.isfile(path):
         raise CliError(f"{path}: no such file")
+    if path.endswith(".npy"):
+        with open(path, "rb") as f:
+            magic = f.read(6)
+        if magic != b"\x93NUMPY":
+            raise CliError(f"{path}: not a .npy file (a CSV request file must not be named .npy)")
     try:
         if path.endswith(".npy"):
             req = np.load(path, allow_pickle=False)
         else:
-            req = np.loadtxt(path, delimiter=",", dtype=np.int64, ndmin=2,
-                             skiprows=_csv_header_rows(path))
-    except (ValueError, OSError, EOFError) as e:
+            with warnings.catch_warnings():
+                warnings.simplefilter("error")              # numpy warns on an empty file: an error here
+                req = np.loadtxt(path, delimiter=",", dtype=np.int64, ndmin=2,
+                                 skiprows=_csv_header_rows(path))
+    except (ValueError, OSError, EOFError, UserWarning) as e:
+        if isinstance(e, UserWarning) or "no data" in str(e):
+            raise CliError(f"{path}: no requests (the file is empty or holds only a header)") from None
+        if "allow_pickle" in str(e):
+            e = "it holds Python objects, not integers"
         raise CliError(f"{path}: cannot read requests ({str(e).splitlines()[0] if str(e) else type(e).__name__})") from None
     if req.ndim != 2 or req.shape[1] != 4 or not np.issubdtype(req.dtype, np.integer):
         raise CliError(f"{path}: requests must be an integer array of shape (N, 4): texture, level, i, j")
+    if len(req) == 0:
+        raise CliError(f"{path}: no requests")
     return req.astype(np.int64)
 
 
 def _csv_header_rows(path: str) -> int:
-    with open(path) as f:
+    with open(path, errors="replace") as f:
         first = f.readline()
     return 1 if any(c.isalpha() for c in first) else 0
 
 
-def cmd_sim(args) -> int:
+def plot_output(outs, path):
+    """Register ``--plot`` (a .png) in ``outs`` and check matplotlib is there, before any work;
+    None when no plot is asked for."""
+    if not path:
+        return None
+    path = outs.add(path, (".png",), "the cycle plot")
+    from vqtex.sim.reports.plotting import require
+    require()
+    return path
+
+
+def run_trace(args):
+    """Load ``args.file`` and ``args.requests``, check them and simulate on ``args.backend``;
+    returns (SimResult, cycle report)."""
     from vqtex.golden.fetch import check_requests
-    ts = load_set(args.file)
-    req = read_requests(args.requests)
-    if len(req) == 0:
-        raise CliError(f"{args.requests}: no requests")
-    check_requests(ts, req[:, 0], req[:, 1], req[:, 2], req[:, 3])
+    from vqtex.sim.backends.interface import simulate
+    from vqtex.sim.reports.cycles import cycle_report
     if not 0.0 <= args.stall < 1.0:
         raise CliError(f"--stall {args.stall} must be in [0, 1)")
-    from vqtex.sim.backends.interface import simulate
+    ts = load_set(args.file)
+    req = read_requests(args.requests)
+    check_requests(ts, req[:, 0], req[:, 1], req[:, 2], req[:, 3])
+    warn_slow(args.backend, len(req))
     res = simulate(ts, req, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port)
-    buf = io.BytesIO()
-    np.save(buf, res.responses.astype(np.uint8))
-    write_bytes(args.output, buf.getvalue())
-    from vqtex.sim.reports.cycles import cycle_report, cycle_text
-    report = cycle_report(res, backend=args.backend, one_port=args.one_port, stall=args.stall)
-    if args.plot:
-        from vqtex.sim.reports.cycles import cycle_plot
-        check_output(args.plot)
-        cycle_plot(report, args.plot)                                   # atomic (write_image)
-    emit(report, args.json, cycle_text(report) + f"\nwrote {args.output}")
+    return res, cycle_report(res, backend=args.backend, one_port=args.one_port, stall=args.stall)
+
+
+def cmd_sim(args) -> int:
+    from vqtex.sim.reports.cycles import cycle_plot, cycle_text
+    with Outputs() as outs:
+        out = outs.add(args.output, (".npy",), "the responses (an (N, 4) uint8 array)")
+        plot = plot_output(outs, args.plot)
+        res, report = run_trace(args)
+        buf = io.BytesIO()
+        np.save(buf, res.responses.astype(np.uint8))
+        write_bytes(outs.path(out), buf.getvalue())
+        if plot:
+            cycle_plot(report, outs.path(plot))
+    emit(report, args.json, cycle_text(report) + f"\nwrote {args.output}" + (f" and {args.plot}" if plot else ""))
     return 0
+
+
+def add_trace_arguments(s) -> None:
+    """The texture set, the request file, the backend and the unit's options (sim, report cycles)."""
+    add_texture_set(s)
+    s.add_argument("requests", metavar="REQUESTS",
+                   help=".npy (N, 4) integer array or CSV (header line allowed): texture, level, i, j")
+    add_backend(s, ["golden", "pysim", "cxxrtl", "verilator"], "golden")
+    add_hardware_options(s)
 
 
 def add_parser(sub) -> None:
     s = sub.add_parser("sim", help="trace-driven simulation of the texel-fetch unit")
-    s.add_argument("file")
-    s.add_argument("requests", help=".npy (N, 4) int array or CSV: texture, level, i, j")
-    s.add_argument("-o", "--output", required=True, help=".npy (N, 4) uint8 RGBA responses")
-    s.add_argument("--backend", choices=["golden", "pysim", "cxxrtl", "verilator"], default="golden")
-    s.add_argument("--stall", type=float, default=0.0, help="probability the output's ready is low")
-    s.add_argument("--seed", type=int, default=0)
-    s.add_argument("--one-port", action="store_true", help="one-port index memory (paper's penalty)")
-    s.add_argument("--plot", help="also draw where the cycles went (PNG)")
-    s.add_argument("--json", action="store_true")
+    add_trace_arguments(s)
+    s.add_argument("-o", "--output", required=True, help="the responses to write: .npy (N, 4) uint8 RGBA")
+    s.add_argument("--plot", metavar="PLOT.png",
+                   help=with_default("also draw where the cycles went, a PNG (needs the plot extra)", "none"))
+    add_json(s)
     s.set_defaults(func=cmd_sim)

@@ -43,24 +43,7 @@ def cycle_text(rep: dict) -> str:
 
 
 def cycle_plot(rep: dict, path: str) -> None:
-    """A stacked bar (PNG, 640x80) of where the cycles went, left to right: one cycle per request
-    (green), the pipeline latency (blue), output backpressure stalls (red), one-port straddle stalls
-    (yellow). Each part's width is proportional to its cycle count.
-
-    Drawn with numpy into an image (no plotting library needed) and written with OpenImageIO.
-    """
-    import numpy as np
-    from vqtex.golden.render.imageio import write_image
-    parts = [("requests", rep["requests"], (60, 160, 60)), ("latency", rep["latency"], (120, 120, 220))]
-    colours = [(220, 90, 60), (230, 180, 40), (150, 80, 180)]
-    for n, (cause, v) in enumerate(rep["stall_cycles"].items()):
-        parts.append((cause, v, colours[n % len(colours)]))
-    total = max(1, sum(v for _, v, _ in parts))
-    w, h = 640, 80
-    img = np.full((h, w, 3), 255, np.uint8)
-    x = 0
-    for _, v, col in parts:
-        dx = int(round(v * (w - 1) / total))
-        img[10:70, x: x + dx] = col
-        x += dx
-    write_image(path, img)
+    """Where the cycles went, a PNG drawn with matplotlib (the ``plot`` extra; see
+    :func:`vqtex.sim.reports.plotting.cycle_figure`): title, axis, legend, the stall causes named."""
+    from .plotting import save_cycle_plot
+    save_cycle_plot(rep, path)

