@@ -15,8 +15,9 @@ from __future__ import annotations
 from amaranth import *
 from amaranth.lib import data, memory, wiring
 from amaranth.lib.wiring import In, Out
+from amaranth.utils import ceil_log2
 
-__all__ = ["BankedROM", "BANK_DEPTH", "LATENCY", "pick"]
+__all__ = ["BankedROM", "BANK_DEPTH", "LATENCY", "pick", "addr_bits"]
 
 #: Words per bank: the depth of one DP16KD at its 36-bit width.
 BANK_DEPTH = 512
@@ -39,9 +40,9 @@ def pick(values: list, index):
     return values[0]
 
 
-def _bits(n: int) -> int:
-    """Bits to address words 0..n-1 (at least 1)."""
-    return max(1, (max(1, n) - 1).bit_length())
+def addr_bits(depth: int) -> int:
+    """Bits of an address into ``depth`` words (at least 1)."""
+    return max(1, ceil_log2(max(1, depth)))
 
 
 class BankedROM(wiring.Component):
@@ -81,23 +82,26 @@ class BankedROM(wiring.Component):
         If ``bank_depth`` is not a power of two.
     """
 
-    def __init__(self, init, *, width: int, bank_depth: int = BANK_DEPTH):
-        self._MustUse__silence = True       # (no "never used" warning for a rejected instance)
+    def __new__(cls, init, *, width: int, bank_depth: int = BANK_DEPTH, **kwargs):
+        # Parameters are checked before the instance exists, so a rejected one is never created
+        # (and never reported by Amaranth as an elaboratable that was not used).
         for name, v in (("width", width), ("bank_depth", bank_depth)):
             if not isinstance(v, int) or v < 1:
                 raise TypeError(f"{name} must be a positive integer, not {v!r}")
         if bank_depth & (bank_depth - 1):
             raise ValueError(f"bank depth {bank_depth} is not a power of two")
-        self._MustUse__silence = False
+        return super().__new__(cls, init, width=width, bank_depth=bank_depth, **kwargs)
+
+    def __init__(self, init, *, width: int, bank_depth: int = BANK_DEPTH):
         self._init = [int(v) for v in init] or [0]
         self._width = width
         self._bank_depth = bank_depth
         self._banks = -(-len(self._init) // bank_depth)
         super().__init__({
-            "addr": In(_bits(len(self._init))),
+            "addr": In(addr_bits(len(self._init))),
             "en": In(1),
             "data": Out(data.ArrayLayout(width, self._banks)),
-            "bank": Out(unsigned(max(1, (self._banks - 1).bit_length()))),
+            "bank": Out(unsigned(addr_bits(self._banks))),
             "word": Out(width),
         })
 

@@ -18,6 +18,7 @@ from amaranth.lib.wiring import In, Out
 from vqtex.golden.format import COLOR_CODES
 
 from .banked_rom import BANK_DEPTH, BankedROM, pick
+from .registers import enabled_register
 
 __all__ = ["CodebookROM", "SamplesLayout", "LATENCY"]
 
@@ -133,10 +134,7 @@ class CodebookROM(wiring.Component):
         ]
 
         def reg(value, name):
-            r = Signal.like(value, name=name)
-            with m.If(self.en):
-                m.d.sync += r.eq(value)
-            return r
+            return enabled_register(m, self.en, value, name)
 
         # Stage 1: byte addresses of the texel and of its U and V, beside the memory reads.
         t = Signal(6)

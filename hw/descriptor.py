@@ -10,6 +10,7 @@ from __future__ import annotations
 from amaranth import *
 from amaranth.lib import data, memory, wiring
 from amaranth.lib.wiring import In, Out
+from amaranth.utils import bits_for
 
 from vqtex.golden.format import DESCRIPTOR_FIELDS, MAX_LEVELS, TextureSet, log2
 
@@ -19,14 +20,9 @@ __all__ = ["DescriptorLayout", "DescriptorTable", "descriptor_widths", "texture_
 LEVEL_BITS = log2(MAX_LEVELS)
 
 
-def _bits(n: int) -> int:
-    """Bits to hold 0..n (at least 1)."""
-    return max(1, int(n).bit_length())
-
-
 def texture_bits(ts: TextureSet) -> int:
     """Width of a texture id for this set (at least 1)."""
-    return _bits(ts.n_textures - 1)
+    return bits_for(ts.n_textures - 1)
 
 
 def descriptor_widths(ts: TextureSet) -> dict:
@@ -35,7 +31,7 @@ def descriptor_widths(ts: TextureSet) -> dict:
     ``base`` is wide enough for both the index memory and the raw memory, ``cb_base`` for the
     codebook memory, the plane offsets for a byte of the widest entry.
     """
-    base_bits = _bits(max(len(ts.index_words), len(ts.raw_words)))
+    base_bits = bits_for(max(len(ts.index_words), len(ts.raw_words)))
     return {
         "valid": 1,
         "compressed": 1,
@@ -45,12 +41,12 @@ def descriptor_widths(ts: TextureSet) -> dict:
         "log2bw": 2,
         "log2bh": 2,
         "index_bits": 5,
-        "cb_base": _bits(len(ts.codebook)),
+        "cb_base": bits_for(len(ts.codebook)),
         "sublevel": 2,
         "color": 2,
-        "texel_off": _bits(ts.entry_bytes),
-        "u_off": _bits(ts.entry_bytes),
-        "v_off": _bits(ts.entry_bytes),
+        "texel_off": bits_for(ts.entry_bytes),
+        "u_off": bits_for(ts.entry_bytes),
+        "v_off": bits_for(ts.entry_bytes),
     }
 
 

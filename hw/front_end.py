@@ -19,6 +19,7 @@ from .address import BlockAddress
 from .banked_rom import BANK_DEPTH
 from .descriptor import DescriptorTable, descriptor_widths, texture_bits
 from .index_reader import IndexReader
+from .registers import enabled_register
 from .pipeline import STAGES, UPSTREAM_STAGES, REGISTERS, LinkLayout, RequestLayout, SideLayout, addr_bits, pack
 
 __all__ = ["FrontEnd"]
@@ -133,10 +134,7 @@ class FrontEnd(wiring.Component):
 
         # -- carried fields: registers beside the blocks' own, same enables ----------------------
         def carry(value, en, name):
-            reg = Signal.like(value, name=name)
-            with m.If(en):
-                m.d.sync += reg.eq(value)
-            return reg
+            return enabled_register(m, en, value, name)
 
         # Stage 1: descriptor.
         m.d.comb += [

@@ -19,6 +19,7 @@ from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
 from .banked_rom import BANK_DEPTH, BankedROM
+from .registers import enabled_register
 
 __all__ = ["IndexReader", "INDEX_BITS", "LATENCY"]
 
@@ -142,11 +143,7 @@ class IndexReader(wiring.Component):
         ]
 
         def reg(value, name):
-            """``value`` registered, enabled by ``en`` (one stage later)."""
-            r = Signal.like(value, name=name)
-            with m.If(self.en):
-                m.d.sync += r.eq(value)
-            return r
+            return enabled_register(m, self.en, value, name)
 
         lo = Signal(W, name="lo")           # stage 4: word[w]
         hi = Signal(W, name="hi")           # stage 4: word[w + 1]

@@ -23,6 +23,7 @@ from amaranth.lib import data
 
 from . import codebook_rom, color_matrix, index_reader
 from .address import COORD_BITS
+from .banked_rom import addr_bits  # noqa: F401 (the pipeline's address widths; re-exported)
 from .descriptor import LEVEL_BITS, descriptor_widths
 
 __all__ = ["STAGES", "LATENCY", "UPSTREAM_STAGES", "REGISTERS", "FRONT_STAGES", "RequestLayout",
@@ -49,11 +50,6 @@ UPSTREAM_STAGES = 3
 #: an occupancy entry in the simulation reports): the stages, then the skid register in front of
 #: the output.
 REGISTERS = STAGES + ("skid",)
-
-
-def addr_bits(depth: int) -> int:
-    """Bits of an address into ``depth`` words (at least 1)."""
-    return max(1, (max(1, depth) - 1).bit_length())
 
 
 class RequestLayout(data.StructLayout):

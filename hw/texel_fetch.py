@@ -158,8 +158,8 @@ class TexelFetch(wiring.Component):
         m.submodules.front = front = FrontEnd(self._ts, one_port=self._one_port, tag_width=self._tag_width,
                                               bank_depth=self._bank_depth)
         m.submodules.back = back = BackEnd(self._ts, bank_depth=self._bank_depth)
+        wiring.connect(m, wiring.flipped(self.i), front.i)          # the request stream, forwarded
         m.d.comb += [
-            front.i.valid.eq(self.i.valid), front.i.p.eq(self.i.p), self.i.ready.eq(front.i.ready),
             self.o.valid.eq(front.o_valid), front.o_ready.eq(self.o.ready),
             self.o.p.eq(pack(self.o.p.shape(), {
                 "r": back.rgba.r, "g": back.rgba.g, "b": back.rgba.b, "a": back.rgba.a, "tag": front.o_tag})),
