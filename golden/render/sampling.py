@@ -21,7 +21,12 @@ W0 x H0 of the pixel's texture)::
     rho_x^2 = (ds/dx W0)^2 + (dt/dx H0)^2,   rho_y^2 = (ds/dy W0)^2 + (dt/dy H0)^2
     lambda  = log2(max(rho_x, rho_y)) = 0.5 log2(max(rho_x^2, rho_y^2))
 
-(the OpenGL scale factor). lambda is quantised to ``FRAC_BITS`` = 8 fractional bits with round to
+(the OpenGL scale factor), then clamped to [-LOD_LIMIT, LOD_LIMIT] = [-64, 64] so it is finite for
+every fragment: zero derivatives (texture coordinates constant across the triangle, or derivatives
+whose squares underflow) give -64, derivatives whose squares overflow give +64, NaN derivatives (never
+made by the rasterizer) give -64. A texture has at most 63 levels (int64 sizes), so the clamp changes
+no level or blend.
+lambda is quantised to ``FRAC_BITS`` = 8 fractional bits with round to
 nearest, ``lam = floor(lambda 256 + 1/2)``, clamped to [0, 256 (levels - 1)]; ``L0 = lam >> 8``,
 level blend ``f = lam & 255``, ``L1 = min(L0 + 1, levels - 1)``. lambda <= 0 (magnification) thus
 gives bilinear filtering of level 0.
@@ -47,7 +52,7 @@ import numpy as np
 from .raster import Fragments
 
 __all__ = [
-    "FRAC_BITS", "WEIGHT_BITS", "MODES", "BACKGROUND", "level_of_detail", "quantize_lod",
+    "FRAC_BITS", "WEIGHT_BITS", "LOD_LIMIT", "MODES", "BACKGROUND", "level_of_detail", "quantize_lod",
     "address", "trilinear_weights", "Sampler",
 ]
 
@@ -56,18 +61,21 @@ WEIGHT_BITS = 3 * FRAC_BITS
 MODES = ("point", "trilinear")
 BACKGROUND = (0, 0, 0, 255)
 _ONE = 1 << FRAC_BITS
+#: |lambda| never exceeds this (levels; finite where log2 would give -inf, +inf or NaN).
+LOD_LIMIT = 64.0
 
 
 def level_of_detail(frags: Fragments, width0: np.ndarray, height0: np.ndarray) -> np.ndarray:
-    """lambda (float64) per fragment, for level-0 sizes per fragment: -inf for zero derivatives, +inf for
-    derivatives whose square overflows, NaN for NaN ones; ``quantize_lod`` maps all three into range
-    (-inf and NaN to level 0, +inf to the last level)."""
+    """lambda (float64) per fragment, for level-0 sizes per fragment, always finite: clamped to
+    [-LOD_LIMIT, LOD_LIMIT], with zero (or underflowing) derivatives at -LOD_LIMIT, overflowing ones at
+    +LOD_LIMIT and NaN ones at -LOD_LIMIT (level 0)."""
     w = np.asarray(width0, np.float64)
     h = np.asarray(height0, np.float64)
-    with np.errstate(over="ignore", divide="ignore"):    # huge derivatives: +inf, zero ones: -inf
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
         rx = (frags.dsdx * w) ** 2 + (frags.dtdx * h) ** 2
         ry = (frags.dsdy * w) ** 2 + (frags.dtdy * h) ** 2
-        return 0.5 * np.log2(np.maximum(rx, ry))
+        lam = 0.5 * np.log2(np.maximum(rx, ry))
+    return np.clip(np.nan_to_num(lam, nan=-LOD_LIMIT, posinf=LOD_LIMIT, neginf=-LOD_LIMIT), -LOD_LIMIT, LOD_LIMIT)
 
 
 def quantize_lod(lam: np.ndarray, levels: np.ndarray) -> np.ndarray:
