@@ -10,6 +10,8 @@
   view is 0 or 180 degrees is refused with ValueError.
 """
 
+import warnings
+
 import numpy as np
 import pytest
 from hypothesis import given, strategies as st
@@ -150,3 +152,51 @@ def test_a_near_plane_at_or_behind_the_eye_is_refused(near):
 def test_a_field_of_view_without_a_projection_is_refused(fov):
     with pytest.raises(ValueError, match="field of view"):
         Camera(position=(0.0, 0.0, 3.0), target=(0.0, 0.0, 0.0), fov=fov)
+
+
+_level_shapes = st.sampled_from(SHAPES)
+_fine = st.integers(-(1 << 21), 1 << 21).map(lambda k: k / (1 << 20))     # multiples of 2^-20 in [-2, 2]
+
+
+@given(st.lists(st.tuples(_fine, _fine, st.integers(-(1 << 30), 1 << 30), st.integers(-(1 << 30), 1 << 30)),
+                min_size=1, max_size=16), _level_shapes, st.sampled_from(["point", "trilinear"]), _extreme)
+def test_wrapped_coordinates_shifted_by_whole_repeats_fetch_the_same(rows, shapes, mode, deriv):
+    """Wrap: s and s + k (k an integer, exact in float64) give the same requests and frame."""
+    s, t, ks, kt = (np.array(c, np.float64) for c in zip(*rows))
+    d = (deriv, 0.0, 0.0, deriv)
+    a, b = Sampler([shapes], mode=mode), Sampler([shapes], mode=mode)
+    ra, rb = a.requests(_fragments(s, t, d)), b.requests(_fragments(s + ks, t + kt, d))
+    assert (ra == rb).all()
+    texels = np.random.default_rng(len(rows)).integers(0, 256, (len(ra), 4)).astype(np.uint8)
+    assert (a.resolve(texels) == b.resolve(texels)).all()
+
+
+@given(st.lists(st.tuples(st.floats(2, 1e300), st.floats(2, 1e300)), min_size=1, max_size=16), _level_shapes,
+       st.sampled_from(["point", "trilinear"]), _extreme)
+def test_clamped_coordinates_beyond_the_edge_fetch_the_edge(far, shapes, mode, deriv):
+    """Clamp: any coordinate beyond [-1, 2] fetches exactly what -1 or 2 fetches, same frame."""
+    s, t = (np.array(c, np.float64) for c in zip(*far))
+    sign = np.where(np.arange(len(s)) % 2, -1.0, 1.0)
+    d = (deriv, 0.0, 0.0, deriv)
+    a, b = Sampler([shapes], "clamp", mode), Sampler([shapes], "clamp", mode)
+    ra = a.requests(_fragments(sign * s, -sign * t, d))
+    rb = b.requests(_fragments(np.where(sign > 0, 2.0, -1.0), np.where(sign > 0, -1.0, 2.0), d))
+    assert (ra == rb).all()
+    texels = np.random.default_rng(len(far)).integers(0, 256, (len(ra), 4)).astype(np.uint8)
+    assert (a.resolve(texels) == b.resolve(texels)).all()
+
+
+@pytest.mark.parametrize("addressing", ["wrap", "clamp"])
+def test_coordinates_of_any_size_are_defined(addressing):
+    """1e15 (beyond int64 once scaled), 1e300, infinities and NaN: requests in range, no warning."""
+    far = [1e6, -1e6, 1e12, 1e15, -1e15, 1e300, -1e300, np.inf, -np.inf, np.nan, 2.0 ** 60 + 0.5]
+    n = len(far)
+    shapes = SHAPES[0]
+    for mode in ("point", "trilinear"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            reqs = Sampler([shapes], addressing, mode).requests(_fragments(far, far[::-1], (1e-3, 0, 0, 1e-3)))
+        assert len(reqs) == n * (1 if mode == "point" else 8)
+        w = np.array([shapes[k][0] for k in reqs[:, 1]])
+        h = np.array([shapes[k][1] for k in reqs[:, 1]])
+        assert ((reqs[:, 2] >= 0) & (reqs[:, 2] < w) & (reqs[:, 3] >= 0) & (reqs[:, 3] < h)).all()
