@@ -46,7 +46,7 @@ class ColorMatrix:
     ---------
     coeffs : 3x3 tuple of int
         Signed integer coefficients ``M[c][k]``; rows are outputs (R, G, B), columns inputs
-        (Y, U, V). Each must fit in 18 signed bits (one ECP5 multiplier operand).
+        (Y, U, V). Each must fit in 18 signed bits, -2^17 .. 2^17 - 1 (one ECP5 multiplier operand).
     offsets : 3-tuple of int
         Subtracted from each 8-bit input before multiplying (0..255).
     frac_bits : int
@@ -72,8 +72,8 @@ class ColorMatrix:
         m = np.asarray(self.coeffs)
         if m.shape != (3, 3) or not np.issubdtype(m.dtype, np.integer):
             raise ValueError("colour matrix coefficients must be a 3x3 array of integers")
-        if np.abs(m).max() >= 1 << 17:
-            raise ValueError("colour matrix coefficients must fit in 18 signed bits")
+        if m.min() < -(1 << 17) or m.max() >= 1 << 17:
+            raise ValueError("colour matrix coefficients must fit in 18 signed bits (-131072..131071)")
         if len(self.offsets) != 3 or not all(0 <= int(o) <= 255 for o in self.offsets):
             raise ValueError("colour matrix offsets must be three integers in 0..255")
         if not 0 <= int(self.frac_bits) <= 16:

@@ -83,13 +83,25 @@ def perspective(fov_y_degrees: float, aspect: float) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Camera:
-    """A pinhole camera: look-at placement, vertical field of view (degrees), near plane distance."""
+    """A pinhole camera: look-at placement, vertical field of view (degrees), near plane distance.
+
+    Raises:
+        ValueError: if ``fov`` is not in (0, 180) degrees or ``near`` is not positive and finite (a
+            field of view of 0 or 180 makes the projection infinite or zero; a near plane at 0 lets
+            w = 0 into the perspective divide). Degenerate placements raise in :meth:`view`.
+    """
 
     position: tuple
     target: tuple
     up: tuple = (0.0, 1.0, 0.0)
     fov: float = 45.0
     near: float = 0.1
+
+    def __post_init__(self):
+        if not (np.isfinite(self.fov) and 0 < self.fov < 180):
+            raise ValueError(f"camera field of view must be in (0, 180) degrees, got {self.fov!r}")
+        if not (np.isfinite(self.near) and self.near > 0):
+            raise ValueError(f"camera near plane distance must be positive and finite, got {self.near!r}")
 
     def view(self) -> np.ndarray:
         return look_at(self.position, self.target, self.up)

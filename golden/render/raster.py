@@ -259,8 +259,14 @@ def rasterize(clip: np.ndarray, st: np.ndarray, tex: np.ndarray, width: int, hei
         st: (T, 3, 2) texture coordinates per vertex.
         tex: (T,) texture id per triangle.
         width, height: frame size in pixels.
-        near: near plane distance (clip w >= near).
+        near: near plane distance (clip w >= near), a positive finite number (w = 0 would divide by
+            zero in the perspective divide).
+
+    Raises:
+        ValueError: if ``near`` is not positive and finite.
     """
+    if not (np.isfinite(near) and near > 0):
+        raise ValueError(f"near plane distance must be positive and finite, got {near!r}")
     tex = np.asarray(tex, np.int64)
     cv, ca, src = clip_triangles(clip, st, width, height, near)
     empty = np.zeros(0)

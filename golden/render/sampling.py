@@ -21,7 +21,12 @@ W0 x H0 of the pixel's texture)::
     rho_x^2 = (ds/dx W0)^2 + (dt/dx H0)^2,   rho_y^2 = (ds/dy W0)^2 + (dt/dy H0)^2
     lambda  = log2(max(rho_x, rho_y)) = 0.5 log2(max(rho_x^2, rho_y^2))
 
-(the OpenGL scale factor). lambda is quantised to ``FRAC_BITS`` = 8 fractional bits with round to
+(the OpenGL scale factor), then clamped to [-LOD_LIMIT, LOD_LIMIT] = [-64, 64] so it is finite for
+every fragment: zero derivatives (texture coordinates constant across the triangle, or derivatives
+whose squares underflow) give -64, derivatives whose squares overflow give +64, NaN derivatives (never
+made by the rasterizer) give -64. A texture has at most 63 levels (int64 sizes), so the clamp changes
+no level or blend.
+lambda is quantised to ``FRAC_BITS`` = 8 fractional bits with round to
 nearest, ``lam = floor(lambda 256 + 1/2)``, clamped to [0, 256 (levels - 1)]; ``L0 = lam >> 8``,
 level blend ``f = lam & 255``, ``L1 = min(L0 + 1, levels - 1)``. lambda <= 0 (magnification) thus
 gives bilinear filtering of level 0.
@@ -36,6 +41,11 @@ sum to exactly 2^24. Per channel ``out = (sum w_k texel_k + 2^23) >> 24``; the s
 
 **Addressing** per texture and axis: ``wrap`` (i mod W) or ``clamp`` (clip to [0, W-1]), applied to
 integer texel indices, so a clamped footprint at the border repeats the edge texel.
+
+**Far coordinates** (:func:`fold_coordinate`): before the footprint, a wrapped coordinate with
+``|s| >= 1`` loses its integer part (``s - floor(s)``, exact in float64) and a clamped one is clipped
+to [-1, 2]; NaN (and, wrapped, an infinity) is 0. The texels and the frame are exactly those of the
+formulas above wherever ``s W 256`` fits int64, and coordinates of any size (1e15, inf) stay defined.
 """
 
 from __future__ import annotations
@@ -47,8 +57,8 @@ import numpy as np
 from .raster import Fragments
 
 __all__ = [
-    "FRAC_BITS", "WEIGHT_BITS", "MODES", "BACKGROUND", "level_of_detail", "quantize_lod",
-    "address", "trilinear_weights", "Sampler",
+    "FRAC_BITS", "WEIGHT_BITS", "LOD_LIMIT", "MODES", "BACKGROUND", "level_of_detail", "quantize_lod",
+    "address", "fold_coordinate", "trilinear_weights", "Sampler",
 ]
 
 FRAC_BITS = 8
@@ -56,18 +66,21 @@ WEIGHT_BITS = 3 * FRAC_BITS
 MODES = ("point", "trilinear")
 BACKGROUND = (0, 0, 0, 255)
 _ONE = 1 << FRAC_BITS
+#: |lambda| never exceeds this (levels; finite where log2 would give -inf, +inf or NaN).
+LOD_LIMIT = 64.0
 
 
 def level_of_detail(frags: Fragments, width0: np.ndarray, height0: np.ndarray) -> np.ndarray:
-    """lambda (float64) per fragment, for level-0 sizes per fragment: -inf for zero derivatives, +inf for
-    derivatives whose square overflows, NaN for NaN ones; ``quantize_lod`` maps all three into range
-    (-inf and NaN to level 0, +inf to the last level)."""
+    """lambda (float64) per fragment, for level-0 sizes per fragment, always finite: clamped to
+    [-LOD_LIMIT, LOD_LIMIT], with zero (or underflowing) derivatives at -LOD_LIMIT, overflowing ones at
+    +LOD_LIMIT and NaN ones at -LOD_LIMIT (level 0)."""
     w = np.asarray(width0, np.float64)
     h = np.asarray(height0, np.float64)
-    with np.errstate(over="ignore", divide="ignore"):    # huge derivatives: +inf, zero ones: -inf
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
         rx = (frags.dsdx * w) ** 2 + (frags.dtdx * h) ** 2
         ry = (frags.dsdy * w) ** 2 + (frags.dtdy * h) ** 2
-        return 0.5 * np.log2(np.maximum(rx, ry))
+        lam = 0.5 * np.log2(np.maximum(rx, ry))
+    return np.clip(np.nan_to_num(lam, nan=-LOD_LIMIT, posinf=LOD_LIMIT, neginf=-LOD_LIMIT), -LOD_LIMIT, LOD_LIMIT)
 
 
 def quantize_lod(lam: np.ndarray, levels: np.ndarray) -> np.ndarray:
@@ -80,6 +93,17 @@ def quantize_lod(lam: np.ndarray, levels: np.ndarray) -> np.ndarray:
 def address(i: np.ndarray, size: np.ndarray, wrap: np.ndarray) -> np.ndarray:
     """Integer texel index into [0, size): wrap (power-of-two size) where ``wrap``, else clamp."""
     return np.where(wrap, i & (size - 1), np.clip(i, 0, size - 1))
+
+
+def fold_coordinate(s: np.ndarray, wrap: np.ndarray) -> np.ndarray:
+    """An equivalent texture coordinate, small enough that ``s W 256`` fits int64 at every level:
+    where ``wrap``, ``s - floor(s)`` if ``|s| >= 1`` (exact: Sterbenz), else ``s``; elsewhere ``s``
+    clipped to [-1, 2] (beyond, both texels of a footprint are already the edge texel). NaN, and
+    infinities where ``wrap``, become 0. Same texels and same filtered colour as ``s``."""
+    s = np.asarray(s, np.float64)
+    with np.errstate(invalid="ignore"):
+        folded = np.where(wrap, np.where(np.abs(s) >= 1, s - np.floor(s), s), np.clip(s, -1.0, 2.0))
+    return np.nan_to_num(folded, nan=0.0)
 
 
 def trilinear_weights(fu0, fv0, fu1, fv1, f) -> np.ndarray:
@@ -162,10 +186,11 @@ class Sampler:
             raise ValueError("fragment texture id out of range")
         m = len(tex)
         ws, wt = self._wrap_s[tex], self._wrap_t[tex]
+        sc, tc = fold_coordinate(frags.s, ws), fold_coordinate(frags.t, wt)
         if self.mode == "point":
             w0, h0 = self._widths[tex, 0], self._heights[tex, 0]
-            i = address(np.floor(frags.s * w0).astype(np.int64), w0, ws)
-            j = address(np.floor(frags.t * h0).astype(np.int64), h0, wt)
+            i = address(np.floor(sc * w0).astype(np.int64), w0, ws)
+            j = address(np.floor(tc * h0).astype(np.int64), h0, wt)
             reqs = np.stack([tex, np.zeros(m, np.int64), i, j], 1)
             weights = None
         else:
@@ -178,8 +203,8 @@ class Sampler:
             fracs = []
             for k, lv in enumerate((l0, l1)):
                 wl, hl = self._widths[tex, lv], self._heights[tex, lv]
-                u = np.floor(frags.s * (wl * _ONE)).astype(np.int64) - (_ONE >> 1)
-                v = np.floor(frags.t * (hl * _ONE)).astype(np.int64) - (_ONE >> 1)
+                u = np.floor(sc * (wl * _ONE)).astype(np.int64) - (_ONE >> 1)
+                v = np.floor(tc * (hl * _ONE)).astype(np.int64) - (_ONE >> 1)
                 i0, j0 = u >> FRAC_BITS, v >> FRAC_BITS
                 fracs += [u & (_ONE - 1), v & (_ONE - 1)]
                 i0a, i1a = address(i0, wl, ws), address(i0 + 1, wl, ws)

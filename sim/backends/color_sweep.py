@@ -23,7 +23,7 @@ from .cxxrtl import DRIVER_DIR, cxxrtl_include_dir, write_cxxrtl
 from .design import port_map
 from .toolchain import cached_build, digest, find_cxx, run_tool, tool_version
 
-__all__ = ["INPUTS", "all_inputs", "rtl_outputs", "golden_check", "sweep", "random_matrix"]
+__all__ = ["INPUTS", "all_inputs", "rtl_outputs", "golden_check", "sweep", "random_matrix", "extreme_matrix"]
 
 #: Every 8-bit (Y, U, V): input c is Y = c & 255, U = (c >> 8) & 255, V = c >> 16.
 INPUTS = 1 << 24
@@ -109,7 +109,8 @@ def sweep(matrix) -> dict:
 
 def random_matrix(seed: int):
     """A random valid parameterisation over the whole range the unit takes: 18-bit signed
-    coefficients (each of a random magnitude, up to 2^17), any offsets, ``F`` in 0..16, round or floor."""
+    coefficients (each of a random bit length 1..17, so from -2^17 to 2^17 - 1), any offsets, ``F`` in
+    0..16, round or floor."""
     from vqtex.golden.color import ColorMatrix
     rng = np.random.default_rng(seed)
     frac = int(rng.integers(0, 17))
@@ -117,3 +118,13 @@ def random_matrix(seed: int):
     coeffs = rng.integers(-(1 << bits), 1 << bits)
     return ColorMatrix(coeffs=coeffs, offsets=tuple(int(v) for v in rng.integers(0, 256, 3)), frac_bits=frac,
                        rounding=bool(rng.integers(0, 2)))
+
+
+def extreme_matrix():
+    """The widest datapath the unit takes: every non-zero coefficient at an end of the 18-bit range (-2^17 or
+    2^17 - 1), offsets 0, 255 and 128 (the largest ``|in - off|`` of each sign, so products reach
+    their full ``product_bits``), ``F`` = 16 with rounding; each output clamps at both ends and takes
+    127 values between (steps of two: a coefficient of 2^17 is 2 at ``F`` = 16)."""
+    from vqtex.golden.color import ColorMatrix
+    lo, hi = -(1 << 17), (1 << 17) - 1
+    return ColorMatrix(coeffs=((hi, hi, 0), (lo, lo, hi), (lo, 0, lo)), offsets=(0, 255, 128), frac_bits=16)

@@ -1,8 +1,9 @@
 """``vqtex bench stability [--json]``: the stress figures in one command (docs/stability.md).
 
 - ``color``: every (Y, U, V) through the compiled RTL colour matrix against golden, for each matrix
-  the project ships and one random parameterisation (:mod:`vqtex.sim.backends.color_sweep`): inputs
-  checked, mismatches, golden's worst error against float64 and its bound, clamped outputs.
+  the project ships, the widest one the unit takes and one random parameterisation
+  (:mod:`vqtex.sim.backends.color_sweep`): inputs checked, mismatches, golden's worst error against
+  float64 and its bound, clamped outputs, build and sweep seconds.
 - ``container``: 100,000 mutated ``.vqt`` files (checksum recomputed) loaded and used as ``info`` and
   ``decode`` use them (:mod:`.fuzz`): counts by outcome (rejected, accepted, crash, hang, big-alloc).
 - ``load``: long random request streams through ``vqtex sim`` on the compiled backend against golden
@@ -22,10 +23,10 @@ __all__ = ["run", "SECTIONS"]
 
 def color_figures(seed: int = 1) -> dict:
     from vqtex.golden.color import DREAMCAST_YUV422, JFIF_BT601
-    from vqtex.sim.backends.color_sweep import random_matrix, sweep
+    from vqtex.sim.backends.color_sweep import extreme_matrix, random_matrix, sweep
     out = {}
     for name, matrix in (("jfif_bt601", JFIF_BT601), ("dreamcast_yuv422", DREAMCAST_YUV422),
-                         (f"random_seed_{seed}", random_matrix(seed))):
+                         ("extreme", extreme_matrix()), (f"random_seed_{seed}", random_matrix(seed))):
         out[name] = sweep(matrix)
     return out
 
@@ -54,7 +55,7 @@ def _text(rep: dict) -> str:
                      + ", ".join(f"{k} {v}" for k, v in c["counts"].items()))
     for name, r in rep.get("color", {}).items():
         lines.append(f"color {name:<20} {r['inputs']} inputs, {r['mismatches']} mismatches; golden vs float64 "
-                     f"{r['worst_error']} (bound {r['error_bound']}); sweep {r['sweep_seconds']} s")
+                     f"{r['worst_error']} (bound {r['error_bound']}); build {r['build_seconds']} s, sweep {r['sweep_seconds']} s")
     for name, r in rep.get("load", {}).items():
         lines.append(f"load  {name:<20} {r['requests']} requests, {r['cycles']} cycles, {r['mismatches']} mismatches; "
                      f"seconds {r['seconds']}, peak MiB {r['peak_mib']}")

@@ -57,6 +57,21 @@ def test_bad_parameters():
     with pytest.raises(ValueError):
         ColorMatrix(coeffs=((1 << 17, 0, 0), (0, 1, 0), (0, 0, 1)))
     with pytest.raises(ValueError):
+        ColorMatrix(coeffs=((1, 0, 0), (0, -(1 << 17) - 1, 0), (0, 0, 1)))
+    with pytest.raises(ValueError):
         ColorMatrix(coeffs=((1, 0), (0, 1)))
     with pytest.raises(ValueError):
         ColorMatrix(coeffs=((1, 0, 0), (0, 1, 0), (0, 0, 1)), frac_bits=20)
+
+
+def test_coefficients_span_the_18_bit_signed_range():
+    """-2^17 and 2^17 - 1 both fit one 18-bit multiplier operand; apply() equals Python's exact
+    integers (floor shift) at both ends of the range."""
+    lo, hi = -(1 << 17), (1 << 17) - 1
+    m = ColorMatrix(coeffs=((lo, hi, 0), (hi, lo, lo), (lo, lo, hi)), offsets=(0, 255, 128), frac_bits=16)
+    x = np.random.default_rng(3).integers(0, 256, (2000, 3))
+    want = [[min(max((sum(c * (int(v) - o) for c, v, o in zip(row, px, m.offsets)) + m.bias) >> 16, 0), 255)
+             for row in m.coeffs] for px in x]
+    out = m.apply(x.astype(np.uint8))
+    assert out.tolist() == want
+    assert 0 < (out == 0).mean() < 1 and 0 < (out == 255).mean() < 1 and ((out > 0) & (out < 255)).any()

@@ -60,7 +60,7 @@ def test_lod_clamps_to_the_pyramid():
     big = _frags([0.3], [0.3], d=(100.0, 0, 0, 100.0))
     r = sm.requests(big)
     assert (r[:, 1] == 3).all()  # the 1x1 level, twice
-    flat = _frags([0.3], [0.3])  # zero derivatives: log2(0) = -inf -> level 0
+    flat = _frags([0.3], [0.3])  # zero derivatives: lambda = -LOD_LIMIT -> level 0
     assert (sm.requests(flat)[:4, 1] == 0).all()
 
 

@@ -1,18 +1,24 @@
 """Fixed-point sampling and geometry under stress (issue: numerical stability).
 
 - The eight trilinear weights sum to exactly 2^24 for every fraction and level blend.
-- The level of detail is defined and finite, and every request lands inside its level, for any
-  fragment: magnification, the last level, zero or infinite derivatives, NaN, coordinates of 1e6.
+- The level of detail is defined and finite (within [-LOD_LIMIT, LOD_LIMIT]), and every request lands
+  inside its level, for any fragment: magnification, the last level, zero or infinite derivatives,
+  NaN, coordinates of 1e6.
 - Degenerate triangles (zero area, edge-on, behind the camera, crossing the near plane, texture
   coordinates of 1e6) rasterize to finite fragments whose requests are all in range.
+- A camera or rasterizer whose near plane is at 0 (w = 0 in the perspective divide) or whose field of
+  view is 0 or 180 degrees is refused with ValueError.
 """
 
+import warnings
+
 import numpy as np
+import pytest
 from hypothesis import given, strategies as st
 
 from vqtex.golden.render.camera import Camera
 from vqtex.golden.render.raster import Fragments, rasterize
-from vqtex.golden.render.sampling import FRAC_BITS, Sampler, quantize_lod, trilinear_weights
+from vqtex.golden.render.sampling import FRAC_BITS, LOD_LIMIT, Sampler, level_of_detail, quantize_lod, trilinear_weights
 
 ONE = 1 << FRAC_BITS
 SHAPES = [[(256, 128), (128, 64), (64, 32), (32, 16), (16, 8), (8, 4), (4, 2), (2, 1), (1, 1)],
@@ -53,7 +59,9 @@ def test_any_fragment_gives_requests_inside_their_level(coords, derivs, shape, a
     sampler = Sampler([shapes], address=[addressing], mode="trilinear")
     s, t = zip(*coords)
     frags = _fragments(s, t, derivs)
-    lam = quantize_lod(sampler.lod(frags), np.full(len(s), len(shapes)))
+    raw = sampler.lod(frags)
+    assert np.isfinite(raw).all() and (np.abs(raw) <= LOD_LIMIT).all()
+    lam = quantize_lod(raw, np.full(len(s), len(shapes)))
     assert (lam >= 0).all() and (lam <= (len(shapes) - 1) * ONE).all()
     reqs = sampler.requests(frags)
     lv = reqs[:, 1]
@@ -92,7 +100,7 @@ def test_degenerate_triangles_give_finite_fragments_and_valid_requests(tris, st_
         assert np.isfinite(getattr(frags, name)).all(), name
     sampler = Sampler([SHAPES[0]], mode="trilinear")
     lam = sampler.lod(frags)
-    assert not np.isnan(lam).any() and not np.isposinf(lam).any()
+    assert np.isfinite(lam).all() and (np.abs(lam) <= LOD_LIMIT).all()
     reqs = sampler.requests(frags)
     if len(reqs):
         lv = reqs[:, 1]
@@ -107,3 +115,88 @@ def test_edge_on_and_behind_the_camera_cover_nothing():
     for tri in (edge_on, behind):
         frags = rasterize(_clip(CAM, tri)[None], np.zeros((1, 3, 2)), np.zeros(1, np.int64), 32, 32, near=CAM.near)
         assert len(frags) == 0
+
+
+def test_lod_rule_at_the_limits():
+    """Zero and underflowing derivatives -> -LOD_LIMIT, overflowing -> +LOD_LIMIT, NaN -> -LOD_LIMIT;
+    ordinary ones unchanged (a pixel covering 4 x 4 texels of a 256-texel level 0 is lambda = 2)."""
+    d = np.array([[0.0, 0, 0, 0], [1e-200, 0, 0, 1e-200], [1e200, 0, 0, 0], [np.inf, 0, 0, 0],
+                  [np.nan, 1.0, 0, 0], [4 / 256, 0, 0, 4 / 256], [0, -1e6, 3e6, 0]])
+    frags = _fragments(np.zeros(len(d)), np.zeros(len(d)), d.T)
+    lam = level_of_detail(frags, np.full(len(d), 256), np.full(len(d), 256))
+    want = [-LOD_LIMIT, -LOD_LIMIT, LOD_LIMIT, LOD_LIMIT, -LOD_LIMIT, 2.0, np.log2(3e6 * 256)]
+    assert lam.tolist() == pytest.approx(want, rel=0, abs=1e-12)
+
+
+def test_flat_texture_coordinates_give_level_0_and_a_finite_lod():
+    """A triangle whose (s, t) is the same at every vertex: zero derivatives, the finest level."""
+    clip = _clip(CAM, [(-1.0, -1.0, 0.0), (1.0, -1.0, 0.0), (0.0, 1.0, 0.0)])[None]
+    frags = rasterize(clip, np.full((1, 3, 2), 0.25), np.zeros(1, np.int64), 32, 32, near=CAM.near)
+    assert len(frags) > 0
+    sampler = Sampler([SHAPES[0]], mode="trilinear")
+    lam = sampler.lod(frags)
+    assert (lam == -LOD_LIMIT).all() and (quantize_lod(lam, np.full(len(lam), len(SHAPES[0]))) == 0).all()
+    assert (sampler.requests(frags).reshape(-1, 8, 4)[:, :4, 1] == 0).all()     # L0 = 0, blend 0
+
+
+@pytest.mark.parametrize("near", [0.0, -0.1, float("inf"), float("nan")])
+def test_a_near_plane_at_or_behind_the_eye_is_refused(near):
+    tri = _clip(CAM, [(-1.0, -1.0, 0.0), (1.0, -1.0, 0.0), (0.0, 1.0, 0.0)])[None]
+    with pytest.raises(ValueError, match="near"):
+        rasterize(tri, np.zeros((1, 3, 2)), np.zeros(1, np.int64), 32, 32, near=near)
+    with pytest.raises(ValueError, match="near"):
+        Camera(position=(0.0, 0.0, 3.0), target=(0.0, 0.0, 0.0), near=near)
+
+
+@pytest.mark.parametrize("fov", [0.0, -10.0, 180.0, 270.0, float("nan")])
+def test_a_field_of_view_without_a_projection_is_refused(fov):
+    with pytest.raises(ValueError, match="field of view"):
+        Camera(position=(0.0, 0.0, 3.0), target=(0.0, 0.0, 0.0), fov=fov)
+
+
+_level_shapes = st.sampled_from(SHAPES)
+_fine = st.integers(-(1 << 21), 1 << 21).map(lambda k: k / (1 << 20))     # multiples of 2^-20 in [-2, 2]
+
+
+@given(st.lists(st.tuples(_fine, _fine, st.integers(-(1 << 30), 1 << 30), st.integers(-(1 << 30), 1 << 30)),
+                min_size=1, max_size=16), _level_shapes, st.sampled_from(["point", "trilinear"]), _extreme)
+def test_wrapped_coordinates_shifted_by_whole_repeats_fetch_the_same(rows, shapes, mode, deriv):
+    """Wrap: s and s + k (k an integer, exact in float64) give the same requests and frame."""
+    s, t, ks, kt = (np.array(c, np.float64) for c in zip(*rows))
+    d = (deriv, 0.0, 0.0, deriv)
+    a, b = Sampler([shapes], mode=mode), Sampler([shapes], mode=mode)
+    ra, rb = a.requests(_fragments(s, t, d)), b.requests(_fragments(s + ks, t + kt, d))
+    assert (ra == rb).all()
+    texels = np.random.default_rng(len(rows)).integers(0, 256, (len(ra), 4)).astype(np.uint8)
+    assert (a.resolve(texels) == b.resolve(texels)).all()
+
+
+@given(st.lists(st.tuples(st.floats(2, 1e300), st.floats(2, 1e300)), min_size=1, max_size=16), _level_shapes,
+       st.sampled_from(["point", "trilinear"]), _extreme)
+def test_clamped_coordinates_beyond_the_edge_fetch_the_edge(far, shapes, mode, deriv):
+    """Clamp: any coordinate beyond [-1, 2] fetches exactly what -1 or 2 fetches, same frame."""
+    s, t = (np.array(c, np.float64) for c in zip(*far))
+    sign = np.where(np.arange(len(s)) % 2, -1.0, 1.0)
+    d = (deriv, 0.0, 0.0, deriv)
+    a, b = Sampler([shapes], "clamp", mode), Sampler([shapes], "clamp", mode)
+    ra = a.requests(_fragments(sign * s, -sign * t, d))
+    rb = b.requests(_fragments(np.where(sign > 0, 2.0, -1.0), np.where(sign > 0, -1.0, 2.0), d))
+    assert (ra == rb).all()
+    texels = np.random.default_rng(len(far)).integers(0, 256, (len(ra), 4)).astype(np.uint8)
+    assert (a.resolve(texels) == b.resolve(texels)).all()
+
+
+@pytest.mark.parametrize("addressing", ["wrap", "clamp"])
+def test_coordinates_of_any_size_are_defined(addressing):
+    """1e15 (beyond int64 once scaled), 1e300, infinities and NaN: requests in range, no warning."""
+    far = [1e6, -1e6, 1e12, 1e15, -1e15, 1e300, -1e300, np.inf, -np.inf, np.nan, 2.0 ** 60 + 0.5]
+    n = len(far)
+    shapes = SHAPES[0]
+    for mode in ("point", "trilinear"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            reqs = Sampler([shapes], addressing, mode).requests(_fragments(far, far[::-1], (1e-3, 0, 0, 1e-3)))
+        assert len(reqs) == n * (1 if mode == "point" else 8)
+        w = np.array([shapes[k][0] for k in reqs[:, 1]])
+        h = np.array([shapes[k][1] for k in reqs[:, 1]])
+        assert ((reqs[:, 2] >= 0) & (reqs[:, 2] < w) & (reqs[:, 3] >= 0) & (reqs[:, 3] < h)).all()
