@@ -5,11 +5,11 @@ C++; :file:`sim/backends/drivers/driver.cc` wraps it in the batch C API of :file
 (or g++, :func:`sim.backends.toolchain.find_cxx`) builds a shared library which ctypes loads. A simulation is a handful of calls with numpy buffers:
 load the memories, run N requests with the output's ready pattern, read N responses and the counters.
 
-Memories are loaded at run time. The C++ is generated from the design with every memory blanked
-(same widths and depths, no contents), so it depends on the design's *structure* only: one build
+Memories are loaded at run time. The C++ is generated from the design with every memory's
+initialiser removed (same widths and depths, no contents), so it depends on the design's *structure* only: one build
 serves every texture set whose memories have the same shapes (and whose descriptors give the same
-field widths). The contents are taken from the elaborated design itself (each memory's ``init``, by
-its hierarchical name), so whatever the hardware packs into its memories (even/odd index banks,
+field widths). The contents are taken from the elaborated design itself
+(:func:`vqtex.hw.memories.memories`, by hierarchical name), so whatever the hardware packs into its memories (even/odd index banks,
 descriptor rows, extended codewords) is exactly what the library loads.
 
 Caching (see :mod:`sim.backends.toolchain`): a *quick key* (hash of the hw and golden sources, the amaranth
@@ -37,6 +37,7 @@ import numpy as np
 from .cxxrtl_inplace import inplace_cycle
 from .design import HALVES, STROBES, DesignInfo, design_info
 from .interface import SimResult
+from .yosys import rtlil_script, run_yosys
 from .toolchain import (ToolchainError, cached_build, digest, find_cxx, index_get, index_put, run_tool,
                         tool_version)
 
@@ -54,30 +55,14 @@ API_VERSION = 2
 
 
 def cxxrtl_sources(info: DesignInfo) -> dict:
-    """C++ of each half of the design (``HALVES``) with every memory blanked (contents are loaded at
-    run time): half -> CXXRTL's output."""
-    from amaranth.hdl import MemoryData, _mem
-    saved = []
+    """C++ of each half of the design (``HALVES``) without its memories' contents (they are loaded at
+    run time): half -> CXXRTL's output with the initialisers removed.
 
-    def blank(f):
-        if isinstance(f, _mem.MemoryInstance):
-            saved.append((f, f._data))
-            f._data = MemoryData(shape=f._data._shape, depth=f._data._depth, init=[])
-        for sub, _, _ in f.subfragments:
-            blank(sub)
-    out = {}
-    try:
-        blank(info.fragment)
-        for half in HALVES:
-            frag, ports = info.halves[half]
-            out[half] = write_cxxrtl(frag, ports)
-    finally:
-        for f, d in saved:
-            f._data = d
-    # The blank memories still come with all-zero initialisers of their full depth; drop them (a
-    # cxxrtl::memory starts zeroed) so compile time does not grow with the memories. If CXXRTL's
-    # output format changes and nothing matches, the zero initialisers stay: slower, still right.
-    return {half: _MEM_INIT.sub("", src) for half, src in out.items()}
+    CXXRTL writes each memory's contents as an initialiser block; removing them makes the C++ depend
+    on the design's structure only, so one build serves every texture set of the same shapes. If
+    CXXRTL's output format changes and nothing matches, the contents stay: the library is then built
+    per texture set (slower to build, still right, since the driver loads the memories anyway)."""
+    return {half: _MEM_INIT.sub("", write_cxxrtl(*info.halves[half])) for half in HALVES}
 
 
 #: ``write_cxxrtl`` options. ``-g1``: debug information for the design's named wires and the
@@ -87,16 +72,11 @@ WRITE_CXXRTL = "write_cxxrtl -g1"
 
 
 def write_cxxrtl(fragment, ports) -> str:
-    """``amaranth.back.cxxrtl.convert_fragment`` with our ``write_cxxrtl`` options (the same RTLIL,
-    the same Yosys)."""
-    from amaranth.back import cxxrtl, rtlil
-    try:
-        from amaranth._toolchain.yosys import find_yosys
-    except ImportError:                         # amaranth moved its private API: the default flow
-        return cxxrtl.convert_fragment(fragment, ports, "top", emit_src=False)[0]
+    """The fragment's RTLIL (``amaranth.back.rtlil``) through Yosys ``write_cxxrtl`` with our options
+    (:data:`WRITE_CXXRTL`), as ``amaranth.back.cxxrtl`` does with its own."""
+    from amaranth.back import rtlil
     text, _ = rtlil.convert_fragment(fragment, ports, "top", emit_src=False)
-    yosys = find_yosys(lambda ver: ver >= (0, 10))
-    return yosys.run(["-q", "-"], f"read_rtlil <<rtlil\n{text}\nrtlil\n{WRITE_CXXRTL}")
+    return run_yosys(rtlil_script(text, WRITE_CXXRTL))
 
 
 _MEM_INIT = re.compile(r"\tstatic const value<\d+> (mem_init_\d+)\[\d+\] \{\n.*?\n\t\};\n"

@@ -29,14 +29,21 @@ TOP_NAME = "texel_fetch"
 def port_map(top) -> dict:
     """Top-level ports of a component for Amaranth's RTLIL/CXXRTL converters: ``name -> (value,
     direction)``, one per signature member, named ``stream__member`` as Amaranth names them."""
-    from amaranth.hdl import _ast, _ir
+    from amaranth.hdl import ValueCastable
     ports = {}
     for path, member, value in top.signature.flatten(top):
-        if isinstance(value, _ast.ValueCastable):
+        if isinstance(value, ValueCastable):
             value = value.as_value()
-        ports["__".join(map(str, path))] = (
-            value, _ir.PortDirection.Input if member.flow == wiring.In else _ir.PortDirection.Output)
+        ports["__".join(map(str, path))] = (value, _direction(member.flow == wiring.In))
     return ports
+
+
+def _direction(is_input: bool):
+    """``amaranth.back.rtlil.convert_fragment`` wants its ports' directions as members of
+    ``PortDirection``, which Amaranth 0.5 does not export from a public module: the one private
+    name this project uses, here only (tests/test_public_api.py holds it to this function)."""
+    from amaranth.hdl._ir import PortDirection
+    return PortDirection.Input if is_input else PortDirection.Output
 
 
 def request_ports(fetch) -> dict:
@@ -143,22 +150,13 @@ def _fields(layout) -> dict:
 
 def design_info(ts, *, one_port: bool = False, tag_width: int = 8) -> DesignInfo:
     """Elaborate ``TexelFetch(ts)`` and collect ports, payload layouts, stages and memory images."""
-    from amaranth.hdl import _ast, _ir, _mem
+    from vqtex.hw.memories import elaborate, memories
     from vqtex.hw.texel_fetch import REGISTERS, TexelFetch
 
     top = TexelFetch(ts, one_port=one_port, tag_width=tag_width)
     ports = port_map(top)
-    frag = _ir.Fragment.get(top, None)
-    memories = []
-
-    def walk(f, path):
-        if isinstance(f, _mem.MemoryInstance):
-            d = f._data
-            memories.append(MemoryImage(" ".join(path), _ast.Shape.cast(d._shape).width, d._depth,
-                                        list(d._init._raw)))
-        for sub, name, _ in f.subfragments:
-            walk(sub, path + (str(name),))
-    walk(frag, ())
+    frag = elaborate(top)
+    images = [MemoryImage(" ".join(mem.path), mem.width, mem.depth, mem.words) for mem in memories(frag)]
     halves = {}
     for sub, name, _ in frag.subfragments:      # FrontEnd and BackEnd, each converted as its own model
         if str(name) in HALVES:
@@ -174,7 +172,7 @@ def design_info(ts, *, one_port: bool = False, tag_width: int = 8) -> DesignInfo
         request_fields=_fields(req), response_fields=_fields(resp),
         request_width=req.size, response_width=resp.size, tag_width=tag_width,
         stages=list(REGISTERS),
-        strobes=[n for n in STROBES if n in names], memories=memories, latency=int(top.latency),
+        strobes=[n for n in STROBES if n in names], memories=images, latency=int(top.latency),
         halves=halves, link_width=len(halves["front"][1]["link"][0]))
     for what, width in (("request", info.request_width), ("response", info.response_width)):
         if width > 64:

@@ -24,6 +24,13 @@ a constant ``$auto$verilog_backend...`` trigger register in some ``always @*`` b
 from __future__ import annotations
 
 from .design import TOP_NAME, TexelFetchTop, port_map, response_ports
+from .yosys import rtlil_script, run_yosys
+
+#: amaranth.back.verilog's own Yosys script (amaranth 0.5, internal attributes stripped), with
+#: ``write_verilog -sv``: the same netlist as the v2005 dialect, written as SystemVerilog.
+_ATTRS = "-remove generator -remove top -remove src -remove amaranth.hierarchy -remove amaranth.decoding"
+SV_SCRIPT = ("proc -nomux -norom", "memory_collect", f"attrmap {_ATTRS}", f"attrmap -modattr {_ATTRS}",
+             "write_verilog -norename -sv")
 
 __all__ = ["export_verilog", "icarus_testbench", "run_icarus", "DIALECTS"]
 
@@ -56,8 +63,7 @@ def export_verilog(ts, *, one_port: bool = False, tag_width: int = 8, name: str 
         text = verilog.convert(top, name=name, emit_src=False, strip_internal_attrs=True)
     else:
         il, _ = rtlil.convert_fragment(Fragment.get(top, None), port_map(top), name, emit_src=False)
-        # amaranth.back.verilog's own Yosys script, with write_verilog -sv.
-        text = verilog._convert_rtlil_text(il, strip_internal_attrs=True, write_verilog_opts=("-sv",))
+        text = run_yosys(rtlil_script(il, *SV_SCRIPT))
     head = (f"// {name}: vqtex texel-fetch unit (Beers, Agrawala, Chaddha 1996), "
             f"{'one-port' if one_port else 'two-bank'} index memory, tag width {tag_width}, "
             f"latency {top.latency}.\n"

@@ -541,17 +541,10 @@ def design_memories(ts, *, one_port: bool = False, tag_width: int = 8) -> dict:
     """Every memory of ``TexelFetch(ts)`` -> ``(depth, width)``, named as Yosys names it inside the
     unit (``fetch.back.codebook_rom.codebook.bank0``, ``fetch.front.descriptor.table``): the banks of
     :class:`hw.banked_rom.BankedROM` are memories of their own."""
-    from amaranth.hdl import _ast, _ir, _mem
+    from vqtex.hw.memories import elaborate, memories
     from vqtex.hw.texel_fetch import TexelFetch
-    out = {}
-
-    def walk(f, path):
-        if isinstance(f, _mem.MemoryInstance):
-            out[".".join(path)] = (int(f._data._depth), _ast.Shape.cast(f._data._shape).width)
-        for sub, name, _ in f.subfragments:
-            walk(sub, path + (str(name),))
-    walk(_ir.Fragment.get(TexelFetch(ts, one_port=one_port, tag_width=tag_width), None), ("fetch",))
-    return out
+    top = TexelFetch(ts, one_port=one_port, tag_width=tag_width)
+    return {".".join(("fetch",) + mem.path): (mem.depth, mem.width) for mem in memories(elaborate(top))}
 
 
 def _memory_shapes(shapes: dict, mapped: dict) -> dict:
