@@ -1,8 +1,6 @@
 """vqtex uses Amaranth through its public interfaces only (issue: public interfaces).
 
-The sources of golden/, hw/ and sim/ are scanned for Amaranth's private modules and attributes. One
-use is allowed, in one function, because Amaranth 0.5 has no public name for it: ``PortDirection``,
-which ``amaranth.back.rtlil.convert_fragment`` requires (sim/backends/design.py ``_direction``)."""
+The sources of golden/, hw/ and sim/ are scanned for Amaranth's private modules and attributes."""
 
 import pathlib
 import re
@@ -11,8 +9,8 @@ from tests.support import REPO
 
 PRIVATE = re.compile(r"amaranth(?:\.\w+)*\._(?!_)\w|from amaranth(?:\.\w+)* import _\w|\._data\b|_MustUse|_convert_rtlil_text"
                      r"|\._init\._raw|_toolchain")
-#: file -> the one line allowed there, and why (see the module docstring).
-ALLOWED = {"sim/backends/design.py": "    from amaranth.hdl._ir import PortDirection"}
+#: file -> a line allowed there (none: every use of Amaranth is public).
+ALLOWED: dict = {}
 
 
 def _hits():

@@ -28,22 +28,16 @@ TOP_NAME = "texel_fetch"
 
 def port_map(top) -> dict:
     """Top-level ports of a component for Amaranth's RTLIL/CXXRTL converters: ``name -> (value,
-    direction)``, one per signature member, named ``stream__member`` as Amaranth names them."""
+    None)``, one per signature member, named ``stream__member`` as Amaranth names them. The direction
+    is left for Amaranth to infer from the design (inputs are what the design reads and does not
+    drive), which gives the same RTLIL as naming it."""
     from amaranth.hdl import ValueCastable
     ports = {}
-    for path, member, value in top.signature.flatten(top):
+    for path, _, value in top.signature.flatten(top):
         if isinstance(value, ValueCastable):
             value = value.as_value()
-        ports["__".join(map(str, path))] = (value, _direction(member.flow == wiring.In))
+        ports["__".join(map(str, path))] = (value, None)
     return ports
-
-
-def _direction(is_input: bool):
-    """``amaranth.back.rtlil.convert_fragment`` wants its ports' directions as members of
-    ``PortDirection``, which Amaranth 0.5 does not export from a public module: the one private
-    name this project uses, here only (tests/test_public_api.py holds it to this function)."""
-    from amaranth.hdl._ir import PortDirection
-    return PortDirection.Input if is_input else PortDirection.Output
 
 
 def request_ports(fetch) -> dict:
