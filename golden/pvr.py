@@ -60,7 +60,7 @@ from .color import DREAMCAST_YUV422
 __all__ = [
     "PvrError", "DtHeader", "PvrTexture", "FORMAT_NAMES", "ARGB1555", "RGB565", "ARGB4444", "YUV422",
     "parse_header", "parse_dt", "read_dt", "decode_dt", "decode_texels", "decode_yuv422_blocks",
-    "twiddle_indices", "preview",
+    "twiddle_indices", "preview", "MAX_DT_BYTES",
 ]
 
 ARGB1555, RGB565, ARGB4444, YUV422 = 0, 1, 2, 3
@@ -70,6 +70,8 @@ FORMAT_NAMES = {ARGB1555: "ARGB1555", RGB565: "RGB565", ARGB4444: "ARGB4444", YU
 MAGIC = b"DcTx"
 HEADER_BYTES = 32
 CODEBOOK_ENTRY_BYTES = 8
+#: No VQ .dt is larger (1024x1024 mip chain: 256 KiB + 85 KiB of indices, 2 KiB codebook, header).
+MAX_DT_BYTES = 1 << 22
 
 #: YUV422 pairing inside a twiddled 2x2 block: (texel carrying U, texel carrying V) for each row.
 YUV422_PAIRS = ((0, 2), (1, 3))
@@ -309,9 +311,16 @@ def parse_dt(data: bytes, *, decode: bool = True) -> PvrTexture:
 
 
 def read_dt(path: str | os.PathLike, *, decode: bool = True) -> PvrTexture:
-    """Read and decode a VQ ``.dt`` file (see :func:`parse_dt`)."""
-    with open(path, "rb") as f:
-        data = f.read()
+    """Read and decode a VQ ``.dt`` file (see :func:`parse_dt`). Raises :class:`PvrError` (naming the
+    file) also when it cannot be read or is larger than any VQ ``.dt`` (:data:`MAX_DT_BYTES`)."""
+    try:
+        with open(path, "rb") as f:
+            size = os.fstat(f.fileno()).st_size
+            if size > MAX_DT_BYTES:
+                raise PvrError(f"{os.fspath(path)}: {size} bytes, larger than any VQ .dt ({MAX_DT_BYTES})")
+            data = f.read(MAX_DT_BYTES + 1)
+    except OSError as e:
+        raise PvrError(f"{os.fspath(path)}: cannot read: {e.strerror or e}") from None
     try:
         return parse_dt(data, decode=decode)
     except PvrError as e:

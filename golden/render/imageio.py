@@ -16,7 +16,12 @@ import tempfile
 
 import numpy as np
 
-__all__ = ["ImageIOError", "read_image", "image_info", "write_image"]
+__all__ = ["ImageIOError", "read_image", "image_info", "write_image", "MAX_IMAGE_SIDE", "MAX_IMAGE_PIXELS"]
+
+#: Largest image read: a file may claim any size in its header, so the size is checked before the
+#: pixels are decoded (16384 per side, 2^26 pixels = 256 MiB of RGBA8).
+MAX_IMAGE_SIDE = 16384
+MAX_IMAGE_PIXELS = 1 << 26
 
 
 class ImageIOError(OSError):
@@ -36,11 +41,27 @@ def _unassociated(oiio):
     return cfg
 
 
+def _line(message: str) -> str:
+    """OpenImageIO's error text on one line (it may span several)."""
+    return " ".join(message.split())[:300]
+
+
+def _checked_spec(inp, path: str):
+    """The spec of an open image, refused (ImageIOError) if its size or channel count is absurd."""
+    spec = inp.spec()
+    w, h, c = int(spec.width), int(spec.height), int(spec.nchannels)
+    if not (1 <= w <= MAX_IMAGE_SIDE and 1 <= h <= MAX_IMAGE_SIDE and w * h <= MAX_IMAGE_PIXELS and 1 <= c <= 4):
+        raise ImageIOError(f"{path}: {w}x{h} with {c} channels is outside what vqtex reads "
+                           f"(sides 1..{MAX_IMAGE_SIDE}, at most {MAX_IMAGE_PIXELS} pixels, 1..4 channels)")
+    return spec
+
+
 def image_info(path: str | os.PathLike) -> tuple[int, int, int]:
     """(width, height, channels) of an image file, read from its header only.
 
     Raises:
-        ImageIOError: the file is missing or not an image OpenImageIO can read.
+        ImageIOError: the file is missing, not an image OpenImageIO can read, or of absurd size
+            (over :data:`MAX_IMAGE_SIDE` a side or :data:`MAX_IMAGE_PIXELS`, or over 4 channels).
     """
     oiio = _oiio()
     path = os.fspath(path)
@@ -48,9 +69,9 @@ def image_info(path: str | os.PathLike) -> tuple[int, int, int]:
         raise ImageIOError(f"{path}: no such file")
     inp = oiio.ImageInput.open(path)
     if inp is None:
-        raise ImageIOError(f"{path}: cannot open image ({oiio.geterror().strip() or 'unknown format'})")
+        raise ImageIOError(f"{path}: cannot open image ({_line(oiio.geterror()) or 'unknown format'})")
     try:
-        spec = inp.spec()
+        spec = _checked_spec(inp, path)
         return int(spec.width), int(spec.height), int(spec.nchannels)
     finally:
         inp.close()
@@ -60,7 +81,8 @@ def read_image(path: str | os.PathLike) -> np.ndarray:
     """Read an image file as ``uint8`` (H, W, C).
 
     Raises:
-        ImageIOError: the file is missing, unreadable or corrupt.
+        ImageIOError: the file is missing, unreadable or corrupt, or its header claims an absurd
+            size (checked before any pixel is decoded; see :func:`image_info`).
     """
     oiio = _oiio()
     path = os.fspath(path)
@@ -68,12 +90,12 @@ def read_image(path: str | os.PathLike) -> np.ndarray:
         raise ImageIOError(f"{path}: no such file")
     inp = oiio.ImageInput.open(path, _unassociated(oiio))
     if inp is None:
-        raise ImageIOError(f"{path}: cannot open image ({oiio.geterror().strip() or 'unknown format'})")
+        raise ImageIOError(f"{path}: cannot open image ({_line(oiio.geterror()) or 'unknown format'})")
     try:
-        spec = inp.spec()
+        spec = _checked_spec(inp, path)
         data = inp.read_image(0, 0, 0, spec.nchannels, "uint8")
         if data is None or inp.has_error:
-            raise ImageIOError(f"{path}: cannot read image ({inp.geterror().strip() or 'corrupt data'})")
+            raise ImageIOError(f"{path}: cannot read image ({_line(inp.geterror()) or 'corrupt data'})")
     finally:
         inp.close()
     arr = np.asarray(data, dtype=np.uint8)
@@ -107,15 +129,15 @@ def write_image(path: str | os.PathLike, image: np.ndarray) -> None:
     try:
         out = oiio.ImageOutput.create(tmp)
         if out is None:
-            raise ImageIOError(f"{path}: no writer for this file type ({oiio.geterror().strip()})")
+            raise ImageIOError(f"{path}: no writer for this file type ({_line(oiio.geterror())})")
         spec = oiio.ImageSpec(arr.shape[1], arr.shape[0], arr.shape[2], "uint8")
         spec.attribute("oiio:UnassociatedAlpha", 1)  # our RGBA is straight alpha: store it as is
         if not out.open(tmp, spec):
-            raise ImageIOError(f"{path}: cannot write ({out.geterror().strip()})")
+            raise ImageIOError(f"{path}: cannot write ({_line(out.geterror())})")
         ok = out.write_image(arr)
         out.close()
         if not ok:
-            raise ImageIOError(f"{path}: cannot write ({out.geterror().strip()})")
+            raise ImageIOError(f"{path}: cannot write ({_line(out.geterror())})")
         os.chmod(tmp, 0o644)  # mkstemp makes 0600; an image is an ordinary file
         os.replace(tmp, path)
     except BaseException:

@@ -45,6 +45,14 @@ ENCODING_DEFAULTS = {
     "encoder": "gla", "seed": 0,
 }
 MAX_TEXTURE_SIZE = 4096
+#: Bounds on what a scene file may ask for (it is outside data): its size, counts, magnitudes.
+MAX_SCENE_BYTES = 1 << 20
+MAX_TEXTURES = 1024
+MAX_MESHES = 4096
+MAX_LIST = 1 << 16
+MAX_MAGNITUDE = 1e9
+MAX_SEGMENTS = 1024
+MAX_GENERATOR_PARAM = 1024
 
 
 class SceneError(ValueError):
@@ -65,7 +73,8 @@ class _Ctx:
 
 
 def _is_num(x) -> bool:
-    return isinstance(x, (int, float)) and not isinstance(x, bool)
+    """A finite number of magnitude at most MAX_MAGNITUDE (TOML has inf and nan literals)."""
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) and abs(x) <= MAX_MAGNITUDE
 
 
 def _is_int(x) -> bool:
@@ -129,8 +138,8 @@ def _vec(ctx, where, key, x, n, integer=False, lo=None):
 
 
 def _vec_list(ctx, where, key, x, n, integer=False):
-    if not isinstance(x, list) or not x:
-        ctx.fail(where, f"'{key}' must be a non-empty array of {n}-element arrays")
+    if not isinstance(x, list) or not 1 <= len(x) <= MAX_LIST:
+        ctx.fail(where, f"'{key}' must be a non-empty array of at most {MAX_LIST} {n}-element arrays")
     for k, v in enumerate(x):
         _vec(ctx, where, f"{key}[{k}]", v, n, integer)
     return np.array(x, np.int64 if integer else np.float64)
@@ -171,11 +180,14 @@ def _shape_param(ctx, where, key, kind, x):
             ctx.fail(where, f"'{key}' must be positive, got {x!r}")
         return v
     if kind == "ivec2":
-        return _vec(ctx, where, key, x, 2, integer=True, lo=1)
+        v = _vec(ctx, where, key, x, 2, integer=True, lo=1)
+        if max(v) > MAX_SEGMENTS:
+            ctx.fail(where, f"'{key}' values must be <= {MAX_SEGMENTS}, got {x!r}")
+        return v
     if kind == "num+":
         return _num(ctx, where, key, x, lo=0, lo_open=True)
     if kind == "int3":
-        return _int(ctx, where, key, x, lo=3, hi=4096)
+        return _int(ctx, where, key, x, lo=3, hi=MAX_SEGMENTS)
     if kind == "vec2list":
         return _vec_list(ctx, where, key, x, 2)
     if kind == "vec3list":
@@ -413,10 +425,14 @@ def parse_scene(text: str, path: str | os.PathLike = "<scene>") -> Scene:
     """Parse scene TOML text; ``path`` names the file in messages and anchors relative files."""
     path = Path(path)
     ctx = _Ctx(str(path))
+    if len(text) > MAX_SCENE_BYTES:
+        ctx.fail("", f"{len(text)} characters; a scene file has at most {MAX_SCENE_BYTES}")
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
-        ctx.fail("", f"TOML syntax error: {e}")
+        ctx.fail("", f"TOML syntax error: {str(e).splitlines()[0]}")
+    except RecursionError:
+        ctx.fail("", "TOML nests too deeply")
     _check_keys(ctx, "top level", doc, {"scene", "camera", "groups", "texture", "mesh"})
     scene_dir = path.resolve().parent
 
@@ -503,6 +519,8 @@ def parse_scene(text: str, path: str | os.PathLike = "<scene>") -> Scene:
     texs = doc.get("texture", [])
     if not isinstance(texs, list) or not texs:
         ctx.fail("", "no textures: add [[texture]] tables")
+    if len(texs) > MAX_TEXTURES:
+        ctx.fail("", f"{len(texs)} textures; at most {MAX_TEXTURES}")
     specs = []
     seen = set()
     for n, t in enumerate(texs):
@@ -528,6 +546,9 @@ def parse_scene(text: str, path: str | os.PathLike = "<scene>") -> Scene:
             gen = _str(ctx, w, "generator", t["generator"], tuple(sorted(GENERATORS)))
             if size is None:
                 ctx.fail(w, "a generated texture needs 'size' ([width, height])")
+            for k, v in params.items():
+                _num(ctx, w, f"params.{k}", v, -MAX_GENERATOR_PARAM, MAX_GENERATOR_PARAM) if not isinstance(v, list) \
+                    else _vec_list(ctx, w, f"params.{k}", v, 3, integer=True)
             bad = set(params) - generator_params(gen)
             if bad:
                 ctx.fail(w, f"unknown parameter '{sorted(bad)[0]}' for generator '{gen}' "
@@ -579,6 +600,8 @@ def parse_scene(text: str, path: str | os.PathLike = "<scene>") -> Scene:
     ms = doc.get("mesh", [])
     if not isinstance(ms, list) or not ms:
         ctx.fail("", "no meshes: add [[mesh]] tables")
+    if len(ms) > MAX_MESHES:
+        ctx.fail("", f"{len(ms)} meshes; at most {MAX_MESHES}")
     mesh_specs = []
     for n, m in enumerate(ms):
         mname = m.get("name") if isinstance(m, dict) else None
@@ -657,6 +680,8 @@ def load_scene(name_or_path: str | os.PathLike) -> Scene:
             raise SceneError(f"{name_or_path}: no such scene file or built-in scene "
                              f"(built-in: {', '.join(BUILTIN_SCENES)})")
     try:
+        if p.stat().st_size > MAX_SCENE_BYTES:
+            raise SceneError(f"{p}: {p.stat().st_size} bytes; a scene file has at most {MAX_SCENE_BYTES}")
         text = p.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as e:
         raise SceneError(f"{p}: cannot read: {e}") from None
