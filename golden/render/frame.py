@@ -20,13 +20,14 @@ from typing import Sequence
 
 import numpy as np
 
+from ..requests import read_request_file
 from .pyramid import TextureSource
 from .raster import Fragments, rasterize
 from .sampling import Sampler
 
 __all__ = [
     "fragments", "plan_frame", "frame_requests", "resolve_frame", "render_frame", "render_frames",
-    "save_requests", "load_requests", "MAX_REQUESTS",
+    "save_requests", "load_requests",
 ]
 
 
@@ -101,40 +102,8 @@ def save_requests(path: str | os.PathLike, reqs: np.ndarray) -> None:
             os.unlink(tmp)
 
 
-#: Largest request file read (2^28 requests, 8 GiB of int64): a bound on what a header may claim.
-MAX_REQUESTS = 1 << 28
-
-
 def load_requests(path: str | os.PathLike) -> np.ndarray:
-    """Read a request stream written by :func:`save_requests`: (N, 4) int64.
-
-    The ``.npy`` header is checked before any data is read: no pickles (object dtypes), an integer
-    dtype, shape (N, 4), and N consistent with the file's size; so a file cannot make this allocate
-    more than it holds.
-
-    Raises:
-        ValueError: (one line naming the file) unreadable, not an ``.npy`` file, or any of the above.
-    """
-    path = os.fspath(path)
-    try:
-        with open(path, "rb") as f:
-            size = os.fstat(f.fileno()).st_size
-            try:
-                version = np.lib.format.read_magic(f)
-                shape, fortran, dtype = (np.lib.format.read_array_header_1_0(f) if version == (1, 0)
-                                         else np.lib.format.read_array_header_2_0(f))
-            except (ValueError, SyntaxError, TypeError, EOFError, KeyError) as e:
-                raise ValueError(f"{path}: not an .npy request array ({str(e).splitlines()[0][:100]})") from None
-            if dtype.hasobject or dtype.kind not in "iu" or len(shape) != 2 or shape[1] != 4:
-                raise ValueError(f"{path}: not an integer (N, 4) request array ({dtype.str} {shape})")
-            n = shape[0]
-            if not 0 <= n <= MAX_REQUESTS or size - f.tell() != n * 4 * dtype.itemsize:
-                raise ValueError(f"{path}: header says {n} requests of {4 * dtype.itemsize} bytes, "
-                                 f"the file holds {size - f.tell()} bytes of data")
-            reqs = np.fromfile(f, dtype=dtype, count=n * 4)
-    except OSError as e:
-        raise ValueError(f"{path}: cannot read: {e.strerror or e}") from None
-    reqs = reqs.reshape((4, n)).T if fortran else reqs.reshape(n, 4)
-    if dtype.kind == "u" and dtype.itemsize == 8 and n and int(reqs.max()) >> 63:
-        raise ValueError(f"{path}: a request field does not fit in int64")
-    return reqs.astype(np.int64)
+    """Read a request stream written by :func:`save_requests` (or any request file): (N, 4) int64.
+    See :func:`golden.requests.read_request_file`; raises its :class:`~golden.fetch.RequestError`
+    (a ``ValueError``) with one line naming the file."""
+    return read_request_file(path)

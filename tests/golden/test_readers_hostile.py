@@ -2,6 +2,7 @@
 request files. Each refuses with its documented exception, one line, quickly, without a big
 allocation."""
 
+import re
 import struct
 import time
 import tracemalloc
@@ -12,7 +13,9 @@ import numpy as np
 import pytest
 
 from vqtex.golden import pvr
+from vqtex.golden.fetch import RequestError
 from vqtex.golden.render.frame import load_requests, save_requests
+from vqtex.golden.requests import MAX_CSV_BYTES, read_request_file
 from vqtex.golden.render.imageio import ImageIOError, image_info, read_image, write_image
 from vqtex.golden.render.scene import SceneError, load_scene, parse_scene
 
@@ -194,5 +197,46 @@ def test_requests_round_trip_and_other_integer_types(tmp_path):
 def test_hostile_request_file(tmp_path, make, match):
     p = tmp_path / "r.npy"
     make(p)
-    message = _refused(ValueError, lambda: load_requests(p))
-    assert __import__("re").search(match, message), message
+    message = _refused(RequestError, lambda: read_request_file(p))
+    assert re.search(match, message) and str(p) in message, message
+    with pytest.raises(RequestError):           # the renderer's reader is the same one
+        load_requests(p)
+
+
+def test_csv_requests_with_and_without_header(tmp_path):
+    reqs = np.array([[0, 1, 2, 3], [4, 5, 6, 7], [-1, 0, 2 ** 40, 9]])
+    body = "\n".join(",".join(map(str, r)) for r in reqs) + "\n"
+    for name, text in [("plain.csv", body), ("head.csv", "texture,level,i,j\n" + body),
+                       ("bom.txt", "\ufefftex, level, i, j\r\n" + body.replace("\n", "\r\n")),
+                       ("comment.csv", "# a stream\n" + body + "\n\n")]:
+        (tmp_path / name).write_text(text, newline="")
+        assert np.array_equal(read_request_file(tmp_path / name), reqs), name
+        assert read_request_file(tmp_path / name).dtype == np.int64
+    for name, text in [("empty.csv", ""), ("header_only.csv", "texture,level,i,j\n")]:
+        (tmp_path / name).write_text(text)
+        assert read_request_file(tmp_path / name).shape == (0, 4)
+
+
+@pytest.mark.parametrize("text, match", [
+    ("0,0,0\n", "3 columns"),
+    ("0,0,0,0,0\n", "5 columns"),
+    ("0,0,0,0\n1,1,1\n", "columns"),
+    ("0,0,1.5,0\n", "integer"),
+    ("0,0,1e3,0\n", "integer"),
+    ("0,0,99999999999999999999,0\n", "integer"),
+    ("0,0,0,0\nx,y,z,w\n", "integer"),
+    (b"0,0,\xff\xfe,0\n", "CSV"),
+    ("0;0;0;0\n", "integer"),
+])
+def test_hostile_csv_request_file(tmp_path, text, match):
+    p = tmp_path / "r.csv"
+    p.write_bytes(text if isinstance(text, bytes) else text.encode())
+    message = _refused(RequestError, lambda: read_request_file(p))
+    assert re.search(match, message) and str(p) in message, message
+
+
+def test_csv_request_file_too_big(tmp_path):
+    p = tmp_path / "big.csv"
+    with open(p, "wb") as f:
+        f.truncate(MAX_CSV_BYTES + 1)               # sparse: no disk used, nothing read
+    assert "use .npy" in _refused(RequestError, lambda: read_request_file(p))
