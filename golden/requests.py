@@ -70,7 +70,7 @@ def _read_npy(f, size: int, path: str) -> np.ndarray:
     except (ValueError, SyntaxError, TypeError, EOFError, KeyError, OverflowError) as e:
         raise RequestError(f"{path}: not an .npy request array ({_line(e)})") from None
     if dtype.hasobject or dtype.kind not in "iu" or len(shape) != 2 or shape[1] != 4:
-        raise RequestError(f"{path}: not an integer (N, 4) request array ({dtype.str} {shape})")
+        raise RequestError(f"{path}: not an integer request array of shape (N, 4) (it holds {dtype.str} of shape {shape})")
     n, data = shape[0], size - f.tell()
     if not 0 <= n <= MAX_REQUESTS or data != n * 4 * dtype.itemsize:
         raise RequestError(f"{path}: header says {n} requests of {4 * dtype.itemsize} bytes, "

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import io
 import os
-import warnings
 
 import numpy as np
 
@@ -15,43 +14,16 @@ __all__ = ["add_parser", "cmd_sim", "read_requests", "run_trace", "plot_output",
 
 
 def read_requests(path: str) -> np.ndarray:
-    """A request file (.npy without pickles, or CSV with an optional header row) as int64 (N, 4), N >= 1.
-
-    Every way a file can fail to be one (missing, empty, header only, a text file named .npy, a
-    pickle, a wrong shape or type) is a one-line CliError naming the file.
-    """
+    """A request file (.npy without pickles, or CSV with an optional header row) as int64 (N, 4), N >= 1:
+    :func:`vqtex.golden.requests.read_request_file` (its RequestError is one line naming the file),
+    and at least one request."""
+    from vqtex.golden.requests import read_request_file
     if not os.path.isfile(path):
         raise CliError(f"{path}: no such file")
-    if path.endswith(".npy"):
-        with open(path, "rb") as f:
-            magic = f.read(6)
-        if magic != b"\x93NUMPY":
-            raise CliError(f"{path}: not a .npy file (a CSV request file must not be named .npy)")
-    try:
-        if path.endswith(".npy"):
-            req = np.load(path, allow_pickle=False)
-        else:
-            with warnings.catch_warnings():
-                warnings.simplefilter("error")              # numpy warns on an empty file: an error here
-                req = np.loadtxt(path, delimiter=",", dtype=np.int64, ndmin=2,
-                                 skiprows=_csv_header_rows(path))
-    except (ValueError, OSError, EOFError, UserWarning) as e:
-        if isinstance(e, UserWarning) or "no data" in str(e):
-            raise CliError(f"{path}: no requests (the file is empty or holds only a header)") from None
-        if "allow_pickle" in str(e):
-            e = "it holds Python objects, not integers"
-        raise CliError(f"{path}: cannot read requests ({str(e).splitlines()[0] if str(e) else type(e).__name__})") from None
-    if req.ndim != 2 or req.shape[1] != 4 or not np.issubdtype(req.dtype, np.integer):
-        raise CliError(f"{path}: requests must be an integer array of shape (N, 4): texture, level, i, j")
+    req = read_request_file(path)
     if len(req) == 0:
-        raise CliError(f"{path}: no requests")
-    return req.astype(np.int64)
-
-
-def _csv_header_rows(path: str) -> int:
-    with open(path, errors="replace") as f:
-        first = f.readline()
-    return 1 if any(c.isalpha() for c in first) else 0
+        raise CliError(f"{path}: no requests (the file is empty or holds only a header)")
+    return req
 
 
 def plot_output(outs, path):

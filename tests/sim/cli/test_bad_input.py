@@ -78,7 +78,7 @@ def test_request_files(tmp_path, vqt, capsys):
     np.save(tmp_path / "none.npy", np.zeros((0, 4), np.int64))
     (tmp_path / "junk.vqt").write_bytes(b"not a texture set at all" * 10)
     for name, pattern in (("empty.csv", "no requests"), ("header.csv", "no requests"),
-                          ("text.npy", "not a .npy file"), ("objects.npy", "cannot read requests (it holds Python objects"),
+                          ("text.npy", "not an .npy file"), ("objects.npy", "not an integer request array of shape (N, 4)"),
                           ("none.npy", "no requests")):
         _one_error(capsys, ["sim", vqt, tmp_path / name, "-o", out], f"{tmp_path / name}: {pattern}")
     _one_error(capsys, ["sim", tmp_path / "junk.vqt", tmp_path / "header.csv", "-o", out], "junk.vqt")
