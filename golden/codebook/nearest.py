@@ -42,7 +42,7 @@ def nearest_screened(x, c, scr: Screen, chunk: int = 0, rows=None, tie=None):
         if amb.size:
             r, cc = np.nonzero(cand[amb])
             r = amb[r] + s
-            dd = exact_d2(x[r], c, cc)
+            dd = exact_d2(x, c, cc, rows=r)  # no (pairs, d) copy of x: bounded memory
             # per row: smallest exact distance, then lowest codeword index
             order = np.lexsort((cc if tie is None else tie[cc], dd, r))
             r, cc = r[order], cc[order]

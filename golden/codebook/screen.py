@@ -116,14 +116,15 @@ class Screen:
         return low
 
 
-def exact_d2(x: np.ndarray, c: np.ndarray, idx: np.ndarray) -> np.ndarray:
-    """Exact float64 squared distance of each x[i] to c[idx[i]] (chunked)."""
-    n, d = x.shape
+def exact_d2(x: np.ndarray, c: np.ndarray, idx: np.ndarray, rows=None) -> np.ndarray:
+    """Exact float64 squared distance of each x[i] to c[idx[i]] (or of x[rows[i]] to c[idx[i]]
+    when ``rows`` is given), chunked so that no temporary exceeds ``MAX_TEMP_BYTES``."""
+    n, d = idx.shape[0], x.shape[1]
     out = np.empty(n, dtype=np.float64)
-    step = max(1, MAX_TEMP_BYTES // (8 * d))
+    step = max(1, MAX_TEMP_BYTES // (8 * d * (1 if rows is None else 2)))
     for s in range(0, n, step):
         e = min(n, s + step)
         diff = np.take(c, idx[s:e], axis=0)  # one temporary, reused in place (much faster)
-        np.subtract(x[s:e], diff, out=diff)
+        np.subtract(x[s:e] if rows is None else np.take(x, rows[s:e], axis=0), diff, out=diff)
         np.einsum("ij,ij->i", diff, diff, out=out[s:e])
     return out
