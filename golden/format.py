@@ -34,47 +34,16 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .color import JFIF_BT601, ColorMatrix
+from .constants import (COLOR_CODES, COLORS, DESCRIPTOR_DTYPE, DESCRIPTOR_FIELDS, MAX_LEVELS, MAX_SIZE,
+                        RAW_BELOW, RAW_WORD_BITS, WORD_BITS_ALLOWED, FormatError)
+from .vqt_header import parse_header
 
 __all__ = [
     "FormatError", "COLORS", "COLOR_CODES", "MAX_LEVELS", "MAX_SIZE", "DESCRIPTOR_FIELDS",
     "DESCRIPTOR_DTYPE", "texel_bytes", "sub_levels", "entry_layout", "EntryLayout", "pack_indices",
-    "unpack_indices", "TextureInfo", "CodebookInfo", "TextureSet", "is_pow2", "log2",
+    "unpack_indices", "TextureInfo", "CodebookInfo", "TextureSet", "is_pow2", "log2", "RAW_BELOW", "RAW_WORD_BITS",
+    "WORD_BITS_ALLOWED",
 ]
-
-#: Colour formats and their 2-bit codes in the descriptor.
-COLORS = ("rgb", "rgba", "intensity", "yuv411")
-COLOR_CODES = {name: code for code, name in enumerate(COLORS)}
-#: Descriptor rows per texture (levels of a 4096x4096 texture: 13).
-MAX_LEVELS = 16
-MAX_SIZE = 4096
-WORD_BITS_ALLOWED = (16, 32, 64)
-RAW_WORD_BITS = 32
-#: Below this size (in either direction) a mip level is stored raw.
-RAW_BELOW = 32
-
-#: Descriptor row: field name -> meaning. All unsigned integers.
-DESCRIPTOR_FIELDS = {
-    "valid": "1 if this (texture, level) exists",
-    "compressed": "1: index map + codebook; 0: raw texels",
-    "base": "compressed: index memory word of the level group's map; raw: raw memory word of texel (0,0)",
-    "log2w": "log2 of the level's width",
-    "log2h": "log2 of the level's height",
-    "log2bw": "log2 of the block width at this level ((block width) >> sub-level)",
-    "log2bh": "log2 of the block height at this level",
-    "index_bits": "b, 1..16",
-    "cb_base": "codebook memory entry of codeword 0 of this texture's codebook",
-    "sublevel": "0, 1, 2: which part of the extended codeword this level reads",
-    "color": "colour format code (0 rgb, 1 rgba, 2 intensity, 3 yuv411)",
-    "texel_off": "byte offset in the entry of this sub-level's texels (the Y plane for yuv411)",
-    "u_off": "yuv411: byte offset of the sub-level's U plane (else 0)",
-    "v_off": "yuv411: byte offset of the sub-level's V plane (else 0)",
-}
-DESCRIPTOR_DTYPE = np.dtype([(name, "<u4") for name in DESCRIPTOR_FIELDS])
-
-
-class FormatError(ValueError):
-    """A texture set or ``.vqt`` file is malformed (truncated, corrupted, foreign, inconsistent)."""
-
 
 def is_pow2(n: int) -> bool:
     return isinstance(n, (int, np.integer)) and n > 0 and (n & (n - 1)) == 0
@@ -151,8 +120,9 @@ def pack_indices(indices: np.ndarray, b: int, word_bits: int = 32) -> np.ndarray
 
 def unpack_indices(words: np.ndarray, b: int, n: int, base: int = 0, word_bits: int = 32) -> np.ndarray:
     """Inverse of :func:`pack_indices`: ``n`` indices from the map starting at word ``base``."""
-    w = np.asarray(words).astype(f"<u{word_bits // 8}")
-    bits = np.unpackbits(w[base:].view(np.uint8), bitorder="little")[: n * b]
+    span = -(-(n * b) // word_bits)                # the words the map occupies, and no more
+    w = np.asarray(words[base: base + span]).astype(f"<u{word_bits // 8}")
+    bits = np.unpackbits(w.view(np.uint8), bitorder="little")[: n * b]
     return (bits.reshape(n, b).astype(np.int64) << np.arange(b)).sum(axis=1)
 
 
@@ -322,9 +292,9 @@ class TextureSet:
                     raise FormatError(f"texture {t} level {L}: valid flag disagrees with level count")
                 if not row["valid"]:
                     continue
-                w, h = 1 << int(row["log2w"]), 1 << int(row["log2h"])
-                if row["log2w"] > 12 or row["log2h"] > 12:
+                if row["log2w"] > 12 or row["log2h"] > 12:      # before any shift by them
                     raise FormatError(f"texture {t} level {L}: size out of range")
+                w, h = 1 << int(row["log2w"]), 1 << int(row["log2h"])
                 if row["compressed"]:
                     b = int(row["index_bits"])
                     if not 1 <= b <= 16 or row["color"] > 3 or row["sublevel"] > 2:
@@ -343,6 +313,50 @@ class TextureSet:
                 elif int(row["base"]) + w * h > len(self.raw_words):
                     raise FormatError(f"texture {t} level {L}: raw level runs past the raw memory")
 
+    def check_consistency(self) -> None:
+        """Check that the metadata, the codebooks and every descriptor row agree, as the encoder
+        writes them (a loaded file must hold what :mod:`golden.encode` could have made). Call after
+        :meth:`validate`. Raises FormatError."""
+        if self.codebook.shape[1] < 1 and self.codebooks:
+            raise FormatError("codebook memory has entries of 0 bytes")
+        for k, cb in enumerate(self.codebooks):
+            if cb.base + cb.size > len(self.codebook) or cb.layout.size > self.entry_bytes:
+                raise FormatError(f"codebook {k} does not fit the codebook memory")
+            if cb.nsub > sub_levels(*cb.block):
+                raise FormatError(f"codebook {k}: {cb.nsub} sub-levels for {cb.block[0]}x{cb.block[1]} blocks")
+        d = self.descriptors
+        for name in ("valid", "compressed"):
+            if (d[name] > 1).any():
+                raise FormatError(f"descriptor field {name} is not 0 or 1")
+        for t, info in enumerate(self.textures):
+            lw, lh = log2(info.width), log2(info.height)
+            if info.levels > 1 + max(lw, lh):
+                raise FormatError(f"texture {t}: {info.levels} levels for a {info.width}x{info.height} texture")
+            cb = self.codebooks[info.codebook] if 0 <= info.codebook < len(self.codebooks) else None
+            if info.codebook >= len(self.codebooks) or (cb is not None and (cb.color, tuple(cb.block)) != (info.color, tuple(info.block))):
+                raise FormatError(f"texture {t}: codebook {info.codebook} missing or of another format")
+            for L in range(info.levels):
+                row = d[t, L]
+                where = f"texture {t} level {L}"
+                if (int(row["log2w"]), int(row["log2h"])) != (max(0, lw - L), max(0, lh - L)):
+                    raise FormatError(f"{where}: size disagrees with the texture's")
+                if not row["compressed"]:
+                    continue
+                s = int(row["sublevel"])
+                if cb is None or s >= cb.nsub:
+                    raise FormatError(f"{where}: compressed without a codebook of sub-level {s}")
+                if (int(row["color"]), int(row["index_bits"])) != (COLOR_CODES[info.color], info.index_bits):
+                    raise FormatError(f"{where}: colour or index width disagrees with the texture's")
+                bw, bh = info.block
+                if (1 << int(row["log2bw"]), 1 << int(row["log2bh"])) != (bw >> s, bh >> s) or (bw >> s) < 1 or (bh >> s) < 1:
+                    raise FormatError(f"{where}: block size disagrees with sub-level {s} of {bw}x{bh} blocks")
+                if (int(row["texel_off"]), int(row["u_off"]), int(row["v_off"])) != tuple(cb.layout.planes[s]):
+                    raise FormatError(f"{where}: plane offsets disagree with the codeword layout")
+                if s:
+                    group = d[t, L - s] if L >= s else None
+                    if group is None or not group["compressed"] or int(group["sublevel"]) or group["base"] != row["base"]:
+                        raise FormatError(f"{where}: sub-level {s} does not read its level group's index map")
+
     def check_indices(self) -> None:
         """Raise FormatError if an index in any map points past its codebook (the hardware would
         read another codebook's entry, or past the memory)."""
@@ -355,9 +369,13 @@ class TextureSet:
                 if not row["compressed"] or row["sublevel"]:
                     continue
                 n = (1 << int(row["log2w"]) >> int(row["log2bw"])) * (1 << int(row["log2h"]) >> int(row["log2bh"]))
-                idx = unpack_indices(self.index_words, int(row["index_bits"]), n, int(row["base"]), self.word_bits)
-                if n and int(idx.max()) >= size:
-                    raise FormatError(f"texture {t} level {L}: index {int(idx.max())} past codebook of {size}")
+                b = int(row["index_bits"])
+                step = self.word_bits * (1 << 14)          # indices per chunk: a whole number of words
+                for k in range(0, n, step):
+                    idx = unpack_indices(self.index_words, b, min(step, n - k), int(row["base"]) + k * b // self.word_bits,
+                                         self.word_bits)
+                    if int(idx.max()) >= size:
+                        raise FormatError(f"texture {t} level {L}: index {int(idx.max())} past codebook of {size}")
 
     # -- combining --------------------------------------------------------------------------------
     @classmethod
@@ -457,25 +475,17 @@ class TextureSet:
         start = len(MAGIC) + 8
         if start + hlen > len(data) - 4:
             raise FormatError("header runs past the end of the file")
+        body = memoryview(data)[start + hlen: len(data) - 4]
+        header = parse_header(bytes(data[start: start + hlen]), len(body))   # every size bounded by the file
         try:
-            header = json.loads(data[start: start + hlen].decode())
-            body = memoryview(data)[start + hlen: len(data) - 4]
             arrays = {}
-            for name in _ARRAYS:
-                spec = header["arrays"][name]
-                dtype = DESCRIPTOR_DTYPE if spec["dtype"] == "descriptor" else np.dtype(spec["dtype"])
-                if dtype.names is None and dtype.kind != "u":
-                    raise FormatError(f"array {name} has a non-integer type")
-                shape = tuple(int(x) for x in spec["shape"])
-                n = int(np.prod(shape)) * dtype.itemsize
-                off = int(spec["offset"])
-                if n != spec["nbytes"] or off < 0 or off + n > len(body):
-                    raise FormatError(f"array {name} runs past the end of the file")
-                arrays[name] = np.frombuffer(body[off: off + n], dtype=dtype).reshape(shape).copy()
-            if header["descriptor_fields"] != list(DESCRIPTOR_FIELDS):
-                raise FormatError("descriptor fields differ from this reader's")
+            for name, (dt, shape, off, nbytes) in header["arrays"].items():
+                dtype = DESCRIPTOR_DTYPE if dt == "descriptor" else np.dtype(dt)
+                arrays[name] = np.frombuffer(body[off: off + nbytes], dtype=dtype).reshape(shape).copy()
+            if arrays["codebook"].shape[1] != header["entry_bytes"]:
+                raise FormatError("codebook memory width disagrees with entry_bytes")
             ts = cls(
-                word_bits=int(header["word_bits"]),
+                word_bits=header["word_bits"],
                 index_words=arrays["index_words"], codebook=arrays["codebook"],
                 raw_words=arrays["raw_words"], descriptors=arrays["descriptors"],
                 textures=[TextureInfo.from_dict(t) for t in header["textures"]],
@@ -483,11 +493,12 @@ class TextureSet:
                 matrix=ColorMatrix.from_dict(header["matrix"]),
             )
             ts.validate()
+            ts.check_consistency()
             ts.check_indices()
         except FormatError:
             raise
-        except (KeyError, IndexError, TypeError, ValueError, AttributeError, UnicodeDecodeError) as e:
-            raise FormatError(f"malformed .vqt header: {e}") from None
+        except (KeyError, IndexError, TypeError, ValueError, AttributeError, OverflowError) as e:
+            raise FormatError(f"malformed .vqt file: {str(e).splitlines()[0] if str(e) else type(e).__name__}") from None
         return ts
 
     def save(self, path) -> None:

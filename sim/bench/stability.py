@@ -3,6 +3,8 @@
 - ``color``: every (Y, U, V) through the compiled RTL colour matrix against golden, for each matrix
   the project ships and one random parameterisation (:mod:`vqtex.sim.backends.color_sweep`): inputs
   checked, mismatches, golden's worst error against float64 and its bound, clamped outputs.
+- ``container``: 100,000 mutated ``.vqt`` files (checksum recomputed) loaded and used as ``info`` and
+  ``decode`` use them (:mod:`.fuzz`): counts by outcome (rejected, accepted, crash, hang, big-alloc).
 - ``load``: long random request streams through ``vqtex sim`` on the compiled backend against golden
   (:mod:`.load`): 1e7 requests with 30% backpressure on the default unit, 1e6 one-port requests with
   20% backpressure on a set with 12-bit indices; mismatches, cycles, seconds and peak memory.
@@ -35,12 +37,21 @@ def load_figures(n: int = 10_000_000, n_one_port: int = 1_000_000) -> dict:
             "one_port_20pct": load_check(n_one_port, stall=0.2, one_port=True, seed=6, ts=four_texture_set())}
 
 
+def container_figures(n: int = 100_000, seed: int = 0) -> dict:
+    from .fuzz import run_mutations
+    return run_mutations(n, seed=seed)
+
+
 #: Section name -> function returning its figures.
-SECTIONS = {"color": color_figures, "load": load_figures}
+SECTIONS = {"container": container_figures, "color": color_figures, "load": load_figures}
 
 
 def _text(rep: dict) -> str:
     lines = []
+    if "container" in rep:
+        c = rep["container"]
+        lines.append(f"container {c['mutations']} mutated files in {c['seconds']} s: "
+                     + ", ".join(f"{k} {v}" for k, v in c["counts"].items()))
     for name, r in rep.get("color", {}).items():
         lines.append(f"color {name:<20} {r['inputs']} inputs, {r['mismatches']} mismatches; golden vs float64 "
                      f"{r['worst_error']} (bound {r['error_bound']}); sweep {r['sweep_seconds']} s")
