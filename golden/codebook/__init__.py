@@ -3,17 +3,20 @@ tree-structured VQ (TSVQ) and the generalized Lloyd algorithm (GLA).
 
 numpy and the standard library only (``golden`` is the executable specification).
 
-Where things live (one algorithm per module, each with its contract at the top)
--------------------------------------------------------------------------------
+Where things live
+-----------------
+One algorithm per module, each with its contract at the top; no module is named like a function
+the package exports, so every module stays importable.
+
 * :mod:`.inputs`   input checks, deduplication of identical vectors (``unique_weighted``)
 * :mod:`.screen`   the float32 GEMM screening (one chunked matmul-and-argmax loop) and exact
                    float64 distances
-* :mod:`.nearest`  exact full-search nearest codeword (``nearest``)
-* :mod:`.split`    splitting one TSVQ cell; :mod:`.tsvq` the greedy tree (``tsvq``,
+* :mod:`.fullsearch` exact full-search nearest codeword (``nearest``)
+* :mod:`.split`    splitting one TSVQ cell; :mod:`.tree` the greedy tree (``tsvq``,
                    ``tsvq_tree``, ``TsvqTree``)
 * :mod:`.cells`    per-cell sums, their updates and the repair of empty cells
 * :mod:`.bounds`   reassignment under Hamerly/Elkan bounds (the Lloyd step's search)
-* :mod:`.gla`      the generalized Lloyd algorithm (``gla``, ``GlaResult``) and ``design``
+* :mod:`.lloyd`    the generalized Lloyd algorithm (``gla``, ``GlaResult``) and ``design``
 
 Conventions shared by every function here
 -----------------------------------------
@@ -37,10 +40,10 @@ Conventions shared by every function here
 """
 from __future__ import annotations
 
-from .gla import GlaResult, design, gla
+from .lloyd import GlaResult, design, gla
 from .inputs import unique_weighted
-from .nearest import nearest
-from .tsvq import TsvqTree, tsvq, tsvq_tree
+from .fullsearch import nearest
+from .tree import TsvqTree, tsvq, tsvq_tree
 
 __all__ = [
     "nearest",

@@ -6,7 +6,7 @@ squared distance ``d2`` and ``lb``, a lower bound of the distance to every other
 nearest codeword (exact in exact arithmetic; candidates screened under the error bound of
 :mod:`.screen`); a vector changes codeword only when the exact float64 distance strictly
 decreases, so the distortion never increases.  The GLA's final indices are certified against
-``lb`` or settled by the exact search (:func:`.nearest.nearest_screened`).
+``lb`` or settled by the exact search (:func:`.fullsearch.nearest_screened`).
 """
 from __future__ import annotations
 

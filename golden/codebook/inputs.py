@@ -20,7 +20,8 @@ def as_vectors(vectors) -> np.ndarray:
         raise ValueError(f"vectors must be a non-empty (N, d) array, got shape {x.shape}")
     if not np.issubdtype(x.dtype, np.number) or np.iscomplexobj(x):
         raise ValueError("vectors must be real numbers")
-    x = np.ascontiguousarray(x, dtype=np.float64) + 0.0  # copy; -0.0 -> +0.0 for dedup
+    x = np.array(x, dtype=np.float64, order="C")  # a copy
+    x += 0.0  # -0.0 -> +0.0 for dedup (in place: one copy of the vectors, not two)
     if not np.all(np.isfinite(x)):
         raise ValueError("vectors must be finite")
     return x
@@ -56,6 +57,13 @@ def row_hash(x: np.ndarray) -> np.ndarray:
     return h
 
 
+def _rows_equal(x: np.ndarray, u: np.ndarray, inv: np.ndarray) -> bool:
+    """x == u[inv], compared in chunks of about 64 MiB (no full (N, d) copy)."""
+    step = max(1, (1 << 26) // (8 * x.shape[1]))
+    return all(np.array_equal(x[s:s + step], np.take(u, inv[s:s + step], axis=0))
+               for s in range(0, x.shape[0], step))
+
+
 def unique_weighted(x: np.ndarray, w: np.ndarray):
     """Merge identical rows of ``x`` (float64, (N, d)) and add their weights.
 
@@ -68,7 +76,7 @@ def unique_weighted(x: np.ndarray, w: np.ndarray):
     _, first, inv = np.unique(h, return_index=True, return_inverse=True)
     inv = inv.reshape(-1)
     u = np.take(x, first, axis=0)
-    if not np.array_equal(x, np.take(u, inv, axis=0)):
+    if not _rows_equal(x, u, inv):
         # a hash collision (astronomically rare): exact lexicographic dedup
         u, inv = np.unique(x, axis=0, return_inverse=True)
         inv = inv.reshape(-1)

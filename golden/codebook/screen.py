@@ -37,10 +37,13 @@ class Screen:
         self.d = d
         self.shift = shift
         self.xa = np.empty((n, d + 1), dtype=np.float32)
-        xc = x - shift
-        self.xa[:, :d] = xc
         self.xa[:, d] = 1.0
-        self.xnorm = np.sqrt(np.einsum("ij,ij->i", xc, xc))
+        self.xnorm = np.empty(n)
+        step = max(1, MAX_TEMP_BYTES // (8 * d))  # centred rows in chunks: no (N, d) temporary
+        for s in range(0, n, step):
+            xc = x[s:s + step] - shift
+            self.xa[s:s + step, :d] = xc
+            self.xnorm[s:s + step] = np.sqrt(np.einsum("ij,ij->i", xc, xc))
         self._buf = None
 
     def codebook(self, c: np.ndarray):

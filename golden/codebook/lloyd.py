@@ -15,9 +15,9 @@ import numpy as np
 from .bounds import State, assign_full, reassign
 from .cells import centroids, repair_empty, update_centroids
 from .inputs import check_k, pad, prepare, wmean
-from .nearest import nearest, nearest_screened
+from .fullsearch import nearest, nearest_screened
 from .screen import Screen, exact_d2
-from .tsvq import tsvq, tsvq_build
+from .tree import tsvq, tsvq_build
 
 __all__ = ["GlaResult", "gla", "design"]
 
