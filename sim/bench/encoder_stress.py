@@ -153,14 +153,16 @@ def build(name: str, seed: int = 0):
 # --------------------------------------------------------------------------------------------
 # the exact checker
 # --------------------------------------------------------------------------------------------
+_TO_INT = np.frompyfunc(int, 1, 1)  # int() of an integral float64 is exact
+
+
 def _as_ints(a: np.ndarray) -> np.ndarray:
     """Exact Python integers a * 2^s (object array) for the least s making every value integral."""
     a = np.asarray(a, dtype=np.float64)
     for s in range(0, 1100):
         y = np.ldexp(a, s)
         if np.all(np.floor(y) == y):
-            # int() of an integral float64 is exact (astype(object) would give Python floats)
-            return np.array([int(v) for v in y.ravel()], dtype=object).reshape(a.shape)
+            return _TO_INT(y)  # (astype(object) would give Python floats)
     raise ValueError("values are not finite")
 
 
@@ -177,7 +179,7 @@ def exact_nearest(x: np.ndarray, c: np.ndarray, chunk_bytes: int = 1 << 25):
     out = np.empty(n, dtype=np.int64)
     step = max(1, chunk_bytes // (8 * k * d))
     slack = 1.0 + 4.0 * (d + 4) * _U64
-    amb_rows, amb_cands = [], []
+    pr, pc = [], []  # (row, candidate) pairs of rows with several candidates
     for s in range(0, n, step):
         e = min(n, s + step)
         diff = x[s:e, None, :] - c[None, :, :]
@@ -186,19 +188,23 @@ def exact_nearest(x: np.ndarray, c: np.ndarray, chunk_bytes: int = 1 << 25):
         out[s:e] = dd.argmin(axis=1)
         cand = dd <= (m * slack)[:, None]  # a true minimiser always passes (error <= (d+4)u D)
         many = np.flatnonzero(np.count_nonzero(cand, axis=1) > 1)
-        for i in many:
-            amb_rows.append(s + i)
-            amb_cands.append(np.flatnonzero(cand[i]))
-    if amb_rows:
-        rows = np.array(amb_rows)
-        both = np.concatenate([x[rows].ravel(), c.ravel()])
-        ints = _as_ints(both)
-        xi = ints[: rows.size * d].reshape(rows.size, d)
-        ci = ints[rows.size * d:].reshape(k, d)
-        for r, xr, cands in zip(rows, xi, amb_cands):
-            dist = [int(((xr - ci[j]) ** 2).sum()) for j in cands]
-            out[r] = cands[int(np.argmin(np.array(dist, dtype=object)))]  # first minimum
-    return out, len(amb_rows)
+        r, j = np.nonzero(cand[many])  # row-major: candidates of a row in increasing index
+        pr.append(s + many[r])
+        pc.append(j)
+    r, j = np.concatenate(pr), np.concatenate(pc)
+    if r.size == 0:
+        return out, 0
+    rows, pos = np.unique(r, return_inverse=True)
+    ints = _as_ints(np.concatenate([x[rows].ravel(), c.ravel()]))
+    xi = ints[: rows.size * d].reshape(rows.size, d)
+    ci = ints[rows.size * d:].reshape(k, d)
+    dist = ((xi[pos] - ci[j]) ** 2).sum(axis=1)  # Python integers: exact
+    start = np.flatnonzero(np.r_[True, r[1:] != r[:-1]])
+    best = np.minimum.reduceat(dist, start)
+    hit = np.flatnonzero((dist == np.repeat(best, np.diff(np.r_[start, r.size]))).astype(bool))
+    first = hit[np.r_[True, r[hit][1:] != r[hit][:-1]]]  # lowest index at the minimum
+    out[r[first]] = j[first]
+    return out, int(rows.size)
 
 
 def _unique_rows(v: np.ndarray):
