@@ -19,6 +19,15 @@ smaller sub-levels are rounded means of the rounded codeword). ``mip_training="j
 the paper: codewords are trained on all sub-levels of the original pyramid at once (each level's
 squared error weighted so every level counts per texel equally), so levels 1 and 2 are no longer
 limited by level 0's error.
+
+Indices. With ``encoder="gla"`` every block's stored index names the nearest *stored* codeword
+(``codebook.nearest``): the one minimising the float64 sum of squared differences between the block's
+vector (as float32, the form it is trained in; for "joint", every sub-level's part scaled by 2^s) and
+the codeword's stored bytes (scaled likewise), ties to the lowest index. For rgb, rgba and intensity
+the vectors are integers and that sum is exact, so the index is the exact nearest; yuv411's vectors
+are fractions and the sum is rounded (relative error at most (d + 4) 2^-53), which could matter for a
+near tie (none in the stress cases of ``vqtex bench stability``). ``encoder="tsvq"`` stores the
+paper's tree-search indices, which need not be the nearest.
 """
 
 from __future__ import annotations
@@ -70,13 +79,14 @@ def _for_color(rgba: np.ndarray, color: str) -> np.ndarray:
 # Block vectors in entry byte order
 
 def _planes(rgba: np.ndarray, color: str) -> list[np.ndarray]:
-    """Full-resolution float planes the codebook quantises: list of (H, W, C) arrays."""
+    """Full-resolution planes the codebook quantises: list of (H, W, C) arrays (uint8 views for
+    rgb, rgba and intensity, float64 Y, U, V for yuv411)."""
     if color == "rgb":
-        return [rgba[..., :3].astype(np.float64)]
+        return [rgba[..., :3]]
     if color == "rgba":
-        return [rgba.astype(np.float64)]
+        return [rgba]
     if color == "intensity":
-        return [rgba[..., :1].astype(np.float64)]
+        return [rgba[..., :1]]
     yuv = rgb_to_yuv(rgba[..., :3])
     return [yuv[..., :1], yuv[..., 1:2], yuv[..., 2:3]]
 
@@ -97,7 +107,8 @@ def block_vectors(rgba: np.ndarray, color: str, bw: int, bh: int) -> np.ndarray:
     """(nblocks, vector length) float64 vectors of one level, in codeword entry byte order."""
     planes = _planes(rgba, color)
     if color != "yuv411":
-        return _blockify(planes[0], bw, bh).reshape(-1, bw * bh * planes[0].shape[2])
+        # blocks of bytes first, then float64: one float64 copy instead of two
+        return _blockify(planes[0], bw, bh).reshape(-1, bw * bh * planes[0].shape[2]).astype(np.float64)
     cw, ch = max(1, bw >> 1), max(1, bh >> 1)
     y = _blockify(planes[0], bw, bh).reshape(-1, bw * bh)
     u = _mean_groups(_blockify(planes[1], bw, bh), ch, cw).reshape(-1, cw * ch)
@@ -225,7 +236,9 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
     indices_by_group = []
     cb_rows = np.zeros((codebook_size, layout.size), np.uint8)
     if groups:
-        allv = np.concatenate(vecs).astype(np.float32)
+        allv = np.concatenate(vecs, dtype=np.float32)  # rounds as astype does, without a float64 copy
+        sizes = [len(v) for v in vecs]
+        del vecs                                    # (the 4096x4096 encode's peak memory)
         if encoder == "gla":
             code, idx = vq.design(allv, codebook_size, method="gla", seed=seed, max_iter=max_iter, tol=tol)
         else:                                       # the paper's TSVQ with tree-search encoding
@@ -245,7 +258,7 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
         if encoder == "gla":
             idx, _ = vq.nearest(allv, rounded)      # the map is optimal for what is stored
         idx = np.asarray(idx, dtype=np.int64)
-        splits = np.cumsum([len(v) for v in vecs])[:-1]
+        splits = np.cumsum(sizes)[:-1]
         indices_by_group = np.split(idx, splits)
 
     # Memory images.

@@ -9,6 +9,9 @@
 - ``load``: long random request streams through ``vqtex sim`` on the compiled backend against golden
   (:mod:`.load`): 1e7 requests with 30% backpressure on the default unit, 1e6 one-port requests with
   20% backpressure on a set with 12-bit indices; mismatches, cycles, seconds and peak memory.
+- ``encoder``: adversarial training sets through the encoder (:mod:`.encoder_stress`): cases, blocks
+  whose stored index was checked against the exact nearest codeword, disagreements, non-finite
+  values, codewords outside the data's range, wrong cell sums, one- against two-thread encodes.
 
 The figures are measured, never asserted here; the tests assert the same properties on the same code.
 """
@@ -43,8 +46,14 @@ def container_figures(n: int = 100_000, seed: int = 0) -> dict:
     return run_mutations(n, seed=seed)
 
 
+def encoder_figures() -> dict:
+    from .encoder_stress import run_cases
+    return run_cases()
+
+
 #: Section name -> function returning its figures.
-SECTIONS = {"container": container_figures, "color": color_figures, "load": load_figures}
+SECTIONS = {"container": container_figures, "color": color_figures, "load": load_figures,
+            "encoder": encoder_figures}
 
 
 def _text(rep: dict) -> str:
@@ -59,6 +68,13 @@ def _text(rep: dict) -> str:
     for name, r in rep.get("load", {}).items():
         lines.append(f"load  {name:<20} {r['requests']} requests, {r['cycles']} cycles, {r['mismatches']} mismatches; "
                      f"seconds {r['seconds']}, peak MiB {r['peak_mib']}")
+    if "encoder" in rep:
+        r = rep["encoder"]
+        lines.append(f"encoder {r['cases']} cases, {r['blocks_checked']} blocks checked, "
+                     f"{r['disagreements']} disagreements, {r['nan']} NaN/inf, "
+                     f"{r['outside_range']} codewords out of range, {r['wrong_sums']} wrong sums, "
+                     f"{r['threads_differ']} of {r['threads_compared']} differ on 1/2 threads; "
+                     f"{r['seconds']} s")
     lines.append(f"total {rep['seconds']} s")
     return "\n".join(lines)
 

@@ -5,7 +5,7 @@ mip     -- extended codewords: the paper's averages against joint training, per 
 sim     -- simulation backends: pysim, compiled CXXRTL, Verilator (cycles per second, build times)
 render  -- golden render time (uncompressed and VQ) and RTL cycles per frame, both built-in scenes
 stability -- numerical stability and hostile input: the colour matrix on every input, long streams under
-           backpressure (and, as they land, mutated files and adversarial encoder cases)
+           backpressure, mutated .vqt files, adversarial encoder training sets
 """
 
 from __future__ import annotations

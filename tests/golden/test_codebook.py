@@ -3,6 +3,7 @@ import numpy as np
 import pytest
 
 from vqtex.golden import codebook as cb
+from vqtex.golden.codebook import cells, inputs
 
 
 def _brute(x, c):
@@ -164,9 +165,9 @@ def test_repair_prefers_largest_error_over_most_populated():
     x = np.concatenate([a, b])
     u, wu, _ = cb.unique_weighted(x + 0.0, np.ones(len(x)))
     lab = (np.abs(u - 100).max(1) > 10).astype(np.int64)  # 0: cell A, 1: cell B, 2: empty
-    cnt, sums = cb._centroids(u, wu, lab, 3)
+    cnt, sums = cells.centroids(u, wu, lab, 3)
     c = np.zeros((3, 3))
-    cb._repair_empty(u, wu, lab, c, cnt, sums, 3)
+    cells.repair_empty(u, wu, lab, c, cnt, sums, 3)
     far_b = np.min(np.linalg.norm(c[2] - np.array([[200.0] * 3, [20.0] * 3]), axis=1))
     assert far_b < 10  # new codeword taken from the spread cell B, not the populous A
 
@@ -283,7 +284,7 @@ def test_dedup_hash_collision_fallback(monkeypatch):
     rng = np.random.default_rng(13)
     x = rng.integers(0, 4, (500, 3)).astype(np.float64)
     ref_u, ref_inv = np.unique(x, axis=0, return_inverse=True)
-    monkeypatch.setattr(cb, "_row_hash", lambda v: np.zeros(v.shape[0], dtype=np.uint64))
+    monkeypatch.setattr(inputs, "row_hash", lambda v: np.zeros(v.shape[0], dtype=np.uint64))
     u, wu, inv = cb.unique_weighted(x, np.ones(500))
     np.testing.assert_array_equal(u[inv], x)
     assert len(u) == len(ref_u) and wu.sum() == 500

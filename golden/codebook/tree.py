@@ -1,0 +1,189 @@
+"""The paper's greedy tree-structured VQ (TSVQ): the tree, its codebook, tree-search encoding.
+
+Contract: ``tsvq_tree`` grows a binary tree from one cell holding every distinct weighted
+vector, splitting the leaf of largest total squared error (or of largest gain) until k leaves;
+``tsvq`` returns its leaf centroids, left to right, padded in ``np.resize`` order when there
+are fewer than k distinct vectors (then every distinct vector appears exactly).  Deterministic
+for a seed.  ``TsvqTree.encode`` is the tree search (ties go left), not the full search.
+"""
+from __future__ import annotations
+
+import heapq
+from dataclasses import dataclass
+
+import numpy as np
+
+from .inputs import as_vectors, check_k, pad, prepare, wmean
+from .split import split_cell, split_cells
+
+__all__ = ["TsvqTree", "tsvq_build", "tsvq_tree", "tsvq"]
+
+@dataclass
+class TsvqTree:
+    """A binary TSVQ tree.
+
+    ``centroids`` (n_nodes, d) float64 node centroids (node 0 is the root); ``left``/``right``
+    (n_nodes,) int64 children, -1 at leaves; ``leaf`` (n_nodes,) int64 codeword index of a leaf,
+    -1 at internal nodes.  ``codebook`` (k, d) float64 are the leaf centroids in left-to-right
+    order (then ``np.resize`` padding when there were fewer than k distinct vectors).
+    """
+
+    centroids: np.ndarray
+    left: np.ndarray
+    right: np.ndarray
+    leaf: np.ndarray
+    codebook: np.ndarray
+
+    @property
+    def depth(self) -> int:
+        depth = np.zeros(len(self.left), dtype=np.int64)
+        for p in range(len(self.left)):  # parents are created before their children
+            if self.left[p] >= 0:
+                depth[self.left[p]] = depth[self.right[p]] = depth[p] + 1
+        return int(depth.max())
+
+    def encode(self, vectors) -> np.ndarray:
+        """Tree-search encoding: from the root, descend to the child whose centroid is nearer
+        (exact float64 squared distance; ties go left).  Returns int64 (N,) codeword indices.
+        Cost O(N d depth) instead of O(N d k); the result need not be the full-search nearest."""
+        x = as_vectors(vectors)
+        if x.shape[1] != self.centroids.shape[1]:
+            raise ValueError("dimension mismatch")
+        node = np.zeros(x.shape[0], dtype=np.int64)
+        act = np.flatnonzero(self.left[node] >= 0)
+        while act.size:
+            nd = node[act]
+            xa = x[act]
+            dl = xa - self.centroids[self.left[nd]]
+            dr = xa - self.centroids[self.right[nd]]
+            go_r = np.sum(dr * dr, axis=1) < np.sum(dl * dl, axis=1)
+            node[act] = np.where(go_r, self.right[nd], self.left[nd])
+            act = act[self.left[node[act]] >= 0]
+        return self.leaf[node]
+
+
+def tsvq_build(u, wu, k, seed, criterion="distortion", batch=128, sample=2048, small_cell=256):
+    """Greedy TSVQ on distinct weighted vectors.
+
+    criterion "distortion" (the paper's rule): split the leaf of largest total squared error.
+    criterion "gain": split the leaf whose split reduces the total squared error most (greedy
+    tree growing, Riskin & Gray 1991; evaluated lazily, since a gain never exceeds the leaf's
+    error).  Ties go to the older leaf.  Stops at k leaves or when no leaf can be split.
+
+    A leaf's split depends only on its vectors and its node number (seeded start vector and
+    sample), never on when it is computed, so splits are computed ahead in vectorised batches
+    of up to ``batch`` high-error leaves without changing the tree (leaves of at most
+    ``small_cell`` vectors, whose cost is all interpreter overhead; larger ones one by one).
+    Returns (TsvqTree, labels of the distinct vectors)."""
+    if criterion not in ("distortion", "gain"):
+        raise ValueError(f"unknown TSVQ split criterion {criterion!r}")
+    m_, d = u.shape
+    v0 = np.random.default_rng(seed).standard_normal((2 * k + 1, d))
+    order = np.arange(m_)
+    xs = u.copy()
+    ws = wu.copy()
+    cent, start, end, left, right, sse = [], [], [], [], [], []
+    rec = {}
+    heap = []
+
+    def new_leaf(a, b, c, e):
+        cid = len(cent)
+        cent.append(c)
+        start.append(a)
+        end.append(b)
+        left.append(-1)
+        right.append(-1)
+        sse.append(e)
+        if b - a > 1:  # rows are distinct: one row = constant leaf
+            heapq.heappush(heap, (-e, cid, False))
+
+    def compute(nids):
+        small = [i for i in nids if end[i] - start[i] <= small_cell]
+        if small:
+            arr = np.array(small, dtype=np.int64)
+            res = split_cells(xs, ws, np.array(start)[arr], np.array(end)[arr],
+                               np.array([cent[i] for i in small]), v0[arr])
+            for i, r in zip(small, res):
+                rec[i] = r
+        for i in nids:
+            if rec.get(i, None) is None:
+                s, e = start[i], end[i]
+                rng = lambda i=i: np.random.default_rng([seed, i])  # noqa: E731
+                rec[i] = split_cell(xs[s:e], ws[s:e], cent[i], v0[i], rng, sample=sample)
+
+    root_c = wmean(xs, ws) if m_ > 1 else xs[0].copy()
+    diff = xs - root_c
+    new_leaf(0, m_, root_c, float(ws @ np.einsum("ij,ij->i", diff, diff)))
+    n_leaves = 1
+    while n_leaves < k and heap:
+        key, nid, exact = heapq.heappop(heap)
+        if nid not in rec:
+            want = max(1, min(batch, k - n_leaves))
+            top = [e[1] for e in heapq.nsmallest(2 * want, heap) if e[1] not in rec]
+            compute([nid] + top[: want - 1])
+        r = rec.pop(nid)
+        if r is None:
+            continue
+        if criterion == "gain" and not exact:
+            heapq.heappush(heap, (-(sse[nid] - r[3] - r[4]), nid, True))
+            rec[nid] = r
+            continue
+        mask, c0, c1, e0, e1 = r
+        s, e = start[nid], end[nid]
+        perm = np.concatenate([np.flatnonzero(~mask), np.flatnonzero(mask)])
+        xs[s:e] = xs[s:e][perm]
+        ws[s:e] = ws[s:e][perm]
+        order[s:e] = order[s:e][perm]
+        mid = s + int(np.count_nonzero(~mask))
+        left[nid] = len(cent)
+        right[nid] = len(cent) + 1
+        new_leaf(s, mid, c0, e0)
+        new_leaf(mid, e, c1, e1)
+        n_leaves += 1
+    left = np.array(left, dtype=np.int64)
+    right = np.array(right, dtype=np.int64)
+    cent = np.array(cent, dtype=np.float64).reshape(-1, d)
+    # leaves numbered left to right (depth-first); nodes are numbered parents-first
+    leaf = np.full(len(left), -1, dtype=np.int64)
+    leaf_nodes = []
+    stack = [0]
+    while stack:
+        nid = stack.pop()
+        if left[nid] < 0:
+            leaf[nid] = len(leaf_nodes)
+            leaf_nodes.append(nid)
+        else:
+            stack.append(right[nid])
+            stack.append(left[nid])
+    leaf_nodes = np.array(leaf_nodes, dtype=np.int64)
+    codebook = pad(cent[leaf_nodes], k)
+    # members of each leaf -> codeword index (the leaves' slices tile [0, M) left to right)
+    sizes = np.array(end)[leaf_nodes] - np.array(start)[leaf_nodes]
+    lab_sorted = np.repeat(np.arange(leaf_nodes.size), sizes)
+    labels = np.empty(m_, dtype=np.int64)
+    labels[order] = lab_sorted
+    return TsvqTree(cent, left, right, leaf, codebook), labels
+
+
+def tsvq_tree(vectors, k, *, seed=0, weights=None, criterion="distortion") -> TsvqTree:
+    """The paper's greedy tree-structured VQ; returns the tree (see :class:`TsvqTree`).
+
+    Starting from one cell holding every (distinct, weighted) vector, repeatedly split the leaf
+    of largest total squared error (``criterion="distortion"``, the paper's rule; "gain" splits
+    the leaf whose split reduces the error most instead).  A split cuts the cell orthogonally to
+    its principal axis (3 power iterations) at the best 1-D two-cluster threshold of the
+    projections, then refines the two children with up to 4 weighted 2-means iterations (cells
+    of more than 2048 vectors fit the cut on a seeded sample of 2048).  Stops at k leaves (or
+    when every leaf holds a single distinct vector).  ``seed`` drives the power-iteration start
+    vectors and the samples; the tree is deterministic for a seed."""
+    k = check_k(k)
+    _, _, u, wu, _ = prepare(vectors, weights)
+    return tsvq_build(u, wu, k, seed, criterion)[0]
+
+
+def tsvq(vectors, k, *, seed=0, weights=None, criterion="distortion") -> np.ndarray:
+    """TSVQ codebook: ``(k, d)`` float64, the leaf centroids of :func:`tsvq_tree` (left to
+    right).  With >= k distinct vectors the k codewords are distinct; with fewer, every distinct
+    vector appears exactly, then repeats.  Encode with :func:`nearest` (full search) or with
+    ``tsvq_tree(...).encode`` (tree search, the paper's fast encoder)."""
+    return tsvq_tree(vectors, k, seed=seed, weights=weights, criterion=criterion).codebook
