@@ -158,3 +158,14 @@ def test_the_circle_detector_finds_a_circle(monkeypatch):
     monkeypatch.setattr(f"{__name__}._imports", lambda name: fake[name])
     with pytest.raises(AssertionError, match="import circles"):
         test_no_import_circles()
+
+
+def test_every_package_is_installed():
+    """A non-editable install ships only the packages pyproject.toml lists: every folder with an
+    ``__init__.py`` under golden/, hw/ and sim/ is one of them."""
+    import tomllib
+    with open(pathlib.Path(REPO) / "pyproject.toml", "rb") as f:
+        listed = set(tomllib.load(f)["tool"]["setuptools"]["packages"])
+    found = {"vqtex." + ".".join(init.parent.relative_to(REPO).parts)
+             for pkg in PACKAGES for init in (pathlib.Path(REPO) / pkg).rglob("__init__.py")}
+    assert found == listed, f"not listed: {sorted(found - listed)}; listed but absent: {sorted(listed - found)}"
