@@ -1,6 +1,6 @@
 """Fixed-point colour matrices (YUV -> RGB) and their float64 references.
 
-One unit serves every colour conversion (DESIGN.md, "Fixed-point colour matrix")::
+One unit serves every colour conversion (docs/format.md, "Colour"; docs/hardware.md, the colour matrix)::
 
     out_c = clamp(((sum_k M[c][k] * (in_k - off_k)) + bias) >> F, 0, 255)
 

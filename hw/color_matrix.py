@@ -112,7 +112,7 @@ class ColorMatrix(wiring.Component):
             m.d.sync += carried_p.eq(carried_r)
         samples_p, color_p = SamplesLayout(carried_p[:-2]), carried_p[-2:]
 
-        # Stage 2: sum + bias, shift, clamp; or bypass.
+        # Stage 3: sum + bias, shift, clamp; or bypass.
         acc = [Signal(signed(sbits), name=f"sum_{'rgb'[c]}") for c in range(3)]
         shifted = [Signal(signed(max(sbits, 10)), name=f"shifted_{'rgb'[c]}") for c in range(3)]
         conv = [Signal(8, name=f"conv_{'rgb'[c]}") for c in range(3)]
