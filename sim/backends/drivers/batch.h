@@ -112,64 +112,119 @@ struct vq_occupancy {
     }
 };
 
+// What a driver's per-cycle hook reports: a response transferred (took) with o.payload (out), and
+// whether the request on i.payload was accepted.
+struct vq_cycle_out {
+    bool took = false, accepted = false;
+    uint64_t out = 0;
+};
+
+// The run loop of vq_run, resumable: state in the struct, ``run(limit, cycle, respond)`` advances
+// up to ``limit`` counted cycles and can be called again. Every driver runs its design through it:
+//   cycle(c, i_valid, payload, o_ready, strobes, occ, occ_sums) -> vq_cycle_out
+//       drives the inputs, clocks the design once and samples the ports (adding the strobes to
+//       strobes[] and the valid bits to occ); a template parameter, so it inlines into the loop;
+//   respond(k, out): the k-th response transferred with o.payload ``out`` (its tag is checked here).
 // AlwaysReady: ready == NULL, compiled as its own loop so that o.ready is a constant in it.
-template<bool AlwaysReady, class A>
-static int vq_run_loop(A &a, uint64_t n, const int64_t *req, const uint32_t *layout, const uint8_t *ready,
-                       uint64_t n_ready, uint64_t max_cycles, uint32_t *rgba, uint64_t *counters) {
-    // The sums are kept in a local array (the compiler may keep it in registers: nothing the
-    // design writes can alias it) and copied to counters[] on every return.
+template<bool AlwaysReady>
+struct alignas(64) vq_run_state {
+    uint64_t n;
+    const int64_t *req;
+    const uint8_t *ready;
+    uint64_t n_ready, max_cycles;
+    vq_layout lay;
     uint64_t sums[VQ_C_OCCUPANCY + VQ_STAGE_COUNT] = {};
-    uint64_t sent = 0, got = 0, c = 0, bad = 0, bad_tag = 0;
-    const vq_layout lay(layout);
-    uint64_t payload = n ? lay.pack(req, 0) : 0;       // the request on i.payload: number ``sent``
+    uint64_t sent = 0, got = 0, c = 0, payload = 0, bad = 0, bad_tag = 0;
     vq_occupancy occ;
-    auto done = [&](int rc) {
+    int rc = -1;                        // -1 running, else vq_run's return code
+
+    vq_run_state(uint64_t n, const int64_t *req, const uint32_t *layout, const uint8_t *ready,
+                 uint64_t n_ready, uint64_t max_cycles)
+        : n(n), req(req), ready(ready), n_ready(n_ready), max_cycles(max_cycles), lay(layout) {
+        payload = n ? lay.pack(req, 0) : 0;
+        if (n == 0)
+            rc = 0;
+    }
+    // Up to ``limit`` more cycles (fewer when the run ends); returns the cycle count so far. The
+    // loop works on local copies of the state (written back at the end): the model's stores could
+    // alias members, which would make the compiler reload and store them every cycle.
+    template<class Cycle, class Respond>
+    uint64_t run(uint64_t limit, Cycle &&cycle, Respond &&respond) {
+        const vq_layout lay = this->lay;
+        uint64_t sent = this->sent, got = this->got, c = this->c, payload = this->payload;
+        uint64_t bad = this->bad, bad_tag = this->bad_tag;
+        uint64_t strobes[VQ_C_OCCUPANCY] = {};
+        vq_occupancy occ = this->occ;
+        uint64_t *occ_sums = sums + VQ_C_OCCUPANCY;
+        for (uint64_t end = c + limit; c < end; c++) {
+            if (got >= n) { rc = 0; break; }
+            if (c >= max_cycles) { rc = 2; break; }
+            bool o_ready = true;
+            if (!AlwaysReady) {
+                if (c >= n_ready) { rc = 1; break; }
+                o_ready = ready[c] != 0;
+            }
+            bool i_valid = sent < n;
+            const vq_cycle_out r = cycle(c, i_valid, payload, o_ready, strobes, occ, occ_sums);
+            if (r.took) {
+                uint64_t tag = lay.tag(r.out);
+                if (tag != (got & lay.mask[5]) && !bad) {
+                    bad = got + 1;
+                    bad_tag = tag;
+                }
+                respond(got, r.out);
+                got++;
+            }
+            if (r.accepted) {
+                sent++;
+                payload = sent < n ? lay.pack(req + 4 * sent, sent) : 0;
+            }
+        }
+        if (rc < 0 && got >= n)
+            rc = 0;
+        for (int k = 0; k < VQ_C_OCCUPANCY; k++)
+            sums[k] += strobes[k];
+        this->sent = sent; this->got = got; this->c = c; this->payload = payload;
+        this->bad = bad; this->bad_tag = bad_tag;
+        this->occ = occ;
+        return c;
+    }
+    // counters[] as vq_run returns them (``responses``: the responses stored); returns rc.
+    int finish(uint64_t *counters, uint64_t responses) {
         occ.flush(sums + VQ_C_OCCUPANCY);
         sums[VQ_C_CYCLES] = c;
         sums[VQ_C_ACCEPTED] = sent;
-        sums[VQ_C_RESPONSES] = got;
+        sums[VQ_C_RESPONSES] = responses;
         sums[VQ_C_BAD_TAG] = bad;
         sums[VQ_C_BAD_TAG_VALUE] = bad_tag;
         std::memcpy(counters, sums, sizeof(sums));
         return rc;
-    };
-    a.reset();
-    while (got < n) {
-        if (c >= max_cycles)
-            return done(2);
-        bool o_ready = true;
-        if (!AlwaysReady) {
-            if (c >= n_ready)
-                return done(1);
-            o_ready = ready[c] != 0;
-        }
-        bool i_valid = sent < n;
-        a.set_inputs(i_valid, payload, o_ready);
-        // sample() reads the ports into locals; the response is stored after the clock edge.
-        bool took = false, accepted = false;
-        uint64_t out = 0;
-        a.cycle([&]() {
-            took = a.o_valid() && o_ready;
-            out = a.o_payload();
-            accepted = i_valid && a.i_ready();
-            a.strobes(sums);
-            occ.add(a.valid(), sums + VQ_C_OCCUPANCY);
-        });
-        if (took) {
-            rgba[got] = uint32_t(out);
-            if (lay.tag(out) != (got & lay.mask[5]) && !bad) {
-                bad = got + 1;
-                bad_tag = lay.tag(out);
-            }
-            got++;
-        }
-        if (accepted) {
-            sent++;
-            payload = sent < n ? lay.pack(req + 4 * sent, sent) : 0;
-        }
-        c++;
     }
-    return done(0);
+};
+
+// One design in one loop (an adapter A with reset, set_inputs, cycle(sample), the port reads).
+template<bool AlwaysReady, class A>
+static int vq_run_loop(A &a, uint64_t n, const int64_t *req, const uint32_t *layout, const uint8_t *ready,
+                       uint64_t n_ready, uint64_t max_cycles, uint32_t *rgba, uint64_t *counters) {
+    vq_run_state<AlwaysReady> s(n, req, layout, ready, n_ready, max_cycles);
+    a.reset();
+    s.run(max_cycles + 1,
+          [&](uint64_t, bool i_valid, uint64_t payload, bool o_ready, uint64_t *strobes, vq_occupancy &occ,
+              uint64_t *occ_sums) {
+              a.set_inputs(i_valid, payload, o_ready);
+              // sample() reads the ports into locals; the response is stored after the clock edge.
+              vq_cycle_out r;
+              a.cycle([&]() {
+                  r.took = a.o_valid() && o_ready;
+                  r.out = a.o_payload();
+                  r.accepted = i_valid && a.i_ready();
+                  a.strobes(strobes);
+                  occ.add(a.valid(), occ_sums);
+              });
+              return r;
+          },
+          [&](uint64_t k, uint64_t out) { rgba[k] = uint32_t(out); });
+    return s.finish(counters, s.got);
 }
 
 template<class A>

@@ -116,84 +116,41 @@ struct Sim {
     void reset() { front.reset(); back.reset(); }
 };
 
-// The front end's run: batch.h's loop, except that the response is the back end's to read.
+// The front end's run: batch.h's run loop with a cycle that drives and clocks the front half and
+// records, for the back end, the link and whether a response transfers (the back end reads the
+// response's colour itself).
 template<bool AlwaysReady>
-struct alignas(64) FrontRun {
+struct FrontRun : vq_run_state<AlwaysReady> {
     Sim &s;
-    uint64_t n;
-    const int64_t *req;
-    const uint8_t *ready;
-    uint64_t n_ready, max_cycles;
-    vq_layout lay;
-    uint64_t sums[VQ_C_OCCUPANCY + VQ_STAGE_COUNT] = {};
-    uint64_t sent = 0, got = 0, c = 0, payload = 0, bad = 0, bad_tag = 0;
-    vq_occupancy occ;
-    int rc = -1;                        // -1 running, else batch.h's return code
-
     FrontRun(Sim &s, uint64_t n, const int64_t *req, const uint32_t *layout, const uint8_t *ready,
              uint64_t n_ready, uint64_t max_cycles)
-        : s(s), n(n), req(req), ready(ready), n_ready(n_ready), max_cycles(max_cycles), lay(layout) {
-        payload = n ? lay.pack(req, 0) : 0;
-        if (n == 0)
-            rc = 0;
-    }
-    // Up to ``limit`` more cycles (fewer when the run ends); returns the cycle count so far. The
-    // loop works on local copies of the state (written back at the end): the model's stores could
-    // alias members, which would make the compiler reload and store them every cycle.
+        : vq_run_state<AlwaysReady>(n, req, layout, ready, n_ready, max_cycles), s(s) {}
     uint64_t run(uint64_t limit) {
-        auto &top = s.front.top;
-        const vq_layout lay = this->lay;
-        uint64_t sent = this->sent, got = this->got, c = this->c, payload = this->payload;
-        uint64_t bad = this->bad, bad_tag = this->bad_tag;
-        uint64_t strobes[VQ_C_OCCUPANCY] = {};
-        vq_occupancy occ = this->occ;
-        Record *ring = s.ring.data();
-        for (uint64_t end = c + limit; c < end; c++) {
-            if (got >= n) { rc = 0; break; }
-            if (c >= max_cycles) { rc = 2; break; }
-            bool o_ready = true;
-            if (!AlwaysReady) {
-                if (c >= n_ready) { rc = 1; break; }
-                o_ready = ready[c] != 0;
-            }
-            bool i_valid = sent < n;
+        // Locals captured by the hook (the model's stores could alias members, not these).
+        auto &front = s.front;
+        auto &top = front.top;
+        Record *const ring = s.ring.data();
+        auto cycle = [&front, &top, ring](uint64_t c, bool i_valid, uint64_t payload, bool o_ready,
+                                          uint64_t *strobes, vq_occupancy &occ, uint64_t *occ_sums) {
             vq_put(top.VQ_I_VALID, i_valid);
             vq_put(top.VQ_I_PAYLOAD, payload);
             vq_put(top.VQ_O_READY, o_ready);
-            bool took = false, accepted = false;
-            uint64_t tag = 0;
-            Record &r = ring[c % VQ_RING];
-            s.front.cycle([&]() {
-                took = vq_get(top.VQ_O_VALID) && o_ready;
-                accepted = i_valid && vq_get(top.VQ_I_READY);
+            vq_cycle_out r;
+            Record &rec = ring[c % VQ_RING];
+            front.cycle([&]() {
+                r.took = vq_get(top.VQ_O_VALID) && o_ready;
+                r.accepted = i_valid && vq_get(top.VQ_I_READY);
 #ifdef VQ_O_TAG
-                tag = lay.tag(vq_get(top.VQ_O_TAG) << VQ_O_TAG_OFFSET);   // as if read from o.payload
+                r.out = vq_get(top.VQ_O_TAG) << VQ_O_TAG_OFFSET;   // the tag where o.payload holds it
 #endif
-                r.link = vq_val(top.VQ_LINK);
+                rec.link = vq_val(top.VQ_LINK);
                 VQ_STROBES(top, strobes)
-                occ.add(uint32_t(vq_get(top.VQ_VALID)), sums + VQ_C_OCCUPANCY);
+                occ.add(uint32_t(vq_get(top.VQ_VALID)), occ_sums);
             });
-            r.took = took;
-            if (took) {
-                if (tag != (got & lay.mask[5]) && !bad) {
-                    bad = got + 1;
-                    bad_tag = tag;
-                }
-                got++;
-            }
-            if (accepted) {
-                sent++;
-                payload = sent < n ? lay.pack(req + 4 * sent, sent) : 0;
-            }
-        }
-        if (rc < 0 && got >= n)
-            rc = 0;
-        for (int k = 0; k < VQ_C_OCCUPANCY; k++)
-            sums[k] += strobes[k];
-        this->sent = sent; this->got = got; this->c = c; this->payload = payload;
-        this->bad = bad; this->bad_tag = bad_tag;
-        this->occ = occ;
-        return c;
+            rec.took = r.took;
+            return r;
+        };
+        return vq_run_state<AlwaysReady>::run(limit, cycle, [](uint64_t, uint64_t) {});
     }
 };
 
@@ -261,14 +218,7 @@ static int vq_run_halves(Sim &s, uint64_t n, const int64_t *req, const uint32_t 
         finished.store(true, std::memory_order_release);
         back.join();
     }
-    f.occ.flush(f.sums + VQ_C_OCCUPANCY);
-    f.sums[VQ_C_CYCLES] = f.c;
-    f.sums[VQ_C_ACCEPTED] = f.sent;
-    f.sums[VQ_C_RESPONSES] = b.got;
-    f.sums[VQ_C_BAD_TAG] = f.bad;
-    f.sums[VQ_C_BAD_TAG_VALUE] = f.bad_tag;
-    std::memcpy(counters, f.sums, sizeof(f.sums));
-    return f.rc;
+    return f.finish(counters, b.got);
 }
 
 int vq_run_batch(Sim &s, uint64_t n, const int64_t *req, const uint32_t *layout, const uint8_t *ready,
