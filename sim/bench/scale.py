@@ -11,7 +11,7 @@ and CPU (user + system) seconds and peak resident memory (``ru_maxrss``, what ``
 beyond the ``base_mib`` of a process that encodes a 64x64 texture (interpreter, numpy, the
 encoder's fixed costs).  ``growth`` gives, between consecutive sizes, the exponent p of
 figure ~ texels^p through the two points (1 = linear), for CPU time and peak memory, as
-measured and beyond the base process.  The figures are measured and
+measured and beyond the base process (None where a figure is not above the base).  The figures are measured and
 printed, never asserted (they depend on the machine and its load).
 
 Run: ``python -m vqtex.sim.bench.scale [--sizes 1024,2048,4096] [--block 4x4] [-k 256]
@@ -81,8 +81,10 @@ def measure(sizes=(1024, 2048, 4096), *, block: str = "4x4", k: int = 256, color
                          "bytes_per_texel_beyond_base": round(
                              (r["peak_mib"] - base["peak_mib"]) * 2 ** 20 / texels, 1)})
     def exponent(a, b, key, minus=0.0):
-        return round(math.log((b[key] - minus) / (a[key] - minus))
-                     / math.log(b["texels"] / a["texels"]), 2)
+        lo, hi = a[key] - minus, b[key] - minus
+        if lo <= 0 or hi <= 0:
+            return None  # within the base process's figure: no growth to speak of
+        return round(math.log(hi / lo) / math.log(b["texels"] / a["texels"]), 2)
 
     growth = [{"from": a["size"], "to": b["size"], "cpu_exponent": exponent(a, b, "cpu_s"),
                "cpu_beyond_base_exponent": exponent(a, b, "cpu_s", base["cpu_s"]),
