@@ -21,13 +21,12 @@ squared error weighted so every level counts per texel equally), so levels 1 and
 limited by level 0's error.
 
 Indices. With ``encoder="gla"`` every block's stored index names the nearest *stored* codeword
-(``codebook.nearest``): the one minimising the float64 sum of squared differences between the block's
+(``codebook.nearest``): the one minimising the sum of squared differences between the block's
 vector (as float32, the form it is trained in; for "joint", every sub-level's part scaled by 2^s) and
-the codeword's stored bytes (scaled likewise), ties to the lowest index. For rgb, rgba and intensity
-the vectors are integers and that sum is exact, so the index is the exact nearest; yuv411's vectors
-are fractions and the sum is rounded (relative error at most (d + 4) 2^-53), which could matter for a
-near tie (none in the stress cases of ``vqtex bench stability``). ``encoder="tsvq"`` stores the
-paper's tree-search indices, which need not be the nearest.
+the codeword's stored bytes (scaled likewise), in exact arithmetic, ties to the lowest index. For rgb,
+rgba and intensity the vectors are integers and float64 computes that sum exactly; yuv411's vectors
+are fractions, and a tie or near tie float64 cannot order is settled in integers. ``encoder="tsvq"``
+stores the paper's tree-search indices, which need not be the nearest.
 """
 
 from __future__ import annotations

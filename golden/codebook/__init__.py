@@ -27,10 +27,12 @@ Conventions shared by every function here
   weights added (so passing duplicates or their count as weight is the same problem).
   Vectors of weight 0 take no part in training but still get an index.
 * Codebooks are ``(k, d)`` float64; indices are int64 ``(N,)``.
-* Distances are squared Euclidean distances.  The *exact* distance of x to c is the float64 sum
-  of the squared differences; ``nearest`` is exact with respect to it (ties go to the lowest
-  index).  Inner loops screen candidates with a float32 GEMM (||x||^2 - 2 x.c + ||c||^2 form, on
-  mean-centred data, in chunks of about 2 MiB of scores) and settle them in float64.
+* Distances are squared Euclidean distances.  ``nearest`` minimises the true distance of the
+  float64 values (the sum of squared differences in exact arithmetic; ties go to the lowest
+  index) and reports it rounded to float64.  Inner loops screen candidates with a float32 GEMM
+  (||x||^2 - 2 x.c + ||c||^2 form, on mean-centred data, in chunks of about 2 MiB of scores),
+  compare them in float64 and settle what float64 cannot order in Python integers.  The Lloyd
+  iterations' moves use the float64 distances (a move must lower it strictly).
 * Everything is deterministic: the same inputs and seed give the same output bits run to run.
   ``nearest`` is moreover independent of the BLAS; the designed codebooks can differ between
   BLAS builds (the float32 screening steers which near-tie a Lloyd iteration resolves first).

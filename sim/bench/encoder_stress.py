@@ -120,6 +120,25 @@ def _nearest_large_norm(seed):
     return x, c
 
 
+def _nearest_fractional_ties(seed):
+    """Not an image: float32 vectors in [0, 255] (the form of yuv411's training vectors) exactly
+    equidistant from codewords 0 and 1 (x0 + x5 = 1, codeword 1 = e0 + e5), the other components
+    spread over 2^-10 .. 2^7.9: the two distances are sums of the same squares in another order,
+    which float64 rounds differently for about 1 % of them, either way; the exact answer is
+    always codeword 0."""
+    r = _rng(seed)
+    n, d = 4096, 6
+    x = np.empty((n, d), np.float32)
+    x[:, 0] = r.random(n, dtype=np.float32)
+    x[:, d - 1] = 1 - x[:, 0]  # exact in float32
+    x[:, 1:d - 1] = np.exp2(r.uniform(-10, 7.9, (n, d - 2)))
+    c = np.zeros((4, d))
+    c[1, [0, d - 1]] = 1
+    c[2] = 255
+    c[3] = c[1]  # a repeat of codeword 1
+    return x.astype(np.float64), c
+
+
 #: name -> (builder, encode options; None: a ``nearest`` case, threads: compare 1 and 2 threads)
 CASES = {
     "large_norm_close": (_large_norm_close, dict(block=(8, 8), codebook_size=128, color="rgba"),
@@ -142,6 +161,7 @@ CASES = {
     "more_codewords_than_vectors": (_few_colours, dict(block=(2, 2), codebook_size=1024,
                                                        color="rgb"), False),
     "nearest_large_norm": (_nearest_large_norm, None, False),
+    "nearest_fractional_ties": (_nearest_fractional_ties, None, False),
 }
 
 

@@ -28,8 +28,8 @@ __all__ = ["load_check", "run_command"]
 
 
 def run_command(argv: list, timeout: float = 1800.0) -> dict:
-    """Run ``python -m vqtex.sim.cli *argv`` and return its exit status, stdout, stderr, wall seconds
-    and peak resident memory in MiB (Linux ``ru_maxrss`` is in KiB)."""
+    """Run ``python -m vqtex.sim.cli *argv`` and return its exit status, stdout, stderr, wall seconds,
+    CPU (user + system) seconds and peak resident memory in MiB (Linux ``ru_maxrss`` is in KiB)."""
     t0 = time.perf_counter()
     with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
         p = subprocess.Popen([sys.executable, "-m", "vqtex.sim.cli", *argv], stdout=out, stderr=err)
@@ -47,7 +47,8 @@ def run_command(argv: list, timeout: float = 1800.0) -> dict:
         out.seek(0)
         err.seek(0)
         return {"returncode": p.returncode, "stdout": out.read().decode(), "stderr": err.read().decode(),
-                "seconds": time.perf_counter() - t0, "peak_mib": usage.ru_maxrss / 1024.0}
+                "seconds": time.perf_counter() - t0, "peak_mib": usage.ru_maxrss / 1024.0,
+                "cpu_seconds": usage.ru_utime + usage.ru_stime}
 
 
 def load_check(n: int = 10_000_000, *, stall: float = 0.3, one_port: bool = False, seed: int = 0,

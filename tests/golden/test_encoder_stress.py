@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from vqtex.golden import codebook as vq
+from vqtex.golden.codebook import fullsearch
 from vqtex.golden.encode import encode
 from vqtex.golden.format import pack_indices, unpack_indices
 from vqtex.sim.bench import encoder_stress as es
@@ -83,6 +84,37 @@ def test_exact_nearest_sees_what_float64_cannot():
     x = np.array([[1.0, 2.0 ** -40]])
     c = np.array([[0.0, 0.0], [2.0, 2.0 ** -39]])
     assert es.exact_nearest(x, c)[0][0] == 0
+
+
+def test_fractional_ties_float64_cannot_order_go_to_the_lowest_index():
+    """yuv411-like float32 vectors exactly equidistant from codewords 0 and 1: float64 sums of
+    squares (in order, as numpy's sum and einsum both add six terms) put some nearer 0 and some
+    nearer 1; ``nearest`` names 0 for every one (it used to follow float64's rounding)."""
+    x, c = es.build("nearest_fractional_ties")
+    d64 = np.stack([((x - c[j]) ** 2).sum(axis=1) for j in (0, 1)])
+    assert np.count_nonzero(d64[1] < d64[0]) > 0 and np.count_nonzero(d64[0] < d64[1]) > 0
+    np.testing.assert_array_equal(vq.nearest(x, c)[0], 0)
+    np.testing.assert_array_equal(vq.nearest(x, c[[1, 0, 2, 3]])[0], 0)  # codeword 1 first
+    ref, settled = es.exact_nearest(x, c)
+    assert settled == len(x) and np.all(ref == 0)
+
+
+def test_integer_settling_in_chunks_is_the_same():
+    """The exact settling works in chunks of whole rows: any chunk size, the same winners."""
+    x, c = es.build("nearest_fractional_ties")
+    r = np.repeat(np.arange(200), 4)
+    cc = np.tile(np.array([3, 1, 0, 2]), 200)
+    want = fullsearch.settle_in_integers(x, c, r, cc, cc)
+    np.testing.assert_array_equal(want[0], np.arange(200))
+    np.testing.assert_array_equal(want[1], 0)
+    for elements in (1, 7, 24, 100):
+        got = fullsearch.settle_in_integers(x, c, r, cc, cc, elements=elements)
+        np.testing.assert_array_equal(np.concatenate(got), np.concatenate(want))
+    # exact ties (codewords 0, 1 and its repeat 3) go to the least tie key, not the position
+    got = fullsearch.settle_in_integers(x, c, r, cc, np.tile([2, 1, 0, 3], 200))
+    np.testing.assert_array_equal(got[1], 0)
+    got = fullsearch.settle_in_integers(x, c, r, cc, np.tile([0, 2, 1, 3], 200))
+    np.testing.assert_array_equal(got[1], 3)
 
 
 def test_a_wrong_index_is_a_disagreement():
