@@ -27,8 +27,10 @@ Requests must be valid for ``ts`` (:func:`~.fetch.check_requests`).
 
 Public API::
 
-    analyse(ts, streams, frames=None, cache=CacheSpec()) -> Need
-    Need.textures, .levels, .groups, .blocks, .codewords, .frames, .summary(), .heat(tex, level)
+    analyse(ts, streams, frames=None, cache=CacheSpec()) -> Need       (NeedCounter(ts, cache).add(f, reqs), .result())
+    heat_image(need, tex, level, min_side=256) -> (H, W, 4) uint8 picture of the blocks touched
+    Need.textures, .levels, .groups, .blocks(t, L), .touched_blocks(t, L), .group_blocks(t, top), .codewords,
+        .frames, .formats(), .summary(per_frame=True)
     scene_streams(scene, source, frames, mode="trilinear") -> iterator of (frame, requests)
     scene_level_shapes(scene) -> [[(w, h), ...] per texture]
     request_blocks(ts, reqs) -> RequestBlocks     buffer_hits(keys) -> bool    cache_hits(keys, sets, ways) -> bool
@@ -45,7 +47,7 @@ from .fetch import block_address, read_index, straddles
 from .format import TextureSet
 
 __all__ = ["CacheSpec", "FrameNeed", "Need", "RequestBlocks", "analyse", "request_blocks", "buffer_hits",
-           "cache_hits", "scene_streams", "scene_level_shapes", "row_grids"]
+           "cache_hits", "scene_streams", "scene_level_shapes", "row_grids", "NeedCounter", "heat_image"]
 
 
 @dataclass(frozen=True)
@@ -352,42 +354,81 @@ class Need:
         return out
 
 
+class NeedCounter:
+    """:func:`analyse` one frame at a time (a renderer feeds each frame's requests as it goes, so no
+    frame's stream is kept): ``add(frame, reqs)`` for each frame, then ``result()``."""
+
+    def __init__(self, ts: TextureSet, cache: CacheSpec = CacheSpec()):
+        self.ts, self.cache = ts, cache
+        self.grids = row_grids(ts)
+        nbx, nby, offset = self.grids
+        self.counts = np.zeros(int((offset + nbx * nby).max(initial=0)), np.int64)
+        self.idx_seen = np.zeros(len(ts.index_words), bool)
+        self.ent_seen = np.zeros(len(ts.codebook), bool)
+        self.raw_seen = np.zeros(len(ts.raw_words), bool)
+        self.frames: list[FrameNeed] = []
+
+    def add(self, frame: int, reqs: np.ndarray) -> FrameNeed:
+        """Count one frame's requests (valid for the set); returns its :class:`FrameNeed`."""
+        cache = self.cache
+        rb = request_blocks(self.ts, reqs, self.grids)
+        self.counts += np.bincount(rb.cell, minlength=len(self.counts))
+        c = rb.compressed
+        words = np.unique(np.concatenate([rb.index_word[c], rb.index_word[c & rb.straddle] + 1]))
+        entries = np.unique(rb.entry[c])
+        raws = np.unique(rb.raw_word[~c])
+        self.idx_seen[words] = True
+        self.ent_seen[entries] = True
+        self.raw_seen[raws] = True
+        sets = (rb.by & (cache.tile[1] - 1)) * cache.tile[0] + (rb.bx & (cache.tile[0] - 1))
+        fn = FrameNeed(
+            frame=int(frame), requests=int(len(rb.key)), index_words=int(len(words)),
+            codebook_entries=int(len(entries)), raw_words=int(len(raws)), blocks=int(len(np.unique(rb.key))),
+            straddling_reads=int((rb.straddle & c).sum()), buffer_hits=int(buffer_hits(rb.key).sum()),
+            cache_hits=int(cache_hits(rb.key, sets, cache.ways).sum()))
+        self.frames.append(fn)
+        return fn
+
+    def result(self) -> Need:
+        codewords = [self.ent_seen[cb.base: cb.base + cb.size].copy() for cb in self.ts.codebooks]
+        return Need(self.ts, self.cache, self.counts.copy(), self.grids, codewords, self.idx_seen.copy(),
+                    self.ent_seen.copy(), self.raw_seen.copy(), list(self.frames))
+
+
 def analyse(ts: TextureSet, streams, frames=None, cache: CacheSpec = CacheSpec()) -> Need:
     """The :class:`Need` of the request ``streams`` (an iterable of (N, 4) arrays, one per frame, or
     of (frame number, array) pairs) in ``ts``. ``frames`` numbers the streams (default 0, 1, ...)."""
-    grids = row_grids(ts)
-    nbx, nby, offset = grids
-    counts = np.zeros(int((offset + nbx * nby).max(initial=0)), np.int64)
-    idx_seen = np.zeros(len(ts.index_words), bool)
-    ent_seen = np.zeros(len(ts.codebook), bool)
-    raw_seen = np.zeros(len(ts.raw_words), bool)
-    per_frame = []
+    counter = NeedCounter(ts, cache)
     frames = iter(frames) if frames is not None else None
     for n, item in enumerate(streams):
         if isinstance(item, tuple):
             f, reqs = item
         else:
             f, reqs = (next(frames) if frames is not None else n), item
-        rb = request_blocks(ts, reqs, grids)
-        counts += np.bincount(rb.cell, minlength=len(counts))
-        c = rb.compressed
-        words = np.concatenate([rb.index_word[c], rb.index_word[c & rb.straddle] + 1])
-        words = np.unique(words)
-        entries = np.unique(rb.entry[c])
-        raws = np.unique(rb.raw_word[~c])
-        idx_seen[words] = True
-        ent_seen[entries] = True
-        raw_seen[raws] = True
-        sets = (rb.by & (cache.tile[1] - 1)) * cache.tile[0] + (rb.bx & (cache.tile[0] - 1))
-        per_frame.append(FrameNeed(
-            frame=int(f), requests=int(len(rb.key)), index_words=int(len(words)),
-            codebook_entries=int(len(entries)), raw_words=int(len(raws)), blocks=int(len(np.unique(rb.key))),
-            straddling_reads=int((rb.straddle & c).sum()), buffer_hits=int(buffer_hits(rb.key).sum()),
-            cache_hits=int(cache_hits(rb.key, sets, cache.ways).sum())))
-    codewords = []
-    for cb in ts.codebooks:
-        codewords.append(ent_seen[cb.base: cb.base + cb.size].copy())
-    return Need(ts, cache, counts, grids, codewords, idx_seen, ent_seen, raw_seen, per_frame)
+        counter.add(f, reqs)
+    return counter.result()
+
+
+def heat_image(need: Need, tex: int, level: int, min_side: int = 256) -> np.ndarray:
+    """A picture (H, W, 4) uint8 of the blocks of (tex, level): one square of pixels per block (per
+    texel for a raw level), enlarged by a whole factor until the longer side is at least
+    ``min_side``. Untouched blocks are dark blue-grey; touched ones go from red (one request) through
+    yellow to white (the level's most requested block), on a log scale."""
+    counts = need.blocks(tex, level)
+    h, w = counts.shape
+    out = np.empty((h, w, 4), np.uint8)
+    out[...] = (32, 36, 52, 255)
+    touched = counts > 0
+    if touched.any():
+        top = np.log1p(counts.max())
+        x = np.log1p(counts[touched]) / top if top > 0 else np.ones(int(touched.sum()))
+        ramp = np.array([[120, 0, 0], [230, 40, 20], [255, 200, 0], [255, 255, 255]], np.float64)
+        pos = x * (len(ramp) - 1)
+        lo = np.minimum(np.floor(pos).astype(np.int64), len(ramp) - 2)
+        frac = (pos - lo)[:, None]
+        out[touched, :3] = np.clip(np.rint(ramp[lo] * (1 - frac) + ramp[lo + 1] * frac), 0, 255).astype(np.uint8)
+    scale = max(1, -(-min_side // max(h, w, 1)))
+    return np.repeat(np.repeat(out, scale, axis=0), scale, axis=1)
 
 
 def scene_level_shapes(scene) -> list[list[tuple[int, int]]]:
