@@ -110,6 +110,7 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
         golden_frame = sampler.resolve(golden_texels)
         out["golden_seconds"] = time.perf_counter() - t0
         out["requests"] = int(len(reqs))
+        out["request_stream"] = reqs                    # for the need analysis of --report
         if backend == "golden":
             out["image"] = golden_frame
             if cycle_model and len(reqs):
@@ -202,6 +203,20 @@ def _extra_outputs(args, outs, frames):
     return write
 
 
+class _NeedReport:
+    """``--report``'s need analysis (``golden.need``), fed each frame's requests as it is rendered;
+    each frame's report gets its figures under ``need``."""
+
+    def __init__(self, ts, then=None):
+        from vqtex.golden.need import NeedCounter
+        self.counter, self.then = NeedCounter(ts), then
+
+    def on_frame(self, r):
+        done = dict(self.then(r) or {}) if self.then else {}
+        done["need"] = self.counter.add(r["frame"], r["request_stream"]).to_dict()
+        return done
+
+
 def _frame_report(r: dict) -> dict:
     d = {"frame": r["frame"], "requests": r["requests"], "golden_seconds": round(r["golden_seconds"], 4)}
     if "mse" in r:
@@ -233,6 +248,9 @@ def cmd_render(args) -> int:
         ts = load_set(args.texture_set) if args.texture_set else encode_scene(scene, images)
         if ts.n_textures != len(scene.textures):
             raise CliError(f"{args.texture_set} holds {ts.n_textures} textures, the scene uses {len(scene.textures)}")
+        need = _NeedReport(ts, on_frame) if report_path else None
+        if need is not None:
+            on_frame = need.on_frame
         per_frame, mismatches = render_to_files(
             scene, ts, frames, frame_paths.get, images, outs=outs, on_frame=on_frame,
             mode=args.mode, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port)
@@ -245,6 +263,7 @@ def cmd_render(args) -> int:
             report["identical_to_golden"] = not mismatches
             report["cycles_per_frame"] = round(float(np.mean([f["cycles"] for f in per_frame])), 1)
         if report_path:
+            report["need"] = need.counter.result().summary(per_frame=False)
             write_json(outs.path(report_path), report)
     text = [f"{scene.name}: {len(frames)} frame(s), {args.mode}, backend {args.backend}, "
             f"overall compression {report['overall_rate']:.2f}:1, mean frame MSE {report['mean_mse']:.3f}"]
