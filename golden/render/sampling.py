@@ -247,7 +247,8 @@ class Sampler:
         if weights is None:
             weights = np.full((m, k), 1 << WEIGHT_BITS, np.uint32)
         if self.stream == "sparse" and k > 1:
-            reqs, weights, counts, self.skipped = sparse_stream(reqs.reshape(m, k, 4), weights)
+            spans = (len(self._levels), self._widths.shape[1], self._widths.max(), self._heights.max())
+            reqs, weights, counts, self.skipped = sparse_stream(reqs.reshape(m, k, 4), weights, spans)
         else:
             weights, counts = weights.reshape(-1), np.full(m, k, np.int64)
             self.skipped = SkipCounts(m * k, 0, 0)
