@@ -87,7 +87,7 @@ def sparse_stream(reqs: np.ndarray, weights: np.ndarray, spans=None):
         raise ValueError("weights must be non-negative and small enough to add exactly")
     at = (np.arange(m, dtype=np.int64)[:, None] * k + first).ravel()
     merged = np.bincount(at, weights=weights.ravel(), minlength=m * k).astype(np.int64).reshape(m, k)
-    group = np.take_along_axis(merged, first, 1)         # each request's texel's merged weight
+    group = merged.ravel()[at].reshape(m, k)             # each request's texel's merged weight
     keep = merged > 0                                    # only a first occurrence can hold weight
     counts = keep.sum(1)
     skip = SkipCounts(m * k, int((group == 0).sum()), int(((first != np.arange(k)) & (group > 0)).sum()))
