@@ -89,13 +89,16 @@ def _frame_path(pattern: str, frame: int, many: bool) -> str:
 
 def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall=0.0, seed=0,
                  one_port=False, reference=True, images=None, progress=None, cycle_model=False,
-                 stream="sparse", fovea=None):
+                 stream="sparse", fovea=None, compare_fixed=False):
     """Render ``frames`` of ``scene`` from TextureSet ``ts``; yields one dict per frame with the frame,
     the golden frame when the backend is RTL (for comparison), cycle results and the reference MSE.
     With the golden backend and ``cycle_model``, the cycles come from the exact cycle model (no RTL).
     ``stream`` is the sampler's request stream (``sparse`` or ``fixed``: the same frames); with a
     ``fovea`` (:class:`~vqtex.golden.render.fovea.Fovea`) the frame is foveated and ``"fovea"`` holds
-    :func:`vqtex.sim.reports.foveation.compare_regions` against the unbiased frame."""
+    :func:`vqtex.sim.reports.foveation.compare_regions` against the unbiased frame. ``compare_fixed``
+    also runs the fixed stream through the backend (the cycle model for ``golden``, which then
+    reports the sparse stream's cycles too): ``"fixed"`` holds its requests, cycles and whether its
+    frame is identical."""
     from vqtex.golden.fetch import fetch
     from vqtex.golden.render.frame import frame_requests
     from vqtex.golden.render.metrics import frame_mse
@@ -119,7 +122,7 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
         out["request_stream"] = reqs                    # for the need analysis of --report
         if backend == "golden":
             out["image"] = golden_frame
-            if cycle_model and len(reqs):
+            if (cycle_model or compare_fixed) and len(reqs):
                 from vqtex.sim.backends import simulate
                 out["sim"] = simulate(ts, reqs, backend="golden", stall=stall, seed=seed, one_port=one_port)
                 out["rtl_seconds"] = 0.0
@@ -137,6 +140,13 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
             ref = sampler.resolve(ref_src.fetch(reqs[:, 0], reqs[:, 1], reqs[:, 2], reqs[:, 3]))
             out["mse"] = frame_mse(out["image"], ref)
             out["reference"] = ref
+        if compare_fixed:
+            from vqtex.sim.backends import simulate
+            freqs, fsampler = frame_requests(scene, f, src, mode, stream="fixed", fovea=fovea)
+            fres = simulate(ts, freqs, backend=backend, stall=stall, seed=seed, one_port=one_port) if len(freqs) else None
+            fimg = fsampler.resolve(fres.responses) if fres is not None else out["image"]
+            out["fixed"] = {"requests": int(len(freqs)), "cycles": int(fres.cycles) if fres is not None else 0,
+                            "identical": bool(np.array_equal(fimg, out["image"]))}
         if fovea is not None:
             from vqtex.sim.reports.foveation import compare_regions
             ureqs, usampler = frame_requests(scene, f, src, mode, stream=stream)
@@ -236,6 +246,8 @@ def _frame_report(r: dict) -> dict:
         d.update(requests_fixed=k.fixed, skipped_zero_weight=k.zero_weight, skipped_repeats=k.repeats)
     if "fovea" in r:
         d["fovea"] = r["fovea"]
+    if "fixed" in r:
+        d["fixed_stream"] = r["fixed"]
     if "mse" in r:
         d["mse"] = round(float(r["mse"]), 4)
     if "sim" in r and r["sim"] is not None:
@@ -256,6 +268,8 @@ def cmd_render(args) -> int:
         scene = load_scene(args.scene)
         frames = parse_frames(args.frames, scene.frames)
         fovea = parse_fovea(args, scene)
+        if args.compare_fixed and args.requests == "fixed":
+            raise CliError("--compare-fixed compares the sparse stream with the fixed one: it needs --requests sparse")
         frame_paths = {f: _frame_path(args.output, f, len(frames) > 1) for f in frames}
         for path in frame_paths.values():
             outs.add(path)
@@ -272,7 +286,7 @@ def cmd_render(args) -> int:
         per_frame, mismatches = render_to_files(
             scene, ts, frames, frame_paths.get, images, outs=outs, on_frame=on_frame,
             mode=args.mode, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port,
-            stream=args.requests, fovea=fovea)
+            stream=args.requests, fovea=fovea, compare_fixed=args.compare_fixed)
         report = {
             "scene": scene.name, "mode": args.mode, "backend": args.backend, "frames": per_frame,
             "overall_rate": round(ts.rates()["overall"], 4),
@@ -284,6 +298,12 @@ def cmd_render(args) -> int:
         if args.backend != "golden":
             report["identical_to_golden"] = not mismatches
             report["cycles_per_frame"] = round(float(np.mean([f["cycles"] for f in per_frame])), 1)
+        stream_mismatches = []
+        if args.compare_fixed:
+            report["cycles_per_frame"] = round(float(np.mean([f.get("cycles", 0) for f in per_frame])), 1)
+            report["fixed_cycles_per_frame"] = round(float(np.mean([f["fixed_stream"]["cycles"] for f in per_frame])), 1)
+            stream_mismatches = [f["frame"] for f in per_frame if not f["fixed_stream"]["identical"]]
+            report["identical_to_fixed_stream"] = not stream_mismatches
         if fovea is not None:
             from vqtex.sim.reports.foveation import summarize
             report["fovea"] = dict(fovea.as_dict(), **summarize([f["fovea"] for f in per_frame]))
@@ -296,12 +316,20 @@ def cmd_render(args) -> int:
     if args.backend != "golden":
         text.append(f"RTL frames identical to golden: {'yes' if not mismatches else 'NO, frames ' + str(mismatches)}; "
                     f"{report['cycles_per_frame']:.0f} cycles per frame")
+    if args.compare_fixed:
+        text.append(f"fixed stream: {report['fixed_requests_per_frame']:,.0f} requests and "
+                    f"{report['fixed_cycles_per_frame']:,.0f} cycles per frame; sparse: "
+                    f"{report['requests_per_frame']:,.0f} and {report['cycles_per_frame']:,.0f} "
+                    f"({'cycle model' if args.backend == 'golden' else args.backend}); frames identical: "
+                    f"{'yes' if not stream_mismatches else 'NO, frames ' + str(stream_mismatches)}")
     if fovea is not None:
         from vqtex.sim.reports.foveation import summary_lines
         text += summary_lines(report["fovea"])
     emit(report, args.json, "\n".join(text))
     if mismatches:
         raise CliError(f"RTL frames {mismatches} differ from the golden frames")
+    if stream_mismatches:
+        raise CliError(f"frames {stream_mismatches} of the fixed stream differ from the sparse stream's")
     return 0
 
 
@@ -347,6 +375,10 @@ def add_parser(sub) -> None:
                                      "of a texel in one pixel's footprint; fixed issues every pixel's whole "
                                      "footprint (8 per pixel in trilinear). The frames are identical "
                                      "(docs/skipping.md)", "sparse"))
+    r.add_argument("--compare-fixed", action="store_true",
+                   help="also run the fixed stream through the backend (the exact cycle model for golden) and "
+                        "report its requests and cycles beside the sparse stream's; its frames must be identical "
+                        "(default off)")
     r.add_argument("--fovea", metavar="X,Y",
                    help=with_default("foveate: bias the level of detail up with the distance from this gaze "
                                      "point (pixels from the top-left corner), 0 inside --fovea-radius; the report "

@@ -35,8 +35,9 @@ def test_sparse_and_fixed_streams_on_the_compiled_rtl(tmp_path, scene_file, caps
     need("g++")
     reps = {}
     for stream in ("fixed", "sparse"):
+        extra = ["--compare-fixed"] if stream == "sparse" else []
         code, reps[stream] = _render(capsys, scene_file, "-o", tmp_path / f"{stream}.png", "--backend", "cxxrtl",
-                                     "--requests", stream)
+                                     "--requests", stream, *extra)
         assert code == 0 and reps[stream]["identical_to_golden"] is True
         assert reps[stream]["request_stream"] == stream
     for f, s in zip(reps["fixed"]["frames"], reps["sparse"]["frames"]):
@@ -46,7 +47,11 @@ def test_sparse_and_fixed_streams_on_the_compiled_rtl(tmp_path, scene_file, caps
         assert f["skipped_zero_weight"] == f["skipped_repeats"] == 0
         assert s["requests"] == s["requests_fixed"] - s["skipped_zero_weight"] - s["skipped_repeats"] < f["requests"]
         assert s["cycles"] == s["requests"] + LATENCY < f["cycles"] == f["requests"] + LATENCY
+        # --compare-fixed ran the fixed stream on the same backend: the fixed run's figures
+        assert s["fixed_stream"] == {"requests": f["requests"], "cycles": f["cycles"], "identical": True}
     assert reps["sparse"]["requests_per_frame"] < reps["sparse"]["fixed_requests_per_frame"]
+    assert reps["sparse"]["identical_to_fixed_stream"] is True
+    assert reps["sparse"]["fixed_cycles_per_frame"] == reps["fixed"]["cycles_per_frame"]
 
 
 def test_fovea_report(tmp_path, scene_file, capsys):
@@ -87,8 +92,9 @@ def test_fovea_report(tmp_path, scene_file, capsys):
     (["--fovea", "1,2", "--fovea-falloff", "-1"], "falloff"),
     (["--fovea-radius", "3"], "needs --fovea"),
     (["--fovea", "1,2", "--mode", "point"], "trilinear"),
+    (["--requests", "fixed", "--compare-fixed"], "needs --requests sparse"),
 ])
-def test_bad_fovea_options_are_one_line(tmp_path, scene_file, capsys, extra, message):
+def test_bad_options_are_one_line(tmp_path, scene_file, capsys, extra, message):
     capsys.readouterr()
     assert main(["render", str(scene_file), "-o", str(tmp_path / "x.png"), *extra]) == 2
     err = capsys.readouterr().err
