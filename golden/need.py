@@ -267,10 +267,8 @@ class Need:
         """bool (nby, nbx): blocks of the level group starting at ``top`` touched from any of its levels."""
         d = self.ts.descriptors[tex]
         out = None
-        for L in range(top, self.ts.textures[tex].levels):
-            if L > top and (not d["compressed"][L] or int(d["sublevel"][L]) == 0):
-                break
-            if d["compressed"][L] and L - int(d["sublevel"][L]) == top:
+        for L in range(top, min(self.ts.textures[tex].levels, top + 3)):     # at most 3 levels a group
+            if d["valid"][L] and d["compressed"][L] and L - int(d["sublevel"][L]) == top:
                 b = self.touched_blocks(tex, L)
                 out = b if out is None else out | b
         return out
