@@ -27,7 +27,8 @@ Requests must be valid for ``ts`` (:func:`~.fetch.check_requests`).
 
 Public API::
 
-    analyse(ts, streams, frames=None, cache=CacheSpec()) -> Need       (NeedCounter(ts, cache).add(f, reqs), .result())
+    analyse(ts, streams, frames=None, cache=CacheSpec(), per_frame=True) -> Need
+    NeedCounter(ts, cache=CacheSpec(), per_frame=True): .add(frame, reqs) -> FrameNeed | None, .result() -> Need
     heat_image(need, tex, level, min_side=256) -> (H, W, 4) uint8 picture of the blocks touched
     Need.textures, .levels, .groups, .blocks(t, L), .touched_blocks(t, L), .group_blocks(t, top), .codewords,
         .frames, .formats(), .summary(per_frame=True)
@@ -125,34 +126,30 @@ class RequestBlocks:
 
 
 def request_blocks(ts: TextureSet, reqs: np.ndarray, grids=None) -> RequestBlocks:
-    """The blocks, words and entries each request of ``reqs`` (N, 4) reads (see :class:`RequestBlocks`)."""
+    """The blocks, words and entries each request of ``reqs`` (N, 4) reads (see :class:`RequestBlocks`).
+
+    The descriptor fields are gathered per request from the (texture, level) row, every request
+    computed as if compressed and as if raw, and the two merged (no boolean subsetting of
+    structured arrays: the cost is a few passes over N int64)."""
     reqs = np.asarray(reqs, np.int64).reshape(-1, 4)
     tex, level, i, j = reqs.T
     nbx, nby, offset = row_grids(ts) if grids is None else grids
-    d = ts.descriptors[tex, level]
-    comp = d["compressed"].astype(bool)
-    n = len(reqs)
-    sub = np.where(comp, d["sublevel"].astype(np.int64), 0)
     row = tex * MAX_LEVELS + level
+    fields = ("compressed", "sublevel", "log2w", "log2bw", "log2bh", "index_bits", "base", "cb_base")
+    d = {name: ts.descriptors[name].ravel().astype(np.int64)[row] for name in fields}
+    comp = d["compressed"].astype(bool)
+    d["index_bits"] = np.where(comp, d["index_bits"], 1)      # raw rows: any width; their results are dropped
+    sub = np.where(comp, d["sublevel"], 0)
     group_row = row - sub
-    bx, by = i.copy(), j.copy()
-    index_word = np.full(n, -1, np.int64)
-    straddle = np.zeros(n, bool)
-    entry = np.full(n, -1, np.int64)
-    codeword = np.full(n, -1, np.int64)
-    raw_word = np.full(n, -1, np.int64)
-    if comp.any():
-        dc = d[comp]
-        k, _, _ = block_address(dc, i[comp], j[comp])
-        bx[comp] = i[comp] >> dc["log2bw"].astype(np.int64)
-        by[comp] = j[comp] >> dc["log2bh"].astype(np.int64)
-        index_word[comp] = dc["base"].astype(np.int64) + (k * dc["index_bits"].astype(np.int64)) // ts.word_bits
-        straddle[comp] = straddles(dc, k, ts.word_bits)
-        codeword[comp] = read_index(ts, dc, k)
-        entry[comp] = dc["cb_base"].astype(np.int64) + codeword[comp]
-    if (~comp).any():
-        dr = d[~comp]
-        raw_word[~comp] = dr["base"].astype(np.int64) + (j[~comp] << dr["log2w"].astype(np.int64)) + i[~comp]
+    lbw, lbh = np.where(comp, d["log2bw"], 0), np.where(comp, d["log2bh"], 0)
+    d["log2bw"], d["log2bh"] = lbw, lbh
+    k, _, _ = block_address(d, i, j)
+    bx, by = i >> lbw, j >> lbh
+    index_word = np.where(comp, d["base"] + (k * d["index_bits"]) // ts.word_bits, -1)
+    straddle = straddles(d, k, ts.word_bits) & comp
+    codeword = np.where(comp, read_index(ts, d, np.where(comp, k, 0)), -1)
+    entry = np.where(comp, d["cb_base"] + codeword, -1)
+    raw_word = np.where(comp, -1, d["base"] + (j << d["log2w"]) + i)
     own_nbx = nbx.ravel()[row]
     cell = offset.ravel()[row] + by * own_nbx + bx
     # A group block's key names the group's top row and the block (the same grid for every level of
@@ -354,10 +351,11 @@ class Need:
 
 class NeedCounter:
     """:func:`analyse` one frame at a time (a renderer feeds each frame's requests as it goes, so no
-    frame's stream is kept): ``add(frame, reqs)`` for each frame, then ``result()``."""
+    frame's stream is kept): ``add(frame, reqs)`` for each frame, then ``result()``. With
+    ``per_frame=False`` only what is touched is counted (no per-frame figures: faster, for pruning)."""
 
-    def __init__(self, ts: TextureSet, cache: CacheSpec = CacheSpec()):
-        self.ts, self.cache = ts, cache
+    def __init__(self, ts: TextureSet, cache: CacheSpec = CacheSpec(), per_frame: bool = True):
+        self.ts, self.cache, self.per_frame = ts, cache, per_frame
         self.grids = row_grids(ts)
         nbx, nby, offset = self.grids
         self.counts = np.zeros(int((offset + nbx * nby).max(initial=0)), np.int64)
@@ -367,11 +365,18 @@ class NeedCounter:
         self.frames: list[FrameNeed] = []
 
     def add(self, frame: int, reqs: np.ndarray) -> FrameNeed:
-        """Count one frame's requests (valid for the set); returns its :class:`FrameNeed`."""
+        """Count one frame's requests (valid for the set); returns its :class:`FrameNeed` (None
+        without ``per_frame``)."""
         cache = self.cache
         rb = request_blocks(self.ts, reqs, self.grids)
         self.counts += np.bincount(rb.cell, minlength=len(self.counts))
         c = rb.compressed
+        if not self.per_frame:                        # what is touched, without the frame's figures
+            self.idx_seen[rb.index_word[c]] = True
+            self.idx_seen[rb.index_word[c & rb.straddle] + 1] = True
+            self.ent_seen[rb.entry[c]] = True
+            self.raw_seen[rb.raw_word[~c]] = True
+            return None
         words = np.unique(np.concatenate([rb.index_word[c], rb.index_word[c & rb.straddle] + 1]))
         entries = np.unique(rb.entry[c])
         raws = np.unique(rb.raw_word[~c])
@@ -393,10 +398,11 @@ class NeedCounter:
                     self.ent_seen.copy(), self.raw_seen.copy(), list(self.frames))
 
 
-def analyse(ts: TextureSet, streams, frames=None, cache: CacheSpec = CacheSpec()) -> Need:
+def analyse(ts: TextureSet, streams, frames=None, cache: CacheSpec = CacheSpec(), per_frame: bool = True) -> Need:
     """The :class:`Need` of the request ``streams`` (an iterable of (N, 4) arrays, one per frame, or
-    of (frame number, array) pairs) in ``ts``. ``frames`` numbers the streams (default 0, 1, ...)."""
-    counter = NeedCounter(ts, cache)
+    of (frame number, array) pairs) in ``ts``. ``frames`` numbers the streams (default 0, 1, ...);
+    ``per_frame=False`` skips the per-frame figures (:class:`NeedCounter`)."""
+    counter = NeedCounter(ts, cache, per_frame)
     frames = iter(frames) if frames is not None else None
     for n, item in enumerate(streams):
         if isinstance(item, tuple):

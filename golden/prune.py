@@ -171,5 +171,5 @@ def encode_needed(scene, frames, mode: str = "trilinear", images=None, cache=Non
     from .render.scene import build_texture_set
     keep = touched_levels(scene, frames, mode)
     ts = build_texture_set(scene, images, keep_levels=keep)
-    need = analyse(ts, scene_streams(scene, ts, frames, mode), cache=cache or CacheSpec())
+    need = analyse(ts, scene_streams(scene, ts, frames, mode), cache=cache or CacheSpec(), per_frame=False)
     return prune(ts, need), need

@@ -21,13 +21,13 @@ def add_need_source(p) -> None:
                    help=with_default("the sampling mode whose requests are analysed", "trilinear"))
 
 
-def scene_need(scene, ts, frames, mode="trilinear", cache=None, progress=True):
+def scene_need(scene, ts, frames, mode="trilinear", cache=None, progress=True, per_frame=True):
     """The :class:`~vqtex.golden.need.Need` of ``frames`` of ``scene`` in ``ts`` (a progress bar)."""
     from vqtex.golden.fetch import check_requests
     from vqtex.golden.need import CacheSpec, NeedCounter, scene_streams
 
     from .render import Progress
-    counter = NeedCounter(ts, cache or CacheSpec())
+    counter = NeedCounter(ts, cache or CacheSpec(), per_frame)
     prog = Progress(len(frames), "analysing frames") if progress else None
     for f, reqs in scene_streams(scene, ts, frames, mode):
         check_requests(ts, reqs[:, 0], reqs[:, 1], reqs[:, 2], reqs[:, 3])
