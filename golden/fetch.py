@@ -191,7 +191,9 @@ def decode(ts: TextureSet, tex: int, level: int = 0) -> np.ndarray:
     """A whole level as an (h, w, 4) uint8 RGBA image.
 
     An independent path from :func:`fetch` (whole index maps unpacked, whole codewords tiled), so
-    that "fetch over every texel equals decode" checks the per-texel address arithmetic.
+    that "fetch over every texel equals decode" checks the per-texel address arithmetic. In a pruned
+    set (``golden.prune``) a level it does not store raises :class:`RequestError` and the texels of
+    blocks it does not store are (0, 0, 0, 0).
     """
     d = ts.descriptor(tex, level)
     if not d["valid"]:
@@ -225,4 +227,8 @@ def decode(ts: TextureSet, tex: int, level: int = 0) -> np.ndarray:
             out[..., 1] = out[..., 2] = out[..., 0]
     if color != COLOR_CODES["rgba"]:
         out[..., 3] = 255
+    if ts.present_blocks is not None:                 # a pruned set: blocks it no longer holds are (0, 0, 0, 0)
+        k = np.arange(nbx * nby)
+        gone = ~ts.block_present(np.full(k.shape, tex), np.full(k.shape, level), k).reshape(nby, nbx)
+        out[np.repeat(np.repeat(gone, bh, axis=0), bw, axis=1)] = 0
     return out
