@@ -277,7 +277,8 @@ class TextureSet:
         32 for rgba, 8 for intensity). ``overall``: original bits of every stored level over the bits
         actually stored for them: index maps, raw levels, and the texture's share of its codebook
         (a shared codebook is split in proportion to the level-0 texels of the textures sharing it).
-        With ``tex=None`` the whole set: total original bits over total stored bits.
+        With ``tex=None`` the whole set: total original bits over total stored bits. Levels a pruned
+        set does not store count neither way (a texture with none stored has an overall rate of 1).
         """
         if tex is None:
             orig = stored = 0.0
@@ -285,7 +286,7 @@ class TextureSet:
                 r = self.rates(t)
                 orig += r["original_bits"]
                 stored += r["stored_bits"]
-            return {"overall": orig / stored, "original_bits": orig, "stored_bits": stored}
+            return {"overall": orig / stored if stored else 1.0, "original_bits": orig, "stored_bits": stored}
         info = self.textures[tex]
         src_bits = {"rgb": 24, "rgba": 32, "intensity": 8, "yuv411": 24}[info.color]
         orig = index = raw = 0
@@ -310,7 +311,7 @@ class TextureSet:
         stored = index + raw + cb_share
         return {
             "base": (bw * bh * src_bits / info.index_bits) if info.codebook >= 0 else 1.0,
-            "overall": orig / stored,
+            "overall": orig / stored if stored else 1.0,     # a pruned texture: nothing for nothing
             "original_bits": orig, "stored_bits": stored,
             "index_bits_total": index, "raw_bits": raw, "codebook_bits_share": cb_share,
         }

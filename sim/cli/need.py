@@ -140,8 +140,8 @@ def add_parser(sub) -> None:
                    help=with_default("analyse this texture set instead of encoding the scene's textures",
                                      "encode them with the scene's settings"))
     p.add_argument("--cache-tile", type=block_size, default=(8, 8),
-                   help=with_default("the block cache's sets as a WxH tile of block coordinates (powers of two)",
-                                     "8x8: 64 sets"))
+                   help=with_default("the block cache's sets as a WxH tile of block coordinates (powers of two; "
+                                     "8x8 is 64 sets)", "8x8"))
     p.add_argument("--cache-ways", type=int, choices=[1, 2], default=2,
                    help=with_default("blocks per cache set: 1 direct-mapped, 2 two-way LRU", 2))
     p.add_argument("--heatmap", metavar="DIR",
