@@ -363,32 +363,51 @@ class NeedCounter:
         self.ent_seen = np.zeros(len(ts.codebook), bool)
         self.raw_seen = np.zeros(len(ts.raw_words), bool)
         self.frames: list[FrameNeed] = []
+        d = ts.descriptors
+        self._comp = (d["compressed"].astype(bool) & d["valid"].astype(bool)).ravel()
+        self._sub = d["sublevel"].astype(np.int64).ravel()
+        self._lbw = np.where(self._comp, d["log2bw"].astype(np.int64).ravel(), 0)
+        self._lbh = np.where(self._comp, d["log2bh"].astype(np.int64).ravel(), 0)
+        self._nbx, self._offset = nbx.ravel(), offset.ravel()
 
     def add(self, frame: int, reqs: np.ndarray) -> FrameNeed:
         """Count one frame's requests (valid for the set); returns its :class:`FrameNeed` (None
-        without ``per_frame``)."""
+        without ``per_frame``).
+
+        Per request only its block is computed (a few shifts); the index, codeword and memory words
+        are read once per distinct block of the frame (:func:`request_blocks` on one request of
+        each), which gives the same distinct words and entries."""
         cache = self.cache
-        rb = request_blocks(self.ts, reqs, self.grids)
-        self.counts += np.bincount(rb.cell, minlength=len(self.counts))
+        reqs = np.asarray(reqs, np.int64).reshape(-1, 4)
+        tex, level, i, j = reqs.T
+        row = tex * MAX_LEVELS + level
+        comp = self._comp[row]
+        lbw, lbh = self._lbw[row], self._lbh[row]
+        bx, by = i >> lbw, j >> lbh
+        own_nbx = self._nbx[row]
+        cell = self._offset[row] + by * own_nbx + bx
+        frame_counts = np.bincount(cell, minlength=len(self.counts))
+        self.counts += frame_counts
+        touched = np.flatnonzero(frame_counts)
+        rep = np.zeros(len(self.counts), np.int64)
+        rep[cell] = np.arange(len(cell))                 # one request of each touched block
+        rb = request_blocks(self.ts, reqs[rep[touched]], self.grids)
         c = rb.compressed
-        if not self.per_frame:                        # what is touched, without the frame's figures
-            self.idx_seen[rb.index_word[c]] = True
-            self.idx_seen[rb.index_word[c & rb.straddle] + 1] = True
-            self.ent_seen[rb.entry[c]] = True
-            self.raw_seen[rb.raw_word[~c]] = True
-            return None
         words = np.unique(np.concatenate([rb.index_word[c], rb.index_word[c & rb.straddle] + 1]))
         entries = np.unique(rb.entry[c])
-        raws = np.unique(rb.raw_word[~c])
+        raws = rb.raw_word[~c]                           # one texel per raw "block": already distinct
         self.idx_seen[words] = True
         self.ent_seen[entries] = True
         self.raw_seen[raws] = True
-        sets = (rb.by & (cache.tile[1] - 1)) * cache.tile[0] + (rb.bx & (cache.tile[0] - 1))
+        if not self.per_frame:
+            return None
+        key = ((row - np.where(comp, self._sub[row], 0)) << 24) | (by * own_nbx + bx)
+        sets = (by & (cache.tile[1] - 1)) * cache.tile[0] + (bx & (cache.tile[0] - 1))
         fn = FrameNeed(
-            frame=int(frame), requests=int(len(rb.key)), index_words=int(len(words)),
+            frame=int(frame), requests=int(len(reqs)), index_words=int(len(words)),
             codebook_entries=int(len(entries)), raw_words=int(len(raws)), blocks=int(len(np.unique(rb.key))),
-            straddling_reads=int((rb.straddle & c).sum()), buffer_hits=int(buffer_hits(rb.key).sum()),
-            cache_hits=int(cache_hits(rb.key, sets, cache.ways).sum()))
+            straddling_reads=int((frame_counts[touched] * (rb.straddle & c)).sum()),
+            buffer_hits=int(buffer_hits(key).sum()), cache_hits=int(cache_hits(key, sets, cache.ways).sum()))
         self.frames.append(fn)
         return fn
 
