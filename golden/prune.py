@@ -29,7 +29,7 @@ import numpy as np
 
 from .format import (CodebookInfo, TextureInfo, TextureSet, default_index_bits, pack_indices, unpack_indices)
 
-__all__ = ["prune", "pruned_bytes", "touched_levels", "encode_needed"]
+__all__ = ["prune", "pruned_bytes", "stored_counts", "prune_report", "touched_levels", "encode_needed"]
 
 
 def _group_rows(d, t: int, top: int, levels: int, keep: np.ndarray) -> list[int]:
@@ -146,6 +146,31 @@ def pruned_bytes(ts: TextureSet) -> dict:
             "descriptors": int(ts.descriptors.nbytes),
             "present_blocks": int(ts.present_blocks.nbytes) if ts.present_blocks is not None else 0,
             "file": len(ts.to_bytes())}
+
+
+def stored_counts(ts: TextureSet) -> dict:
+    """What ``ts`` stores: textures with a stored level, levels, compressed levels, blocks of stored
+    compressed levels (present ones in a pruned set), codewords, codebooks, index width per texture
+    (None without a codebook)."""
+    d = ts.descriptors
+    valid = d["valid"].astype(bool)
+    comp = valid & d["compressed"].astype(bool)
+    rows, _, nblocks = ts.present_rows()
+    blocks = int(nblocks[rows].sum()) if ts.present_blocks is None else int(np.unpackbits(ts.present_blocks).sum())
+    return {"textures": int(valid.any(axis=1).sum()), "levels": int(valid.sum()),
+            "compressed_levels": int(comp.sum()), "compressed_level_blocks": blocks,
+            "codewords": int(sum(cb.size for cb in ts.codebooks)), "codebooks": len(ts.codebooks),
+            "index_bits": [t.index_bits if t.codebook >= 0 else None for t in ts.textures]}
+
+
+def prune_report(before: TextureSet, after: TextureSet, **extra) -> dict:
+    """Before and after: :func:`stored_counts`, :func:`pruned_bytes` and ``memory_bytes`` (index +
+    codebook + raw memories: what the hardware holds), plus ``extra``."""
+    out = {}
+    for key, ts in (("before", before), ("after", after)):
+        b = pruned_bytes(ts)
+        out[key] = {**stored_counts(ts), "bytes": b, "memory_bytes": b["index"] + b["codebook"] + b["raw"]}
+    return {**out, **extra}
 
 
 def touched_levels(scene, frames, mode: str = "trilinear") -> list[list[int]]:

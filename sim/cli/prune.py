@@ -9,33 +9,7 @@ import time
 from .common import CliError, Outputs, add_json, emit, load_set, with_default, write_bytes
 from .need import add_need_source, scene_need
 
-__all__ = ["add_parser", "cmd_prune", "prune_report", "prune_text"]
-
-
-def _counts(ts) -> dict:
-    d = ts.descriptors
-    valid = d["valid"].astype(bool)
-    comp = valid & d["compressed"].astype(bool)
-    rows, _, nblocks = ts.present_rows()
-    if ts.present_blocks is None:
-        blocks = int(nblocks[rows].sum())
-    else:
-        import numpy as np
-        blocks = int(np.unpackbits(ts.present_blocks).sum())
-    return {"textures": int(valid.any(axis=1).sum()), "levels": int(valid.sum()),
-            "compressed_levels": int(comp.sum()), "compressed_level_blocks": blocks,
-            "codewords": int(sum(cb.size for cb in ts.codebooks)), "codebooks": len(ts.codebooks),
-            "index_bits": [t.index_bits if t.codebook >= 0 else None for t in ts.textures]}
-
-
-def prune_report(before, after, **extra) -> dict:
-    """Before/after: what is stored (textures, levels, blocks, codewords, index widths) and bytes."""
-    from vqtex.golden.prune import pruned_bytes
-    b, a = pruned_bytes(before), pruned_bytes(after)
-    memory = {k: b[k] for k in ("index", "codebook", "raw")}
-    memory_after = {k: a[k] for k in ("index", "codebook", "raw")}
-    return {"before": {**_counts(before), "bytes": b, "memory_bytes": sum(memory.values())},
-            "after": {**_counts(after), "bytes": a, "memory_bytes": sum(memory_after.values())}, **extra}
+__all__ = ["add_parser", "cmd_prune", "prune_text"]
 
 
 def prune_text(r: dict) -> str:
@@ -60,7 +34,7 @@ def prune_text(r: dict) -> str:
 
 
 def cmd_prune(args) -> int:
-    from vqtex.golden.prune import encode_needed, prune
+    from vqtex.golden.prune import encode_needed, prune, prune_report
     from vqtex.golden.render.scene import build_texture_set, load_scene
 
     from .render import Progress, parse_frames
