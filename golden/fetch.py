@@ -197,6 +197,8 @@ def decode(ts: TextureSet, tex: int, level: int = 0) -> np.ndarray:
     """
     d = ts.descriptor(tex, level)
     if not d["valid"]:
+        if level < ts.textures[tex].levels:
+            raise RequestError(f"texture {tex} level {level} was pruned from this texture set")
         raise RequestError(f"texture {tex} has no level {level}")
     w, h = 1 << d["log2w"], 1 << d["log2h"]
     if not d["compressed"]:
