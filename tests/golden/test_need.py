@@ -183,3 +183,11 @@ def test_scene_level_shapes_are_the_encoded_ones(small):
     scene, ts, _ = small
     assert scene_level_shapes(scene) == [ts.level_shapes(t) for t in range(ts.n_textures)]
     assert ts.descriptors.shape[1] == MAX_LEVELS
+
+
+def test_a_frame_without_requests_touches_nothing(small):
+    _, ts, _ = small
+    s = analyse(ts, [np.zeros((0, 4), np.int64)], frames=[7]).summary()
+    assert s["levels"]["touched"] == 0 and s["codewords"]["used"] == 0 and s["memory_touched"]["index_words"] == 0
+    assert s["per_frame"] == [dict(frame=7, requests=0, index_words=0, codebook_entries=0, raw_words=0, blocks=0,
+                                   straddling_reads=0, buffer_hits=0, cache_hits=0)]

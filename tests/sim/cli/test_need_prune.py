@@ -107,3 +107,21 @@ def test_pruned_frames_identical_on_golden_and_cxxrtl(name, tmp_path, capsys):
     code, out, err = run(capsys, "render", scene_file, "--frames", other, "--texture-set", tmp_path / "p.vqt",
                          "-o", tmp_path / "x.png")
     assert code == 2 and err.count("\n") == 1 and "pruned from this texture set" in err
+
+
+def test_render_encode_needed_and_prune_without_a_set(topspin_set, tmp_path, capsys):
+    scene_file, ts, folder = topspin_set
+    code, out, err = run(capsys, "render", scene_file, "--frames", "3", "--encode-needed", "-o", tmp_path / "f.png",
+                         "--report", tmp_path / "r.json")
+    assert code == 0, err
+    rep = json.loads((tmp_path / "r.json").read_text())
+    assert rep["frames"][0]["need"]["requests"] == rep["frames"][0]["requests"] > 0
+    assert rep["need"]["levels"]["touched"] == rep["need"]["levels"]["stored"]      # only what frame 3 reads
+    code, out, err = run(capsys, "prune", "--scene", scene_file, "--frames", "3", "-o", tmp_path / "n.vqt",
+                         "--compare", "--json")
+    assert code == 0, err
+    r = json.loads(out)
+    assert r["after"]["levels"] < r["before"]["levels"] and "full_encode_seconds" in r and "encode_seconds" in r
+    code, out, err = run(capsys, "prune", folder / "full.vqt", "--scene", scene_file, "--compare", "-o",
+                         tmp_path / "x.vqt")
+    assert code == 2 and err.count("\n") == 1 and not (tmp_path / "x.vqt").exists()
