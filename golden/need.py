@@ -34,6 +34,7 @@ Public API::
         .frames, .formats(), .summary(per_frame=True)
     scene_streams(scene, source, frames, mode="trilinear") -> iterator of (frame, requests)
     scene_level_shapes(scene) -> [[(w, h), ...] per texture]
+    distinct_requests(streams) -> (M, 4) int64, the union of several streams' requests
     request_blocks(ts, reqs) -> RequestBlocks     buffer_hits(keys) -> bool    cache_hits(keys, sets, ways) -> bool
 """
 
@@ -48,7 +49,8 @@ from .fetch import block_address, read_index, straddles
 from .format import TextureSet
 
 __all__ = ["CacheSpec", "FrameNeed", "Need", "RequestBlocks", "analyse", "request_blocks", "buffer_hits",
-           "cache_hits", "scene_streams", "scene_level_shapes", "row_grids", "NeedCounter", "heat_image"]
+           "cache_hits", "scene_streams", "scene_level_shapes", "row_grids", "NeedCounter", "heat_image",
+           "distinct_requests"]
 
 
 @dataclass(frozen=True)
@@ -452,6 +454,20 @@ def heat_image(need: Need, tex: int, level: int, min_side: int = 256) -> np.ndar
         out[touched, :3] = np.clip(np.rint(ramp[lo] * (1 - frac) + ramp[lo + 1] * frac), 0, 255).astype(np.uint8)
     scale = max(1, -(-min_side // max(h, w, 1)))
     return np.repeat(np.repeat(out, scale, axis=0), scale, axis=1)
+
+
+def distinct_requests(streams) -> np.ndarray:
+    """The distinct requests (M, 4) int64 of several request streams (each (N, 4), valid: sizes up to
+    4096 and at most 4096 textures), sorted by (texture, level, j, i): what a set must hold to answer
+    them all. Per stream one sort; the union is kept as 40-bit keys."""
+    acc = np.zeros(0, np.int64)
+    for reqs in streams:
+        r = np.asarray(reqs, np.int64).reshape(-1, 4)
+        key = ((((r[:, 0] * MAX_LEVELS + r[:, 1]) << 12) | r[:, 3]) << 12) | r[:, 2]
+        acc = np.union1d(acc, key)
+    mask = (1 << 12) - 1
+    row = acc >> 24
+    return np.stack([row // MAX_LEVELS, row % MAX_LEVELS, acc & mask, (acc >> 12) & mask], 1)
 
 
 def scene_level_shapes(scene) -> list[list[tuple[int, int]]]:

@@ -6,7 +6,7 @@ import pytest
 
 from vqtex.golden.fetch import RequestError, check_requests, fetch
 from vqtex.golden.format import FormatError, TextureSet
-from vqtex.golden.need import analyse, scene_streams
+from vqtex.golden.need import analyse, distinct_requests, scene_streams
 from vqtex.golden.prune import encode_needed, prune, pruned_bytes, touched_levels
 from vqtex.golden.render.frame import render_frame
 from vqtex.golden.render.pyramid import VQSource
@@ -83,6 +83,8 @@ def test_pruning_again_for_the_same_frames_changes_nothing(pruned):
     name, scene, ts, frames, need, p = pruned
     again = prune(p, analyse(p, scene_streams(scene, p, frames)))
     assert again == p
+    texels = distinct_requests(r for _, r in scene_streams(scene, ts, frames))       # what encode_needed uses
+    assert prune(ts, analyse(ts, [texels], per_frame=False)) == p
 
 
 def test_encode_needed_stores_only_touched_levels():
