@@ -27,12 +27,14 @@ Requests must be valid for ``ts`` (:func:`~.fetch.check_requests`).
 
 Public API::
 
-    analyse(ts, streams, frames=None, cache=CacheSpec()) -> Need       (NeedCounter(ts, cache).add(f, reqs), .result())
+    analyse(ts, streams, frames=None, cache=CacheSpec(), per_frame=True) -> Need
+    NeedCounter(ts, cache=CacheSpec(), per_frame=True): .add(frame, reqs) -> FrameNeed | None, .result() -> Need
     heat_image(need, tex, level, min_side=256) -> (H, W, 4) uint8 picture of the blocks touched
     Need.textures, .levels, .groups, .blocks(t, L), .touched_blocks(t, L), .group_blocks(t, top), .codewords,
         .frames, .formats(), .summary(per_frame=True)
     scene_streams(scene, source, frames, mode="trilinear") -> iterator of (frame, requests)
     scene_level_shapes(scene) -> [[(w, h), ...] per texture]
+    distinct_requests(streams) -> (M, 4) int64, the union of several streams' requests
     request_blocks(ts, reqs) -> RequestBlocks     buffer_hits(keys) -> bool    cache_hits(keys, sets, ways) -> bool
 """
 
@@ -47,7 +49,8 @@ from .fetch import block_address, read_index, straddles
 from .format import TextureSet
 
 __all__ = ["CacheSpec", "FrameNeed", "Need", "RequestBlocks", "analyse", "request_blocks", "buffer_hits",
-           "cache_hits", "scene_streams", "scene_level_shapes", "row_grids", "NeedCounter", "heat_image"]
+           "cache_hits", "scene_streams", "scene_level_shapes", "row_grids", "NeedCounter", "heat_image",
+           "distinct_requests"]
 
 
 @dataclass(frozen=True)
@@ -125,34 +128,30 @@ class RequestBlocks:
 
 
 def request_blocks(ts: TextureSet, reqs: np.ndarray, grids=None) -> RequestBlocks:
-    """The blocks, words and entries each request of ``reqs`` (N, 4) reads (see :class:`RequestBlocks`)."""
+    """The blocks, words and entries each request of ``reqs`` (N, 4) reads (see :class:`RequestBlocks`).
+
+    The descriptor fields are gathered per request from the (texture, level) row, every request
+    computed as if compressed and as if raw, and the two merged (no boolean subsetting of
+    structured arrays: the cost is a few passes over N int64)."""
     reqs = np.asarray(reqs, np.int64).reshape(-1, 4)
     tex, level, i, j = reqs.T
     nbx, nby, offset = row_grids(ts) if grids is None else grids
-    d = ts.descriptors[tex, level]
-    comp = d["compressed"].astype(bool)
-    n = len(reqs)
-    sub = np.where(comp, d["sublevel"].astype(np.int64), 0)
     row = tex * MAX_LEVELS + level
+    fields = ("compressed", "sublevel", "log2w", "log2bw", "log2bh", "index_bits", "base", "cb_base")
+    d = {name: ts.descriptors[name].ravel().astype(np.int64)[row] for name in fields}
+    comp = d["compressed"].astype(bool)
+    d["index_bits"] = np.where(comp, d["index_bits"], 1)      # raw rows: any width; their results are dropped
+    sub = np.where(comp, d["sublevel"], 0)
     group_row = row - sub
-    bx, by = i.copy(), j.copy()
-    index_word = np.full(n, -1, np.int64)
-    straddle = np.zeros(n, bool)
-    entry = np.full(n, -1, np.int64)
-    codeword = np.full(n, -1, np.int64)
-    raw_word = np.full(n, -1, np.int64)
-    if comp.any():
-        dc = d[comp]
-        k, _, _ = block_address(dc, i[comp], j[comp])
-        bx[comp] = i[comp] >> dc["log2bw"].astype(np.int64)
-        by[comp] = j[comp] >> dc["log2bh"].astype(np.int64)
-        index_word[comp] = dc["base"].astype(np.int64) + (k * dc["index_bits"].astype(np.int64)) // ts.word_bits
-        straddle[comp] = straddles(dc, k, ts.word_bits)
-        codeword[comp] = read_index(ts, dc, k)
-        entry[comp] = dc["cb_base"].astype(np.int64) + codeword[comp]
-    if (~comp).any():
-        dr = d[~comp]
-        raw_word[~comp] = dr["base"].astype(np.int64) + (j[~comp] << dr["log2w"].astype(np.int64)) + i[~comp]
+    lbw, lbh = np.where(comp, d["log2bw"], 0), np.where(comp, d["log2bh"], 0)
+    d["log2bw"], d["log2bh"] = lbw, lbh
+    k, _, _ = block_address(d, i, j)
+    bx, by = i >> lbw, j >> lbh
+    index_word = np.where(comp, d["base"] + (k * d["index_bits"]) // ts.word_bits, -1)
+    straddle = straddles(d, k, ts.word_bits) & comp
+    codeword = np.where(comp, read_index(ts, d, np.where(comp, k, 0)), -1)
+    entry = np.where(comp, d["cb_base"] + codeword, -1)
+    raw_word = np.where(comp, -1, d["base"] + (j << d["log2w"]) + i)
     own_nbx = nbx.ravel()[row]
     cell = offset.ravel()[row] + by * own_nbx + bx
     # A group block's key names the group's top row and the block (the same grid for every level of
@@ -267,10 +266,8 @@ class Need:
         """bool (nby, nbx): blocks of the level group starting at ``top`` touched from any of its levels."""
         d = self.ts.descriptors[tex]
         out = None
-        for L in range(top, self.ts.textures[tex].levels):
-            if L > top and (not d["compressed"][L] or int(d["sublevel"][L]) == 0):
-                break
-            if d["compressed"][L] and L - int(d["sublevel"][L]) == top:
+        for L in range(top, min(self.ts.textures[tex].levels, top + 3)):     # at most 3 levels a group
+            if d["valid"][L] and d["compressed"][L] and L - int(d["sublevel"][L]) == top:
                 b = self.touched_blocks(tex, L)
                 out = b if out is None else out | b
         return out
@@ -356,10 +353,11 @@ class Need:
 
 class NeedCounter:
     """:func:`analyse` one frame at a time (a renderer feeds each frame's requests as it goes, so no
-    frame's stream is kept): ``add(frame, reqs)`` for each frame, then ``result()``."""
+    frame's stream is kept): ``add(frame, reqs)`` for each frame, then ``result()``. With
+    ``per_frame=False`` only what is touched is counted (no per-frame figures: faster, for pruning)."""
 
-    def __init__(self, ts: TextureSet, cache: CacheSpec = CacheSpec()):
-        self.ts, self.cache = ts, cache
+    def __init__(self, ts: TextureSet, cache: CacheSpec = CacheSpec(), per_frame: bool = True):
+        self.ts, self.cache, self.per_frame = ts, cache, per_frame
         self.grids = row_grids(ts)
         nbx, nby, offset = self.grids
         self.counts = np.zeros(int((offset + nbx * nby).max(initial=0)), np.int64)
@@ -367,25 +365,51 @@ class NeedCounter:
         self.ent_seen = np.zeros(len(ts.codebook), bool)
         self.raw_seen = np.zeros(len(ts.raw_words), bool)
         self.frames: list[FrameNeed] = []
+        d = ts.descriptors
+        self._comp = (d["compressed"].astype(bool) & d["valid"].astype(bool)).ravel()
+        self._sub = d["sublevel"].astype(np.int64).ravel()
+        self._lbw = np.where(self._comp, d["log2bw"].astype(np.int64).ravel(), 0)
+        self._lbh = np.where(self._comp, d["log2bh"].astype(np.int64).ravel(), 0)
+        self._nbx, self._offset = nbx.ravel(), offset.ravel()
 
     def add(self, frame: int, reqs: np.ndarray) -> FrameNeed:
-        """Count one frame's requests (valid for the set); returns its :class:`FrameNeed`."""
+        """Count one frame's requests (valid for the set); returns its :class:`FrameNeed` (None
+        without ``per_frame``).
+
+        Per request only its block is computed (a few shifts); the index, codeword and memory words
+        are read once per distinct block of the frame (:func:`request_blocks` on one request of
+        each), which gives the same distinct words and entries."""
         cache = self.cache
-        rb = request_blocks(self.ts, reqs, self.grids)
-        self.counts += np.bincount(rb.cell, minlength=len(self.counts))
+        reqs = np.asarray(reqs, np.int64).reshape(-1, 4)
+        tex, level, i, j = reqs.T
+        row = tex * MAX_LEVELS + level
+        comp = self._comp[row]
+        lbw, lbh = self._lbw[row], self._lbh[row]
+        bx, by = i >> lbw, j >> lbh
+        own_nbx = self._nbx[row]
+        cell = self._offset[row] + by * own_nbx + bx
+        frame_counts = np.bincount(cell, minlength=len(self.counts))
+        self.counts += frame_counts
+        touched = np.flatnonzero(frame_counts)
+        rep = np.zeros(len(self.counts), np.int64)
+        rep[cell] = np.arange(len(cell))                 # one request of each touched block
+        rb = request_blocks(self.ts, reqs[rep[touched]], self.grids)
         c = rb.compressed
         words = np.unique(np.concatenate([rb.index_word[c], rb.index_word[c & rb.straddle] + 1]))
         entries = np.unique(rb.entry[c])
-        raws = np.unique(rb.raw_word[~c])
+        raws = rb.raw_word[~c]                           # one texel per raw "block": already distinct
         self.idx_seen[words] = True
         self.ent_seen[entries] = True
         self.raw_seen[raws] = True
-        sets = (rb.by & (cache.tile[1] - 1)) * cache.tile[0] + (rb.bx & (cache.tile[0] - 1))
+        if not self.per_frame:
+            return None
+        key = ((row - np.where(comp, self._sub[row], 0)) << 24) | (by * own_nbx + bx)
+        sets = (by & (cache.tile[1] - 1)) * cache.tile[0] + (bx & (cache.tile[0] - 1))
         fn = FrameNeed(
-            frame=int(frame), requests=int(len(rb.key)), index_words=int(len(words)),
+            frame=int(frame), requests=int(len(reqs)), index_words=int(len(words)),
             codebook_entries=int(len(entries)), raw_words=int(len(raws)), blocks=int(len(np.unique(rb.key))),
-            straddling_reads=int((rb.straddle & c).sum()), buffer_hits=int(buffer_hits(rb.key).sum()),
-            cache_hits=int(cache_hits(rb.key, sets, cache.ways).sum()))
+            straddling_reads=int((frame_counts[touched] * (rb.straddle & c)).sum()),
+            buffer_hits=int(buffer_hits(key).sum()), cache_hits=int(cache_hits(key, sets, cache.ways).sum()))
         self.frames.append(fn)
         return fn
 
@@ -395,10 +419,11 @@ class NeedCounter:
                     self.ent_seen.copy(), self.raw_seen.copy(), list(self.frames))
 
 
-def analyse(ts: TextureSet, streams, frames=None, cache: CacheSpec = CacheSpec()) -> Need:
+def analyse(ts: TextureSet, streams, frames=None, cache: CacheSpec = CacheSpec(), per_frame: bool = True) -> Need:
     """The :class:`Need` of the request ``streams`` (an iterable of (N, 4) arrays, one per frame, or
-    of (frame number, array) pairs) in ``ts``. ``frames`` numbers the streams (default 0, 1, ...)."""
-    counter = NeedCounter(ts, cache)
+    of (frame number, array) pairs) in ``ts``. ``frames`` numbers the streams (default 0, 1, ...);
+    ``per_frame=False`` skips the per-frame figures (:class:`NeedCounter`)."""
+    counter = NeedCounter(ts, cache, per_frame)
     frames = iter(frames) if frames is not None else None
     for n, item in enumerate(streams):
         if isinstance(item, tuple):
@@ -429,6 +454,20 @@ def heat_image(need: Need, tex: int, level: int, min_side: int = 256) -> np.ndar
         out[touched, :3] = np.clip(np.rint(ramp[lo] * (1 - frac) + ramp[lo + 1] * frac), 0, 255).astype(np.uint8)
     scale = max(1, -(-min_side // max(h, w, 1)))
     return np.repeat(np.repeat(out, scale, axis=0), scale, axis=1)
+
+
+def distinct_requests(streams) -> np.ndarray:
+    """The distinct requests (M, 4) int64 of several request streams (each (N, 4), valid: sizes up to
+    4096 and at most 4096 textures), sorted by (texture, level, j, i): what a set must hold to answer
+    them all. Per stream one sort; the union is kept as 40-bit keys."""
+    acc = np.zeros(0, np.int64)
+    for reqs in streams:
+        r = np.asarray(reqs, np.int64).reshape(-1, 4)
+        key = ((((r[:, 0] * MAX_LEVELS + r[:, 1]) << 12) | r[:, 3]) << 12) | r[:, 2]
+        acc = np.union1d(acc, key)
+    mask = (1 << 12) - 1
+    row = acc >> 24
+    return np.stack([row // MAX_LEVELS, row % MAX_LEVELS, acc & mask, (acc >> 12) & mask], 1)
 
 
 def scene_level_shapes(scene) -> list[list[tuple[int, int]]]:

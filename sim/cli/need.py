@@ -21,13 +21,13 @@ def add_need_source(p) -> None:
                    help=with_default("the sampling mode whose requests are analysed", "trilinear"))
 
 
-def scene_need(scene, ts, frames, mode="trilinear", cache=None, progress=True):
+def scene_need(scene, ts, frames, mode="trilinear", cache=None, progress=True, per_frame=True):
     """The :class:`~vqtex.golden.need.Need` of ``frames`` of ``scene`` in ``ts`` (a progress bar)."""
     from vqtex.golden.fetch import check_requests
     from vqtex.golden.need import CacheSpec, NeedCounter, scene_streams
 
     from .render import Progress
-    counter = NeedCounter(ts, cache or CacheSpec())
+    counter = NeedCounter(ts, cache or CacheSpec(), per_frame)
     prog = Progress(len(frames), "analysing frames") if progress else None
     for f, reqs in scene_streams(scene, ts, frames, mode):
         check_requests(ts, reqs[:, 0], reqs[:, 1], reqs[:, 2], reqs[:, 3])
@@ -140,8 +140,8 @@ def add_parser(sub) -> None:
                    help=with_default("analyse this texture set instead of encoding the scene's textures",
                                      "encode them with the scene's settings"))
     p.add_argument("--cache-tile", type=block_size, default=(8, 8),
-                   help=with_default("the block cache's sets as a WxH tile of block coordinates (powers of two)",
-                                     "8x8: 64 sets"))
+                   help=with_default("the block cache's sets as a WxH tile of block coordinates (powers of two; "
+                                     "8x8 is 64 sets)", "8x8"))
     p.add_argument("--cache-ways", type=int, choices=[1, 2], default=2,
                    help=with_default("blocks per cache set: 1 direct-mapped, 2 two-way LRU", 2))
     p.add_argument("--heatmap", metavar="DIR",

@@ -99,12 +99,13 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
     also runs the fixed stream through the backend (the cycle model for ``golden``, which then
     reports the sparse stream's cycles too): ``"fixed"`` holds its requests, cycles and whether its
     frame is identical."""
-    from vqtex.golden.fetch import fetch
+    from vqtex.golden.fetch import check_requests, fetch
     from vqtex.golden.render.frame import frame_requests
     from vqtex.golden.render.metrics import frame_mse
     from vqtex.golden.render.pyramid import ReferenceSource
     from vqtex.golden.render.pyramid import VQSource
     src = VQSource(ts)
+    pruned = ts.present_blocks is not None or any(t.absent_levels for t in ts.textures)
     ref_src = None
     if reference:
         if images is None:
@@ -114,6 +115,8 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
         out = {"frame": f}
         t0 = time.perf_counter()
         reqs, sampler = frame_requests(scene, f, src, mode, stream=stream, fovea=fovea)
+        if pruned:                                      # a pruned set refuses what it does not hold
+            check_requests(ts, reqs[:, 0], reqs[:, 1], reqs[:, 2], reqs[:, 3])
         golden_texels = fetch(ts, reqs[:, 0], reqs[:, 1], reqs[:, 2], reqs[:, 3])
         golden_frame = sampler.resolve(golden_texels)
         out["golden_seconds"] = time.perf_counter() - t0
@@ -150,6 +153,8 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
         if fovea is not None:
             from vqtex.sim.reports.foveation import compare_regions
             ureqs, usampler = frame_requests(scene, f, src, mode, stream=stream)
+            if pruned:
+                check_requests(ts, ureqs[:, 0], ureqs[:, 1], ureqs[:, 2], ureqs[:, 3])
             uframe = usampler.resolve(fetch(ts, ureqs[:, 0], ureqs[:, 1], ureqs[:, 2], ureqs[:, 3]))
             out["fovea"] = compare_regions(ts, fovea, (reqs, sampler, golden_frame), (ureqs, usampler, uframe), f,
                                            backend=backend, stall=stall, seed=seed, one_port=one_port)
@@ -277,7 +282,16 @@ def cmd_render(args) -> int:
             raise CliError(f"--diff-scale {args.diff_scale} must be at least 1")
         on_frame = _extra_outputs(args, outs, frames)
         images = [img for img, _ in scene.load_textures()]
-        ts = load_set(args.texture_set) if args.texture_set else encode_scene(scene, images)
+        if args.encode_needed and args.texture_set:
+            raise CliError("--encode-needed encodes the scene's textures: it does not go with --texture-set")
+        if args.encode_needed and (args.requests != "sparse" or args.compare_fixed or fovea is not None):
+            raise CliError("--encode-needed encodes what the sparse, unbiased stream needs: it does not go with "
+                           "--requests fixed, --compare-fixed or --fovea")
+        if args.encode_needed:
+            from vqtex.golden.prune import encode_needed
+            ts = encode_needed(scene, frames, args.mode, images)[0]
+        else:
+            ts = load_set(args.texture_set) if args.texture_set else encode_scene(scene, images)
         if ts.n_textures != len(scene.textures):
             raise CliError(f"{args.texture_set} holds {ts.n_textures} textures, the scene uses {len(scene.textures)}")
         need = _NeedReport(ts, on_frame) if report_path else None
@@ -392,6 +406,9 @@ def add_parser(sub) -> None:
     r.add_argument("--texture-set", metavar="FILE.vqt",
                    help=with_default("use this texture set instead of encoding the scene's textures",
                                      "encode them with the scene's settings"))
+    r.add_argument("--encode-needed", action="store_true",
+                   help="encode only what the rendered frames need (their levels; codebooks trained on those, "
+                        "then pruned: golden.prune.encode_needed; default: encode everything)")
     add_hardware_options(r)
     r.add_argument("--report", metavar="REPORT.json", help=with_default("also write the JSON report here", "none"))
     r.add_argument("--reference", metavar="REF.png",

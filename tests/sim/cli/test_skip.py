@@ -93,6 +93,8 @@ def test_fovea_report(tmp_path, scene_file, capsys):
     (["--fovea-radius", "3"], "needs --fovea"),
     (["--fovea", "1,2", "--mode", "point"], "trilinear"),
     (["--requests", "fixed", "--compare-fixed"], "needs --requests sparse"),
+    (["--encode-needed", "--requests", "fixed"], "--encode-needed"),
+    (["--encode-needed", "--fovea", "1,2"], "--encode-needed"),
 ])
 def test_bad_options_are_one_line(tmp_path, scene_file, capsys, extra, message):
     capsys.readouterr()
