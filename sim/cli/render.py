@@ -395,7 +395,7 @@ def add_parser(sub) -> None:
                         "(default off)")
     r.add_argument("--fovea", metavar="X,Y",
                    help=with_default("foveate: bias the level of detail up with the distance from this gaze "
-                                     "point (pixels from the top-left corner), 0 inside --fovea-radius; the report "
+                                     "point (pixels from the top-left corner; --fovea=-X,Y when X is negative), 0 inside --fovea-radius; the report "
                                      "compares fovea and periphery with the unbiased frame (docs/skipping.md)",
                                      "no foveation"))
     r.add_argument("--fovea-radius", type=float, metavar="R",

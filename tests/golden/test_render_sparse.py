@@ -191,3 +191,13 @@ def test_point_mode_and_bad_stream():
     assert len(sm.requests(f)) == 2 and (sm.counts == 1).all()
     with pytest.raises(ValueError, match="stream"):
         Sampler([SQUARE], stream="dense")
+
+
+def test_a_frame_without_fragments():
+    e = np.zeros(0)
+    f = Fragments(4, 3, np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64), *(e,) * 6)
+    for stream in ("sparse", "fixed"):
+        for mode in ("point", "trilinear"):
+            sm = Sampler([SQUARE], mode=mode, stream=stream)
+            assert sm.requests(f).shape == (0, 4) and sm.skipped == SkipCounts(0, 0, 0)
+            assert (sm.resolve(np.zeros((0, 4), np.uint8)) == (0, 0, 0, 255)).all()

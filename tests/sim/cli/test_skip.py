@@ -139,3 +139,14 @@ def test_small_topspin_frames_on_the_compiled_rtl(cache):
             out[stream] = (len(reqs), res.cycles, sampler.resolve(res.responses))
         assert np.array_equal(out["fixed"][2], out["sparse"][2])
         assert out["sparse"][0] < out["fixed"][0] and out["sparse"][1] == out["sparse"][0] + LATENCY < out["fixed"][1]
+
+
+def test_a_fovea_off_the_frame_is_all_periphery(tmp_path, scene_file, capsys):
+    code, rep = _render(capsys, scene_file, "-o", tmp_path / "f.png", "--frames", "0", "--fovea=-50,-50",
+                        "--fovea-radius", "2")
+    assert code == 0
+    regions = rep["frames"][0]["fovea"]
+    assert regions["fovea"]["pixels"] == 0 and regions["fovea"]["identical"] is True
+    assert regions["fovea"]["foveated"]["requests"] == regions["fovea"]["foveated"]["cycles"] == 0
+    assert rep["fovea"]["fovea"]["saved"]["requests"] == 0.0
+    assert regions["periphery"]["foveated"]["requests"] == rep["frames"][0]["requests"]
