@@ -104,10 +104,13 @@ def test_bad_options_are_one_line(tmp_path, scene_file, capsys, extra, message):
     assert not list(tmp_path.glob("x*.png"))
 
 
-def test_bench_skip_on_a_small_scene(cache):
+def test_bench_skip_on_a_small_scene(cache, capsys):
     need("g++")
-    from vqtex.sim.bench.skip import bench_scene
-    row = bench_scene(parse_scene(TINY, "tiny.toml"), frames=[0, 1])
+    from vqtex.sim.bench.skip import run
+    capsys.readouterr()
+    rows = run(json_out=True, scenes=[parse_scene(TINY, "tiny.toml")])          # its two frames
+    assert json.loads(capsys.readouterr().out) == {"skip": json.loads(json.dumps(rows))}
+    row = rows[0]
     assert row["frames"] == 2 and row["frames_identical"] is True
     f, s = row["fixed"], row["sparse"]
     assert f["requests_per_frame"] == 8 * row["covered_pixels_per_frame"]
