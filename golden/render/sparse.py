@@ -39,9 +39,9 @@ class SkipCounts:
 
     Members:
         fixed: requests of the fixed stream (M K).
-        zero_weight: requests dropped because their texel's merged weight in the pixel is 0.
-        repeats: requests dropped because an earlier request of the same pixel names the same texel
-            (their weight moved to it).
+        zero_weight: requests left out whose own weight is 0.
+        repeats: requests left out whose own weight is not 0: an earlier request of the pixel names
+            the same texel and carries it.
     """
 
     fixed: int
@@ -87,10 +87,10 @@ def sparse_stream(reqs: np.ndarray, weights: np.ndarray, spans=None):
         raise ValueError("weights must be non-negative and small enough to add exactly")
     at = (np.arange(m, dtype=np.int64)[:, None] * k + first).ravel()
     merged = np.bincount(at, weights=weights.ravel(), minlength=m * k).astype(np.int64).reshape(m, k)
-    group = merged.ravel()[at].reshape(m, k)             # each request's texel's merged weight
     keep = merged > 0                                    # only a first occurrence can hold weight
     counts = keep.sum(1)
-    skip = SkipCounts(m * k, int((group == 0).sum()), int(((first != np.arange(k)) & (group > 0)).sum()))
+    dropped_zero = int((~keep & (weights == 0)).sum())
+    skip = SkipCounts(m * k, dropped_zero, m * k - int(counts.sum()) - dropped_zero)
     kept = np.flatnonzero(keep)
     return (np.take(reqs.reshape(-1, 4), kept, axis=0), np.take(merged, kept).astype(weights.dtype),
             counts.astype(np.int64), skip)
