@@ -4,6 +4,8 @@ encode  -- the codebook designer against scikit-learn's KMeans (needs the ``benc
 mip     -- extended codewords: the paper's averages against joint training, per level
 sim     -- simulation backends: pysim, compiled CXXRTL, Verilator (cycles per second, build times)
 render  -- golden render time (uncompressed and VQ) and RTL cycles per frame, both built-in scenes
+codecs  -- VQ against BC1, ASTC, JPEG 2000 and wavelet coders: bits, PSNR, encode, decode, one random texel
+           (needs the ``codecs`` extra; the full run's photographs need ``bench``)
 stability -- numerical stability and hostile input: the colour matrix on every input, long streams under
            backpressure, mutated .vqt files, adversarial encoder training sets
 """
@@ -11,6 +13,7 @@ stability -- numerical stability and hostile input: the colour matrix on every i
 from __future__ import annotations
 
 import importlib
+import inspect
 
 from .common import CliError, add_json
 
@@ -22,15 +25,27 @@ BENCHES = {
     "sim": "vqtex.sim.bench.simulation",
     "render": "vqtex.sim.bench.render",
     "stability": "vqtex.sim.bench.stability",
+    "codecs": "vqtex.sim.bench.codecs",
 }
+
+#: The extra that installs what a bench needs (default ``bench``).
+EXTRAS = {"codecs": "codecs"}
 
 
 def cmd_bench(args) -> int:
     try:
         mod = importlib.import_module(BENCHES[args.what])
     except ImportError as e:
-        raise CliError(f"bench {args.what} needs {e.name} (pip install '.[bench]')") from None
-    mod.run(json_out=args.json)
+        raise CliError(f"bench {args.what} needs {e.name} (pip install '.[{EXTRAS.get(args.what, 'bench')}]')") from None
+    kwargs = {}
+    if args.quick:
+        if "quick" not in inspect.signature(mod.run).parameters:
+            raise CliError(f"bench {args.what} has no --quick")
+        kwargs["quick"] = True
+    try:
+        mod.run(json_out=args.json, **kwargs)
+    except ImportError as e:
+        raise CliError(f"bench {args.what} needs {e.name} (pip install '.[{EXTRAS.get(args.what, 'bench')}]')") from None
     return 0
 
 
@@ -38,6 +53,10 @@ def add_parser(sub) -> None:
     b = sub.add_parser("bench", help="benchmarks that print numbers (speed and quality, not tests)")
     b.add_argument("what", choices=sorted(BENCHES),
                    help="encode: codebook design vs scikit-learn KMeans; mip: extended codewords; "
-                        "sim: simulation backends' speed; render: golden render time and RTL cycles per frame")
+                        "sim: simulation backends' speed; render: golden render time and RTL cycles per frame; "
+                        "codecs: VQ against BC1, ASTC, JPEG 2000 and wavelet coders")
+    b.add_argument("--quick", action="store_true",
+                   help="codecs: a small run (two bundled textures, two VQ configurations, 2 repeats) "
+                        "instead of the full one (default off)")
     add_json(b)
     b.set_defaults(func=cmd_bench)
