@@ -32,11 +32,18 @@ BENCHES = {
 EXTRAS = {"codecs": "codecs"}
 
 
+def _needs(what: str, e: ImportError) -> CliError:
+    """The one-line error for a missing dependency: a Python package (its extra) or a system library."""
+    name = e.name or "a missing module"
+    how = "scripts/install-sim-tools" if name.startswith("lib") else f"pip install '.[{EXTRAS.get(what, 'bench')}]'"
+    return CliError(f"bench {what} needs {name} ({how})")
+
+
 def cmd_bench(args) -> int:
     try:
         mod = importlib.import_module(BENCHES[args.what])
     except ImportError as e:
-        raise CliError(f"bench {args.what} needs {e.name} (pip install '.[{EXTRAS.get(args.what, 'bench')}]')") from None
+        raise _needs(args.what, e) from None
     kwargs = {}
     if args.quick:
         if "quick" not in inspect.signature(mod.run).parameters:
@@ -45,7 +52,7 @@ def cmd_bench(args) -> int:
     try:
         mod.run(json_out=args.json, **kwargs)
     except ImportError as e:
-        raise CliError(f"bench {args.what} needs {e.name} (pip install '.[{EXTRAS.get(args.what, 'bench')}]')") from None
+        raise _needs(args.what, e) from None
     return 0
 
 

@@ -57,42 +57,47 @@ def _check_images(images) -> None:
 def codec_rows(images: dict, *, methods=METHODS, vq_configs=vq.CONFIGS, bc1_encoders=bc1.ENCODERS,
                astc_blocks=astc.BLOCKS, jpeg2000_tiles=jpeg2000.TILES, wavelets=tuple(wavelet.WAVELETS),
                wavelet_tiles=wavelet.TILES, repeats: int = 3, random_texels_n: int = RANDOM_TEXELS,
-               jpeg2000_sample: int = jpeg2000.RANDOM_SAMPLE, seed: int = 0, log=None) -> list[dict]:
+               jpeg2000_sample: int = jpeg2000.RANDOM_SAMPLE, targets: dict | None = None, seed: int = 0,
+               log=None) -> list[dict]:
     """Rows of the shared schema (:data:`FIELDS`) for every image and codec configuration.
 
     images: {name: (H, W, 3) uint8}, sides powers of two from 16 (VQ's textures).
-    JPEG 2000 and the wavelet coder run at the bits per texel of each VQ row of the same image (so
-    they need ``vq`` in ``methods``). Times are the best of ``repeats``; random texels are batches of
+    JPEG 2000 and the wavelet coder run at the bits per texel of each VQ row of the same image, and
+    at the rates of ``targets`` ({label: bits per texel}, the same for every image; their rows' config
+    ends ``@label``): without ``vq`` in ``methods`` and without ``targets`` they have no rate. Times are the best of ``repeats``; random texels are batches of
     ``random_texels_n`` (the same coordinates for every codec of an image, seeded by ``seed``).
     """
     _check_images(images)
     unknown = set(methods) - set(METHODS)
     if unknown:
         raise ValueError(f"unknown methods {sorted(unknown)} (known: {', '.join(METHODS)})")
+    if "jpeg2000" in methods:
+        jpeg2000.openjpeg()                                   # a missing libopenjp2 fails before any work
     log = log or (lambda msg: None)
     out = []
     for n, (name, img) in enumerate(images.items()):
         img = np.ascontiguousarray(img)
         y, x = random_texels(img.shape, random_texels_n, seed + n)
-        targets = {}
+        rates = {}
         if "vq" in methods:
             log(f"{name}: vq {', '.join(vq_configs)}")
             vrows = vq.rows(name, img, y=y, x=x, repeats=repeats, configs=vq_configs, seed=seed)
-            targets = {r["config"]: r["bits_per_texel"] for r in vrows}
+            rates = {r["config"]: r["bits_per_texel"] for r in vrows}
             out += vrows
+        rates.update({str(k): float(v) for k, v in (targets or {}).items()})
         if "bc1" in methods:
             log(f"{name}: bc1 {', '.join(bc1_encoders)}")
             out += bc1.rows(name, img, y=y, x=x, repeats=repeats, encoders=bc1_encoders)
         if "astc" in methods:
             log(f"{name}: astc {', '.join(f'{b}x{b}' for b in astc_blocks)}")
             out += astc.rows(name, img, y=y, x=x, repeats=repeats, blocks=astc_blocks)
-        if "jpeg2000" in methods and targets:
-            log(f"{name}: jpeg2000 at {len(targets)} rates")
-            out += jpeg2000.rows(name, img, targets=targets, y=y, x=x, repeats=repeats, tiles=jpeg2000_tiles,
+        if "jpeg2000" in methods and rates:
+            log(f"{name}: jpeg2000 at {len(rates)} rates")
+            out += jpeg2000.rows(name, img, targets=rates, y=y, x=x, repeats=repeats, tiles=jpeg2000_tiles,
                                  sample=jpeg2000_sample)
-        if "wavelet" in methods and targets:
-            log(f"{name}: wavelets at {len(targets)} rates")
-            out += wavelet.rows(name, img, targets=targets, y=y, x=x, repeats=repeats, wavelets=wavelets,
+        if "wavelet" in methods and rates:
+            log(f"{name}: wavelets at {len(rates)} rates")
+            out += wavelet.rows(name, img, targets=rates, y=y, x=x, repeats=repeats, wavelets=wavelets,
                                 tiles=wavelet_tiles)
     return out
 

@@ -30,7 +30,7 @@ import numpy as np
 from .measure import best_time, copy_floor, gather_floor, psnr
 from .schema import row
 
-__all__ = ["encode", "decode", "decode_texel", "rows", "TILES", "RANDOM_SAMPLE"]
+__all__ = ["encode", "decode", "decode_texel", "rows", "openjpeg", "TILES", "RANDOM_SAMPLE"]
 
 #: Layouts: None (untiled) and the tile side.
 TILES = (None, 64)
@@ -38,22 +38,28 @@ TILES = (None, 64)
 RANDOM_SAMPLE = 32
 
 
+def openjpeg():
+    """The glymur module, once it has found OpenJPEG; ImportError (naming ``libopenjp2``) if not."""
+    import glymur as g
+    if g.version.openjpeg_version_tuple[0] < 2:
+        raise ImportError("glymur found no OpenJPEG library", name="libopenjp2")
+    return g
+
+
 def encode(image: np.ndarray, path: str, bits_per_texel: float, tile: int | None = None):
     """Write ``image`` (H, W, 3) uint8 to the codestream ``path`` (``.j2k``) at about
     ``bits_per_texel``; returns the glymur object."""
-    import glymur
     h, w = image.shape[:2]
     side = min(h, w) if tile is None else tile
     levels = max(1, min(5, int(np.log2(side)) - 2))         # down to a 4-texel band, at most 5
     kw = {"tilesize": (tile, tile)} if tile is not None else {}
-    return glymur.Jp2k(path, data=np.ascontiguousarray(image[..., :3]), cratios=[24.0 / bits_per_texel],
+    return openjpeg().Jp2k(path, data=np.ascontiguousarray(image[..., :3]), cratios=[24.0 / bits_per_texel],
                        irreversible=True, numres=levels + 1, **kw)
 
 
 def decode(path: str) -> np.ndarray:
     """The whole image, (H, W, 3) uint8."""
-    import glymur
-    return glymur.Jp2k(path)[:]
+    return openjpeg().Jp2k(path)[:]
 
 
 def decode_texel(jp2, y: int, x: int) -> np.ndarray:
@@ -62,8 +68,7 @@ def decode_texel(jp2, y: int, x: int) -> np.ndarray:
 
 
 def _random_texel_s(path: str, y, x, sample: int) -> float:
-    import glymur
-    jp2 = glymur.Jp2k(path)                                  # headers parsed once, as a renderer would
+    jp2 = openjpeg().Jp2k(path)                                 # headers parsed once, as a renderer would
     n = min(sample, len(y))
     t0 = time.perf_counter()
     for k in range(n):                                       # one library decode per request
@@ -74,7 +79,7 @@ def _random_texel_s(path: str, y, x, sample: int) -> float:
 def rows(name: str, image: np.ndarray, *, targets: dict, y, x, repeats: int = 3, tiles=TILES,
          sample: int = RANDOM_SAMPLE) -> list[dict]:
     """One row per (target rate, layout). ``targets``: {VQ config: its bits per texel}."""
-    import glymur
+    g = openjpeg()
     h, w = image.shape[:2]
     out = []
     with tempfile.TemporaryDirectory(prefix="vqtex-j2k-") as tmp:
@@ -94,6 +99,6 @@ def rows(name: str, image: np.ndarray, *, targets: dict, y, x, repeats: int = 3,
                                random_texel=("OpenJPEG decode of a 1x1 area "
                                              + ("of the image" if tile is None else "in its tile")
                                              + f", one call per texel, {min(sample, len(y))} texels"),
-                               library=f"glymur {glymur.__version__}, OpenJPEG {glymur.version.openjpeg_version}, 9/7",
+                               library=f"glymur {g.__version__}, OpenJPEG {g.version.openjpeg_version}, 9/7",
                                target_bits_per_texel=bpt, width=w, height=h))
     return out

@@ -194,3 +194,23 @@ def test_bench_codecs_json(monkeypatch, capsys):
 def test_quick_is_only_for_benches_that_have_it(capsys):
     assert main(["bench", "mip", "--quick"]) == 2
     assert capsys.readouterr().err.strip() == "vqtex: error: bench mip has no --quick"
+
+
+def test_codec_rows_at_given_rates_without_vq():
+    rows = codecs.codec_rows({"a": _image(64)}, methods=("jpeg2000", "wavelet"), targets={"1 bpt": 1},
+                             wavelets=("haar",), jpeg2000_tiles=(None,), wavelet_tiles=(None,), repeats=1,
+                             random_texels_n=16, jpeg2000_sample=1)
+    assert [(r["method"], r["config"], r["target_bits_per_texel"]) for r in rows] == [
+        ("jpeg2000", "untiled @1 bpt", 1.0), ("wavelet", "Haar untiled @1 bpt", 1.0)]
+
+
+def test_a_missing_openjpeg_is_one_line(monkeypatch, capsys):
+    def missing():
+        raise ImportError("glymur found no OpenJPEG library", name="libopenjp2")
+    monkeypatch.setattr(jpeg2000, "openjpeg", missing)
+    monkeypatch.setattr(codecs, "default_images", lambda quick: {"tiny": _image(32)})
+    monkeypatch.setattr(codecs, "QUICK", dict(TINY, vq_configs=("2x2/16 rgb",)))
+    assert main(["bench", "codecs", "--quick", "--json"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err.strip() == "vqtex: error: bench codecs needs libopenjp2 (scripts/install-sim-tools)"
