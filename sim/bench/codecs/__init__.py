@@ -30,7 +30,7 @@ from . import astc, bc1, jpeg2000, vq, wavelet
 from .measure import RANDOM_TEXELS, random_texels
 from .schema import FIELDS
 
-__all__ = ["codec_rows", "summary", "run", "default_images", "FIELDS", "METHODS"]
+__all__ = ["codec_rows", "summary", "run", "print_table", "default_images", "FIELDS", "METHODS"]
 
 METHODS = ("vq", "bc1", "astc", "jpeg2000", "wavelet")
 
@@ -103,7 +103,8 @@ def codec_rows(images: dict, *, methods=METHODS, vq_configs=vq.CONFIGS, bc1_enco
 
 
 def summary(rows: list[dict]) -> list[dict]:
-    """Per (method, config) over the images: mean bits per texel and PSNR, median times, and the
+    """Per (method, config) over the images: mean bits per texel and PSNR (over the lossy images;
+    ``None`` if every one was exact), median times, and the
     median ratios of the random texel and the decode to their floors."""
     groups: dict = {}
     for r in rows:
@@ -111,9 +112,10 @@ def summary(rows: list[dict]) -> list[dict]:
     out = []
     for (method, config), rs in groups.items():
         med = lambda k: float(np.median([r[k] for r in rs]))                  # noqa: E731
+        lossy = [r["psnr_db"] for r in rs if r["psnr_db"] is not None]
         out.append({"method": method, "config": config, "images": len(rs),
                     "bits_per_texel": float(np.mean([r["bits_per_texel"] for r in rs])),
-                    "psnr_db": float(np.mean([r["psnr_db"] for r in rs])),
+                    "psnr_db": float(np.mean(lossy)) if lossy else None,
                     "encode_s": med("encode_s"), "decode_s": med("decode_s"),
                     "random_texel_s": med("random_texel_s"),
                     "random_over_floor": float(np.median([r["random_texel_s"] / r["random_floor_s"] for r in rs])),
@@ -164,6 +166,10 @@ def run(json_out: bool = False, *, quick: bool = False, images: dict | None = No
     return out
 
 
+def _db(p) -> str:
+    return " exact" if p is None else f"{p:6.2f}"
+
+
 def _us(s: float) -> str:
     return f"{s * 1e6:10.3f}" if s < 1e-3 else f"{s * 1e6:10.0f}"
 
@@ -180,14 +186,14 @@ def print_table(out: dict) -> None:
         for r in out["rows"]:
             if r["image"] != name:
                 continue
-            print(f"{r['method']:<8} {r['config']:<36} {r['bits_per_texel']:6.3f} {r['psnr_db']:6.2f} | "
+            print(f"{r['method']:<8} {r['config']:<36} {r['bits_per_texel']:6.3f} {_db(r['psnr_db'])} | "
                   f"{r['encode_s'] * 1e3:9.2f} {r['decode_s'] * 1e3:9.3f} {r['decode_s'] / r['floor_s']:8.0f} | "
                   f"{_us(r['random_texel_s'])} {r['random_texel_s'] / r['random_floor_s']:8.0f}")
     print(f"\nover {len(out['images'])} images: mean bpt and PSNR, median times and ratios to the floor")
     print(hdr)
     print("-" * len(hdr))
     for s in out["summary"]:
-        print(f"{s['method']:<8} {s['config']:<36} {s['bits_per_texel']:6.3f} {s['psnr_db']:6.2f} | "
+        print(f"{s['method']:<8} {s['config']:<36} {s['bits_per_texel']:6.3f} {_db(s['psnr_db'])} | "
               f"{s['encode_s'] * 1e3:9.2f} {s['decode_s'] * 1e3:9.3f} {s['decode_over_floor']:8.0f} | "
               f"{_us(s['random_texel_s'])} {s['random_over_floor']:8.0f}")
     print("floor: decode = copying the decoded RGB bytes once; texel = reading the same random texels "

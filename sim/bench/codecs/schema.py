@@ -11,7 +11,8 @@ Fields (:data:`FIELDS`; every row has every one, ``None`` where a field does not
 ``bits_per_texel``     every stored bit over the texels: VQ counts index bits plus the whole codebook
                        (the paper's count, one codebook per image here); BC1 and ASTC the blocks;
                        JPEG 2000 the whole codestream (headers included); wavelets the entropy model's bits
-``psnr_db``            PSNR over R, G, B of the decoded image (uint8) against the image
+``psnr_db``            PSNR over R, G, B of the decoded image (uint8) against the image; ``None`` when
+                       they are equal (lossless: JSON has no infinity)
 ``encode_s``           wall seconds to compress the image (best of ``repeats``)
 ``decode_s``           wall seconds to decode the whole image into an (H, W, 3|4) uint8 array
 ``random_texel_s``     wall seconds for one random texel, amortised over a batch (``random_texel`` says how)
@@ -27,6 +28,8 @@ Fields (:data:`FIELDS`; every row has every one, ``None`` where a field does not
 """
 
 from __future__ import annotations
+
+import math
 
 __all__ = ["FIELDS", "row"]
 
@@ -45,4 +48,6 @@ def row(**fields) -> dict:
               "random_floor_s", "target_bits_per_texel", "index_bits_per_texel"):
         if out[k] is not None:
             out[k] = float(out[k])
+    if out["psnr_db"] is not None and not math.isfinite(out["psnr_db"]):
+        out["psnr_db"] = None
     return out

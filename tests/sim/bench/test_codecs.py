@@ -214,3 +214,15 @@ def test_a_missing_openjpeg_is_one_line(monkeypatch, capsys):
     captured = capsys.readouterr()
     assert captured.out == ""
     assert captured.err.strip() == "vqtex: error: bench codecs needs libopenjp2 (scripts/install-sim-tools)"
+
+
+def test_a_lossless_row_has_no_psnr_and_the_table_says_exact(capsys):
+    flat = np.full((16, 16, 3), 255, np.uint8)                      # every codec is exact on a white picture
+    rows = codecs.codec_rows({"white": flat}, methods=("bc1",), bc1_encoders=("etcpak",), repeats=1,
+                             random_texels_n=8)
+    assert rows[0]["psnr_db"] is None
+    out = {"images": {"white": [16, 16]}, "rows": rows, "summary": codecs.summary(rows)}
+    assert out["summary"][0]["psnr_db"] is None
+    json.dumps(out, allow_nan=False)
+    codecs.print_table(out)
+    assert "exact" in capsys.readouterr().out
