@@ -81,7 +81,7 @@ def codec_rows(images: dict, *, methods=METHODS, vq_configs=vq.CONFIGS, bc1_enco
         y, x = random_texels(img.shape, random_texels_n, seed + n)
         rates = {}
         if "vq" in methods:
-            log(f"{name}: vq {', '.join(vq_configs)}")
+            log(f"{name}: vq {', '.join(vq.applicable(vq_configs, img.shape)) or '(none fits)'}")
             vrows = vq.rows(name, img, y=y, x=x, repeats=repeats, configs=vq_configs, seed=seed)
             rates = {r["config"]: r["bits_per_texel"] for r in vrows}
             out += vrows
