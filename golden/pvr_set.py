@@ -37,7 +37,7 @@ from .format import (PVR2_ONE_BY_ONE_TEXEL_OFF, CodebookInfo, TextureInfo, Textu
                      pack_indices, unpack_indices)
 from .pvr import HEADER_BYTES, MAGIC, PvrError, PvrTexture, read_dt, twiddle_indices
 
-__all__ = ["from_dt", "import_dt", "to_dt", "is_pvr2", "dt_control", "WORD_BITS", "ENTRY_BYTES"]
+__all__ = ["from_dt", "import_dt", "to_dt", "dt_bytes", "stream_order", "is_pvr2", "dt_control", "WORD_BITS", "ENTRY_BYTES"]
 
 #: Index memory word width of an imported set.
 WORD_BITS = 32
@@ -50,7 +50,7 @@ def is_pvr2(ts: TextureSet, tex: int) -> bool:
     return ts.textures[tex].color in PVR2_COLORS
 
 
-def _stream_order(raster: np.ndarray) -> np.ndarray:
+def stream_order(raster: np.ndarray) -> np.ndarray:
     """A ``(bh, bw)`` index map in raster order -> the file's twiddled order (1-D)."""
     bh, bw = raster.shape
     out = np.empty(bh * bw, dtype=np.int64)
@@ -70,7 +70,7 @@ def from_dt(tex: PvrTexture, name: str = "dt") -> TextureSet:
     descriptors = np.zeros((1, MAX_LEVELS), DESCRIPTOR_DTYPE)
     parts, base = [], 0
     for L, ((w, h), raster) in enumerate(zip(sizes, tex.indices)):
-        words = pack_indices(_stream_order(raster), 8, WORD_BITS)
+        words = pack_indices(stream_order(raster), 8, WORD_BITS)
         row = descriptors[0, L]
         row["valid"] = row["compressed"] = 1
         row["base"] = base
@@ -134,18 +134,26 @@ def to_dt(ts: TextureSet, tex: int = 0) -> bytes:
     if cb.size > 256 or not (8 <= info.width <= 1024 and 8 <= info.height <= 1024):
         raise FormatError(f"texture {tex}: a .dt holds 8..1024 texels a side and at most 256 codewords")
     n = cb.size
-    codebook = ts.codebook[cb.base: cb.base + n, :ENTRY_BYTES]
+    codebook = np.ascontiguousarray(ts.codebook[cb.base: cb.base + n, :ENTRY_BYTES]).view("<u2").reshape(n, 4)
     maps = []
     for L in range(info.levels):
         d = ts.descriptor(tex, L)
         w, h = 1 << d["log2w"], 1 << d["log2h"]
-        count = max(1, (w // 2) * (h // 2))
-        maps.append(unpack_indices(ts.index_words, 8, count, d["base"], ts.word_bits) + (256 - n))
-    body = codebook.tobytes() + b"".join(m.astype(np.uint8).tobytes() for m in reversed(maps))
+        maps.append(unpack_indices(ts.index_words, 8, max(1, (w // 2) * (h // 2)), d["base"], ts.word_bits))
+    return dt_bytes(info.width, info.height, info.color, info.mipmapped, codebook, maps)
+
+
+def dt_bytes(width: int, height: int, color: str, mipmapped: bool, codebook: np.ndarray, maps: list) -> bytes:
+    """A VQ ``.dt`` in pvrtex's layout: the 32-byte header, the ``(N, 4)`` uint16 codebook, the index
+    maps (``maps``: largest level first, each the level's entries ``0 .. N-1`` in twiddled order) smallest
+    first as bytes ``256 - N + entry``, zero padding to a multiple of 32 bytes (as pvrtex pads)."""
+    n = len(codebook)
+    body = np.ascontiguousarray(np.asarray(codebook).astype("<u2")).tobytes()
+    body += b"".join((np.asarray(m, dtype=np.int64) + (256 - n)).astype(np.uint8).tobytes() for m in reversed(maps))
     size = HEADER_BYTES + len(body)
     size += -size % 32
-    control = dt_control(info.width, info.height, info.color, info.mipmapped)
+    control = dt_control(width, height, color, mipmapped)
     header = (MAGIC + size.to_bytes(4, "little") + bytes([0, 0, n - 1, 0])
-              + info.width.to_bytes(2, "little") + info.height.to_bytes(2, "little")
+              + width.to_bytes(2, "little") + height.to_bytes(2, "little")
               + control.to_bytes(4, "little") + bytes(12))
     return (header + body).ljust(size, b"\0")

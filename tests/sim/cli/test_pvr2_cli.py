@@ -161,3 +161,31 @@ def test_damaged_or_foreign_dt_is_one_line_exit_2(capsys, tmp_path, name):
 
 def test_missing_dt_is_one_line(capsys, tmp_path):
     _one_error(capsys, ["decode", tmp_path / "nothing.dt", "-o", tmp_path / "a.png"], "cannot read")
+
+
+def test_encode_layout_pvr2_writes_a_dt_read_back_bit_for_bit(capsys, tmp_path):
+    src = DATA.parent / "crate.png"
+    out = tmp_path / "crate.dt"
+    code, text, err = _run(capsys, "encode", src, "--layout", "pvr2", "--color", "yuv422", "--mipmaps", "-k", "64",
+                           "-o", out, "--json")
+    assert code == 0, err
+    rep = json.loads(text)
+    t = rep["textures"][0]
+    assert (t["color"], t["levels"], t["codebook_size"]) == ("yuv422", 8, 64) and len(t["psnr_db"]) == 8
+    tex = pvr.read_dt(out)
+    for level in (0, 4):
+        img = tmp_path / f"l{level}.png"
+        assert _run(capsys, "decode", out, "--level", level, "-o", img)[0] == 0
+        assert np.array_equal(read_image(img), tex.levels[level][..., :3])
+    assert pvr_set.to_dt(pvr_set.import_dt([out])) == out.read_bytes()
+
+
+def test_encode_layout_pvr2_bad_options(capsys, tmp_path):
+    src = DATA.parent / "crate.png"
+    _one_error(capsys, ["encode", src, "--layout", "pvr2", "--color", "rgb", "-o", tmp_path / "a.dt"], "takes --color")
+    _one_error(capsys, ["encode", src, "--layout", "pvr2", "-k", "300", "-o", tmp_path / "a.dt"], "1..256")
+    _one_error(capsys, ["encode", src, "--layout", "pvr2", "--block", "2x2", "-o", tmp_path / "a.dt"], "does not apply")
+    _one_error(capsys, ["encode", src, src, "--layout", "pvr2", "-o", tmp_path / "a.dt"], "holds one texture")
+    _one_error(capsys, ["encode", src, "--color", "rgb565", "-o", tmp_path / "a.vqt"], "--layout pvr2")
+    _one_error(capsys, ["encode", src, "--layout", "pvr2", "-o", tmp_path / "a.png"], "extension")
+    assert not list(tmp_path.iterdir())
