@@ -16,6 +16,10 @@ the chip". The contract (see ``docs/format.md`` for the hardware engineer's vers
   format: raw levels need no colour conversion).
 * **Descriptor table** -- one row per (texture, level), ``MAX_LEVELS`` rows per texture; see
   :data:`DESCRIPTOR_FIELDS`.
+* **The PowerVR2 layout** (descriptor ``layout`` 1, colours argb1555 / rgb565 / argb4444 / yuv422):
+  Dreamcast VQ textures; 8-bit indices in twiddled (Morton) order, one index map per mip level,
+  codebook entries of four 16-bit texels listed column by column. See :mod:`golden.pvr_set` and
+  ``docs/pvr2.md``.
 
 A fetch of texel (i, j) of a level (``i`` is the column, ``j`` the row, both inside the level) is
 defined by :mod:`golden.fetch` from these images alone.
