@@ -105,14 +105,9 @@ class BlockAddress(wiring.Component):
             by.eq(self.j >> self.log2bh),
             row_shift.eq(self.log2w - self.log2bw),
         ]
-        k = Signal(2 * COORD_BITS)
-        x = Signal(OFFSET_BITS)
-        y = Signal(OFFSET_BITS)
-        m.d.comb += [
-            k.eq((by << row_shift) | bx),
-            x.eq(self.i & ~(C((1 << COORD_BITS) - 1, COORD_BITS) << self.log2bw)),
-            y.eq(self.j & ~(C((1 << COORD_BITS) - 1, COORD_BITS) << self.log2bh)),
-        ]
+        k = (by << row_shift) | bx
+        x = self.i & ~(C((1 << COORD_BITS) - 1, COORD_BITS) << self.log2bw)
+        y = self.j & ~(C((1 << COORD_BITS) - 1, COORD_BITS) << self.log2bh)
         k_out, x_out, y_out = k, x, y
         if self._twiddle:
             k_out, x_out, y_out = self._twiddled(m, bx, by, k, x, y)

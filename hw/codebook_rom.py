@@ -231,19 +231,31 @@ class CodebookROM(wiring.Component):
             v.eq(pick(v_words, bank).bit_select(vstart << 3, 8)),
         ]
         out = Signal(32)
+        if not self._pvr2:                  # the paper's formats only
+            with m.If(~compressed):
+                m.d.comb += out.eq(raw_word)
+            with m.Elif(color == _YUV):
+                m.d.comb += out.eq(Cat(texel[:8], u, v, texel[24:]))
+            with m.Else():
+                m.d.comb += out.eq(texel)
+            with m.If(self.en):
+                m.d.sync += [
+                    self.samples.as_value().eq(out),
+                    self.color_out.eq(Mux(compressed, color, _RGBA)),
+                ]
+            return m
+        # With PowerVR2 formats: 16-bit texels expanded here (then rgba to the colour matrix); yuv422
+        # as (Y, U, V) with Y the texel's high byte (then yuv411's code: through the matrix).
         color_out = Signal(2)               # what the colour matrix is told: the paper's codes only
         m.d.comb += color_out.eq(Mux(compressed, color[:2], _RGBA))
         with m.If(~compressed):
             m.d.comb += out.eq(raw_word)
         with m.Elif(color == _YUV):
             m.d.comb += out.eq(Cat(texel[:8], u, v, texel[24:]))
-        if self._pvr2:
-            # PowerVR2: 16-bit texels expanded here (then rgba to the colour matrix); yuv422 as
-            # (Y, U, V) with Y the texel's high byte (then yuv411's code: through the matrix)
-            with m.Elif(color == _YUV422):
-                m.d.comb += [out.eq(Cat(texel[8:16], u, v, texel[24:])), color_out.eq(_YUV)]
-            with m.Elif(color[2]):
-                m.d.comb += [out.eq(expand_texel(texel[:16], color)), color_out.eq(_RGBA)]
+        with m.Elif(color == _YUV422):
+            m.d.comb += [out.eq(Cat(texel[8:16], u, v, texel[24:])), color_out.eq(_YUV)]
+        with m.Elif(color[2]):
+            m.d.comb += [out.eq(expand_texel(texel[:16], color)), color_out.eq(_RGBA)]
         with m.Else():
             m.d.comb += out.eq(texel)
         with m.If(self.en):

@@ -172,3 +172,17 @@ def test_golden_fetch_of_small_sets_equals_pvr_decode():
         for L, (w, h) in enumerate(ts.level_shapes(t)):
             jj, ii = np.mgrid[0:h, 0:w]
             assert np.array_equal(fetch(ts, t, L, ii.ravel(), jj.ravel()).reshape(h, w, 4), tex.levels[L])
+
+
+def test_paper_rtl_holds_no_pvr2_logic():
+    """A paper set's RTLIL has the layout field at width 0 only and none of the PowerVR2 signals; a
+    PowerVR2 set's has them (main's RTLIL for paper sets differs only by those zero-width wires,
+    docs/pvr2.md)."""
+    from vqtex.sim.reports.synth import design_rtlil
+    paper = design_rtlil(support.texture_sets()["rgb12"])
+    layout = [ln.strip() for ln in paper.splitlines() if "layout" in ln]
+    assert layout and all(ln.startswith(("wire width 0", "connect")) and ("{  }" in ln or "wire width 0" in ln)
+                          for ln in layout), layout[:4]
+    pvr2 = design_rtlil(SMALL["rectangles_and_mip8"])
+    for name in ("k_tw", "ct_pair", "square"):
+        assert f"\\{name}" not in paper and f"\\{name}" in pvr2, name
