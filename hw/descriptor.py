@@ -121,7 +121,11 @@ class DescriptorTable(wiring.Component):
         init = [{name: int(row[name]) for name in DESCRIPTOR_FIELDS} for row in rows]
         depth = 1 << (texture_bits(self._ts) + LEVEL_BITS)       # every address decodes
         init += [{name: 0 for name in DESCRIPTOR_FIELDS}] * (depth - len(init))
-        m.submodules.table = table = memory.Memory(shape=self._layout, depth=depth, init=init)
+        # A set with PowerVR2 textures keeps the table in LUTs (as Yosys does for most paper sets):
+        # its twiddle adds logic after the read, and a block RAM's clock-to-output (4.3 ns on the
+        # ECP5-8) left too little of the cycle for it (89 MHz, docs/pvr2.md).
+        attrs = {"rom_style": "logic"} if self._widths["layout"] else None
+        m.submodules.table = table = memory.Memory(shape=self._layout, depth=depth, init=init, attrs=attrs)
         port = table.read_port(domain="sync")
         m.d.comb += [
             port.addr.eq(Cat(self.level, self.texture)),

@@ -31,17 +31,17 @@ def _psnr(a, b) -> float:
     return float(10 * np.log10(255.0 ** 2 / max(float((d * d).mean()), 1e-12)))
 
 
-def run(data: str = DEFAULT_DATA, seed: int = 0) -> list:
+def run(data: str = DEFAULT_DATA, seed: int = 0, formats=FORMATS, variants=VARIANTS) -> list:
     """One row per (format, variant): ``{"format", "codebook", "mipmaps", "pvrtex_db", "ours_db",
-    "gain_db", "ours_seconds"}``."""
+    "gain_db", "ours_seconds"}``. ``variants``: (pvrtex file tag, codebook size, mipmapped)."""
     from vqtex.golden.pvr import parse_dt
     from vqtex.golden.pvr_encode import encode_pvr2
     from vqtex.golden.render.imageio import read_image
     src = read_image(os.path.join(data, "crate.png"))
     h, w = src.shape[:2]
     rows = []
-    for fmt in FORMATS:
-        for tag, k, mip in VARIANTS:
+    for fmt in formats:
+        for tag, k, mip in variants:
             preview = read_image(os.path.join(data, "generated", f"crate_{fmt}_{tag}.preview.png"))
             theirs = _psnr(preview[:h, :w], src)
             t0 = time.perf_counter()
@@ -57,9 +57,14 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python -m vqtex.sim.bench.pvr2_quality", description=__doc__.splitlines()[0])
     p.add_argument("--data", default=DEFAULT_DATA, help="folder holding crate.png and generated/ (default tests/data/pvrtex)")
     p.add_argument("--seed", type=int, default=0, help="encoder seed (default 0)")
+    p.add_argument("--format", dest="formats", action="append", choices=FORMATS,
+                   help="only this format (repeat for several; default all four)")
+    p.add_argument("--codebook", type=int, choices=[64, 256], default=None,
+                   help="only this codebook size (default both, 256 and 64)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
     args = p.parse_args(argv)
-    rows = run(args.data, args.seed)
+    variants = [v for v in VARIANTS if args.codebook in (None, v[1])]
+    rows = run(args.data, args.seed, tuple(args.formats or FORMATS), tuple(variants))
     if args.json:
         print(json.dumps({"rows": rows}))
         return 0
