@@ -13,6 +13,7 @@ from vqtex.golden.color import DREAMCAST_YUV422
 from vqtex.golden.fetch import block_address, decode, fetch, random_requests, twiddled_block
 from vqtex.golden.format import COLOR_CODES, DESCRIPTOR_FIELDS, FormatError, TextureSet
 from vqtex.golden.render.imageio import read_image
+from tests.support import random_dt
 from vqtex.sim.bench.fuzz import join_vqt, mutate_vqt, split_vqt, try_file
 
 DATA = Path(__file__).resolve().parent.parent / "data" / "pvrtex"
@@ -103,22 +104,11 @@ def test_twiddled_block_agrees_with_pvr_twiddle(bw, bh):
     assert np.array_equal(k.reshape(bh, bw), pvr.twiddle_indices(bw, bh))
 
 
-def _dt(width: int, height: int, fmt: int, n: int, seed: int) -> bytes:
-    """A .dt made byte by byte (not by to_dt): random codebook, random index bytes 256-N..255."""
-    rng = np.random.default_rng(seed)
-    body = rng.integers(0, 1 << 16, (n, 4)).astype("<u2").tobytes()
-    body += rng.integers(256 - n, 256, width * height // 4).astype(np.uint8).tobytes()
-    control = (1 << 30) | (fmt << 27)
-    size = 32 + len(body)
-    return (b"DcTx" + size.to_bytes(4, "little") + bytes([0, 0, n - 1, 0]) + width.to_bytes(2, "little")
-            + height.to_bytes(2, "little") + control.to_bytes(4, "little") + bytes(12) + body)
-
-
 @pytest.mark.parametrize("width, height, fmt, n", [(64, 8, 1, 256), (8, 32, 3, 17), (16, 16, 0, 1),
                                                    (1024, 8, 2, 100), (8, 8, 3, 256)])
 def test_rectangular_textures_fetch_as_pvr_decodes(width, height, fmt, n):
     """Rectangles are twiddled in min-side squares; random texels of every format."""
-    data = _dt(width, height, fmt, n, seed=width + height)
+    data = random_dt(width, height, fmt, n, seed=width + height)
     ts = pvr_set.from_dt(pvr.parse_dt(data, decode=False))
     assert np.array_equal(_levels_by_fetch(ts)[0], pvr.parse_dt(data).levels[0])
     assert np.array_equal(decode(ts, 0, 0), pvr.parse_dt(data).levels[0])

@@ -10,7 +10,6 @@ import pytest
 from amaranth.sim import Simulator
 
 from tests import support
-from tests.golden.test_pvr_set import _dt
 from vqtex.golden import pvr, pvr_set
 from vqtex.golden.fetch import block_address, expand_texels, fetch
 from vqtex.golden.format import COLOR_CODES, DESCRIPTOR_DTYPE, LAYOUT_CODES, PVR2_COLORS
@@ -27,9 +26,9 @@ GENERATED = sorted((DATA / "generated").glob("*.dt"))
 def _small_sets():
     """Tiny PowerVR2 sets for pysim: rectangles both ways, an 8x8 mip chain down to 1x1 in yuv422
     (whose 1x1 level is rgb565) and argb4444, small codebooks, one 128x128 pvrtex mip chain."""
-    parts = [pvr_set.from_dt(pvr.parse_dt(_dt(*a, seed=n), decode=False))
+    parts = [pvr_set.from_dt(pvr.parse_dt(support.random_dt(*a, seed=n), decode=False))
              for n, a in enumerate([(16, 8, 3, 17), (8, 32, 0, 256), (16, 16, 2, 5)])]
-    mip = bytearray(_dt(8, 8, 3, 200, seed=9))
+    mip = bytearray(support.random_dt(8, 8, 3, 200, seed=9))
     extra = np.random.default_rng(9).integers(56, 256, 6).astype(np.uint8).tobytes()   # 1x1, 2x2, 4x4 maps
     mip = bytes(mip[:32]) + bytes(mip[32:32 + 1600]) + extra + bytes(mip[32 + 1600:])
     mip = mip[:4] + len(mip).to_bytes(4, "little") + mip[8:19] + bytes([mip[19] | 0x80]) + mip[20:]
