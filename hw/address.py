@@ -127,7 +127,7 @@ class BlockAddress(wiring.Component):
         is ``((i | j) >> lmin) << 2 lmin | interleave(i mod L, j mod L)`` (``j`` bit n at bit 2n, ``i``
         bit n at bit 2n + 1), and the block number is that over 4 (PowerVR2 blocks are 2x2; the 1x1
         level's only texel is block 0). The interleave is wiring; the rest a compare, a mask and one
-        shifter. The offsets come transposed: ``x = j & 1``, ``y = i & 1``."""
+        shifter. The offsets come transposed: ``x = j & (bh - 1)``, ``y = i & (bw - 1)``."""
         lmin = Signal(4)                    # log2 of the twiddled squares' side, in texels
         m.d.comb += lmin.eq(Mux(self.log2w < self.log2h, self.log2w, self.log2h))
         low = ~(C((1 << COORD_BITS) - 1, COORD_BITS) << lmin)
@@ -138,7 +138,4 @@ class BlockAddress(wiring.Component):
         morton = Cat(*(Cat(sy[n], sx[n]) for n in range(COORD_BITS)))
         texel = Signal(2 * COORD_BITS)
         m.d.comb += texel.eq((square << lmin) | morton)
-        k_tw = texel[2:]
-        x_tw = Cat(self.j[0], C(0, OFFSET_BITS - 1))
-        y_tw = Cat(self.i[0], C(0, OFFSET_BITS - 1))
-        return (Mux(self.layout, k_tw, k), Mux(self.layout, x_tw, x), Mux(self.layout, y_tw, y))
+        return (Mux(self.layout, texel[2:], k), Mux(self.layout, y, x), Mux(self.layout, x, y))
