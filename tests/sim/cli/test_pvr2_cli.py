@@ -78,10 +78,12 @@ def test_sim_on_a_dt_through_cxxrtl(capsys, tmp_path):
     assert np.array_equal(resp, want)
 
 
-def test_export_a_dt(capsys, tmp_path):
+def test_export_a_dt_lint_clean(capsys, tmp_path):
+    need("verilator")
     out = tmp_path / "crate.v"
-    code, text, _ = _run(capsys, "export", ARGB, "-o", out, "--json")
-    assert code == 0 and out.stat().st_size > 1000 and "module texel_fetch" in out.read_text()
+    code, text, err = _run(capsys, "export", YUV_MIP, "-o", out, "--lint", "--json")
+    assert code == 0, err
+    assert json.loads(text)["lint"] == "clean" and "module texel_fetch" in out.read_text()
 
 
 def test_render_a_scene_naming_dt_textures(capsys, tmp_path):
