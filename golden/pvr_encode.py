@@ -163,10 +163,9 @@ def _cells(vectors: np.ndarray, weights: np.ndarray, idx: np.ndarray, k: int):
     return counts, sums
 
 
-def _refine(vectors, weights, blocks_shape, cb, color, iterations):
+def _refine(vectors, weights, cb, color, iterations):
     """Quantisation-aware Lloyd iterations on (k, 4) uint16 ``cb``; returns (cb, indices)."""
     k = len(cb)
-    d = vectors.shape[1]
     nch = ERROR_CHANNELS[color]
     idx = nearest(vectors, _vectors(_decode(cb, color), color))[0]
     for _ in range(iterations):
@@ -184,7 +183,6 @@ def _refine(vectors, weights, blocks_shape, cb, color, iterations):
             break
         cb = np.where(better[:, None], new, cb).astype(np.uint16)
         idx = nearest(vectors, _vectors(_decode(cb, color), color))[0]
-    assert d == 4 * nch
     return cb, idx
 
 
@@ -220,7 +218,7 @@ def encode_pvr2(image: np.ndarray, color: str = "rgb565", *, codebook_size: int 
     means = np.zeros((k, 4, 4))
     means[..., :nch] = start.reshape(k, 4, nch)
     cb = _fit_yuv(means) if color == "yuv422" else _quantize_rgb(means, color)
-    cb, idx = _refine(vectors, weights, allb.shape, cb, color, iterations)
+    cb, idx = _refine(vectors, weights, cb, color, iterations)
     maps, at = [], 0
     for lv in levels:
         lh, lw = lv.shape[:2]
