@@ -27,8 +27,7 @@ class BlockAddress(wiring.Component):
     With ``twiddle`` (a set holding PowerVR2 textures) and ``layout`` high, ``k`` is instead the
     twiddled (Morton) block number of :func:`golden.fetch.twiddled_block` and the offsets are
     transposed (``x = j & (bh - 1)``, ``y = i & (bw - 1)``: a PowerVR2 codeword lists its texels
-    column by column), as :func:`golden.fetch.block_address` says for PowerVR2 levels (2x2 blocks,
-    or the 1x1 level's one 1x1 block: ``layout`` rows of a valid set have no others).
+    column by column), as :func:`golden.fetch.block_address` says.
 
     Latency 1 (outputs registered, updated in cycles where ``en`` is high). Throughput: one per cycle.
 
@@ -122,20 +121,24 @@ class BlockAddress(wiring.Component):
         return m
 
     def _twiddled(self, m, bx, by, k, x, y):
-        """The PowerVR2 layout (``layout`` high), computed on texel coordinates so that nothing waits
-        for ``log2bw``: with ``L = 2**lmin`` the smaller side of the level, the twiddled texel number
-        is ``((i | j) >> lmin) << 2 lmin | interleave(i mod L, j mod L)`` (``j`` bit n at bit 2n, ``i``
-        bit n at bit 2n + 1), and the block number is that over 4 (PowerVR2 blocks are 2x2; the 1x1
-        level's only texel is block 0). The interleave is wiring; the rest a compare, a mask and one
-        shifter. The offsets come transposed: ``x = j & (bh - 1)``, ``y = i & (bw - 1)``."""
-        lmin = Signal(4)                    # log2 of the twiddled squares' side, in texels
-        m.d.comb += lmin.eq(Mux(self.log2w < self.log2h, self.log2w, self.log2h))
-        low = ~(C((1 << COORD_BITS) - 1, COORD_BITS) << lmin)
+        """The PowerVR2 layout (``layout`` high): the twiddled (Morton) block number
+        ``((bx | by) >> lm) << 2 lm | interleave(bx mod 2**lm, by mod 2**lm)`` (``by`` bit n at bit
+        2n, ``bx`` bit n at bit 2n + 1; ``lm`` the log2 of the smaller side of the block grid) and
+        the offsets transposed. The interleave is wiring; the rest two shifters and masks."""
+        gw = Signal(4)
+        gh = Signal(4)
+        lm = Signal(4)                      # log2 of the twiddled squares' side, in blocks
+        m.d.comb += [
+            gw.eq(self.log2w - self.log2bw),
+            gh.eq(self.log2h - self.log2bh),
+            lm.eq(Mux(gw < gh, gw, gh)),
+        ]
+        low = ~(C((1 << COORD_BITS) - 1, COORD_BITS) << lm)
         sx = Signal(COORD_BITS)
         sy = Signal(COORD_BITS)
-        square = Signal(COORD_BITS)         # (i | j) above the square: which square, times L
-        m.d.comb += [sx.eq(self.i & low), sy.eq(self.j & low), square.eq((self.i | self.j) & ~low)]
+        square = Signal(COORD_BITS)         # which square along the longer side
+        m.d.comb += [sx.eq(bx & low), sy.eq(by & low), square.eq((bx | by) >> lm)]
         morton = Cat(*(Cat(sy[n], sx[n]) for n in range(COORD_BITS)))
-        texel = Signal(2 * COORD_BITS)
-        m.d.comb += texel.eq((square << lmin) | morton)
-        return (Mux(self.layout, texel[2:], k), Mux(self.layout, y, x), Mux(self.layout, x, y))
+        k_tw = Signal(2 * COORD_BITS)
+        m.d.comb += k_tw.eq((square << (lm << 1)) | morton)
+        return (Mux(self.layout, k_tw, k), Mux(self.layout, y, x), Mux(self.layout, x, y))

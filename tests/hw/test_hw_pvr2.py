@@ -183,5 +183,5 @@ def test_paper_rtl_holds_no_pvr2_logic():
     assert layout and all(ln.startswith(("wire width 0", "connect")) and ("{  }" in ln or "wire width 0" in ln)
                           for ln in layout), layout[:4]
     pvr2 = design_rtlil(SMALL["rectangles_and_mip8"])
-    for name in ("lmin", "ct_pair", "square"):
+    for name in ("k_tw", "ct_pair", "square"):
         assert f"\\{name}" not in paper and f"\\{name}" in pvr2, name
