@@ -9,7 +9,7 @@ import time
 from .common import CliError, Outputs, add_json, emit, load_set, with_default, write_bytes
 from .need import add_need_source, scene_need
 
-__all__ = ["add_parser", "cmd_prune", "prune_text"]
+__all__ = ["add_parser", "cmd_prune", "prune_text", "add_train_on"]
 
 
 def prune_text(r: dict) -> str:
@@ -44,6 +44,8 @@ def cmd_prune(args) -> int:
         frames = parse_frames(args.frames, scene.frames)
         extra = {"scene": scene.name, "frames": frames, "mode": args.mode}
         if args.file:
+            if args.train_on != "levels":
+                raise CliError("--train-on is for encoding (no SET.vqt): a set's codebooks are already trained")
             if args.compare:
                 raise CliError("--compare times a full encode against encoding for the frames: give no SET.vqt")
             ts = load_set(args.file)
@@ -57,7 +59,8 @@ def cmd_prune(args) -> int:
             images = [img for img, _ in scene.load_textures()]
             prog = Progress(1, "encoding for the frames")
             t0 = time.perf_counter()
-            pruned, need = encode_needed(scene, frames, args.mode, images)
+            pruned, need = encode_needed(scene, frames, args.mode, images, train=args.train_on)
+            extra["train_on"] = args.train_on
             extra["encode_seconds"] = round(time.perf_counter() - t0, 3)
             prog.step()
             prog.done()
@@ -88,5 +91,13 @@ def add_parser(sub) -> None:
     p.add_argument("--compare", action="store_true",
                    help="without SET.vqt: also encode everything, to report the bytes before and the time saved "
                         "(default: no full encode; 'before' is the encode of the touched levels)")
+    add_train_on(p)
     add_json(p)
     p.set_defaults(func=cmd_prune)
+
+
+def add_train_on(p) -> None:
+    """``--train-on``: what encoding for the frames trains the codebooks on."""
+    p.add_argument("--train-on", choices=["levels", "blocks"], default="levels",
+                   help=with_default("encoding for the frames: train the codebooks on every block of the touched "
+                                     "level groups, or on the touched blocks only", "levels"))

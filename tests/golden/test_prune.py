@@ -87,11 +87,12 @@ def test_pruning_again_for_the_same_frames_changes_nothing(pruned):
     assert prune(ts, analyse(ts, [texels], per_frame=False)) == p
 
 
-def test_encode_needed_stores_only_touched_levels():
+@pytest.mark.parametrize("train", ["levels", "blocks"])
+def test_encode_needed_stores_only_touched_levels(train):
     scene = small_scene("town")
     frames = [0]
     keep = touched_levels(scene, frames)
-    p, need = encode_needed(scene, frames)
+    p, need = encode_needed(scene, frames, train=train)
     for t, info in enumerate(p.textures):
         stored = [L for L in range(info.levels) if L not in info.absent_levels]
         assert stored == keep[t]
@@ -105,3 +106,16 @@ def test_combining_block_pruned_sets_is_refused(pruned):
     p = pruned[-1]
     with pytest.raises(FormatError, match="combine, then prune"):
         TextureSet.combine([p, p])
+
+
+def test_train_texels_trains_on_their_blocks_only():
+    from vqtex.golden.encode import encode
+    from vqtex.golden.fetch import decode
+    rng = np.random.default_rng(5)
+    img = rng.integers(0, 256, (64, 64, 3)).astype(np.uint8)
+    everything = encode([img], codebook_size=4, block=(4, 4))
+    one = encode([img], codebook_size=4, block=(4, 4), train_texels=[np.array([[0, 5, 6]])])   # block (1, 1)
+    got = decode(one, 0, 0)[4:8, 4:8, :3].astype(int)
+    assert np.abs(got - img[4:8, 4:8]).max() <= 1          # the one block trained on is (nearly) exact
+    assert not np.array_equal(one.codebook, everything.codebook)
+    assert decode(one, 0, 0).shape == (64, 64, 4)          # every block still has an index
