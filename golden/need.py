@@ -316,9 +316,13 @@ class Need:
         codebooks = [{"codebook": c, "size": cb.size, "used": int(self.codewords[c].sum())}
                      for c, cb in enumerate(ts.codebooks)]
         groups = self.groups
-        n_groups = sum(1 for t, info in enumerate(ts.textures) for L in range(info.levels)
-                       if valid[t, L] and (not comp[t, L] or d["sublevel"][t, L] == 0))
-        group_blocks = sum(int(self.group_blocks(t, top).sum()) for t, top, _ in groups if comp[t, top])
+        stored_groups = {}                            # (texture, top) -> blocks of its map (0: a raw level)
+        for t, L in zip(*np.nonzero(valid)):
+            t, L = int(t), int(L)
+            top = L - int(d["sublevel"][t, L]) if comp[t, L] else L
+            stored_groups[(t, top)] = int(self.grids[0][t, L] * self.grids[1][t, L]) if comp[t, L] else 0
+        n_groups = len(stored_groups)
+        group_blocks = sum(int(self.group_blocks(t, top).sum()) for t, top, _ in groups if stored_groups[(t, top)])
         fr = self.frames
         total = {
             "frames": len(fr), "requests": sum(f.requests for f in fr),
@@ -331,12 +335,10 @@ class Need:
         touched = {"index_words": int(self.index_words.sum()), "codebook_entries": int(self.codebook_entries.sum()),
                    "raw_words": int(self.raw_words.sum())}
         out = {
-            "textures": {"stored": ts.n_textures, "touched": int(self.textures.sum())},
+            "textures": {"stored": int(valid.any(axis=1).sum()), "touched": int(self.textures.sum())},
             "levels": {"stored": int(valid.sum()), "touched": int(lv.sum())},
             "level_groups": {"stored": n_groups, "touched": len(groups)},
-            "compressed_blocks": {"stored": int(sum(int(self.grids[0][t, L] * self.grids[1][t, L])
-                                                    for t, L in zip(*np.nonzero(comp & (d["sublevel"] == 0))))),
-                                  "touched": group_blocks},
+            "compressed_blocks": {"stored": sum(stored_groups.values()), "touched": group_blocks},
             "codewords": {"stored": int(sum(cb.size for cb in ts.codebooks)),
                           "used": int(sum(int(c.sum()) for c in self.codewords))},
             "formats": self.formats(),

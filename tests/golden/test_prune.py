@@ -81,8 +81,13 @@ def test_requests_outside_the_need_are_refused(pruned):
 
 def test_pruning_again_for_the_same_frames_changes_nothing(pruned):
     name, scene, ts, frames, need, p = pruned
-    again = prune(p, analyse(p, scene_streams(scene, p, frames)))
+    need_p = analyse(p, scene_streams(scene, p, frames))
+    again = prune(p, need_p)
     assert again == p
+    s = need_p.summary(per_frame=False)                   # the pruned set: everything stored is touched
+    for key in ("textures", "levels", "level_groups"):
+        assert s[key]["stored"] == s[key]["touched"], key
+    assert s["codewords"]["stored"] == s["codewords"]["used"]
     texels = distinct_requests(r for _, r in scene_streams(scene, ts, frames))       # what encode_needed uses
     assert prune(ts, analyse(ts, [texels], per_frame=False)) == p
 
