@@ -7,7 +7,7 @@ reports
 * which **textures**, **levels**, **level groups** and **blocks** are touched. A block of a compressed
   level is a block of its level group's index map (block ``k`` of :func:`~.fetch.block_address`:
   levels ``n, n+1, n+2`` of a group share one block grid); a "block" of a raw level is one texel
-  (one raw word). Counts of requests per block are kept per (texture, level): :attr:`Need.blocks`.
+  (one raw word). Counts of requests per block are kept per (texture, level): :meth:`Need.blocks`.
 * which **codewords** the touched blocks use, per codebook (the indices the touched blocks' maps hold);
 * the **colour formats**, **index widths** and **sub-levels** of the touched levels;
 * per frame, the **distinct words** of each memory a frame reads against what is stored: index
