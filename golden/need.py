@@ -32,7 +32,7 @@ Public API::
     heat_image(need, tex, level, min_side=256) -> (H, W, 4) uint8 picture of the blocks touched
     Need.textures, .levels, .groups, .blocks(t, L), .touched_blocks(t, L), .group_blocks(t, top), .codewords,
         .frames, .formats(), .summary(per_frame=True)
-    scene_streams(scene, source, frames, mode="trilinear") -> iterator of (frame, requests)
+    scene_streams(scene, source, frames, mode="trilinear", **options) -> iterator of (frame, requests)
     scene_level_shapes(scene) -> [[(w, h), ...] per texture]
     distinct_requests(streams) -> (M, 4) int64, the union of several streams' requests
     request_blocks(ts, reqs) -> RequestBlocks     buffer_hits(keys) -> bool    cache_hits(keys, sets, ways) -> bool
@@ -484,10 +484,11 @@ def scene_level_shapes(scene) -> list[list[tuple[int, int]]]:
     return out
 
 
-def scene_streams(scene, source, frames, mode: str = "trilinear"):
+def scene_streams(scene, source, frames, mode: str = "trilinear", **options):
     """Yield (frame, requests (N, 4) int64) of ``frames`` of ``scene``; ``source`` is a TextureSet,
-    any texture source with ``level_shapes``, or the list of level shapes per texture."""
+    any texture source with ``level_shapes``, or the list of level shapes per texture; ``options``
+    are ``golden.render.frame.frame_requests``'s (``stream="sparse"`` or ``"fixed"``, ``fovea``)."""
     from .render.frame import frame_requests
     for f in frames:
-        reqs, _ = frame_requests(scene, f, source, mode)
+        reqs, _ = frame_requests(scene, f, source, mode, **options)
         yield f, reqs

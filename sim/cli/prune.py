@@ -42,7 +42,7 @@ def cmd_prune(args) -> int:
         out = outs.add(args.output, (".vqt",), "a texture set")
         scene = load_scene(args.scene)
         frames = parse_frames(args.frames, scene.frames)
-        extra = {"scene": scene.name, "frames": frames, "mode": args.mode}
+        extra = {"scene": scene.name, "frames": frames, "mode": args.mode, "requests": args.requests}
         if args.file:
             if args.train_on != "levels":
                 raise CliError("--train-on is for encoding (no SET.vqt): a set's codebooks are already trained")
@@ -52,14 +52,14 @@ def cmd_prune(args) -> int:
             if ts.n_textures != len(scene.textures):
                 raise CliError(f"{args.file} holds {ts.n_textures} textures, the scene uses {len(scene.textures)}")
             t0 = time.perf_counter()
-            pruned = prune(ts, scene_need(scene, ts, frames, args.mode, per_frame=False))
+            pruned = prune(ts, scene_need(scene, ts, frames, args.mode, per_frame=False, stream=args.requests))
             extra["prune_seconds"] = round(time.perf_counter() - t0, 3)
             before = ts
         else:
             images = [img for img, _ in scene.load_textures()]
             prog = Progress(1, "encoding for the frames")
             t0 = time.perf_counter()
-            pruned, need = encode_needed(scene, frames, args.mode, images, train=args.train_on)
+            pruned, need = encode_needed(scene, frames, args.mode, images, train=args.train_on, stream=args.requests)
             extra["train_on"] = args.train_on
             extra["encode_seconds"] = round(time.perf_counter() - t0, 3)
             prog.step()
