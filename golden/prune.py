@@ -30,7 +30,7 @@ import numpy as np
 from .format import (CodebookInfo, TextureInfo, TextureSet, default_index_bits, pack_indices, unpack_indices)
 
 __all__ = ["prune", "pruned_bytes", "stored_counts", "prune_report", "touched_texels", "touched_levels",
-           "encode_needed"]
+           "encode_needed", "TRAIN_ON"]
 
 
 def _group_rows(d, t: int, top: int, levels: int, keep: np.ndarray) -> list[int]:
@@ -174,11 +174,12 @@ def prune_report(before: TextureSet, after: TextureSet, **extra) -> dict:
     return {**out, **extra}
 
 
-def touched_texels(scene, frames, mode: str = "trilinear") -> np.ndarray:
+def touched_texels(scene, frames, mode: str = "trilinear", **options) -> np.ndarray:
     """The distinct requests (M, 4) of ``frames`` of ``scene``, found before anything is encoded (the
-    requests depend only on the level shapes, :func:`golden.need.scene_level_shapes`)."""
+    requests depend only on the level shapes, :func:`golden.need.scene_level_shapes`); ``options``
+    are the request stream's (``stream``, ``fovea``: :func:`golden.need.scene_streams`)."""
     from .need import distinct_requests, scene_level_shapes, scene_streams
-    return distinct_requests(r for _, r in scene_streams(scene, scene_level_shapes(scene), frames, mode))
+    return distinct_requests(r for _, r in scene_streams(scene, scene_level_shapes(scene), frames, mode, **options))
 
 
 def touched_levels(scene, frames=None, mode: str = "trilinear", texels=None) -> list[list[int]]:
@@ -192,10 +193,17 @@ def touched_levels(scene, frames=None, mode: str = "trilinear", texels=None) -> 
     return [np.flatnonzero(row).tolist() for row in seen]
 
 
-def encode_needed(scene, frames, mode: str = "trilinear", images=None, cache=None):
-    """Encode only what ``frames`` of ``scene`` need: the levels they touch (the codebooks are
-    trained on the blocks of the touched level groups only), then :func:`prune` to the codewords and
-    blocks they touch. Returns (pruned set, the :class:`golden.need.Need` of the encoded set over
+#: What ``encode_needed`` trains the codebooks on: every block of the touched level groups, or only
+#: the blocks the frames touch.
+TRAIN_ON = ("levels", "blocks")
+
+
+def encode_needed(scene, frames, mode: str = "trilinear", images=None, cache=None, train: str = "levels",
+                  **options):
+    """Encode only what ``frames`` of ``scene`` need: the levels they touch, the codebooks trained on
+    the blocks of the touched level groups (``train="levels"``) or on the touched blocks only
+    (``train="blocks"``), then :func:`prune` to the codewords and blocks they touch. ``options``
+    choose the request stream (:func:`touched_texels`; default the sparse stream ``vqtex render`` issues). Returns (pruned set, the :class:`golden.need.Need` of the encoded set over
     the frames' distinct requests: its counts are distinct texels per block, not requests).
 
     The frames are rasterised once (:func:`touched_texels`). The frames rendered from the result
@@ -204,7 +212,12 @@ def encode_needed(scene, frames, mode: str = "trilinear", images=None, cache=Non
     set before pruning."""
     from .need import CacheSpec, analyse
     from .render.scene import build_texture_set
-    texels = touched_texels(scene, frames, mode)
-    ts = build_texture_set(scene, images, keep_levels=touched_levels(scene, texels=texels))
+    if train not in TRAIN_ON:
+        raise ValueError(f"train must be one of {TRAIN_ON}, not {train!r}")
+    texels = touched_texels(scene, frames, mode, **options)
+    per_texture = None
+    if train == "blocks":
+        per_texture = [texels[texels[:, 0] == t][:, 1:] for t in range(len(scene.textures))]
+    ts = build_texture_set(scene, images, keep_levels=touched_levels(scene, texels=texels), train_texels=per_texture)
     need = analyse(ts, [texels], cache=cache or CacheSpec(), per_frame=False)
     return prune(ts, need), need

@@ -284,12 +284,14 @@ def cmd_render(args) -> int:
         images = [img for img, _ in scene.load_textures()]
         if args.encode_needed and args.texture_set:
             raise CliError("--encode-needed encodes the scene's textures: it does not go with --texture-set")
+        if args.train_on != "levels" and not args.encode_needed:
+            raise CliError("--train-on goes with --encode-needed")
         if args.encode_needed and (args.requests != "sparse" or args.compare_fixed or fovea is not None):
             raise CliError("--encode-needed encodes what the sparse, unbiased stream needs: it does not go with "
                            "--requests fixed, --compare-fixed or --fovea")
         if args.encode_needed:
             from vqtex.golden.prune import encode_needed
-            ts = encode_needed(scene, frames, args.mode, images)[0]
+            ts = encode_needed(scene, frames, args.mode, images, train=args.train_on)[0]
         else:
             ts = load_set(args.texture_set) if args.texture_set else encode_scene(scene, images)
         if ts.n_textures != len(scene.textures):
@@ -409,6 +411,9 @@ def add_parser(sub) -> None:
     r.add_argument("--encode-needed", action="store_true",
                    help="encode only what the rendered frames need (their levels; codebooks trained on those, "
                         "then pruned: golden.prune.encode_needed; default: encode everything)")
+    r.add_argument("--train-on", choices=["levels", "blocks"], default="levels",
+                   help=with_default("with --encode-needed: train the codebooks on every block of the touched level "
+                                     "groups, or on the touched blocks only", "levels"))
     add_hardware_options(r)
     r.add_argument("--report", metavar="REPORT.json", help=with_default("also write the JSON report here", "none"))
     r.add_argument("--reference", metavar="REF.png",
