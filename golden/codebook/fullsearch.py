@@ -116,7 +116,8 @@ def nearest_screened(x, c, scr: Screen, chunk: int = 0, rows=None, tie=None):
     xnorm = scr.xnorm if rows is None else scr.xnorm[rows]
     gam = (d + 4) * U32 * (1 + 1e-3)
     idx = np.empty(n, dtype=np.int64)
-    for s, e, sc, best, smax in scr.chunks(ca, rows, chunk):
+
+    def one_chunk(s, e, sc, best, smax):  # writes rows [s, e) of idx only
         idx[s:e] = best
         margin = (2.0 * gam * (xnorm[s:e] * rmax + 0.5 * rmax * rmax)).astype(np.float32)
         # float32 rounding of the threshold itself: widen by a few more ulps
@@ -129,6 +130,8 @@ def nearest_screened(x, c, scr: Screen, chunk: int = 0, rows=None, tie=None):
             dd = exact_d2(x, c, cc, rows=r)  # no (pairs, d) copy of x: bounded memory
             won_r, won_c = settle(x, c, r, cc, dd, cc if tie is None else tie[cc])
             idx[won_r] = won_c
+
+    scr.map_chunks(ca, one_chunk, rows, chunk)
     return idx, exact_d2(x, c, idx)
 
 
