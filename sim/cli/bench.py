@@ -32,9 +32,14 @@ BENCHES = {
 def cmd_bench(args) -> int:
     try:
         mod = importlib.import_module(BENCHES[args.what])
+        opts = _options(args)
+        mod.run(json_out=args.json, **opts)
     except ImportError as e:
-        raise CliError(f"bench {args.what} needs {e.name} (pip install '.[bench]')") from None
-    mod.run(json_out=args.json, **_options(args))
+        top = (e.name or "").split(".")[0]
+        if not top or top == "vqtex":
+            raise
+        extra = {"distributed": "sweep", "matplotlib": "plot"}.get(top, "bench")
+        raise CliError(f"bench {args.what} needs {e.name} (pip install '.[{extra}]')") from None
     return 0
 
 

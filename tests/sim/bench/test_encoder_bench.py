@@ -8,10 +8,7 @@ import math
 
 import pytest
 
-pytest.importorskip("sklearn")
-pytest.importorskip("skimage")
-
-from vqtex.sim.bench import encoder as eb  # noqa: E402
+from vqtex.sim.bench import encoder as eb
 
 
 def test_tiny_run_reports_every_field(capsys):

@@ -11,7 +11,6 @@ import pytest
 from vqtex.sim.bench import tradeoff as t
 from vqtex.sim.cli import main
 
-pytest.importorskip("sklearn")  # the bench extra (installed with the test extra's environment)
 
 TINY = dict(images=("marble32",), blocks=((2, 2),), sizes=(16,), colors=("rgb", "yuv411"),
             methods=t.METHODS + t.REFERENCES)
@@ -111,3 +110,18 @@ def test_grid_options_belong_to_tradeoff_only(capsys):
     code = main(["bench", "mip", "--quick"])
     err = capsys.readouterr().err
     assert code == 2 and "tradeoff" in err
+
+
+def test_missing_extra_is_one_line_naming_it(capsys, monkeypatch):
+    import builtins
+    real = builtins.__import__
+
+    def no_sklearn(name, *a, **kw):
+        if name.split(".")[0] == "sklearn":
+            raise ImportError(f"No module named {name!r}", name=name)
+        return real(name, *a, **kw)
+
+    monkeypatch.setattr(builtins, "__import__", no_sklearn)
+    code = main(["bench", "tradeoff", "--quick", "--scheduler", "serial"])
+    err = capsys.readouterr().err
+    assert code == 2 and "pip install '.[bench]'" in err and len(err.strip().splitlines()) == 1
