@@ -318,22 +318,25 @@ def _json_safe(v):
 
 def table(rows) -> str:
     """The rows as a fixed-width text table."""
-    hdr = (f"{'image':<20} {'config':<18} {'method':<10} {'bits/tx':>7} {'PSNR dB':>7} "
+    hdr = (f"{'image':<20} {'config':<28} {'method':<10} {'bits/tx':>7} {'PSNR dB':>7} "
            f"{'frame dB':>8} {'enc s':>7} {'cpu s':>7} {'dec ms':>7}")
     out = [hdr, "-" * len(hdr)]
     for r in rows:
         cpu = r.get("encode_cpu_s")
         dec = r.get("decode_s")
         fr = r.get("frame_psnr_db")
-        out.append(f"{r['image']:<20} {r['config']:<18} {r['method']:<10} {r['bits_per_texel']:>7.3f} "
-                   f"{r['psnr_db']:>7.2f} {'' if fr is None else f'{fr:.2f}':>8} "
+        p = r["psnr_db"]
+        out.append(f"{r['image']:<20} {r['config']:<28.28} {r['method']:<10} {r['bits_per_texel']:>7.3f} "
+                   f"{'exact' if p is None or not math.isfinite(p) else f'{p:.2f}':>7} "
+                   f"{'' if fr is None else f'{fr:.2f}':>8} "
                    f"{r['encode_s']:>7.3f} {'' if cpu is None else f'{cpu:.3f}':>7} "
                    f"{'' if dec is None else f'{1e3 * dec:.2f}':>7}")
     return "\n".join(out)
 
 
 _STYLE = {"gla": ("#1f77b4", "o"), "tsvq": ("#2ca02c", "s"), "kmeans": ("#d62728", "^"),
-          "minibatch": ("#ff7f0e", "v")}
+          "minibatch": ("#ff7f0e", "v"), "bc1": ("#9467bd", "D"), "astc": ("#8c564b", "P"),
+          "jpeg2000": ("#e377c2", "X"), "wavelet": ("#17becf", "*")}
 
 
 def save_plots(rows, folder: str) -> list[str]:
@@ -354,7 +357,7 @@ def save_plots(rows, folder: str) -> list[str]:
         for ax, image in zip(axes.flat, images):
             for m in methods:
                 pts = [r for r in rows if r["image"] == image and r["method"] == m
-                       and math.isfinite(r["psnr_db"]) and r[x] > 0]
+                       and _scored(r) and r[x] > 0]
                 if not pts:
                     continue
                 colour, marker = _STYLE.get(m, ("#7f7f7f", "d"))
@@ -381,10 +384,32 @@ def save_plots(rows, folder: str) -> list[str]:
     return paths
 
 
-def _codec_rows(images) -> list[dict]:
-    """The rows of ``vqtex.sim.bench.codecs`` on the same images (when that module exists)."""
-    from vqtex.sim.bench import codecs  # the codecs branch's module
-    return codecs.rows([load_image(n) for n in images], names=list(images))
+#: Codecs of ``vqtex bench codecs`` added by ``--codecs`` (VQ's rows are this bench's own).
+CODECS = ("bc1", "astc", "jpeg2000", "wavelet")
+#: The rate-controlled codecs (JPEG 2000, wavelets) run at up to this many of an image's GLA rgb rates.
+CODEC_RATES = 6
+
+
+def _codec_rows(rows, images) -> list[dict]:
+    """The rows of ``vqtex.sim.bench.codecs`` on the same images: BC1 and ASTC at their fixed rates,
+    JPEG 2000 and the wavelet coder at up to :data:`CODEC_RATES` of the image's GLA rgb rates
+    (spread over the range; their ``config`` names the GLA configuration they match)."""
+    from vqtex.sim.bench import codecs
+    out = []
+    for name in images:
+        gla = sorted({r["bits_per_texel"]: r["config"] for r in rows
+                      if r["image"] == name and r["method"] == "gla" and r["color"] == "rgb"}.items())
+        pick = [gla[i] for i in sorted({round(j * (len(gla) - 1) / max(1, CODEC_RATES - 1))
+                                        for j in range(CODEC_RATES)})] if gla else []
+        targets = {cfg.replace(" k=", "/"): bpt for bpt, cfg in pick}
+        out += codecs.codec_rows({name: load_image(name)}, methods=CODECS, targets=targets or None)
+    return out
+
+
+def _scored(r) -> bool:
+    """A row with a finite PSNR (lossless rows have None or inf)."""
+    p = r.get("psnr_db")
+    return p is not None and math.isfinite(p)
 
 
 def run(json_out: bool = False, *, plot: str | None = None, quick: bool = False,
@@ -405,10 +430,10 @@ def run(json_out: bool = False, *, plot: str | None = None, quick: bool = False,
     rows = run_jobs(run_job, [(j,) for j in jobs], scheduler=scheduler, workers=workers,
                     progress=progress)
     if include_codecs:
-        rows += _codec_rows(g["images"])
+        rows += _codec_rows(rows, g["images"])
     fronts = {}
     for image in dict.fromkeys(r["image"] for r in rows):
-        mine = [r for r in rows if r["image"] == image and math.isfinite(r["psnr_db"])]
+        mine = [r for r in rows if r["image"] == image and _scored(r)]
         fronts[image] = {
             "time": [(r["method"], r["config"]) for r in pareto(mine, "encode_s")],
             "bits": [(r["method"], r["config"]) for r in pareto(mine, "bits_per_texel")],

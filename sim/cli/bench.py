@@ -4,6 +4,8 @@ encode  -- the codebook designer against scikit-learn's KMeans (needs the ``benc
 mip     -- extended codewords: the paper's averages against joint training, per level
 sim     -- simulation backends: pysim, compiled CXXRTL, Verilator (cycles per second, build times)
 render  -- golden render time (uncompressed and VQ) and RTL cycles per frame, both built-in scenes
+codecs  -- VQ against BC1, ASTC, JPEG 2000 and wavelet coders: bits, PSNR, encode, decode, one random texel
+           (needs the ``codecs`` extra; the full run's photographs need ``bench``)
 tradeoff -- encoders: time against error: GLA and TSVQ against scikit-learn's KMeans and MiniBatchKMeans
             over blocks, codebook sizes and colours; Pareto plots with --plot DIR (needs the ``bench`` extra)
 stability -- numerical stability and hostile input: the colour matrix on every input, long streams under
@@ -14,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import inspect
 
 from .common import CliError, add_json, add_sweep_options, block_size, sweep_options, with_default
 
@@ -25,8 +28,21 @@ BENCHES = {
     "sim": "vqtex.sim.bench.simulation",
     "render": "vqtex.sim.bench.render",
     "stability": "vqtex.sim.bench.stability",
+    "codecs": "vqtex.sim.bench.codecs",
     "tradeoff": "vqtex.sim.bench.tradeoff",
 }
+
+#: The extra that installs what a bench needs (default ``bench``).
+EXTRAS = {"codecs": "codecs"}
+
+
+def _needs(what: str, e: ImportError) -> CliError:
+    """The one-line error for a missing dependency: a Python package (its extra) or a system library."""
+    name = e.name or "a missing module"
+    top = name.split(".")[0]
+    extra = {"distributed": "sweep", "matplotlib": "plot"}.get(top, EXTRAS.get(what, "bench"))
+    how = "scripts/install-sim-tools" if name.startswith("lib") else f"pip install '.[{extra}]'"
+    return CliError(f"bench {what} needs {name} ({how})")
 
 
 def cmd_bench(args) -> int:
@@ -35,23 +51,25 @@ def cmd_bench(args) -> int:
         opts = _options(args)
         mod.run(json_out=args.json, **opts)
     except ImportError as e:
-        top = (e.name or "").split(".")[0]
-        if not top or top == "vqtex":
+        if (e.name or "").split(".")[0] in ("", "vqtex"):
             raise
-        extra = {"distributed": "sweep", "matplotlib": "plot"}.get(top, "bench")
-        raise CliError(f"bench {args.what} needs {e.name} (pip install '.[{extra}]')") from None
+        raise _needs(args.what, e) from None
     return 0
 
 
 def _options(args) -> dict:
-    """The options of the bench ``args.what`` (its run() keywords); the tradeoff grid's options
-    are an error on any other bench."""
-    grid_opts = ("plot", "quick", "codecs", "images", "sizes", "blocks", "threads", "scheduler", "workers")
+    """The options of the bench ``args.what`` (its run() keywords): ``--quick`` for the benches
+    whose run() takes it; the tradeoff grid's options are an error on any other bench."""
+    grid_opts = ("plot", "codecs", "images", "sizes", "blocks", "threads", "scheduler", "workers")
     given = [o for o in grid_opts if getattr(args, o) not in (None, False)]
     if args.what != "tradeoff":
         if given:
             raise CliError(f"--{given[0]} is an option of 'vqtex bench tradeoff' only")
-        return {}
+        if not args.quick:
+            return {}
+        if "quick" not in inspect.signature(importlib.import_module(BENCHES[args.what]).run).parameters:
+            raise CliError(f"bench {args.what} has no --quick")
+        return {"quick": True}
     from vqtex.sim.bench import tradeoff
     grid = dict(tradeoff.QUICK if args.quick else tradeoff.FULL)
     if args.images:
@@ -94,14 +112,16 @@ def add_parser(sub) -> None:
     b.add_argument("what", choices=sorted(BENCHES),
                    help="encode: codebook design vs scikit-learn KMeans; mip: extended codewords; "
                         "sim: simulation backends' speed; render: golden render time and RTL cycles per frame; "
+                        "codecs: VQ against BC1, ASTC, JPEG 2000 and wavelet coders; "
                         "tradeoff: encoders' time, bits and error against scikit-learn's k-means")
+    b.add_argument("--quick", action="store_true",
+                   help=with_default("a small run: codecs: two bundled textures, two VQ configurations, 2 repeats; "
+                                     "tradeoff: one 64x64 texture, 2x2 and 4x4, k 16 and 64", "the full run"))
     add_json(b)
     t = b.add_argument_group("tradeoff options")
     t.add_argument("--plot", metavar="DIR", default=None,
                    help=with_default("write the Pareto plots tradeoff_time.png and tradeoff_bits.png into DIR "
                                      "(needs matplotlib)", "no plots"))
-    t.add_argument("--quick", action="store_true",
-                   help=with_default("the small grid (one 64x64 texture, 2x2 and 4x4, k 16 and 64)", "the full grid"))
     t.add_argument("--codecs", action="store_true",
                    help=with_default("add the codecs' rows (BC1, JPEG 2000, wavelets) on the same images", "off"))
     t.add_argument("--images", metavar="NAMES", default=None,

@@ -107,7 +107,7 @@ def test_cli_bad_options_are_one_line_and_exit_2(capsys, argv, msg):
 
 
 def test_grid_options_belong_to_tradeoff_only(capsys):
-    code = main(["bench", "mip", "--quick"])
+    code = main(["bench", "mip", "--sizes", "16"])
     err = capsys.readouterr().err
     assert code == 2 and "tradeoff" in err
 
@@ -125,3 +125,21 @@ def test_missing_extra_is_one_line_naming_it(capsys, monkeypatch):
     code = main(["bench", "tradeoff", "--quick", "--scheduler", "serial"])
     err = capsys.readouterr().err
     assert code == 2 and "pip install '.[bench]'" in err and len(err.strip().splitlines()) == 1
+
+
+def test_codecs_rows_join_the_table_and_plots(tmp_path):
+    """--codecs: the codecs bench's rows on the same image, in the same table, fronts and plots;
+    JPEG 2000 and the wavelets at the GLA rows' rates."""
+    grid = dict(TINY, colors=("rgb",), methods=("gla",))
+    out = t.run(False, grid=grid, include_codecs=True, scheduler="serial", progress=False, plot=str(tmp_path))
+    methods = {r["method"] for r in out["rows"]}
+    assert {"gla", "bc1", "astc", "jpeg2000", "wavelet"} <= methods
+    gla = next(r for r in out["rows"] if r["method"] == "gla")
+    for r in out["rows"]:
+        assert r["image"] == "marble32"
+        for f in ("method", "config", "image", "bits_per_texel", "psnr_db", "encode_s", "decode_s"):
+            assert f in r
+        if r["method"] in ("jpeg2000", "wavelet"):
+            assert r["config"].endswith("@2x2/16 rgb") and r["target_bits_per_texel"] == gla["bits_per_texel"]
+    assert len(out["plots"]) == 2
+    json.dumps(out)
