@@ -25,7 +25,8 @@ because KMeans takes minutes there).
 
 Run: ``vqtex bench encode [--json]``.  For whole-process timings, ``python -m
 vqtex.sim.bench.encoder --only gla|kmeans --case 1 --image hubble_deep_field`` runs one method once
-(both import the same modules) and prints its PSNR.
+(both import the same modules) and prints its PSNR; ``--only load`` does everything but the fit
+(the fixed cost to subtract).
 """
 from __future__ import annotations
 
@@ -267,8 +268,13 @@ def _only(method: str, case: int, image: str, seed: int, size: int = 512) -> Non
     """One method once on one photograph of a case (whole-process timing)."""
     import sklearn.cluster  # noqa: F401  (both methods' processes import the same modules)
 
+    import vqtex.golden.codebook  # noqa: F401
+
     spec = CASES[case]
     x = blocks(load_images([image], size)[0], spec["block"])
+    if method == "load":  # the fixed cost of the other two: imports and the image's vectors
+        print(f"load case {case} {image}: {x.shape[0]} vectors")
+        return
     cb, lab, it, _ = fit(method, x, spec["k"], seed)
     print(f"{method} case {case} {image}: {psnr(x, cb, lab):.3f} dB, {it} iterations")
 
@@ -280,7 +286,8 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=None, help="runs per method (default: the case's)")
     ap.add_argument("--cases", default="1,2,3", help="cases to run (default 1,2,3)")
     ap.add_argument("--seed", type=int, default=0, help="seed of both methods (default 0)")
-    ap.add_argument("--only", choices=("gla", "kmeans"), help="run one method once (whole-process timing)")
+    ap.add_argument("--only", choices=("gla", "kmeans", "load"),
+                    help="run one method once (whole-process timing); load: only the imports and the vectors")
     ap.add_argument("--case", type=int, default=1, help="with --only: the case (default 1)")
     ap.add_argument("--image", default="hubble_deep_field", help="with --only: the photograph")
     ap.add_argument("--size", type=int, default=512, help="with --only: the crop's side (default 512)")

@@ -43,3 +43,5 @@ def test_one_thread_setting_is_undone():
 def test_only_runs_one_method(capsys):
     eb.main(["--only", "gla", "--case", "1", "--image", "astronaut", "--size", "64"])
     assert "gla case 1 astronaut:" in capsys.readouterr().out
+    eb.main(["--only", "load", "--case", "1", "--image", "astronaut", "--size", "64"])
+    assert "load case 1 astronaut: 1024 vectors" in capsys.readouterr().out
