@@ -32,8 +32,7 @@ class ThreadSettingError(ValueError):
 MAX_THREADS = 1024
 _lock = threading.Lock()
 _set: int | None = None
-_pool: ThreadPoolExecutor | None = None
-_pool_size = 0
+_pools: dict[int, ThreadPoolExecutor] = {}
 _blas = None  # threadpoolctl controller of the BLAS (False: not available)
 _local = threading.local()
 
@@ -72,14 +71,13 @@ def set_threads(n: int | None) -> None:
 
 
 def _executor(n: int) -> ThreadPoolExecutor:
-    global _pool, _pool_size
+    """The shared pool of ``n`` threads (one pool per size, never shut down while the process
+    lives: a pool another thread may be submitting to stays valid)."""
     with _lock:
-        if _pool is None or _pool_size != n:
-            if _pool is not None:
-                _pool.shutdown(wait=False)
-            _pool = ThreadPoolExecutor(max_workers=n, thread_name_prefix="vqtex-encoder")
-            _pool_size = n
-        return _pool
+        pool = _pools.get(n)
+        if pool is None:
+            pool = _pools[n] = ThreadPoolExecutor(max_workers=n, thread_name_prefix="vqtex-encoder")
+        return pool
 
 
 def _blas_single():
@@ -97,10 +95,11 @@ def _blas_single():
 def map_ordered(fn, items) -> list:
     """``[fn(i) for i in items]`` on :func:`threads` threads (the results in ``items`` order)."""
     items = list(items)
-    n = min(threads(), len(items))
+    t = threads()
+    n = min(t, len(items))
     if n <= 1 or getattr(_local, "worker", False):
         return [fn(i) for i in items]
-    pool = _executor(n - 1)
+    pool = _executor(t - 1)
 
     def run(part):
         _local.worker = True

@@ -90,3 +90,20 @@ def test_thread_count_from_the_environment(restore_threads, monkeypatch):
     for bad in (0, -1, True, 2.0, workers.MAX_THREADS + 1):
         with pytest.raises(ValueError):
             workers.set_threads(bad)
+
+
+def test_map_ordered_from_several_threads_at_once(restore_threads):
+    """Callers on several threads share the pool (a pool is never shut down under another
+    caller), with lists shorter and longer than the thread count."""
+    from concurrent.futures import ThreadPoolExecutor
+    workers.set_threads(3)
+
+    def caller(n):
+        for _ in range(50):
+            assert workers.map_ordered(lambda i: i + n, range(n)) == [i + n for i in range(n)]
+        return n
+
+    with ThreadPoolExecutor(4) as ex:
+        assert list(ex.map(caller, [1, 2, 5, 9])) == [1, 2, 5, 9]
+    workers.set_threads(2)  # another size: a pool of its own
+    assert workers.map_ordered(lambda i: -i, range(7)) == [-i for i in range(7)]
