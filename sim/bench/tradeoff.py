@@ -339,16 +339,19 @@ _STYLE = {"gla": ("#1f77b4", "o"), "tsvq": ("#2ca02c", "s"), "kmeans": ("#d62728
           "jpeg2000": ("#e377c2", "X"), "wavelet": ("#17becf", "*")}
 
 
-def save_plots(rows, folder: str) -> list[str]:
+def save_plots(rows, folder: str, time_field: str = "encode_s") -> list[str]:
     """Two PNGs in ``folder``: encode time against PSNR and bits per texel against PSNR, one panel
-    per image, every method's points and its Pareto front.  Returns the paths."""
+    per image, every method's points and its Pareto front.  ``time_field``: ``encode_s`` (wall
+    seconds) or ``encode_cpu_s`` (CPU seconds; rows without it are left out of that plot).
+    Returns the paths."""
     from vqtex.sim.reports.plotting import require
     plt = require()
     os.makedirs(folder, exist_ok=True)
     images = list(dict.fromkeys(r["image"] for r in rows))
     methods = list(dict.fromkeys(r["method"] for r in rows))
     paths = []
-    for x, label, name, logx in (("encode_s", "encode time (s, log)", "tradeoff_time.png", True),
+    tlabel = "encode time (CPU s, log)" if time_field == "encode_cpu_s" else "encode time (s, log)"
+    for x, label, name, logx in ((time_field, tlabel, "tradeoff_time.png", True),
                                  ("bits_per_texel", "bits per texel (indices + codebook)",
                                   "tradeoff_bits.png", False)):
         cols = min(3, len(images))
@@ -357,7 +360,7 @@ def save_plots(rows, folder: str) -> list[str]:
         for ax, image in zip(axes.flat, images):
             for m in methods:
                 pts = [r for r in rows if r["image"] == image and r["method"] == m
-                       and _scored(r) and r[x] > 0]
+                       and _scored(r) and (r.get(x) or 0) > 0]
                 if not pts:
                     continue
                 colour, marker = _STYLE.get(m, ("#7f7f7f", "d"))

@@ -143,3 +143,8 @@ def test_codecs_rows_join_the_table_and_plots(tmp_path):
             assert r["config"].endswith("@2x2/16 rgb") and r["target_bits_per_texel"] == gla["bits_per_texel"]
     assert len(out["plots"]) == 2
     json.dumps(out)
+
+
+def test_plots_on_cpu_time(report, tmp_path):
+    paths = t.save_plots(report["rows"], str(tmp_path), time_field="encode_cpu_s")
+    assert len(paths) == 2 and all((tmp_path / p.rsplit("/", 1)[1]).stat().st_size > 1000 for p in paths)
