@@ -16,6 +16,7 @@ import numpy as np
 
 from .inputs import as_vectors
 from .screen import U32, Screen, exact_d2
+from .workers import one_blas_thread
 
 __all__ = ["nearest", "nearest_screened", "as_integers", "group_starts", "settle",
            "settle_in_integers"]
@@ -135,6 +136,7 @@ def nearest_screened(x, c, scr: Screen, chunk: int = 0, rows=None, tie=None):
     return idx, exact_d2(x, c, idx)
 
 
+@one_blas_thread
 def nearest(vectors: np.ndarray, codebook: np.ndarray, chunk: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Full-search nearest codeword.
 

@@ -7,23 +7,26 @@ depends on the number of threads: the encoder's output is the same bytes on 1 an
 chunk boundaries depend on the problem's size only, never on the thread count).
 
 numpy's matmul, argmax, take and most ufuncs release the GIL, so Python threads over chunks use
-several cores.  While the workers run, the BLAS is held to one thread of its own (each worker's
-GEMM is one chunk; two workers each asking OpenBLAS for two threads oversubscribe the cores and
-serialise on its lock): that is what scikit-learn's KMeans does around its OpenMP loop, and it
-goes through threadpoolctl when installed (without it the BLAS keeps its own setting, which is
-only slower).
+several cores.  The encoder's entry points (``gla``, ``nearest``, the TSVQ build; decorator
+:func:`one_blas_thread`) hold the BLAS to one thread of its own for their whole run, as
+scikit-learn's KMeans does around its OpenMP loop: their parallel parts run on these threads (two
+workers each asking OpenBLAS for both cores would oversubscribe them), and OpenBLAS's threads
+would only spin between the small GEMMs in between.  That goes through threadpoolctl (a
+dependency); without it the BLAS keeps its own setting, which is only slower.
 
 Thread count: :func:`set_threads` (``None``: automatic), else the environment variable
 ``VQTEX_THREADS``, else the cores this process may run on (``os.sched_getaffinity``).
 """
 from __future__ import annotations
 
+import functools
 import os
 import threading
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import nullcontext
 
-__all__ = ["MAX_THREADS", "ThreadSettingError", "threads", "set_threads", "map_ordered", "local_buffer"]
+__all__ = ["MAX_THREADS", "ThreadSettingError", "threads", "set_threads", "map_ordered", "local_buffer", "blas_single",
+           "one_blas_thread"]
 
 
 class ThreadSettingError(ValueError):
@@ -80,8 +83,11 @@ def _executor(n: int) -> ThreadPoolExecutor:
         return pool
 
 
-def _blas_single():
-    """Context holding the BLAS to one thread (threadpoolctl), or nothing without it."""
+def blas_single():
+    """Context holding the BLAS to one thread (threadpoolctl), or nothing without it.  The
+    encoder's entry points (``gla``, ``nearest``) hold it for their whole run: their parallel
+    parts run on this module's threads, and OpenBLAS's own threads between two small GEMMs only
+    spin between calls."""
     global _blas
     if _blas is None:
         try:
@@ -90,6 +96,15 @@ def _blas_single():
         except ImportError:
             _blas = False
     return _blas.limit(limits=1, user_api="blas") if _blas else nullcontext()
+
+
+def one_blas_thread(fn):
+    """Decorator: run ``fn`` under :func:`blas_single` (the encoder's entry points)."""
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        with blas_single():
+            return fn(*args, **kwargs)
+    return wrapper
 
 
 def map_ordered(fn, items) -> list:
@@ -110,7 +125,7 @@ def map_ordered(fn, items) -> list:
 
     # n strided parts: the calling thread takes the first, the pool the others
     parts = [items[p::n] for p in range(n)]
-    with _blas_single():
+    with blas_single():
         futs = [pool.submit(run, part) for part in parts[1:]]
         first = run(parts[0])
         rest = [f.result() for f in futs]
