@@ -286,6 +286,7 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=None, help="runs per method (default: the case's)")
     ap.add_argument("--cases", default="1,2,3", help="cases to run (default 1,2,3)")
     ap.add_argument("--seed", type=int, default=0, help="seed of both methods (default 0)")
+    ap.add_argument("--images", default=None, help="comma-separated photographs (default: the four)")
     ap.add_argument("--only", choices=("gla", "kmeans", "load"),
                     help="run one method once (whole-process timing); load: only the imports and the vectors")
     ap.add_argument("--case", type=int, default=1, help="with --only: the case (default 1)")
@@ -296,7 +297,8 @@ def main(argv=None) -> int:
         _only(a.only, a.case, a.image, a.seed, a.size)
         return 0
     cases = tuple(int(c) for c in a.cases.split(","))
-    run(a.json, settings=tuple(a.settings.split(",")), repeats=a.repeats, cases=cases, seed=a.seed)
+    run(a.json, settings=tuple(a.settings.split(",")), repeats=a.repeats, cases=cases, seed=a.seed,
+        images=tuple(a.images.split(",")) if a.images else None)
     return 0
 
 
