@@ -10,7 +10,7 @@ two references run on the same images, across block sizes, codebook sizes and co
   ``n_init="auto"``: 3 k-means++ starts).
 
 faiss-cpu's k-means was tried and left out: on this project's vectors (d = 12..48, 16K-64K of
-them) it was slower than KMeans and 1-2 dB worse at its default 20 iterations (docs/benchmarks.md).
+them) it was no faster than KMeans and 1.5-2.3 dB worse (docs/benchmarks.md).
 
 Every method yields the same thing, a ``.vqt`` texture set (golden.format) a texel-fetch unit can
 read: the references' centres are rounded to the stored bytes and every block's index is the exact
