@@ -8,6 +8,7 @@ codecs  -- VQ against BC1, ASTC, JPEG 2000 and wavelet coders: bits, PSNR, encod
            (needs the ``codecs`` extra; the full run's photographs need ``bench``)
 tradeoff -- encoders: time against error: GLA and TSVQ against scikit-learn's KMeans and MiniBatchKMeans
             over blocks, codebook sizes and colours; Pareto plots with --plot DIR (needs the ``bench`` extra)
+skip    -- the sparse request stream against the fixed one: requests, RTL cycles and time per frame
 stability -- numerical stability and hostile input: the colour matrix on every input, long streams under
            backpressure, mutated .vqt files, adversarial encoder training sets
 """
@@ -27,6 +28,7 @@ BENCHES = {
     "mip": "vqtex.sim.bench.mipmaps",
     "sim": "vqtex.sim.bench.simulation",
     "render": "vqtex.sim.bench.render",
+    "skip": "vqtex.sim.bench.skip",
     "stability": "vqtex.sim.bench.stability",
     "codecs": "vqtex.sim.bench.codecs",
     "tradeoff": "vqtex.sim.bench.tradeoff",
@@ -112,6 +114,7 @@ def add_parser(sub) -> None:
     b.add_argument("what", choices=sorted(BENCHES),
                    help="encode: codebook design vs scikit-learn KMeans; mip: extended codewords; "
                         "sim: simulation backends' speed; render: golden render time and RTL cycles per frame; "
+                        "skip: sparse against fixed request stream (requests, RTL cycles and time per frame); "
                         "codecs: VQ against BC1, ASTC, JPEG 2000 and wavelet coders; "
                         "tradeoff: encoders' time, bits and error against scikit-learn's k-means")
     b.add_argument("--quick", action="store_true",
