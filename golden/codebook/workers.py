@@ -23,10 +23,10 @@ import functools
 import os
 import threading
 from concurrent.futures import ThreadPoolExecutor
-from contextlib import nullcontext
+from contextlib import contextmanager, nullcontext
 
 __all__ = ["MAX_THREADS", "ThreadSettingError", "threads", "set_threads", "map_ordered", "local_buffer", "blas_single",
-           "one_blas_thread"]
+           "one_blas_thread", "using_threads"]
 
 
 class ThreadSettingError(ValueError):
@@ -71,6 +71,18 @@ def set_threads(n: int | None) -> None:
     if n is not None and (isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_THREADS):
         raise ThreadSettingError(f"threads must be an integer 1..{MAX_THREADS} or None, got {n!r}")
     _set = n
+
+
+@contextmanager
+def using_threads(n: int | None):
+    """Context: :func:`set_threads` ``(n)`` inside, the previous setting restored after."""
+    global _set
+    before = _set
+    set_threads(n)
+    try:
+        yield
+    finally:
+        _set = before
 
 
 def _executor(n: int) -> ThreadPoolExecutor:

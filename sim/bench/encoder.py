@@ -119,12 +119,8 @@ def thread_setting(setting: str):
         if setting == "default":
             yield
             return
-        workers.set_threads(1)
-        try:
-            with threadpool_limits(limits=1):
-                yield
-        finally:
-            workers.set_threads(None)
+        with workers.using_threads(1), threadpool_limits(limits=1):
+            yield
     return ctx()
 
 

@@ -56,6 +56,7 @@ import math
 import os
 import sys
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from functools import lru_cache
 
@@ -247,17 +248,17 @@ def _reference_set(job: Job, img: np.ndarray, template):
     return replace(template, codebook=code, index_words=words)
 
 
+@contextmanager
 def _limits(threads):
-    """Hold every library to ``threads`` threads (None: leave the defaults)."""
-    from contextlib import nullcontext
-
+    """Hold every library to ``threads`` threads (None: leave the defaults); restored after."""
     from vqtex.golden.codebook import workers
     if threads is None:
-        workers.set_threads(None)
-        return nullcontext()
-    workers.set_threads(int(threads))
+        with workers.using_threads(None):
+            yield
+        return
     from threadpoolctl import threadpool_limits
-    return threadpool_limits(limits=int(threads))
+    with workers.using_threads(int(threads)), threadpool_limits(limits=int(threads)):
+        yield
 
 
 def run_job(job: Job) -> dict:

@@ -107,3 +107,15 @@ def test_map_ordered_from_several_threads_at_once(restore_threads):
         assert list(ex.map(caller, [1, 2, 5, 9])) == [1, 2, 5, 9]
     workers.set_threads(2)  # another size: a pool of its own
     assert workers.map_ordered(lambda i: -i, range(7)) == [-i for i in range(7)]
+
+
+def test_using_threads_restores_the_setting(restore_threads, monkeypatch):
+    monkeypatch.setenv("VQTEX_THREADS", "3")
+    with workers.using_threads(1):
+        assert workers.threads() == 1
+    assert workers.threads() == 3  # back to automatic (the environment), not frozen at 1
+    workers.set_threads(2)
+    with pytest.raises(RuntimeError):
+        with workers.using_threads(1):
+            raise RuntimeError
+    assert workers.threads() == 2

@@ -33,6 +33,7 @@ def test_tiny_run_reports_every_field(capsys):
 
 
 def test_one_thread_setting_is_undone():
+    """Restored to the previous setting (automatic), not frozen at the value read before."""
     from vqtex.golden.codebook import workers
     before = workers.threads()
     with eb.thread_setting("one"):

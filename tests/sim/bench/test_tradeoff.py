@@ -148,3 +148,10 @@ def test_codecs_rows_join_the_table_and_plots(tmp_path):
 def test_plots_on_cpu_time(report, tmp_path):
     paths = t.save_plots(report["rows"], str(tmp_path), time_field="encode_cpu_s")
     assert len(paths) == 2 and all((tmp_path / p.rsplit("/", 1)[1]).stat().st_size > 1000 for p in paths)
+
+
+def test_a_job_restores_the_thread_setting():
+    from vqtex.golden.codebook import workers
+    before = workers.threads()
+    t.run_job(t.Job("gla", "marble32", (2, 2), 16, "rgb", threads=1))
+    assert workers.threads() == before
