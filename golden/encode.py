@@ -37,7 +37,7 @@ from . import codebook as vq
 from .color import JFIF_BT601, ColorMatrix, rgb_to_yuv
 from .mipmap import box_down, build_pyramid
 from .mipmap import to_rgba as _to_rgba
-from .format import (COLOR_CODES, COLORS, DESCRIPTOR_DTYPE, MAX_LEVELS, MAX_SIZE, RAW_BELOW,
+from .format import (COLOR_CODES, COLORS, DESCRIPTOR_DTYPE, PVR2_COLORS, MAX_LEVELS, MAX_SIZE, RAW_BELOW,
                      WORD_BITS_ALLOWED, CodebookInfo, TextureInfo, TextureSet, default_index_bits,
                      entry_layout, is_pow2, log2, pack_indices, sub_levels)
 
@@ -143,8 +143,10 @@ def _extend(code0: np.ndarray, layout) -> np.ndarray:
 # The encoder
 
 def _check(images, block, codebook_size, color, index_bits, encoder, mip_training, word_bits):
-    if color not in COLORS:
-        raise EncodeError(f"colour format {color!r} is not one of {', '.join(COLORS)}")
+    if color not in COLORS or color in PVR2_COLORS:
+        paper = [c for c in COLORS if c not in PVR2_COLORS]
+        raise EncodeError(f"colour format {color!r} is not one of {', '.join(paper)}"
+                          + (" (PowerVR2 formats: golden.pvr_encode, vqtex encode --layout pvr2)" if color in PVR2_COLORS else ""))
     bw, bh = block
     if not (is_pow2(bw) and is_pow2(bh) and bw <= 8 and bh <= 8):
         raise EncodeError(f"block {bw}x{bh}: width and height must be powers of two from 1 to 8")

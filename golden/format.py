@@ -16,6 +16,10 @@ the chip". The contract (see ``docs/format.md`` for the hardware engineer's vers
   format: raw levels need no colour conversion).
 * **Descriptor table** -- one row per (texture, level), ``MAX_LEVELS`` rows per texture; see
   :data:`DESCRIPTOR_FIELDS`.
+* **The PowerVR2 layout** (descriptor ``layout`` 1, colours argb1555 / rgb565 / argb4444 / yuv422):
+  Dreamcast VQ textures; 8-bit indices in twiddled (Morton) order, one index map per mip level,
+  codebook entries of four 16-bit texels listed column by column. See :mod:`golden.pvr_set` and
+  ``docs/pvr2.md``.
 
 A fetch of texel (i, j) of a level (``i`` is the column, ``j`` the row, both inside the level) is
 defined by :mod:`golden.fetch` from these images alone.
@@ -34,13 +38,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .color import JFIF_BT601, ColorMatrix
-from .constants import (COLOR_CODES, COLORS, DESCRIPTOR_DTYPE, DESCRIPTOR_FIELDS, MAX_LEVELS, MAX_SIZE,
-                        RAW_BELOW, RAW_WORD_BITS, WORD_BITS_ALLOWED, FormatError)
+from .constants import (COLOR_CODES, COLORS, DESCRIPTOR_DTYPE, DESCRIPTOR_FIELDS, LAYOUT_CODES, LAYOUTS, MAX_LEVELS,
+                        MAX_SIZE, PVR2_COLORS, RAW_BELOW, RAW_WORD_BITS, WORD_BITS_ALLOWED, FormatError)
 from .vqt_header import parse_header
 
 __all__ = [
     "FormatError", "COLORS", "COLOR_CODES", "MAX_LEVELS", "MAX_SIZE", "DESCRIPTOR_FIELDS",
-    "DESCRIPTOR_DTYPE", "texel_bytes", "sub_levels", "entry_layout", "EntryLayout", "pack_indices",
+    "DESCRIPTOR_DTYPE", "PVR2_COLORS", "LAYOUTS", "LAYOUT_CODES", "texel_bytes", "sub_levels", "entry_layout", "EntryLayout", "pack_indices",
     "unpack_indices", "TextureInfo", "CodebookInfo", "TextureSet", "is_pow2", "log2", "RAW_BELOW", "RAW_WORD_BITS",
     "WORD_BITS_ALLOWED",
 ]
@@ -54,8 +58,9 @@ def log2(n: int) -> int:
 
 
 def texel_bytes(color: str) -> int:
-    """Bytes per texel of a codeword plane (Y only for yuv411)."""
-    return {"rgb": 3, "rgba": 4, "intensity": 1, "yuv411": 1}[color]
+    """Bytes per texel of a codeword plane (Y only for yuv411; the PowerVR2 formats are 16-bit)."""
+    return {"rgb": 3, "rgba": 4, "intensity": 1, "yuv411": 1,
+            "argb1555": 2, "rgb565": 2, "argb4444": 2, "yuv422": 2}[color]
 
 
 def sub_levels(bw: int, bh: int) -> int:
@@ -91,6 +96,11 @@ def entry_layout(color: str, bw: int, bh: int, nsub: int = 1) -> EntryLayout:
             cw, ch = max(1, w >> 1), max(1, h >> 1)
             planes.append((off, off + w * h, off + w * h + cw * ch))
             off += w * h + 2 * cw * ch
+        elif color == "yuv422":
+            # texel pairs (twiddled texels 0/2 and 1/3) share chroma: U in the left texel's low byte
+            # (texels 0, 1: bytes off + 2x), V in the right texel's (texels 2, 3: bytes off + 4 + 2x)
+            planes.append((off, off, off + h * texel_bytes(color)))
+            off += w * h * texel_bytes(color)
         else:
             planes.append((off, 0, 0))
             off += w * h * texel_bytes(color)
@@ -187,6 +197,32 @@ class CodebookInfo(_Record):
     def layout(self) -> EntryLayout:
         return entry_layout(self.color, self.block[0], self.block[1], self.nsub)
 
+
+
+#: Byte offset in a PowerVR2 codebook entry of the texel a 1x1 mip level reads (texel 3, bottom right).
+PVR2_ONE_BY_ONE_TEXEL_OFF = 6
+
+
+def _check_pvr2_level(row, info, cb, level: int, where: str) -> None:
+    """A compressed level of a PowerVR2 texture (twiddled layout) must be what
+    :mod:`golden.pvr_set` writes: 8-bit indices into one 2x2 codebook of 16-bit texels, sub-level 0
+    (every level has its own index map); a 1x1 level reads texel 3 of its block (a 1x1 block at byte
+    offset 6), and in yuv422 that lone texel is rgb565. Raises FormatError."""
+    if tuple(info.block) != (2, 2) or info.index_bits != 8 or cb is None or cb.nsub != 1:
+        raise FormatError(f"{where}: a PowerVR2 texture has 2x2 blocks, 8-bit indices and a one-level codebook")
+    if int(row["sublevel"]) or int(row["index_bits"]) != 8:
+        raise FormatError(f"{where}: a PowerVR2 level reads sub-level 0 of its own 8-bit index map")
+    lw, lh = int(row["log2w"]), int(row["log2h"])
+    if lw and lh:
+        want = (1, 1, COLOR_CODES[info.color]) + tuple(cb.layout.planes[0])
+    elif not lw and not lh and info.mipmapped:
+        color = "rgb565" if info.color == "yuv422" else info.color
+        want = (0, 0, COLOR_CODES[color], PVR2_ONE_BY_ONE_TEXEL_OFF, 0, 0)
+    else:
+        raise FormatError(f"{where}: a {1 << lw}x{1 << lh} PowerVR2 level (square mip chains only)")
+    have = tuple(int(row[f]) for f in ("log2bw", "log2bh", "color", "texel_off", "u_off", "v_off"))
+    if have != want:
+        raise FormatError(f"{where}: block size, colour or texel offsets disagree with the PowerVR2 layout")
 
 
 MAGIC = b"VQTX\r\n\x1a\n"
@@ -288,7 +324,7 @@ class TextureSet:
                 stored += r["stored_bits"]
             return {"overall": orig / stored if stored else 1.0, "original_bits": orig, "stored_bits": stored}
         info = self.textures[tex]
-        src_bits = {"rgb": 24, "rgba": 32, "intensity": 8, "yuv411": 24}[info.color]
+        src_bits = {"rgb": 24, "rgba": 32, "intensity": 8, "yuv411": 24}.get(info.color, 16)  # PowerVR2: 16-bit
         orig = index = raw = 0
         for L, (w, h) in enumerate(self.level_shapes(tex)):
             d = self.descriptors[tex, L]
@@ -348,7 +384,7 @@ class TextureSet:
                 w, h = 1 << int(row["log2w"]), 1 << int(row["log2h"])
                 if row["compressed"]:
                     b = int(row["index_bits"])
-                    if not 1 <= b <= 16 or row["color"] > 3 or row["sublevel"] > 2:
+                    if not 1 <= b <= 16 or row["color"] >= len(COLORS) or row["sublevel"] > 2 or row["layout"] > 1:
                         raise FormatError(f"texture {t} level {L}: bad index width, colour or sub-level")
                     if row["log2bw"] > row["log2w"] or row["log2bh"] > row["log2h"]:
                         raise FormatError(f"texture {t} level {L}: block larger than level")
@@ -402,6 +438,13 @@ class TextureSet:
                 if not row["valid"] and row["compressed"]:
                     raise FormatError(f"{where}: an absent level marked compressed")
                 if not row["compressed"]:
+                    if int(row["layout"]):
+                        raise FormatError(f"{where}: a raw level has no index map to twiddle")
+                    continue
+                if (info.color in PVR2_COLORS) != (int(row["layout"]) == LAYOUT_CODES["pvr2"]):
+                    raise FormatError(f"{where}: layout disagrees with the colour format {info.color}")
+                if info.color in PVR2_COLORS:
+                    _check_pvr2_level(row, info, cb, L, where)
                     continue
                 s = int(row["sublevel"])
                 if cb is None or s >= cb.nsub:
@@ -449,15 +492,20 @@ class TextureSet:
         """One texture set holding all textures of ``sets`` (each keeps its own codebooks).
 
         Memories are concatenated and descriptors rebased; texture ids follow the order of ``sets``.
-        All sets must share the word width and colour matrix.
+        All sets must share the word width, and the sets holding YUV textures their colour matrix.
         """
         if not sets:
             raise FormatError("nothing to combine")
-        wb, matrix = sets[0].word_bits, sets[0].matrix
+        wb = sets[0].word_bits
         if any(s.present_blocks is not None for s in sets):
             raise FormatError("sets pruned to blocks are not combined (combine, then prune)")
-        if any(s.word_bits != wb or s.matrix != matrix for s in sets):
-            raise FormatError("combined texture sets must share word width and colour matrix")
+        if any(s.word_bits != wb for s in sets):
+            raise FormatError("combined texture sets must share word width")
+        # the colour matrix matters only to sets holding a YUV texture (yuv411 or yuv422): they must agree
+        yuv = [s.matrix for s in sets if any(t.color in ("yuv411", "yuv422") for t in s.textures)]
+        matrix = yuv[0] if yuv else sets[0].matrix
+        if any(m != matrix for m in yuv):
+            raise FormatError("combined texture sets holding YUV textures must share the colour matrix")
         entry_bytes = max(s.entry_bytes for s in sets)
         index_parts, cb_parts, raw_parts, desc_parts, textures, codebooks = [], [], [], [], [], []
         iw = ce = rw = 0
@@ -552,8 +600,13 @@ class TextureSet:
         try:
             arrays = {}
             for name, (dt, shape, off, nbytes) in header["arrays"].items():
-                dtype = DESCRIPTOR_DTYPE if dt == "descriptor" else np.dtype(dt)
+                dtype = header["descriptor_dtype"] if dt == "descriptor" else np.dtype(dt)
                 arrays[name] = np.frombuffer(body[off: off + nbytes], dtype=dtype).reshape(shape).copy()
+            if arrays["descriptors"].dtype != DESCRIPTOR_DTYPE:     # a file from before ``layout``: 0
+                old = arrays["descriptors"]
+                arrays["descriptors"] = np.zeros(old.shape, DESCRIPTOR_DTYPE)
+                for name in old.dtype.names:
+                    arrays["descriptors"][name] = old[name]
             if arrays["codebook"].shape[1] != header["entry_bytes"]:
                 raise FormatError("codebook memory width disagrees with entry_bytes")
             ts = cls(

@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from .constants import (COLORS, DESCRIPTOR_DTYPE, DESCRIPTOR_FIELDS, MAX_LEVELS, MAX_SIZE, WORD_BITS_ALLOWED,
+from .constants import (COLORS, DESCRIPTOR_DTYPE, DESCRIPTOR_FIELDS, LEGACY_DESCRIPTOR_DTYPE, LEGACY_DESCRIPTOR_FIELDS, MAX_LEVELS, MAX_SIZE, WORD_BITS_ALLOWED,
                         FormatError)
 
 __all__ = ["parse_header", "MAX_HEADER_BYTES", "MAX_DEPTH", "MAX_TEXTURES", "ARRAY_DTYPES", "OPTIONAL_ARRAYS"]
@@ -166,7 +166,7 @@ def _codebook(c, k):
     return c
 
 
-def _arrays(a, body_size):
+def _arrays(a, body_size, descriptor_dtype=DESCRIPTOR_DTYPE):
     _dict(a, "arrays", set(ARRAY_DTYPES) - set(OPTIONAL_ARRAYS), optional=OPTIONAL_ARRAYS)
     out = {}
     for name, (dtypes, rank) in ARRAY_DTYPES.items():
@@ -178,7 +178,7 @@ def _arrays(a, body_size):
         shape = [_int(x, f"array {name} dimension", 0, body_size) for x in _list(spec["shape"], f"array {name} shape", rank, rank)]
         off = _int(spec["offset"], f"array {name} offset", 0, body_size)
         nbytes = _int(spec["nbytes"], f"array {name} nbytes", 0, body_size)
-        item = DESCRIPTOR_DTYPE.itemsize if spec["dtype"] == "descriptor" else np.dtype(spec["dtype"]).itemsize
+        item = descriptor_dtype.itemsize if spec["dtype"] == "descriptor" else np.dtype(spec["dtype"]).itemsize
         if math.prod(shape) * item != nbytes or off + nbytes > body_size:
             _fail(f"array {name} of shape {shape} does not fit its {nbytes} bytes inside the file")
         out[name] = (spec["dtype"], tuple(shape), off, nbytes)
@@ -187,7 +187,9 @@ def _arrays(a, body_size):
 
 def parse_header(raw: bytes, body_size: int) -> dict:
     """The checked header: ``word_bits``, ``entry_bytes``, ``matrix`` (dict), ``textures``,
-    ``codebooks`` (lists of dicts), ``arrays`` (name -> (dtype string, shape, offset, nbytes))."""
+    ``codebooks`` (lists of dicts), ``arrays`` (name -> (dtype string, shape, offset, nbytes)),
+    ``descriptor_dtype`` (the descriptor rows' dtype: the current fields, or those of files written
+    before the ``layout`` field, which the caller widens with layout 0)."""
     if len(raw) > MAX_HEADER_BYTES:
         _fail(f"{len(raw)} bytes (at most {MAX_HEADER_BYTES})")
     if not _depth_ok(raw):
@@ -202,13 +204,18 @@ def parse_header(raw: bytes, body_size: int) -> dict:
     if h["word_bits"] not in WORD_BITS_ALLOWED or type(h["word_bits"]) is not int:
         _fail(f"word_bits {h['word_bits']!r:.40} is not one of {WORD_BITS_ALLOWED}")
     _int(h["entry_bytes"], "entry_bytes", 0, 1 << 16)
-    if h["descriptor_fields"] != list(DESCRIPTOR_FIELDS):
+    if h["descriptor_fields"] == list(DESCRIPTOR_FIELDS):
+        descriptor_dtype = DESCRIPTOR_DTYPE
+    elif h["descriptor_fields"] == list(LEGACY_DESCRIPTOR_FIELDS):     # written before ``layout``
+        descriptor_dtype = LEGACY_DESCRIPTOR_DTYPE
+    else:
         _fail("descriptor fields differ from this reader's")
     _matrix(h["matrix"])
     textures = [_texture(t, k) for k, t in enumerate(_list(h["textures"], "textures", 0, MAX_TEXTURES))]
     codebooks = [_codebook(c, k) for k, c in enumerate(_list(h["codebooks"], "codebooks", 0, MAX_TEXTURES))]
-    arrays = _arrays(h["arrays"], body_size)
+    arrays = _arrays(h["arrays"], body_size, descriptor_dtype)
     if arrays["index_words"][0] != f"<u{h['word_bits'] // 8}":
         _fail("index memory dtype does not match the word width")
     return {"word_bits": h["word_bits"], "entry_bytes": h["entry_bytes"], "matrix": h["matrix"],
-            "textures": textures, "codebooks": codebooks, "arrays": arrays}
+            "textures": textures, "codebooks": codebooks, "arrays": arrays,
+            "descriptor_dtype": descriptor_dtype}

@@ -63,9 +63,10 @@ def codec_rows(images: dict, *, methods=METHODS, vq_configs=vq.CONFIGS, bc1_enco
 
     images: {name: (H, W, 3) uint8}, sides powers of two from 16 (VQ's textures).
     JPEG 2000 and the wavelet coder run at the bits per texel of each VQ row of the same image, and
-    at the rates of ``targets`` ({label: bits per texel}, the same for every image; their rows' config
-    ends ``@label``): without ``vq`` in ``methods`` and without ``targets`` they have no rate. Times are the best of ``repeats``; random texels are batches of
-    ``random_texels_n`` (the same coordinates for every codec of an image, seeded by ``seed``).
+    at the rates of ``targets`` ({label: bits per texel}, the same for every image; their rows'
+    config ends ``@label``): without ``vq`` in ``methods`` and without ``targets`` they have no rate.
+    Times are the best of ``repeats``; random texels are batches of ``random_texels_n`` (the same
+    coordinates for every codec of an image, seeded by ``seed``).
     """
     _check_images(images)
     unknown = set(methods) - set(METHODS)
@@ -80,7 +81,7 @@ def codec_rows(images: dict, *, methods=METHODS, vq_configs=vq.CONFIGS, bc1_enco
         y, x = random_texels(img.shape, random_texels_n, seed + n)
         rates = {}
         if "vq" in methods:
-            log(f"{name}: vq {', '.join(vq_configs)}")
+            log(f"{name}: vq {', '.join(vq.applicable(vq_configs, img.shape)) or '(none fits)'}")
             vrows = vq.rows(name, img, y=y, x=x, repeats=repeats, configs=vq_configs, seed=seed)
             rates = {r["config"]: r["bits_per_texel"] for r in vrows}
             out += vrows
@@ -104,8 +105,8 @@ def codec_rows(images: dict, *, methods=METHODS, vq_configs=vq.CONFIGS, bc1_enco
 
 def summary(rows: list[dict]) -> list[dict]:
     """Per (method, config) over the images: mean bits per texel and PSNR (over the lossy images;
-    ``None`` if every one was exact), median times, and the
-    median ratios of the random texel and the decode to their floors."""
+    ``None`` if every one was exact), median times, and the median ratios of the random texel and
+    the decode to their floors."""
     groups: dict = {}
     for r in rows:
         groups.setdefault((r["method"], r["config"]), []).append(r)

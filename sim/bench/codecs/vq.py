@@ -17,7 +17,7 @@ import numpy as np
 from .measure import best_time, copy_floor, gather_floor, psnr
 from .schema import row
 
-__all__ = ["parse_config", "encode", "rows", "CONFIGS", "QUICK_CONFIGS"]
+__all__ = ["parse_config", "applicable", "encode", "rows", "CONFIGS", "QUICK_CONFIGS"]
 
 #: Default configurations: ``BWxBH/K colour``.
 CONFIGS = ("2x2/256 rgb", "2x2/256 yuv411", "4x4/256 rgb", "4x4/1024 rgb", "2x2/4096 rgb")
@@ -35,6 +35,18 @@ def parse_config(text: str) -> tuple[tuple[int, int], int, str]:
         raise ValueError(f"VQ configuration {text!r} is not like '2x2/256 rgb'") from None
 
 
+def applicable(configs, shape) -> list[str]:
+    """The configurations with fewer codewords than an image of ``shape`` has blocks (with as many,
+    the codebook could hold every block: the image stored exactly, in more bits than raw)."""
+    h, w = shape[:2]
+    out = []
+    for cfg in configs:
+        (bw, bh), k, _ = parse_config(cfg)
+        if k < (w // bw) * (h // bh):
+            out.append(cfg)
+    return out
+
+
 def encode(image: np.ndarray, config: str, seed: int = 0):
     """A one-texture :class:`TextureSet` of ``image`` (H, W, 3) uint8 at ``config``."""
     from vqtex.golden.encode import encode as vq_encode
@@ -43,12 +55,12 @@ def encode(image: np.ndarray, config: str, seed: int = 0):
 
 
 def rows(name: str, image: np.ndarray, *, y, x, repeats: int = 3, configs=CONFIGS, seed: int = 0) -> list[dict]:
-    """One row per configuration."""
+    """One row per :func:`applicable` configuration."""
     from vqtex.golden.fetch import decode, fetch
     h, w = image.shape[:2]
     zeros = np.zeros(len(y), np.int64)
     out = []
-    for cfg in configs:
+    for cfg in applicable(configs, image.shape):
         (bw, bh), k, color = parse_config(cfg)
         ts, enc_s = best_time(lambda: encode(image, cfg, seed), repeats)
         dec, dec_s = best_time(lambda: decode(ts, 0, 0), repeats)

@@ -226,3 +226,10 @@ def test_a_lossless_row_has_no_psnr_and_the_table_says_exact(capsys):
     json.dumps(out, allow_nan=False)
     codecs.print_table(out)
     assert "exact" in capsys.readouterr().out
+
+
+def test_vq_skips_codebooks_as_large_as_the_image():
+    img = _image(16)                                                # 64 blocks of 2x2
+    y, x = random_texels(img.shape, 8)
+    rows = vq.rows("t", img, y=y, x=x, repeats=1, configs=("2x2/64 rgb", "2x2/16 rgb", "4x4/16 rgb"))
+    assert [r["config"] for r in rows] == ["2x2/16 rgb"]
