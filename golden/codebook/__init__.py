@@ -9,8 +9,9 @@ One algorithm per module, each with its contract at the top; no module is named 
 the package exports, so every module stays importable.
 
 * :mod:`.inputs`   input checks, deduplication of identical vectors (``unique_weighted``)
-* :mod:`.screen`   the float32 GEMM screening (one chunked matmul-and-argmax loop) and exact
-                   float64 distances
+* :mod:`.screen`   the float32 GEMM screening (one chunked matmul-and-argmax loop, its chunks
+                   on the worker threads) and exact float64 distances
+* :mod:`.workers`  the encoder's worker threads (``VQTEX_THREADS``; output independent of them)
 * :mod:`.fullsearch` exact full-search nearest codeword (``nearest``)
 * :mod:`.split`    splitting one TSVQ cell; :mod:`.tree` the greedy tree (``tsvq``,
                    ``tsvq_tree``, ``TsvqTree``)
@@ -33,8 +34,8 @@ Conventions shared by every function here
   (||x||^2 - 2 x.c + ||c||^2 form, on mean-centred data, in chunks of about 2 MiB of scores),
   compare them in float64 and settle what float64 cannot order in Python integers.  The Lloyd
   iterations' moves use the float64 distances (a move must lower it strictly).
-* Everything is deterministic: the same inputs and seed give the same output bits run to run.
-  ``nearest`` is moreover independent of the BLAS; the designed codebooks can differ between
+* Everything is deterministic: the same inputs and seed give the same output bits run to run,
+  on any number of worker threads (:mod:`.workers`).  ``nearest`` is moreover independent of the BLAS; the designed codebooks can differ between
   BLAS builds (the float32 screening steers which near-tie a Lloyd iteration resolves first).
 * Degenerate inputs: when there are at most k distinct vectors (of positive weight) every design
   function returns all of them, exactly, followed by repeats (``np.resize`` order) up to k rows;

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from .screen import SCORE_BYTES, U32, exact_d2
+from .workers import map_ordered
 
 __all__ = ["State", "assign_full", "reassign"]
 
@@ -87,7 +88,8 @@ def _half_gaps(c, scr, moved=None, old=None):
     row_min = np.empty(rows.size)
     col_min = np.full(k, np.inf)
     step = max(1, SCORE_BYTES // (4 * k))
-    for s0 in range(0, rows.size, step):
+
+    def one_chunk(s0):  # rows [s0, e) of row_min; its column minima are returned (min is exact)
         e = min(rows.size, s0 + step)
         sc = xa[s0:e] @ ca
         r_cn = cn[rows[s0:e]]
@@ -96,7 +98,10 @@ def _half_gaps(c, scr, moved=None, old=None):
         q -= (2.0 * gam * (np.sqrt(r_cn) * rmax + 0.5 * rmax * rmax))[:, None] + np.abs(q) * 1e-6
         q[np.arange(e - s0), rows[s0:e]] = np.inf  # not its own neighbour
         row_min[s0:e] = q.min(axis=1)
-        np.minimum(col_min, q.min(axis=0), out=col_min)
+        return q.min(axis=0)
+
+    for part in map_ordered(one_chunk, range(0, rows.size, step)):
+        np.minimum(col_min, part, out=col_min)
     out = np.empty(k)
     if rows.size == k:
         out[:] = 0.5 * np.sqrt(np.maximum(row_min, 0.0))

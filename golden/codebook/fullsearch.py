@@ -16,6 +16,7 @@ import numpy as np
 
 from .inputs import as_vectors
 from .screen import U32, Screen, exact_d2
+from .workers import one_blas_thread
 
 __all__ = ["nearest", "nearest_screened", "as_integers", "group_starts", "settle",
            "settle_in_integers"]
@@ -116,7 +117,8 @@ def nearest_screened(x, c, scr: Screen, chunk: int = 0, rows=None, tie=None):
     xnorm = scr.xnorm if rows is None else scr.xnorm[rows]
     gam = (d + 4) * U32 * (1 + 1e-3)
     idx = np.empty(n, dtype=np.int64)
-    for s, e, sc, best, smax in scr.chunks(ca, rows, chunk):
+
+    def one_chunk(s, e, sc, best, smax):  # writes rows [s, e) of idx only
         idx[s:e] = best
         margin = (2.0 * gam * (xnorm[s:e] * rmax + 0.5 * rmax * rmax)).astype(np.float32)
         # float32 rounding of the threshold itself: widen by a few more ulps
@@ -129,9 +131,12 @@ def nearest_screened(x, c, scr: Screen, chunk: int = 0, rows=None, tie=None):
             dd = exact_d2(x, c, cc, rows=r)  # no (pairs, d) copy of x: bounded memory
             won_r, won_c = settle(x, c, r, cc, dd, cc if tie is None else tie[cc])
             idx[won_r] = won_c
+
+    scr.map_chunks(ca, one_chunk, rows, chunk)
     return idx, exact_d2(x, c, idx)
 
 
+@one_blas_thread
 def nearest(vectors: np.ndarray, codebook: np.ndarray, chunk: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Full-search nearest codeword.
 

@@ -18,6 +18,7 @@ from .inputs import check_k, pad, prepare, wmean
 from .fullsearch import nearest, nearest_screened
 from .screen import Screen, exact_d2
 from .tree import tsvq, tsvq_build
+from .workers import one_blas_thread
 
 __all__ = ["GlaResult", "gla", "design"]
 
@@ -181,6 +182,7 @@ def _final_indices(u, st: State, scr, chunk=0):
     return a, d2
 
 
+@one_blas_thread
 def gla(vectors, k, *, seed=0, weights=None, init=None, max_iter=100, tol=1e-3,
         migrate=8, subsample=32) -> GlaResult:
     """Generalized Lloyd algorithm (full-search Lloyd / LBG) with TSVQ initialisation and

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .workers import local_buffer, map_ordered
+
 __all__ = ["U32", "SCORE_BYTES", "MAX_TEMP_BYTES", "Screen", "exact_d2"]
 
 U32 = float(np.finfo(np.float32).eps) / 2.0  # unit roundoff of float32
@@ -72,23 +74,43 @@ class Screen:
         return self._buf
 
     def chunks(self, ca: np.ndarray, rows=None, chunk: int = 0):
-        """The screening loop: for consecutive chunks of the vectors (all, or the subset
+        """The screening loop, serial: for consecutive chunks of the vectors (all, or the subset
         ``rows``) yield ``(s, e, sc, best, smax)``: the chunk's row range [s, e) in that order,
         its float32 scores ``sc`` (e - s, k) against the columns ``ca`` (a view of a reused
         buffer, valid until the next chunk; the caller may overwrite it), the first maximum
         ``best`` of each row and its score ``smax``.  ``chunk``: rows per chunk (0 = about
-        ``SCORE_BYTES`` of scores)."""
+        ``SCORE_BYTES`` of scores).  :meth:`map_chunks` is the same loop on every core."""
         k = ca.shape[1]
-        xa = self.xa if rows is None else np.take(self.xa, rows, axis=0)
-        n = xa.shape[0]
+        n = self.xa.shape[0] if rows is None else len(rows)
         step = self.rows_per_chunk(k, chunk)
         buf = self.scores_buffer(min(step, n) * k)[: min(step, n) * k].reshape(-1, k)
         for s in range(0, n, step):
             e = min(n, s + step)
-            sc = buf[: e - s]
-            np.matmul(xa[s:e], ca, out=sc)
-            best = sc.argmax(axis=1)
-            yield s, e, sc, best, sc[np.arange(e - s), best]
+            yield (s, e) + self._score(ca, rows, s, e, buf[: e - s])
+
+    def map_chunks(self, ca: np.ndarray, fn, rows=None, chunk: int = 0) -> list:
+        """The screening loop on the encoder's worker threads (:mod:`.workers`): calls
+        ``fn(s, e, sc, best, smax)`` once per chunk (the arguments of :meth:`chunks`; ``sc`` is
+        the calling thread's buffer, valid during the call) and returns the results in chunk
+        order.  Chunk boundaries depend on the sizes only, never on the thread count; ``fn``
+        must only write to rows [s, e) of shared outputs."""
+        k = ca.shape[1]
+        n = self.xa.shape[0] if rows is None else len(rows)
+        step = self.rows_per_chunk(k, chunk)
+        size = min(step, n) * k
+
+        def one(s):
+            e = min(n, s + step)
+            sc = local_buffer(size, np.float32)[: (e - s) * k].reshape(e - s, k)
+            return fn(s, e, *self._score(ca, rows, s, e, sc))
+
+        return map_ordered(one, range(0, n, step))
+
+    def _score(self, ca, rows, s, e, sc):
+        xa = self.xa[s:e] if rows is None else np.take(self.xa, rows[s:e], axis=0)
+        np.matmul(xa, ca, out=sc)
+        best = sc.argmax(axis=1)
+        return sc, best, sc[np.arange(e - s), best]
 
     def _best(self, ca, rows, chunk, two):
         k = ca.shape[1]
@@ -97,7 +119,8 @@ class Screen:
         b2 = np.full(n, -1, dtype=np.int64)
         s1 = np.empty(n, dtype=np.float32)
         s2 = np.full(n, -np.inf, dtype=np.float32)
-        for s, e, sc, best, smax in self.chunks(ca, rows, chunk):
+
+        def fn(s, e, sc, best, smax):
             b1[s:e] = best
             s1[s:e] = smax
             if two and k > 1:
@@ -105,6 +128,8 @@ class Screen:
                 sc[r, best] = -np.inf
                 b2[s:e] = nb = sc.argmax(axis=1)
                 s2[s:e] = sc[r, nb]
+
+        self.map_chunks(ca, fn, rows, chunk)
         return b1, b2, s1, s2
 
     def approx_d2(self, rows, s, ca_rmax):

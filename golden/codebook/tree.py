@@ -15,6 +15,7 @@ import numpy as np
 
 from .inputs import as_vectors, check_k, pad, prepare, wmean
 from .split import split_cell, split_cells
+from .workers import one_blas_thread
 
 __all__ = ["TsvqTree", "tsvq_build", "tsvq_tree", "tsvq"]
 
@@ -62,6 +63,7 @@ class TsvqTree:
         return self.leaf[node]
 
 
+@one_blas_thread
 def tsvq_build(u, wu, k, seed, criterion="distortion", batch=128, sample=2048, small_cell=256):
     """Greedy TSVQ on distinct weighted vectors.
 

@@ -1,25 +1,32 @@
 """Codebook design benchmark: ``golden.codebook`` (TSVQ-initialised GLA) against scikit-learn's
-KMeans (k-means++, one init, Lloyd to convergence) on the same vectors, side by side.
+KMeans (k-means++, one init, Lloyd, its default tolerance) on the same vectors, side by side, at
+each library's default thread settings (as a user runs them) and with both held to one thread.
 
-Images are scikit-image's bundled photographs (nothing is downloaded): astronaut and
-immunohistochemistry (512x512), and 512x512 centre crops of hubble_deep_field and retina.
+Images are scikit-image's bundled photographs (nothing is downloaded): 512x512 centre crops of
+astronaut, immunohistochemistry, hubble_deep_field and retina.
 
 Cases (targets: PSNR loss against KMeans at most ``max_loss_db`` and a speed-up of at least
-``min_speedup``):
+``min_speedup``, both at default threads):
 
-1. 2x2 RGB blocks (d = 12), k = 256, astronaut: 0.10 dB, 5x
-2. 4x4 RGB blocks (d = 48), k = 1024, astronaut: 0.15 dB, 5x
-3. 2x2 RGB blocks, k = 4096 shared by the four images (one training set): 0.15 dB, 10x
+1. 2x2 RGB blocks (d = 12), k = 256, each photograph on its own: 0.10 dB, 5x
+2. 4x4 RGB blocks (d = 48), k = 1024, each photograph on its own: 0.10 dB, 5x
+3. 2x2 RGB blocks, k = 4096 shared by the four photographs (one training set): 0.15 dB, 10x
+
+A case with several photographs encodes each on its own; its speed-up is KMeans's total time over
+ours, its PSNR loss the worst photograph's (both also per photograph in ``per_image``).
 
 PSNR = 10 log10(255^2 / MSE) over every reconstructed pixel component, each block decoded to its
-codeword rounded and clipped to uint8.  Both methods run under the same BLAS/OpenMP thread limit
-(threadpoolctl; default 1 thread, the reproducible setting on a shared machine; with more
-threads sklearn's OpenMP Lloyd loop gains more than our mostly single-threaded numpy pipeline),
-and interleaved; the time of a method is the minimum wall time over ``repeats`` runs (same count for
-both methods; case 3 runs once by default because KMeans takes minutes there).
+codeword rounded and clipped to uint8.  Thread settings: "default" leaves both libraries alone
+(our encoder's worker threads: ``VQTEX_THREADS`` or the cores; KMeans: its OpenMP threads, BLAS
+as configured); "one" holds both to one thread (threadpoolctl for OpenMP and BLAS,
+``workers.set_threads(1)`` for ours).  The two methods alternate; the time of a method is the
+minimum wall time over ``repeats`` runs (the same count for both; case 3 runs once by default
+because KMeans takes minutes there).
 
-Run: ``python -m sim.bench.encoder [--json] [--threads N] [--repeats R] [--cases 1,2,3]``
-or ``vqtex bench encode [--json]``.
+Run: ``vqtex bench encode [--json]``.  For whole-process timings, ``python -m
+vqtex.sim.bench.encoder --only gla|kmeans --case 1 --image hubble_deep_field`` runs one method once
+(both import the same modules) and prints its PSNR; ``--only load`` does everything but the fit
+(the fixed cost to subtract).
 """
 from __future__ import annotations
 
@@ -30,20 +37,19 @@ import time
 
 import numpy as np
 
-__all__ = ["run", "blocks", "psnr", "load_images"]
+__all__ = ["run", "blocks", "psnr", "load_images", "CASES", "SETTINGS", "fit", "thread_setting"]
 
+PHOTOS = ("astronaut", "immunohistochemistry", "hubble_deep_field", "retina")
 CASES = {
-    1: dict(name="2x2 blocks, k=256, astronaut", block=2, k=256, images=("astronaut",),
+    1: dict(name="2x2 blocks, k=256, each photograph", block=2, k=256, images=PHOTOS, separate=True,
             max_loss_db=0.10, min_speedup=5.0, repeats=3),
-    2: dict(name="4x4 blocks, k=1024, astronaut", block=4, k=1024, images=("astronaut",),
-            max_loss_db=0.15, min_speedup=5.0, repeats=3),
-    3: dict(name="2x2 blocks, k=4096 shared by 4 images", block=2, k=4096,
-            images=("astronaut", "immunohistochemistry", "hubble_deep_field", "retina"),
-            max_loss_db=0.15, min_speedup=10.0, repeats=1),
+    2: dict(name="4x4 blocks, k=1024, each photograph", block=4, k=1024, images=PHOTOS, separate=True,
+            max_loss_db=0.10, min_speedup=5.0, repeats=3),
+    3: dict(name="2x2 blocks, k=4096 shared by 4 photographs", block=2, k=4096, images=PHOTOS,
+            separate=False, max_loss_db=0.15, min_speedup=10.0, repeats=1),
 }
-
-
-_KM_MAX_ITER = 10000  # KMeans runs until its own (default) tolerance stops it
+#: Thread settings, in the order they run: the libraries' defaults, then one thread each.
+SETTINGS = ("default", "one")
 
 
 def _ours_settings() -> dict:
@@ -81,96 +87,146 @@ def _centre(img: np.ndarray, size: int = 512) -> np.ndarray:
     return np.ascontiguousarray(img[y:y + size, x:x + size, :3])
 
 
-def load_images(names) -> list[np.ndarray]:
-    """512x512x3 uint8 images bundled with scikit-image (centre crops of the larger ones)."""
+def load_images(names, size: int = 512) -> list[np.ndarray]:
+    """size x size x 3 uint8 images bundled with scikit-image (centre crops)."""
     import skimage.data
-    return [_centre(getattr(skimage.data, n)()) for n in names]
+    return [_centre(getattr(skimage.data, n)(), size) for n in names]
 
 
-def _time(fn):
+def fit(method: str, x: np.ndarray, k: int, seed: int = 0):
+    """Design a k-codeword codebook for ``x`` with ``method`` ("gla" or "kmeans"); returns
+    (codebook, labels, iterations, converged)."""
+    if method == "gla":
+        from vqtex.golden.codebook import gla
+        r = gla(x, k, seed=seed)
+        return r.codebook, r.indices, r.iterations, bool(r.converged)
+    from sklearn.cluster import KMeans
+    km = KMeans(n_clusters=k, init="k-means++", n_init=1, random_state=seed, algorithm="lloyd").fit(x)
+    return km.cluster_centers_, km.labels_, int(km.n_iter_), bool(km.n_iter_ < km.max_iter)
+
+
+def thread_setting(setting: str):
+    """The thread setting as a context: "default" changes nothing, "one" holds both libraries to
+    one thread."""
+    from contextlib import contextmanager
+
+    from threadpoolctl import threadpool_limits
+
+    from vqtex.golden.codebook import workers
+
+    @contextmanager
+    def ctx():
+        if setting == "default":
+            yield
+            return
+        with workers.using_threads(1), threadpool_limits(limits=1):
+            yield
+    return ctx()
+
+
+def _pools() -> list[str]:
+    from threadpoolctl import threadpool_info
+
+    from vqtex.golden.codebook import workers
+    return sorted({f"{p['internal_api']}={p['num_threads']}" for p in threadpool_info()}
+                  | {f"vqtex={workers.threads()}"})
+
+
+def _timed(fn):
     t0, c0 = time.perf_counter(), time.process_time()
     out = fn()
     return out, time.perf_counter() - t0, time.process_time() - c0
 
 
-def _run_case(cid: int, spec: dict, seed: int, repeats: int | None, log) -> dict:
-    from sklearn.cluster import KMeans
+def _run_set(x, k, seed, reps, log, label):
+    """Both methods on one training set, alternating; min wall time of ``reps`` runs each."""
+    best = {}
+    out = {}
+    for rep in range(reps):
+        for method in ("gla", "kmeans"):
+            log(f"  {label}: {method:6s} run {rep + 1}/{reps} ({len(x)} vectors, k={k}) ...")
+            res, wall, cpu = _timed(lambda: fit(method, x, k, seed))
+            if method not in best or wall < best[method][0]:
+                best[method] = (wall, cpu)
+            out[method] = res
+    row = {}
+    for method, name in (("gla", "ours"), ("kmeans", "kmeans")):
+        cb, lab, it, conv = out[method]
+        row[name] = {"time_s": best[method][0], "cpu_s": best[method][1], "psnr_db": psnr(x, cb, lab),
+                     "iterations": it, "converged": conv}
+    return row
 
-    from vqtex.golden.codebook import gla
 
-    imgs = load_images(spec["images"])
-    x = np.concatenate([blocks(im, spec["block"]) for im in imgs])
+def _run_case(cid: int, spec: dict, seed: int, repeats: int | None, setting: str, log,
+              images=None, size: int = 512) -> dict:
+    names = tuple(images or spec["images"])
+    imgs = load_images(names, size)
     k = spec["k"]
     reps = spec["repeats"] if repeats is None else repeats
-    ours_t, km_t = [], []
-    for rep in range(reps):
-        log(f"  case {cid}: ours   run {rep + 1}/{reps} ({len(x)} vectors, k={k}) ...")
-        res, wall, cpu = _time(lambda: gla(x, k, seed=seed))
-        ours_t.append((wall, cpu))
-        log(f"  case {cid}: ours   {wall:8.3f} s")
-        log(f"  case {cid}: KMeans run {rep + 1}/{reps} (the slow one: up to minutes) ...")
-        km, wall, cpu = _time(lambda: KMeans(n_clusters=k, init="k-means++", n_init=1,
-                                             random_state=seed, algorithm="lloyd",
-                                             max_iter=_KM_MAX_ITER).fit(x))
-        km_t.append((wall, cpu))
-        log(f"  case {cid}: KMeans {wall:8.3f} s")
-    ours_wall, ours_cpu = min(ours_t)
-    km_wall, km_cpu = min(km_t)
-    p_ours = psnr(x, res.codebook, res.indices)
-    p_km = psnr(x, km.cluster_centers_, km.labels_)
-    loss = p_km - p_ours
-    speedup = km_wall / ours_wall
+    if spec["separate"]:
+        sets = [(n, blocks(im, spec["block"])) for n, im in zip(names, imgs)]
+    else:
+        sets = [("+".join(names), np.concatenate([blocks(im, spec["block"]) for im in imgs]))]
+    per = []
+    with thread_setting(setting):
+        for name, x in sets:
+            r = _run_set(x, k, seed, reps, log, f"case {cid} {setting} {name}")
+            r.update(image=name, vectors=int(x.shape[0]),
+                     psnr_loss_db=r["kmeans"]["psnr_db"] - r["ours"]["psnr_db"],
+                     speedup=r["kmeans"]["time_s"] / r["ours"]["time_s"])
+            log(f"  case {cid} {setting} {name}: ours {r['ours']['time_s']:.3f} s "
+                f"{r['ours']['psnr_db']:.3f} dB, KMeans {r['kmeans']['time_s']:.3f} s "
+                f"{r['kmeans']['psnr_db']:.3f} dB: {r['speedup']:.1f}x")
+            per.append(r)
+    ours_t = sum(r["ours"]["time_s"] for r in per)
+    km_t = sum(r["kmeans"]["time_s"] for r in per)
+    loss = max(r["psnr_loss_db"] for r in per)
+    speedup = km_t / ours_t
     return {
-        "case": cid,
-        "name": spec["name"],
-        "images": list(spec["images"]),
-        "vectors": int(x.shape[0]),
-        "distinct_vectors": int(np.unique(x, axis=0).shape[0]),
-        "dim": int(x.shape[1]),
-        "k": k,
-        "repeats": reps,
-        "ours": {"time_s": ours_wall, "cpu_s": ours_cpu, "psnr_db": p_ours,
-                 "iterations": res.iterations, "converged": bool(res.converged)},
-        "kmeans": {"time_s": km_wall, "cpu_s": km_cpu, "psnr_db": p_km,
-                   "iterations": int(km.n_iter_), "converged": bool(km.n_iter_ < _KM_MAX_ITER)},
-        "psnr_loss_db": loss,
-        "speedup": speedup,
-        "target": {"max_psnr_loss_db": spec["max_loss_db"], "min_speedup": spec["min_speedup"]},
+        "case": cid, "name": spec["name"], "threads": setting, "images": list(names),
+        "dim": int(sets[0][1].shape[1]), "k": k, "repeats": reps,
+        "per_image": per,
+        "ours_time_s": ours_t, "kmeans_time_s": km_t,
+        "psnr_loss_db": loss, "speedup": speedup,
+        "target": {"max_psnr_loss_db": spec["max_loss_db"], "min_speedup": spec["min_speedup"],
+                   "at": "default"},
         "quality_met": bool(loss <= spec["max_loss_db"]),
         "speed_met": bool(speedup >= spec["min_speedup"]),
         "met": bool(loss <= spec["max_loss_db"] and speedup >= spec["min_speedup"]),
     }
 
 
-def run(json_out: bool = False, *, threads: int | None = 1, repeats: int | None = None,
-        cases=(1, 2, 3), seed: int = 0) -> dict:
+def run(json_out: bool = False, *, settings=SETTINGS, repeats: int | None = None,
+        cases=(1, 2, 3), seed: int = 0, images=None, size: int = 512) -> dict:
     """Run the benchmark; print a table (or one JSON object) and return the result dict.
 
-    threads: BLAS/OpenMP thread limit applied to both methods (None: library defaults).
-    repeats: runs per method and case (None: 3 for cases 1-2, 1 for case 3); min wall time counts.
+    settings: thread settings to run ("default", "one"). repeats: runs per method and training
+    set (None: the case's). images, size: other photographs or a smaller crop (tests).
     """
     import sklearn
-    from threadpoolctl import threadpool_info, threadpool_limits
 
     def log(msg):
         print(msg, file=sys.stderr if json_out else sys.stdout, flush=True)
 
     results = []
-    with threadpool_limits(limits=threads):
-        pools = sorted({f"{p['internal_api']}={p['num_threads']}" for p in threadpool_info()})
-        log(f"threads: limit {threads if threads else 'default'} ({', '.join(pools)})")
+    pools = {}
+    for setting in settings:
+        with thread_setting(setting):
+            pools[setting] = _pools()
+        log(f"threads {setting}: {', '.join(pools[setting])}")
         for cid in cases:
-            results.append(_run_case(cid, CASES[cid], seed, repeats, log))
+            results.append(_run_case(cid, CASES[cid], seed, repeats, setting, log, images, size))
+    targets = [r for r in results if r["threads"] == "default"]
     out = {
         "benchmark": "encode",
-        "threads": threads,
+        "settings": list(settings),
         "thread_pools": pools,
         "numpy": np.__version__,
         "sklearn": sklearn.__version__,
         "seed": seed,
         "ours_settings": _ours_settings(),
         "cases": results,
-        "all_met": all(r["met"] for r in results),
+        "all_met": bool(targets) and all(r["met"] for r in targets),
     }
     if json_out:
         print(json.dumps(out))
@@ -180,36 +236,65 @@ def run(json_out: bool = False, *, threads: int | None = 1, repeats: int | None 
 
 
 def _print_table(out: dict) -> None:
-    hdr = (f"{'case':<40} {'N':>7} {'d':>3} {'k':>5} | {'ours s':>7} {'dB':>6} | "
-           f"{'KMeans s':>8} {'dB':>6} | {'loss dB':>7} {'speedup':>7} | target")
-    print(f"codebook design vs sklearn KMeans (k-means++, lloyd), threads: "
-          f"{out['threads'] if out['threads'] else 'library default'} ({', '.join(out['thread_pools'])})")
+    hdr = (f"{'case':<44} {'threads':<8} {'k':>5} | {'ours s':>7} | {'KMeans s':>8} | "
+           f"{'loss dB':>7} {'speedup':>7} | target (default threads)")
+    print("codebook design vs sklearn KMeans (k-means++, n_init=1, lloyd, default tol)")
+    for s, p in out["thread_pools"].items():
+        print(f"threads {s}: {', '.join(p)}")
     print("ours: golden.codebook.gla(" + ", ".join(f"{k}={v}" for k, v in out["ours_settings"].items())
-          + "), TSVQ-initialised; KMeans: init='k-means++', n_init=1, algorithm='lloyd', default tol")
+          + "), TSVQ-initialised")
     print(hdr)
     print("-" * len(hdr))
     for r in out["cases"]:
         t = r["target"]
         tgt = (f"<= {t['max_psnr_loss_db']:.2f} dB {'ok' if r['quality_met'] else 'MISSED'}, "
-               f">= {t['min_speedup']:.0f}x {'ok' if r['speed_met'] else 'MISSED'}")
-        print(f"{r['case']}. {r['name']:<37} {r['vectors']:>7} {r['dim']:>3} {r['k']:>5} | "
-              f"{r['ours']['time_s']:>7.2f} {r['ours']['psnr_db']:>6.2f} | "
-              f"{r['kmeans']['time_s']:>8.2f} {r['kmeans']['psnr_db']:>6.2f} | "
+               f">= {t['min_speedup']:.0f}x {'ok' if r['speed_met'] else 'MISSED'}"
+               if r["threads"] == "default" else "")
+        print(f"{r['case']}. {r['name']:<41} {r['threads']:<8} {r['k']:>5} | "
+              f"{r['ours_time_s']:>7.2f} | {r['kmeans_time_s']:>8.2f} | "
               f"{r['psnr_loss_db']:>+7.3f} {r['speedup']:>6.1f}x | {tgt}")
-    print(f"all targets met: {'yes' if out['all_met'] else 'NO'}")
+        for p in r["per_image"]:
+            print(f"     {p['image']:<40} {'':<8} {'':>5} | {p['ours']['time_s']:>7.2f} | "
+                  f"{p['kmeans']['time_s']:>8.2f} | {p['psnr_loss_db']:>+7.3f} {p['speedup']:>6.1f}x | "
+                  f"{p['ours']['psnr_db']:.2f} vs {p['kmeans']['psnr_db']:.2f} dB")
+    print(f"all targets met (default threads): {'yes' if out['all_met'] else 'NO'}")
+
+
+def _only(method: str, case: int, image: str, seed: int, size: int = 512) -> None:
+    """One method once on one photograph of a case (whole-process timing)."""
+    import sklearn.cluster  # noqa: F401  (both methods' processes import the same modules)
+
+    import vqtex.golden.codebook  # noqa: F401
+
+    spec = CASES[case]
+    x = blocks(load_images([image], size)[0], spec["block"])
+    if method == "load":  # the fixed cost of the other two: imports and the image's vectors
+        print(f"load case {case} {image}: {x.shape[0]} vectors")
+        return
+    cb, lab, it, _ = fit(method, x, spec["k"], seed)
+    print(f"{method} case {case} {image}: {psnr(x, cb, lab):.3f} dB, {it} iterations")
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--json", action="store_true", help="print one JSON object")
-    ap.add_argument("--threads", type=int, default=1,
-                    help="BLAS/OpenMP threads for both methods (0: library default)")
-    ap.add_argument("--repeats", type=int, default=None)
-    ap.add_argument("--cases", default="1,2,3")
-    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--settings", default="default,one", help="thread settings (default,one)")
+    ap.add_argument("--repeats", type=int, default=None, help="runs per method (default: the case's)")
+    ap.add_argument("--cases", default="1,2,3", help="cases to run (default 1,2,3)")
+    ap.add_argument("--seed", type=int, default=0, help="seed of both methods (default 0)")
+    ap.add_argument("--images", default=None, help="comma-separated photographs (default: the four)")
+    ap.add_argument("--only", choices=("gla", "kmeans", "load"),
+                    help="run one method once (whole-process timing); load: only the imports and the vectors")
+    ap.add_argument("--case", type=int, default=1, help="with --only: the case (default 1)")
+    ap.add_argument("--image", default="hubble_deep_field", help="with --only: the photograph")
+    ap.add_argument("--size", type=int, default=512, help="with --only: the crop's side (default 512)")
     a = ap.parse_args(argv)
+    if a.only:
+        _only(a.only, a.case, a.image, a.seed, a.size)
+        return 0
     cases = tuple(int(c) for c in a.cases.split(","))
-    run(a.json, threads=a.threads or None, repeats=a.repeats, cases=cases, seed=a.seed)
+    run(a.json, settings=tuple(a.settings.split(",")), repeats=a.repeats, cases=cases, seed=a.seed,
+        images=tuple(a.images.split(",")) if a.images else None)
     return 0
 
 

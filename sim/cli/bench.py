@@ -4,19 +4,22 @@ encode  -- the codebook designer against scikit-learn's KMeans (needs the ``benc
 mip     -- extended codewords: the paper's averages against joint training, per level
 sim     -- simulation backends: pysim, compiled CXXRTL, Verilator (cycles per second, build times)
 render  -- golden render time (uncompressed and VQ) and RTL cycles per frame, both built-in scenes
-skip    -- the sparse request stream against the fixed one: requests, RTL cycles and time per frame
 codecs  -- VQ against BC1, ASTC, JPEG 2000 and wavelet coders: bits, PSNR, encode, decode, one random texel
            (needs the ``codecs`` extra; the full run's photographs need ``bench``)
+tradeoff -- encoders: time against error: GLA and TSVQ against scikit-learn's KMeans and MiniBatchKMeans
+            over blocks, codebook sizes and colours; Pareto plots with --plot DIR (needs the ``bench`` extra)
+skip    -- the sparse request stream against the fixed one: requests, RTL cycles and time per frame
 stability -- numerical stability and hostile input: the colour matrix on every input, long streams under
            backpressure, mutated .vqt files, adversarial encoder training sets
 """
 
 from __future__ import annotations
 
+import argparse
 import importlib
 import inspect
 
-from .common import CliError, add_json
+from .common import CliError, add_json, add_sweep_options, block_size, sweep_options, with_default
 
 __all__ = ["add_parser"]
 
@@ -28,6 +31,7 @@ BENCHES = {
     "skip": "vqtex.sim.bench.skip",
     "stability": "vqtex.sim.bench.stability",
     "codecs": "vqtex.sim.bench.codecs",
+    "tradeoff": "vqtex.sim.bench.tradeoff",
 }
 
 #: The extra that installs what a bench needs (default ``bench``).
@@ -37,25 +41,72 @@ EXTRAS = {"codecs": "codecs"}
 def _needs(what: str, e: ImportError) -> CliError:
     """The one-line error for a missing dependency: a Python package (its extra) or a system library."""
     name = e.name or "a missing module"
-    how = "scripts/install-sim-tools" if name.startswith("lib") else f"pip install '.[{EXTRAS.get(what, 'bench')}]'"
+    top = name.split(".")[0]
+    extra = {"distributed": "sweep", "matplotlib": "plot"}.get(top, EXTRAS.get(what, "bench"))
+    how = "scripts/install-sim-tools" if name.startswith("lib") else f"pip install '.[{extra}]'"
     return CliError(f"bench {what} needs {name} ({how})")
 
 
 def cmd_bench(args) -> int:
     try:
         mod = importlib.import_module(BENCHES[args.what])
+        opts = _options(args)
+        mod.run(json_out=args.json, **opts)
     except ImportError as e:
-        raise _needs(args.what, e) from None
-    kwargs = {}
-    if args.quick:
-        if "quick" not in inspect.signature(mod.run).parameters:
-            raise CliError(f"bench {args.what} has no --quick")
-        kwargs["quick"] = True
-    try:
-        mod.run(json_out=args.json, **kwargs)
-    except ImportError as e:
+        if (e.name or "").split(".")[0] == "vqtex":
+            raise
         raise _needs(args.what, e) from None
     return 0
+
+
+def _options(args) -> dict:
+    """The options of the bench ``args.what`` (its run() keywords): ``--quick`` for the benches
+    whose run() takes it; the tradeoff grid's options are an error on any other bench."""
+    grid_opts = ("plot", "codecs", "images", "sizes", "blocks", "threads", "scheduler", "workers")
+    given = [o for o in grid_opts if getattr(args, o) not in (None, False)]
+    if args.what != "tradeoff":
+        if given:
+            raise CliError(f"--{given[0]} is an option of 'vqtex bench tradeoff' only")
+        if not args.quick:
+            return {}
+        if "quick" not in inspect.signature(importlib.import_module(BENCHES[args.what]).run).parameters:
+            raise CliError(f"bench {args.what} has no --quick")
+        return {"quick": True}
+    from vqtex.sim.bench import tradeoff
+    grid = dict(tradeoff.QUICK if args.quick else tradeoff.FULL)
+    if args.images:
+        names = tuple(args.images.split(","))
+        bad = [n for n in names if n not in tradeoff.IMAGES]
+        if bad:
+            raise CliError(f"--images: unknown image {bad[0]!r} (one of {', '.join(tradeoff.IMAGES)})")
+        grid["images"] = names
+    if args.sizes:
+        try:
+            sizes = tuple(int(v) for v in args.sizes.split(","))
+        except ValueError:
+            raise CliError(f"--sizes: {args.sizes!r} is not a comma-separated list of integers") from None
+        if any(not 2 <= k <= 4096 for k in sizes):
+            raise CliError("--sizes: codebook sizes are 2..4096")
+        grid["sizes"] = sizes
+    if args.blocks:
+        try:
+            grid["blocks"] = tuple(block_size(b) for b in args.blocks.split(","))
+        except argparse.ArgumentTypeError as e:
+            raise CliError(f"--blocks: {e}") from None
+        if any(w not in (1, 2, 4, 8) or h not in (1, 2, 4, 8) for w, h in grid["blocks"]):
+            raise CliError("--blocks: sides are powers of two 1..8")
+    if args.codecs:
+        try:
+            importlib.import_module("vqtex.sim.bench.codecs")
+        except ImportError as e:
+            if e.name == "vqtex.sim.bench.codecs":
+                raise CliError("--codecs: this build has no codecs bench (vqtex.sim.bench.codecs)") from None
+            raise
+    if args.threads is not None and args.threads < 0:
+        raise CliError(f"--threads must be 0 (the libraries' defaults) or more, got {args.threads}")
+    threads = 1 if args.threads is None else (args.threads or None)
+    return {"plot": args.plot, "grid": grid, "include_codecs": args.codecs, "threads": threads,
+            **sweep_options(args)}
 
 
 def add_parser(sub) -> None:
@@ -64,9 +115,25 @@ def add_parser(sub) -> None:
                    help="encode: codebook design vs scikit-learn KMeans; mip: extended codewords; "
                         "sim: simulation backends' speed; render: golden render time and RTL cycles per frame; "
                         "skip: sparse against fixed request stream (requests, RTL cycles and time per frame); "
-                        "codecs: VQ against BC1, ASTC, JPEG 2000 and wavelet coders")
+                        "codecs: VQ against BC1, ASTC, JPEG 2000 and wavelet coders; "
+                        "tradeoff: encoders' time, bits and error against scikit-learn's k-means")
     b.add_argument("--quick", action="store_true",
-                   help="codecs: a small run (two bundled textures, two VQ configurations, 2 repeats) "
-                        "instead of the full one (default off)")
+                   help=with_default("a small run: codecs: two bundled textures, two VQ configurations, 2 repeats; "
+                                     "tradeoff: one 64x64 texture, 2x2 and 4x4, k 16 and 64", "the full run"))
     add_json(b)
+    t = b.add_argument_group("tradeoff options")
+    t.add_argument("--plot", metavar="DIR", default=None,
+                   help=with_default("write the Pareto plots tradeoff_time.png and tradeoff_bits.png into DIR "
+                                     "(needs matplotlib)", "no plots"))
+    t.add_argument("--codecs", action="store_true",
+                   help=with_default("add the codecs' rows (BC1, JPEG 2000, wavelets) on the same images", "off"))
+    t.add_argument("--images", metavar="NAMES", default=None,
+                   help=with_default("comma-separated image names (docs/benchmarks.md lists them)", "the grid's"))
+    t.add_argument("--sizes", metavar="K,K", default=None,
+                   help=with_default("comma-separated codebook sizes", "16,64,256,1024,4096"))
+    t.add_argument("--blocks", metavar="WxH,WxH", default=None,
+                   help=with_default("comma-separated blocks", "2x2,4x4,4x2"))
+    t.add_argument("--threads", type=int, default=None,
+                   help=with_default("threads every library is held to in a job (0: the libraries' defaults)", 1))
+    add_sweep_options(t)
     b.set_defaults(func=cmd_bench)

@@ -49,8 +49,9 @@ def _user_errors():
     from vqtex.golden.encode import EncodeError
     from vqtex.golden.fetch import RequestError
     from vqtex.golden.format import FormatError
+    from vqtex.golden.codebook.workers import ThreadSettingError
     from vqtex.golden.render.scene import SceneError
-    return (CliError, FormatError, EncodeError, RequestError, SceneError, OSError)
+    return (CliError, FormatError, EncodeError, RequestError, SceneError, ThreadSettingError, OSError)
 
 
 def main(argv=None) -> int:
