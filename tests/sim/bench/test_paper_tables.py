@@ -7,6 +7,7 @@ import json
 
 import pytest
 
+from tests.sim.bench.tiny_scenes import TINY_TOPSPIN, TINY_TOWN, tiny_scene
 from vqtex.golden.render.scene import DATA_DIR, PAPER_SCENES, load_scene
 from vqtex.sim.bench import experiments, paper_configs
 from vqtex.sim.bench.paper_configs import Codebook
@@ -105,33 +106,14 @@ def test_encode_config_rejects_a_configuration_that_leaves_a_texture_out():
         experiments.encode_config(s, images, (Codebook(("floor", "marble"), 16, "4x4", "rgb"),), False)
 
 
-def _tiny_scene(tmp_path, name, textures) -> str:
-    """A scene file with one 64x64 (or given) texture per (group, colour, generator), each on a quad
-    facing the camera: the paper's groups at a size the tests can afford."""
-    text = f"[scene]\nname = \"{name}\"\nframes = 3\nsize = [48, 32]\n" \
-           "[camera]\nposition = [0, 0, 4]\ntarget = [0, 0, 0]\n"
-    for k, (group, color, gen, size) in enumerate(textures):
-        text += (f"[groups.{group}]\ncolor = \"{color}\"\n[[texture]]\nname = \"t{k}\"\ngenerator = \"{gen}\"\n"
-                 f"size = {list(size)}\ngroup = \"{group}\"\n[[mesh]]\nshape = \"quad\"\ntexture = \"t{k}\"\n"
-                 f"size = [1.5, 1.5]\ntranslate = [{k * 1.2 - 2.4}, 0, {-k}]\nrotate = [-50, 20, 0]\n")
-    path = tmp_path / f"{name}.toml"
-    path.write_text(text)
-    return str(path)
-
-
 @pytest.fixture
 def tiny_town(tmp_path):
-    return _tiny_scene(tmp_path, "tiny-town", [("signs", "rgb", "checker", (64, 64)), ("roads", "rgb", "noise", (64, 64)),
-                                               ("other", "rgb", "bricks", (64, 64)),
-                                               ("grey", "intensity", "marble", (64, 64)),
-                                               ("cutouts", "rgba", "cutout", (64, 64))])
+    return tiny_scene(tmp_path, "tiny-town", TINY_TOWN)
 
 
 @pytest.fixture
 def tiny_topspin(tmp_path):
-    return _tiny_scene(tmp_path, "tiny-topspin", [("floor", "rgb", "wood", (64, 64)),
-                                                  ("marble", "rgb", "marble", (64, 64)),
-                                                  ("top", "rgb", "stripes", (64, 32))])
+    return tiny_scene(tmp_path, "tiny-topspin", TINY_TOPSPIN)
 
 
 FIELDS = {"row", "source", "label", "codebooks", "sampling", "n_codebooks", "overall_rate", "rate_level0", "mse",
