@@ -3,9 +3,9 @@
     python golden/data/make_town_paper.py
 
 The paper's town scene holds 85 textures in 5 MB: 64 RGB, 14 one-channel (intensity) and 7 RGBA.
-This scene has exactly that mix. 26 of its textures are the bundled PNGs of golden/data (the
+This scene has exactly that mix. 19 of its textures are the bundled PNGs of golden/data (the
 scikit-image photographs and their derivatives, see LICENSE-textures.md; nothing new is bundled);
-the other 59 are generated at run time by golden/render/textures.py (wood, marble, checker, stripes,
+the other 66 are generated at run time by golden/render/textures.py (wood, marble, checker, stripes,
 bricks, facade, noise, cutout) with their own seeds and parameters. Sizes are chosen so the
 uncompressed total is 5,001,216 bytes (5.00 MB; 4.77 MiB): see ``SIZES`` and docs/experiments.md.
 

@@ -62,19 +62,20 @@ def cmd_experiments(args) -> int:
     elif args.table == "table5":
         rows = experiments.table5(frames=tuple(frames), backend=backend, scene=args.scene or "topspin")
     else:
-        outputs = Outputs()
-        plot = outputs.add(args.plot) if args.plot is not None else None
-        if plot is not None:
-            hardware_tradeoff.check_plotting()
-        step = frames[1] - frames[0] if len(frames) > 1 else scene.frames
-        scenes = (args.scene,) if args.scene else hardware_tradeoff.SCENES
-        rows = hardware_tradeoff.sweep(frame_step=step, backend=backend, sweep=sweep, scenes=scenes)
-        if plot is not None:
-            with outputs:
-                hardware_tradeoff.plot(rows, plot)
-            extra["plot"] = str(args.plot)
+        with Outputs() as outputs:
+            plot = outputs.add(args.plot, (".png",), "the plot") if args.plot is not None else None
+            if plot is not None:
+                hardware_tradeoff.check_plotting()          # before the work: one line if matplotlib is missing
+            step = frames[1] - frames[0] if len(frames) > 1 else scene.frames
+            scenes = (args.scene,) if args.scene else hardware_tradeoff.SCENES
+            rows = hardware_tradeoff.sweep(frame_step=step, backend=backend, sweep=sweep, scenes=scenes)
+            if plot is not None:
+                hardware_tradeoff.plot(rows, outputs.path(plot))
+                extra["plot"] = args.plot
+        extra["frame_step"] = step
     if args.json:
-        print(json.dumps({"table": args.table, "frames": frames, "rows": rows, **extra}, sort_keys=True))
+        head = {"table": args.table} if args.table == "hardware" else {"table": args.table, "frames": frames}
+        print(json.dumps({**head, "rows": rows, **extra}, sort_keys=True))
     else:
         print_table(rows)
     return 0

@@ -65,6 +65,7 @@ def test_command_json_and_plot(town, tmp_path, capsys):
                  "--scheduler", "serial", "--plot", str(plot), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["table"] == "hardware" and out["plot"] == str(plot) and len(out["rows"]) == 8
+    assert out["frame_step"] == 3 and all(r["frames"] == 1 for r in out["rows"])
     assert {(r["sampling"], r["index_bits"], r["color"]) for r in out["rows"]} == {
         (s, b, c) for s in ("point", "trilinear") for b in (8, 12) for c in ("rgb", "yuv411")}
     assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
