@@ -206,8 +206,8 @@ def plot(rows: list[dict], path: str) -> None:
                 plt.Line2D([], [], color="grey", ls="-", label="rgb (left: line to the one-port point)"),
                 plt.Line2D([], [], color="grey", ls="--", label="yuv411")]
     ax_m.legend(handles=handles, fontsize=7, loc="best")
-    backend = rows[0]["rtl_backend"] if rows else ""
-    fig.suptitle(f"Frame error against cycles and memory ({backend} RTL)", fontsize=10)
+    backends = ", ".join(sorted({r["rtl_backend"] for r in rows}))
+    fig.suptitle(f"Frame error against cycles per frame and memory bits (cycles from: {backends})", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, format="png", bbox_inches="tight")
     plt.close(fig)
