@@ -196,7 +196,8 @@ def plot(rows: list[dict], path: str) -> None:
                      facecolors=col if r["color"] == "rgb" else "none", edgecolors=col)
     for ax in (ax_c, ax_m):
         ax.set_xscale("log")
-        ax.set_ylabel("frame MSE (the paper's, mean over frames)")
+        ax.set_yscale("log")
+        ax.set_ylabel("frame MSE (the paper's, mean over frames; log scale)")
         ax.grid(True, which="both", lw=0.3)
     ax_c.set_xlabel("RTL cycles per frame (filled: two banks; hollow: one port)")
     ax_m.set_xlabel("memory bits (index + codebook + raw memories; filled: rgb, hollow: yuv411)")
