@@ -194,9 +194,11 @@ def plot(rows: list[dict], path: str) -> None:
                   linestyle=style)
         ax_m.scatter(r["memory_bits"]["total"], y, marker=marker, color=col, s=50,
                      facecolors=col if r["color"] == "rgb" else "none", edgecolors=col)
+    from matplotlib.ticker import NullFormatter
     for ax in (ax_c, ax_m):
         ax.set_xscale("log")
         ax.set_yscale("log")
+        ax.xaxis.set_minor_formatter(NullFormatter())        # decade labels only: no overlapping ticks
         ax.set_ylabel("frame MSE (the paper's, mean over frames; log scale)")
         ax.grid(True, which="both", lw=0.3)
     ax_c.set_xlabel("RTL cycles per frame (filled: two banks; hollow: one port)")
