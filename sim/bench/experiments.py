@@ -20,7 +20,7 @@ import time
 import numpy as np
 
 __all__ = ["table3", "table4", "table5", "table_row", "encode_config", "render_mse", "rate_level0",
-           "permuted_source", "frame_selection"]
+           "permuted_source"]
 
 
 def _encode_groups(scene, images, overrides: dict | None = None, grouping: str = "scene"):
@@ -134,11 +134,6 @@ def rate_level0(ts) -> float:
     src_bits = {"rgb": 24, "rgba": 32, "intensity": 8, "yuv411": 24}
     orig0 = sum(t.width * t.height * src_bits[t.color] for t in ts.textures)
     return orig0 / ts.rates()["stored_bits"]
-
-
-def frame_selection(scene, frames=None, step: int = 1) -> list[int]:
-    """``frames`` (checked against the scene) or every ``step``-th frame."""
-    return _frames(scene, step, frames)
 
 
 def table_row(scene_name: str, row, frames, source: str = "paper") -> dict:

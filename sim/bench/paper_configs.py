@@ -22,7 +22,7 @@ Our own rows follow the paper's (:data:`TABLE3_OURS`, :data:`TABLE4_OURS`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 __all__ = ["Codebook", "Row", "TABLE3_SCENE", "TABLE4_SCENE", "TABLE3_PAPER", "TABLE4_PAPER",
            "TABLE3_OURS", "TABLE4_OURS", "describe"]
@@ -51,7 +51,6 @@ class Row:
     sampling: str                   # "point" | "trilinear"
     codebooks: tuple[Codebook, ...]
     paper: tuple[float, float] | None = None
-    notes: str = field(default="", compare=False)
 
     @property
     def mipmaps(self) -> bool:
