@@ -7,11 +7,18 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["COLORS", "COLOR_CODES", "MAX_LEVELS", "MAX_SIZE", "WORD_BITS_ALLOWED", "RAW_WORD_BITS", "RAW_BELOW",
+__all__ = ["COLORS", "COLOR_CODES", "PVR2_COLORS", "LAYOUTS", "LAYOUT_CODES", "LEGACY_DESCRIPTOR_FIELDS", "LEGACY_DESCRIPTOR_DTYPE", "MAX_LEVELS", "MAX_SIZE", "WORD_BITS_ALLOWED", "RAW_WORD_BITS", "RAW_BELOW",
            "DESCRIPTOR_FIELDS", "DESCRIPTOR_DTYPE", "FormatError"]
 
-#: Colour formats and their 2-bit codes in the descriptor.
-COLORS = ("rgb", "rgba", "intensity", "yuv411")
+#: Colour formats and their codes in the descriptor: the paper's four (codes 0-3, a 2-bit field), then
+#: the Dreamcast PowerVR2 codebook formats (codes 4-7: 16-bit texels, see :mod:`.pvr_set`; a set that
+#: holds one has a 3-bit colour field).
+COLORS = ("rgb", "rgba", "intensity", "yuv411", "argb1555", "rgb565", "argb4444", "yuv422")
+#: The PowerVR2 colour formats (16-bit texels, 2x2 blocks, twiddled index maps).
+PVR2_COLORS = ("argb1555", "rgb565", "argb4444", "yuv422")
+#: Descriptor ``layout`` codes: the paper's row-major index maps, or PowerVR2 twiddled (Morton) maps.
+LAYOUTS = ("paper", "pvr2")
+LAYOUT_CODES = {name: code for code, name in enumerate(LAYOUTS)}
 COLOR_CODES = {name: code for code, name in enumerate(COLORS)}
 #: Descriptor rows per texture (levels of a 4096x4096 texture: 13).
 MAX_LEVELS = 16
@@ -33,12 +40,16 @@ DESCRIPTOR_FIELDS = {
     "index_bits": "b, 1..16",
     "cb_base": "codebook memory entry of codeword 0 of this texture's codebook",
     "sublevel": "0, 1, 2: which part of the extended codeword this level reads",
-    "color": "colour format code (0 rgb, 1 rgba, 2 intensity, 3 yuv411)",
+    "color": "colour format code (0 rgb, 1 rgba, 2 intensity, 3 yuv411, 4 argb1555, 5 rgb565, 6 argb4444, 7 yuv422)",
     "texel_off": "byte offset in the entry of this sub-level's texels (the Y plane for yuv411)",
-    "u_off": "yuv411: byte offset of the sub-level's U plane (else 0)",
-    "v_off": "yuv411: byte offset of the sub-level's V plane (else 0)",
+    "u_off": "yuv411: byte offset of the sub-level's U plane (else 0); yuv422: of the U texel pair's first byte",
+    "v_off": "yuv411: byte offset of the sub-level's V plane (else 0); yuv422: of the V texel pair's first byte",
+    "layout": "0: the paper's row-major index map; 1: PowerVR2 twiddled (Morton) map, offsets transposed",
 }
+#: The fields of ``.vqt`` files written before the ``layout`` field existed (read as layout 0).
+LEGACY_DESCRIPTOR_FIELDS = tuple(name for name in DESCRIPTOR_FIELDS if name != "layout")
 DESCRIPTOR_DTYPE = np.dtype([(name, "<u4") for name in DESCRIPTOR_FIELDS])
+LEGACY_DESCRIPTOR_DTYPE = np.dtype([(name, "<u4") for name in LEGACY_DESCRIPTOR_FIELDS])
 
 
 class FormatError(ValueError):

@@ -37,7 +37,7 @@ from . import codebook as vq
 from .color import JFIF_BT601, ColorMatrix, rgb_to_yuv
 from .mipmap import box_down, build_pyramid
 from .mipmap import to_rgba as _to_rgba
-from .format import (COLOR_CODES, COLORS, DESCRIPTOR_DTYPE, MAX_LEVELS, MAX_SIZE, RAW_BELOW,
+from .format import (COLOR_CODES, COLORS, DESCRIPTOR_DTYPE, PVR2_COLORS, MAX_LEVELS, MAX_SIZE, RAW_BELOW,
                      WORD_BITS_ALLOWED, CodebookInfo, TextureInfo, TextureSet, default_index_bits,
                      entry_layout, is_pow2, log2, pack_indices, sub_levels)
 
@@ -143,8 +143,10 @@ def _extend(code0: np.ndarray, layout) -> np.ndarray:
 # The encoder
 
 def _check(images, block, codebook_size, color, index_bits, encoder, mip_training, word_bits):
-    if color not in COLORS:
-        raise EncodeError(f"colour format {color!r} is not one of {', '.join(COLORS)}")
+    if color not in COLORS or color in PVR2_COLORS:
+        paper = [c for c in COLORS if c not in PVR2_COLORS]
+        raise EncodeError(f"colour format {color!r} is not one of {', '.join(paper)}"
+                          + (" (PowerVR2 formats: golden.pvr_encode, vqtex encode --layout pvr2)" if color in PVR2_COLORS else ""))
     bw, bh = block
     if not (is_pow2(bw) and is_pow2(bh) and bw <= 8 and bh <= 8):
         raise EncodeError(f"block {bw}x{bh}: width and height must be powers of two from 1 to 8")
@@ -168,11 +170,30 @@ def _check(images, block, codebook_size, color, index_bits, encoder, mip_trainin
             raise EncodeError(f"image {n} is {w}x{h}: sides must be powers of two from 1 to {MAX_SIZE}")
 
 
+def _trained_blocks(texels, top: int, nsub: int, plan, shape, block):
+    """bool (blocks of the group at ``top``,): the blocks ``texels`` ((N, 3) level, i, j) fall in at
+    the group's compressed levels; None for ``texels`` None (every block)."""
+    if texels is None:
+        return None
+    h, w = shape[:2]
+    bw, bh = block
+    nbx = w // bw
+    mask = np.zeros(nbx * (h // bh), bool)
+    tx = np.asarray(texels, np.int64).reshape(-1, 3)
+    for s in range(nsub):
+        if top + s >= len(plan) or not plan[top + s]:
+            continue
+        at = tx[tx[:, 0] == top + s]
+        k = (at[:, 2] >> (log2(bh) - s)) * nbx + (at[:, 1] >> (log2(bw) - s))
+        mask[k[(k >= 0) & (k < len(mask))]] = True
+    return mask
+
+
 def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb",
            index_bits: int | None = None, mipmaps: bool = False, encoder: str = "gla", seed: int = 0,
            mip_training: str = "average", names=None, word_bits: int = 32,
            matrix: ColorMatrix = JFIF_BT601, raw_below: int = RAW_BELOW, max_iter: int = 100,
-           tol: float = 1e-3, raw: bool = False) -> TextureSet:
+           tol: float = 1e-3, raw: bool = False, keep_levels=None, train_texels=None) -> TextureSet:
     """Compress ``images`` (list of (H, W[, C]) uint8) into one texture group sharing a codebook.
 
     Arguments
@@ -183,6 +204,14 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
     mip_training : "average" (the paper) or "joint" (train on all sub-levels).
     raw_below : mip levels narrower or shorter than this are stored raw.
     raw : store every level uncompressed (the baseline of the paper's Table 5).
+    keep_levels : per image, the level numbers to store (None: all levels of every image). The others
+        are absent (``TextureInfo.absent_levels``, as in a pruned set): a level group none of whose
+        levels is kept is neither trained on nor stored, so the codebook is trained on the blocks of
+        the kept level groups only (``golden.prune.encode_needed``).
+    train_texels : per image, None or an (N, 3) integer array of texels (level, i, j): the codebook
+        is trained only on the blocks of compressed levels these texels fall in (every level group's
+        blocks for an image given None); indices are still chosen for every block of every stored
+        group. ``golden.prune.encode_needed(..., train="blocks")``.
     max_iter, tol : GLA's stop rule: stop when the distortion's relative decrease falls to ``tol``
         (``D_{m-1} - D_m <= tol * D_m``) or after ``max_iter`` iterations (``golden.codebook.gla``).
 
@@ -213,16 +242,27 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
             ok = ok and top.shape[0] % bh == 0 and top.shape[1] % bw == 0 and not raw
             plan.append(ok)
         plans.append(plan)
+    if keep_levels is None:
+        stored = [[True] * len(pyr) for pyr in pyrs]
+    else:
+        if len(keep_levels) != len(images):
+            raise EncodeError(f"keep_levels lists {len(keep_levels)} images, not {len(images)}")
+        stored = [[L in set(int(x) for x in keep) for L in range(len(pyr))] for keep, pyr in zip(keep_levels, pyrs)]
+    if train_texels is not None and len(train_texels) != len(images):
+        raise EncodeError(f"train_texels lists {len(train_texels)} images, not {len(images)}")
 
     # Training vectors: the top level of every compressed level group.
     weights_by_sub = [4.0 ** s for s in range(nsub)]
     groups = []                                     # (texture, top level)
     vecs = []
+    train = []                                      # per group, the blocks trained on (None: all)
     for t, (pyr, plan) in enumerate(zip(pyrs, plans)):
         for L in range(0, len(pyr), nsub):
-            if not plan[L]:
+            if not plan[L] or not any(stored[t][M] and plan[M] for M in range(L, min(L + nsub, len(pyr)))):
                 continue
             groups.append((t, L))
+            train.append(_trained_blocks(train_texels[t] if train_texels is not None else None,
+                                         L, nsub, plan, pyr[L].shape, (bw, bh)))
             if mip_training == "joint":
                 parts = []
                 for s in range(nsub):
@@ -238,11 +278,17 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
         allv = np.concatenate(vecs, dtype=np.float32)  # rounds as astype does, without a float64 copy
         sizes = [len(v) for v in vecs]
         del vecs                                    # (the 4096x4096 encode's peak memory)
+        some = None if all(m is None for m in train) else np.concatenate(
+            [np.ones(n, bool) if m is None else m for m, n in zip(train, sizes)])
+        if some is not None and not some.any():
+            some = None                             # nothing touched: train on everything stored
+        tv = allv if some is None else allv[some]
         if encoder == "gla":
-            code, idx = vq.design(allv, codebook_size, method="gla", seed=seed, max_iter=max_iter, tol=tol)
+            code, idx = vq.design(tv, codebook_size, method="gla", seed=seed, max_iter=max_iter, tol=tol)
         else:                                       # the paper's TSVQ with tree-search encoding
-            tree = vq.tsvq_tree(allv, codebook_size, seed=seed)
+            tree = vq.tsvq_tree(tv, codebook_size, seed=seed)
             code, idx = tree.codebook, tree.encode(allv)
+        del tv
         code = np.asarray(code, dtype=np.float64)
         if mip_training == "joint":
             ends = [layout.planes[s][0] for s in range(1, nsub)] + [layout.size]
@@ -275,8 +321,10 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
         for L, lv in enumerate(pyr):
             h, w = lv.shape[:2]
             row = descriptors[t, L]
-            row["valid"] = 1
             row["log2w"], row["log2h"] = log2(w), log2(h)
+            if not stored[t][L]:
+                continue                                # absent: only its size is kept
+            row["valid"] = 1
             if plan[L]:
                 s = L % nsub
                 row["compressed"] = 1
@@ -293,9 +341,11 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
                 rw += w * h
         textures.append(TextureInfo(
             name=str(names[t]), width=pyr[0].shape[1], height=pyr[0].shape[0], levels=len(pyr),
-            color=color, block=block, codebook=0 if any(plan) else -1, index_bits=b, mipmapped=bool(mipmaps),
+            color=color, block=block, codebook=0 if any(p and k for p, k in zip(plan, stored[t])) else -1,
+            index_bits=b, mipmapped=bool(mipmaps),
             params={"codebook_size": codebook_size, "encoder": encoder, "seed": seed,
-                    "mip_training": mip_training, "raw_below": raw_below}))
+                    "mip_training": mip_training, "raw_below": raw_below},
+            absent_levels=[L for L in range(len(pyr)) if not stored[t][L]]))
     dt = np.dtype(f"<u{word_bits // 8}")
     index_parts.append(np.zeros(1, dt))
     codebooks = [CodebookInfo(color, block, nsub, codebook_size, 0)] if groups else []

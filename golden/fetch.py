@@ -20,10 +20,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from .format import COLOR_CODES, MAX_LEVELS, TextureSet, unpack_indices
+from .format import COLOR_CODES, COLORS, LAYOUT_CODES, MAX_LEVELS, PVR2_COLORS, TextureSet, unpack_indices
+from .pvr import decode_texels, decode_yuv422_blocks, twiddle_indices
 
 __all__ = ["fetch", "decode", "random_requests", "lookup_descriptor", "block_address", "read_index", "read_codeword",
-           "convert_color", "straddles", "RequestError", "check_requests"]
+           "convert_color", "straddles", "twiddled_block", "expand_texels", "RequestError", "check_requests"]
 
 
 class RequestError(ValueError):
@@ -31,7 +32,8 @@ class RequestError(ValueError):
 
 
 def check_requests(ts: TextureSet, tex, level, i, j) -> None:
-    """Raise :class:`RequestError` (one line) unless every request is inside its level."""
+    """Raise :class:`RequestError` (one line) unless every request is inside its level, and, in a
+    pruned set (``golden.prune``), its level and block are stored."""
     tex, level, i, j = (np.asarray(a, dtype=np.int64) for a in (tex, level, i, j))
     bad = (tex < 0) | (tex >= ts.n_textures) | (level < 0) | (level >= MAX_LEVELS)
     if bad.any():
@@ -41,12 +43,25 @@ def check_requests(ts: TextureSet, tex, level, i, j) -> None:
     bad = ~d["valid"].astype(bool)
     if bad.any():
         n = int(np.argmax(bad))
-        raise RequestError(f"request {n}: texture {int(tex[n])} has no level {int(level[n])}")
+        t, L = int(tex[n]), int(level[n])
+        if L < ts.textures[t].levels:
+            raise RequestError(f"request {n}: texture {t} level {L} was pruned from this texture set "
+                               f"(the frames it was pruned for never read it)")
+        raise RequestError(f"request {n}: texture {t} has no level {L}")
     bad = (i < 0) | (j < 0) | (i >= (1 << d["log2w"].astype(np.int64))) | (j >= (1 << d["log2h"].astype(np.int64)))
     if bad.any():
         n = int(np.argmax(bad))
         raise RequestError(f"request {n}: texel ({int(i[n])}, {int(j[n])}) is outside texture "
                            f"{int(tex[n])} level {int(level[n])} ({1 << int(d['log2w'][n])}x{1 << int(d['log2h'][n])})")
+    comp = d["compressed"].astype(bool)
+    if ts.present_blocks is not None and comp.any():
+        k, _, _ = block_address(d[comp], i[comp], j[comp])
+        bad = ~ts.block_present(tex[comp], level[comp], k)
+        if bad.any():
+            n = int(np.flatnonzero(comp)[np.argmax(bad)])
+            raise RequestError(f"request {n}: texel ({int(i[n])}, {int(j[n])}) of texture {int(tex[n])} level "
+                               f"{int(level[n])} is in a block pruned from this texture set (the frames it was "
+                               f"pruned for never read it)")
 
 
 def random_requests(ts: TextureSet, n: int, seed: int = 0) -> np.ndarray:
@@ -72,13 +87,44 @@ def block_address(d: np.ndarray, i, j):
 
     ``bx = i >> log2bw``, ``by = j >> log2bh``, ``k = (by << (log2w - log2bw)) | bx``,
     ``x = i & (bw - 1)``, ``y = j & (bh - 1)`` (block sizes of this level's sub-level).
+
+    With the PowerVR2 layout (``layout`` 1) ``k`` is the twiddled block number
+    (:func:`twiddled_block`) and the offsets are transposed, ``x = j & (bh - 1)``, ``y = i & (bw - 1)``:
+    a PowerVR2 codeword lists its texels column by column (twiddled), so the texel number
+    ``(y << log2bw) | x`` of :func:`read_codeword` is the twiddled one (PowerVR2 blocks are square).
     """
     i = np.asarray(i, dtype=np.int64)
     j = np.asarray(j, dtype=np.int64)
     lbw = d["log2bw"].astype(np.int64)
     lbh = d["log2bh"].astype(np.int64)
     k = ((j >> lbh) << (d["log2w"].astype(np.int64) - lbw)) | (i >> lbw)
-    return k, i & ((1 << lbw) - 1), j & ((1 << lbh) - 1)
+    x, y = i & ((1 << lbw) - 1), j & ((1 << lbh) - 1)
+    tw = d["layout"] == LAYOUT_CODES["pvr2"]
+    if tw.any():
+        gw = d["log2w"].astype(np.int64) - lbw
+        gh = d["log2h"].astype(np.int64) - lbh
+        k = np.where(tw, twiddled_block(i >> lbw, j >> lbh, gw, gh), k)
+        x, y = np.where(tw, y, x), np.where(tw, x, y)
+    return k, x, y
+
+
+def twiddled_block(bx, by, log2gw, log2gh) -> np.ndarray:
+    """Twiddled (Morton) number of block (bx, by) in a grid of ``2**log2gw x 2**log2gh`` blocks, the
+    PowerVR2 order: inside squares of side ``m = 2**min(log2gw, log2gh)`` the bits of ``by`` and
+    ``bx`` interleave (``by`` bit n -> bit 2n, ``bx`` bit n -> bit 2n+1); the squares follow one
+    another along the longer side: ``k = ((bx | by) >> log2m) << 2 log2m | morton(bx mod m, by mod m)``
+    (one of ``bx >> log2m``, ``by >> log2m`` is 0). Twin of :class:`hw.address.BlockAddress`'s
+    twiddle; agrees with :func:`golden.pvr.twiddle_indices`."""
+    bx = np.asarray(bx, dtype=np.int64)
+    by = np.asarray(by, dtype=np.int64)
+    lm = np.minimum(np.asarray(log2gw, dtype=np.int64), np.asarray(log2gh, dtype=np.int64))
+    mask = (1 << lm) - 1
+    sx, sy = bx & mask, by & mask
+    k = ((bx | by) >> lm) << (2 * lm)
+    for bit in range(12):                       # over the coordinate bits, not the blocks
+        k |= ((sy >> bit) & 1) << (2 * bit)
+        k |= ((sx >> bit) & 1) << (2 * bit + 1)
+    return k
 
 
 def straddles(d: np.ndarray, k, word_bits: int) -> np.ndarray:
@@ -113,14 +159,19 @@ def read_index(ts: TextureSet, d: np.ndarray, k) -> np.ndarray:
 
 def read_codeword(ts: TextureSet, d: np.ndarray, index, x, y) -> np.ndarray:
     """Raw samples of the texel at offset (x, y) of sub-level ``d['sublevel']`` of entry
-    ``cb_base + index``: (N, 4) uint8 holding (R,G,B,A), (R,G,B,-), (I,-,-,-) or (Y,U,V,-)."""
+    ``cb_base + index``: (N, 4) uint8 holding (R,G,B,A), (R,G,B,-), (I,-,-,-) or (Y,U,V,-).
+
+    PowerVR2 formats: the 16-bit texel at byte ``texel_off + 2t`` (little-endian), expanded to
+    (R,G,B,A) by :func:`expand_texels` (argb1555, rgb565, argb4444); yuv422: (Y,U,V,-) with Y the
+    texel's high byte, U the byte at ``u_off + 2x`` and V at ``v_off + 2x`` (the low bytes of the
+    left and right texel of the texel's row: ``x`` is the row, the offsets being transposed)."""
     entry = ts.codebook[d["cb_base"].astype(np.int64) + np.asarray(index, dtype=np.int64)]
     n = len(entry)
     x = np.asarray(x, dtype=np.int64)
     y = np.asarray(y, dtype=np.int64)
     t = (y << d["log2bw"].astype(np.int64)) | x
     color = d["color"].astype(np.int64)
-    tb = np.choose(color, [3, 4, 1, 1])
+    tb = np.choose(color, [3, 4, 1, 1, 2, 2, 2, 2])
     out = np.zeros((n, 4), np.uint8)
     rows = np.arange(n)
     base = d["texel_off"].astype(np.int64) + tb * t
@@ -133,21 +184,43 @@ def read_codeword(ts: TextureSet, d: np.ndarray, index, x, y) -> np.ndarray:
         ct = ((y >> 1) << lcw) | (x >> 1)
         out[yuv, 1] = entry[rows, np.minimum(d["u_off"].astype(np.int64) + ct, last)][yuv]
         out[yuv, 2] = entry[rows, np.minimum(d["v_off"].astype(np.int64) + ct, last)][yuv]
+    texel16 = out[:, 0].astype(np.int64) | (out[:, 1].astype(np.int64) << 8)
+    for name in ("argb1555", "rgb565", "argb4444"):
+        sel = color == COLOR_CODES[name]
+        if sel.any():
+            out[sel] = expand_texels(texel16[sel], name)
+    yuv = color == COLOR_CODES["yuv422"]
+    if yuv.any():
+        # Y is the texel's high byte; U and V the low bytes of the row's left and right texels
+        pair = 2 * x
+        luma = out[:, 1].copy()
+        out[yuv, 0] = luma[yuv]
+        out[yuv, 1] = entry[rows, np.minimum(d["u_off"].astype(np.int64) + pair, last)][yuv]
+        out[yuv, 2] = entry[rows, np.minimum(d["v_off"].astype(np.int64) + pair, last)][yuv]
     return out
+
+
+def expand_texels(texels, color: str) -> np.ndarray:
+    """16-bit PowerVR2 texels (argb1555, rgb565, argb4444) -> ``(N, 4)`` RGBA uint8, each field
+    widened to 8 bits by bit replication (rgb565: alpha 255). Twin of the codebook ROM's expansion;
+    the same arithmetic as :func:`golden.pvr.decode_texels`."""
+    return decode_texels(texels, PVR2_COLORS.index(color))
 
 
 def convert_color(ts: TextureSet, color, samples: np.ndarray) -> np.ndarray:
     """Samples of :func:`read_codeword` -> RGBA8888. rgb: A=255; intensity: (I,I,I,255);
-    yuv411: the colour matrix, A=255; rgba: unchanged."""
+    yuv411 and yuv422: the colour matrix, A=255; rgba and the 16-bit PowerVR2 formats (expanded by
+    :func:`read_codeword`): unchanged."""
     color = np.asarray(color)
     out = samples.copy()
     i8 = color == COLOR_CODES["intensity"]
     out[i8, 1] = out[i8, 0]
     out[i8, 2] = out[i8, 0]
-    yuv = color == COLOR_CODES["yuv411"]
+    yuv = (color == COLOR_CODES["yuv411"]) | (color == COLOR_CODES["yuv422"])
     if yuv.any():
         out[yuv, :3] = ts.matrix.apply(samples[yuv, :3])
-    out[color != COLOR_CODES["rgba"], 3] = 255
+    opaque = np.isin(color, [COLOR_CODES[c] for c in ("rgb", "intensity", "yuv411", "yuv422")])
+    out[opaque, 3] = 255
     return out
 
 
@@ -177,10 +250,14 @@ def decode(ts: TextureSet, tex: int, level: int = 0) -> np.ndarray:
     """A whole level as an (h, w, 4) uint8 RGBA image.
 
     An independent path from :func:`fetch` (whole index maps unpacked, whole codewords tiled), so
-    that "fetch over every texel equals decode" checks the per-texel address arithmetic.
+    that "fetch over every texel equals decode" checks the per-texel address arithmetic. In a pruned
+    set (``golden.prune``) a level it does not store raises :class:`RequestError` and the texels of
+    blocks it does not store are (0, 0, 0, 0).
     """
     d = ts.descriptor(tex, level)
     if not d["valid"]:
+        if level < ts.textures[tex].levels:
+            raise RequestError(f"texture {tex} level {level} was pruned from this texture set")
         raise RequestError(f"texture {tex} has no level {level}")
     w, h = 1 << d["log2w"], 1 << d["log2h"]
     if not d["compressed"]:
@@ -189,6 +266,13 @@ def decode(ts: TextureSet, tex: int, level: int = 0) -> np.ndarray:
     nbx, nby = w // bw, h // bh
     idx = unpack_indices(ts.index_words, d["index_bits"], nbx * nby, d["base"], ts.word_bits)
     entries = ts.codebook[d["cb_base"] + idx].astype(np.int64)
+    if d["layout"] == LAYOUT_CODES["pvr2"]:
+        out = _decode_pvr2(ts, d, idx, nbx, nby)
+        if ts.present_blocks is not None:             # a pruned set, as below; block numbers twiddled
+            k = twiddle_indices(nbx, nby).ravel()
+            gone = ~ts.block_present(np.full(k.shape, tex), np.full(k.shape, level), k).reshape(nby, nbx)
+            out[np.repeat(np.repeat(gone, bh, axis=0), bw, axis=1)] = 0
+        return out
 
     def tile(plane, pw, ph, c):       # (nblocks, ph*pw*c) -> (h, w, c), each sample covering (bh/ph, bw/pw)
         a = plane.reshape(nby, nbx, ph, pw, c)
@@ -211,4 +295,26 @@ def decode(ts: TextureSet, tex: int, level: int = 0) -> np.ndarray:
             out[..., 1] = out[..., 2] = out[..., 0]
     if color != COLOR_CODES["rgba"]:
         out[..., 3] = 255
+    if ts.present_blocks is not None:                 # a pruned set: blocks it no longer holds are (0, 0, 0, 0)
+        k = np.arange(nbx * nby)
+        gone = ~ts.block_present(np.full(k.shape, tex), np.full(k.shape, level), k).reshape(nby, nbx)
+        out[np.repeat(np.repeat(gone, bh, axis=0), bw, axis=1)] = 0
     return out
+
+
+def _decode_pvr2(ts: TextureSet, d: dict, idx: np.ndarray, nbx: int, nby: int) -> np.ndarray:
+    """A PowerVR2 level decoded whole, as :mod:`golden.pvr` decodes a ``.dt``: the twiddled index
+    map gathered into raster order, every block's 16-bit texels decoded at once (yuv422 pairs through
+    the set's colour matrix), the blocks tiled column by column."""
+    grid = idx[twiddle_indices(nbx, nby)]                        # (nby, nbx) entries, raster order
+    bw, bh = 1 << d["log2bw"], 1 << d["log2bh"]
+    start = d["texel_off"]
+    raw = ts.codebook[d["cb_base"] + grid.ravel(), start: start + 2 * bw * bh]
+    texels = np.ascontiguousarray(raw).view("<u2").astype(np.int64)          # (n, bw*bh)
+    name = COLORS[d["color"]]
+    if name == "yuv422":
+        blocks = decode_yuv422_blocks(texels, matrix=ts.matrix)
+    else:
+        blocks = expand_texels(texels.ravel(), name).reshape(len(texels), bw * bh, 4)
+    tiles = blocks.reshape(nby, nbx, bw, bh, 4)                  # texel t = (x << log2bh) | y
+    return np.ascontiguousarray(tiles.transpose(0, 3, 1, 2, 4).reshape(nby * bh, nbx * bw, 4))

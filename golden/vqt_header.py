@@ -14,6 +14,8 @@ or raises :class:`~.format.FormatError` with one line. Contract:
 - Each array is described by a dtype from a fixed list for that array (no structured, object or
   comma dtypes), a shape of the right rank, and an offset and byte count that lie inside the
   ``body_size`` bytes that follow the header: the caller allocates at most what the file holds.
+- A pruned set (``golden.prune``) may also hold, per texture, ``absent_levels`` (distinct increasing
+  level numbers below its level count, at least one) and the array ``present_blocks`` (bytes).
 """
 
 from __future__ import annotations
@@ -23,10 +25,10 @@ import math
 
 import numpy as np
 
-from .constants import (COLORS, DESCRIPTOR_DTYPE, DESCRIPTOR_FIELDS, MAX_LEVELS, MAX_SIZE, WORD_BITS_ALLOWED,
+from .constants import (COLORS, DESCRIPTOR_DTYPE, DESCRIPTOR_FIELDS, LEGACY_DESCRIPTOR_DTYPE, LEGACY_DESCRIPTOR_FIELDS, MAX_LEVELS, MAX_SIZE, WORD_BITS_ALLOWED,
                         FormatError)
 
-__all__ = ["parse_header", "MAX_HEADER_BYTES", "MAX_DEPTH", "MAX_TEXTURES", "ARRAY_DTYPES"]
+__all__ = ["parse_header", "MAX_HEADER_BYTES", "MAX_DEPTH", "MAX_TEXTURES", "ARRAY_DTYPES", "OPTIONAL_ARRAYS"]
 
 MAX_HEADER_BYTES = 16 << 20
 MAX_DEPTH = 16
@@ -37,7 +39,10 @@ ARRAY_DTYPES = {
     "codebook": (("|u1",), 2),
     "raw_words": (("<u4",), 1),
     "descriptors": (("descriptor",), 2),
+    "present_blocks": (("|u1",), 1),
 }
+#: Arrays only a pruned set holds (``golden.prune``); every other array is in every file.
+OPTIONAL_ARRAYS = ("present_blocks",)
 _TEXTURE_KEYS = {"name", "width", "height", "levels", "color", "block", "codebook", "index_bits", "mipmapped", "params"}
 _CODEBOOK_KEYS = {"color", "block", "nsub", "size", "base"}
 _HEADER_KEYS = {"word_bits", "entry_bytes", "descriptor_fields", "matrix", "textures", "codebooks", "arrays"}
@@ -126,7 +131,7 @@ def _matrix(m):
 
 def _texture(t, k):
     what = f"texture {k}"
-    _dict(t, what, _TEXTURE_KEYS)
+    _dict(t, what, _TEXTURE_KEYS, optional=("absent_levels",))
     if type(t["name"]) is not str or len(t["name"]) > 256:
         _fail(f"{what} name must be a string of at most 256 characters")
     _pow2(t["width"], f"{what} width", MAX_SIZE)
@@ -142,6 +147,11 @@ def _texture(t, k):
     if type(params) is not dict or len(params) > 64 or any(
             type(key) is not str or type(v) not in (str, int, float, bool, type(None)) for key, v in params.items()):
         _fail(f"{what} params must be a flat object of at most 64 scalars")
+    if "absent_levels" in t:
+        absent = [_int(L, f"{what} absent level", 0, t["levels"] - 1)
+                  for L in _list(t["absent_levels"], f"{what} absent_levels", 1, t["levels"])]
+        if absent != sorted(set(absent)):
+            _fail(f"{what} absent_levels must be distinct and increasing")
     return t
 
 
@@ -156,17 +166,19 @@ def _codebook(c, k):
     return c
 
 
-def _arrays(a, body_size):
-    _dict(a, "arrays", set(ARRAY_DTYPES))
+def _arrays(a, body_size, descriptor_dtype=DESCRIPTOR_DTYPE):
+    _dict(a, "arrays", set(ARRAY_DTYPES) - set(OPTIONAL_ARRAYS), optional=OPTIONAL_ARRAYS)
     out = {}
     for name, (dtypes, rank) in ARRAY_DTYPES.items():
+        if name not in a:
+            continue
         spec = _dict(a[name], f"array {name}", {"shape", "offset", "nbytes", "dtype"})
         if spec["dtype"] not in dtypes:
             _fail(f"array {name} has dtype {spec['dtype']!r:.40}, not one of {dtypes}")
         shape = [_int(x, f"array {name} dimension", 0, body_size) for x in _list(spec["shape"], f"array {name} shape", rank, rank)]
         off = _int(spec["offset"], f"array {name} offset", 0, body_size)
         nbytes = _int(spec["nbytes"], f"array {name} nbytes", 0, body_size)
-        item = DESCRIPTOR_DTYPE.itemsize if spec["dtype"] == "descriptor" else np.dtype(spec["dtype"]).itemsize
+        item = descriptor_dtype.itemsize if spec["dtype"] == "descriptor" else np.dtype(spec["dtype"]).itemsize
         if math.prod(shape) * item != nbytes or off + nbytes > body_size:
             _fail(f"array {name} of shape {shape} does not fit its {nbytes} bytes inside the file")
         out[name] = (spec["dtype"], tuple(shape), off, nbytes)
@@ -175,7 +187,9 @@ def _arrays(a, body_size):
 
 def parse_header(raw: bytes, body_size: int) -> dict:
     """The checked header: ``word_bits``, ``entry_bytes``, ``matrix`` (dict), ``textures``,
-    ``codebooks`` (lists of dicts), ``arrays`` (name -> (dtype string, shape, offset, nbytes))."""
+    ``codebooks`` (lists of dicts), ``arrays`` (name -> (dtype string, shape, offset, nbytes)),
+    ``descriptor_dtype`` (the descriptor rows' dtype: the current fields, or those of files written
+    before the ``layout`` field, which the caller widens with layout 0)."""
     if len(raw) > MAX_HEADER_BYTES:
         _fail(f"{len(raw)} bytes (at most {MAX_HEADER_BYTES})")
     if not _depth_ok(raw):
@@ -190,13 +204,18 @@ def parse_header(raw: bytes, body_size: int) -> dict:
     if h["word_bits"] not in WORD_BITS_ALLOWED or type(h["word_bits"]) is not int:
         _fail(f"word_bits {h['word_bits']!r:.40} is not one of {WORD_BITS_ALLOWED}")
     _int(h["entry_bytes"], "entry_bytes", 0, 1 << 16)
-    if h["descriptor_fields"] != list(DESCRIPTOR_FIELDS):
+    if h["descriptor_fields"] == list(DESCRIPTOR_FIELDS):
+        descriptor_dtype = DESCRIPTOR_DTYPE
+    elif h["descriptor_fields"] == list(LEGACY_DESCRIPTOR_FIELDS):     # written before ``layout``
+        descriptor_dtype = LEGACY_DESCRIPTOR_DTYPE
+    else:
         _fail("descriptor fields differ from this reader's")
     _matrix(h["matrix"])
     textures = [_texture(t, k) for k, t in enumerate(_list(h["textures"], "textures", 0, MAX_TEXTURES))]
     codebooks = [_codebook(c, k) for k, c in enumerate(_list(h["codebooks"], "codebooks", 0, MAX_TEXTURES))]
-    arrays = _arrays(h["arrays"], body_size)
+    arrays = _arrays(h["arrays"], body_size, descriptor_dtype)
     if arrays["index_words"][0] != f"<u{h['word_bits'] // 8}":
         _fail("index memory dtype does not match the word width")
     return {"word_bits": h["word_bits"], "entry_bytes": h["entry_bytes"], "matrix": h["matrix"],
-            "textures": textures, "codebooks": codebooks, "arrays": arrays}
+            "textures": textures, "codebooks": codebooks, "arrays": arrays,
+            "descriptor_dtype": descriptor_dtype}

@@ -24,6 +24,11 @@ class BlockAddress(wiring.Component):
     ``k = ((j >> log2bh) << (log2w - log2bw)) | (i >> log2bw)``, ``x = i & (bw - 1)``,
     ``y = j & (bh - 1)`` and, for raw levels, ``raw_addr = base + (j << log2w) + i``.
 
+    With ``twiddle`` (a set holding PowerVR2 textures) and ``layout`` high, ``k`` is instead the
+    twiddled (Morton) block number of :func:`golden.fetch.twiddled_block` and the offsets are
+    transposed (``x = j & (bh - 1)``, ``y = i & (bw - 1)``: a PowerVR2 codeword lists its texels
+    column by column), as :func:`golden.fetch.block_address` says.
+
     Latency 1 (outputs registered, updated in cycles where ``en`` is high). Throughput: one per cycle.
 
     Arguments
@@ -34,6 +39,8 @@ class BlockAddress(wiring.Component):
         Width of a block number (at most 24: a 4096x4096 level of 1x1 blocks).
     raw_bits : int
         Width of a raw memory address.
+    twiddle : bool
+        Elaborate the PowerVR2 twiddled path (default False: the paper's shifter only).
 
     Members
     -------
@@ -41,6 +48,10 @@ class BlockAddress(wiring.Component):
         Texel column and row inside the level.
     log2w : In(4)
         log2 of the level's width.
+    log2h : In(4)
+        log2 of the level's height (``twiddle`` only).
+    layout : In(1)
+        The descriptor's layout: 1 for a PowerVR2 twiddled index map (``twiddle`` only).
     log2bw, log2bh : In(2)
         log2 of the block's width and height at this level.
     base : In(base_bits)
@@ -55,14 +66,17 @@ class BlockAddress(wiring.Component):
         Raw memory word of texel (i, j).
     """
 
-    def __init__(self, *, base_bits: int, k_bits: int, raw_bits: int):
+    def __init__(self, *, base_bits: int, k_bits: int, raw_bits: int, twiddle: bool = False):
         for name, v in (("base_bits", base_bits), ("k_bits", k_bits), ("raw_bits", raw_bits)):
             if not isinstance(v, int) or v < 1:
                 raise TypeError(f"{name} must be a positive integer, not {v!r}")
         if k_bits > 2 * COORD_BITS:
             raise ValueError(f"k_bits {k_bits} exceeds {2 * COORD_BITS}")
         self._k_bits = k_bits
+        self._twiddle = bool(twiddle)
+        twiddle_ports = {"layout": In(1), "log2h": In(4)} if self._twiddle else {}
         super().__init__({
+            **twiddle_ports,
             "i": In(COORD_BITS),
             "j": In(COORD_BITS),
             "log2w": In(4),
@@ -76,6 +90,11 @@ class BlockAddress(wiring.Component):
             "raw_addr": Out(raw_bits),
         })
 
+    @property
+    def twiddle(self) -> bool:
+        """The PowerVR2 twiddled path is elaborated (``layout`` and ``log2h`` ports exist)."""
+        return self._twiddle
+
     def elaborate(self, platform):
         m = Module()
         bx = Signal(COORD_BITS)
@@ -86,11 +105,40 @@ class BlockAddress(wiring.Component):
             by.eq(self.j >> self.log2bh),
             row_shift.eq(self.log2w - self.log2bw),
         ]
+        k = (by << row_shift) | bx
+        x = self.i & ~(C((1 << COORD_BITS) - 1, COORD_BITS) << self.log2bw)
+        y = self.j & ~(C((1 << COORD_BITS) - 1, COORD_BITS) << self.log2bh)
+        k_out, x_out, y_out = k, x, y
+        if self._twiddle:
+            k_out, x_out, y_out = self._twiddled(m, bx, by, k, x, y)
         with m.If(self.en):
             m.d.sync += [
-                self.k.eq(((by << row_shift) | bx)[:self._k_bits]),
-                self.x.eq(self.i & ~(C((1 << COORD_BITS) - 1, COORD_BITS) << self.log2bw)),
-                self.y.eq(self.j & ~(C((1 << COORD_BITS) - 1, COORD_BITS) << self.log2bh)),
+                self.k.eq(k_out[:self._k_bits]),
+                self.x.eq(x_out),
+                self.y.eq(y_out),
                 self.raw_addr.eq(self.base + (self.j << self.log2w) + self.i),
             ]
         return m
+
+    def _twiddled(self, m, bx, by, k, x, y):
+        """The PowerVR2 layout (``layout`` high): the twiddled (Morton) block number
+        ``((bx | by) >> lm) << 2 lm | interleave(bx mod 2**lm, by mod 2**lm)`` (``by`` bit n at bit
+        2n, ``bx`` bit n at bit 2n + 1; ``lm`` the log2 of the smaller side of the block grid) and
+        the offsets transposed. The interleave is wiring; the rest two shifters and masks."""
+        gw = Signal(4)
+        gh = Signal(4)
+        lm = Signal(4)                      # log2 of the twiddled squares' side, in blocks
+        m.d.comb += [
+            gw.eq(self.log2w - self.log2bw),
+            gh.eq(self.log2h - self.log2bh),
+            lm.eq(Mux(gw < gh, gw, gh)),
+        ]
+        low = ~(C((1 << COORD_BITS) - 1, COORD_BITS) << lm)
+        sx = Signal(COORD_BITS)
+        sy = Signal(COORD_BITS)
+        square = Signal(COORD_BITS)         # which square along the longer side
+        m.d.comb += [sx.eq(bx & low), sy.eq(by & low), square.eq((bx | by) >> lm)]
+        morton = Cat(*(Cat(sy[n], sx[n]) for n in range(COORD_BITS)))
+        k_tw = Signal(2 * COORD_BITS)
+        m.d.comb += k_tw.eq((square << (lm << 1)) | morton)
+        return (Mux(self.layout, k_tw, k), Mux(self.layout, y, x), Mux(self.layout, x, y))

@@ -62,7 +62,7 @@ class BackEnd(wiring.Component):
         side = link.side
         m.submodules.codebook_rom = rom = CodebookROM(
             ts.codebook, ts.raw_words, cb_bits=widths["cb_base"], raw_bits=addr_bits(len(ts.raw_words)),
-            off_bits=widths["texel_off"], bank_depth=self._bank_depth)
+            off_bits=widths["texel_off"], bank_depth=self._bank_depth, color_bits=widths["color"])
         m.submodules.color_matrix = cm = ColorMatrix(ts.matrix)
 
         # Stages 8-11: codebook ROM (and raw memory).

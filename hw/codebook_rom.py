@@ -20,7 +20,7 @@ from vqtex.golden.format import COLOR_CODES
 from .banked_rom import BANK_DEPTH, BankedROM, pick
 from .registers import enabled_register
 
-__all__ = ["CodebookROM", "SamplesLayout", "LATENCY"]
+__all__ = ["CodebookROM", "SamplesLayout", "LATENCY", "expand_texel"]
 
 #: Cycles from the index to the samples.
 LATENCY = 4
@@ -29,6 +29,25 @@ LATENCY = 4
 SamplesLayout = data.ArrayLayout(unsigned(8), 4)
 
 _RGB, _RGBA, _YUV = (COLOR_CODES[c] for c in ("rgb", "rgba", "yuv411"))
+_ARGB1555, _RGB565, _ARGB4444, _YUV422 = (COLOR_CODES[c] for c in ("argb1555", "rgb565", "argb4444", "yuv422"))
+
+
+def _widen(field: Value) -> Value:
+    """A 4-, 5- or 6-bit colour field widened to 8 bits by bit replication (``v << (8-n) | v >> (2n-8)``):
+    wiring only."""
+    n = len(field)
+    return Cat(field, field)[2 * n - 8:] if n < 8 else field
+
+
+def expand_texel(texel: Value, color: Value) -> Value:
+    """The 16-bit PowerVR2 texel as R, G, B, A bytes (combinational; twin of
+    :func:`golden.fetch.expand_texels`): argb1555 (A = bit 15 replicated), rgb565 (A = 255),
+    argb4444."""
+    t = texel
+    argb1555 = Cat(_widen(t[10:15]), _widen(t[5:10]), _widen(t[0:5]), t[15].replicate(8))
+    rgb565 = Cat(_widen(t[11:16]), _widen(t[5:11]), _widen(t[0:5]), C(255, 8))
+    argb4444 = Cat(_widen(t[8:12]), _widen(t[4:8]), _widen(t[0:4]), _widen(t[12:16]))
+    return Mux(color == _ARGB1555, argb1555, Mux(color == _RGB565, rgb565, argb4444))
 
 
 def _entry_ints(codebook: np.ndarray) -> list:
@@ -94,7 +113,7 @@ class CodebookROM(wiring.Component):
     """
 
     def __init__(self, codebook, raw_words, *, cb_bits: int, raw_bits: int, off_bits: int,
-                 bank_depth: int = BANK_DEPTH):
+                 bank_depth: int = BANK_DEPTH, color_bits: int = 2):
         codebook = np.asarray(codebook, dtype=np.uint8)
         if codebook.ndim != 2:
             raise ValueError("codebook memory must be a 2-D uint8 array")
@@ -102,6 +121,9 @@ class CodebookROM(wiring.Component):
         self._entries = _entry_ints(codebook) or [0]
         self._raw = [int(v) for v in np.asarray(raw_words, dtype=np.uint32).tolist()] or [0]
         self._bank_depth = bank_depth
+        if color_bits not in (2, 3):
+            raise ValueError(f"color_bits must be 2 (the paper's formats) or 3 (with PowerVR2's), not {color_bits!r}")
+        self._pvr2 = color_bits == 3
         super().__init__({
             "index": In(16),
             "cb_base": In(cb_bits),
@@ -110,7 +132,7 @@ class CodebookROM(wiring.Component):
             "x": In(3),
             "y": In(3),
             "log2bw": In(2),
-            "color": In(2),
+            "color": In(color_bits),
             "texel_off": In(off_bits),
             "u_off": In(off_bits),
             "v_off": In(off_bits),
@@ -151,14 +173,24 @@ class CodebookROM(wiring.Component):
                 m.d.comb += tbt.eq((t << 1) + t)
             with m.Case(_RGBA):
                 m.d.comb += tbt.eq(t << 2)
+            if self._pvr2:
+                with m.Case(_ARGB1555, _RGB565, _ARGB4444, _YUV422):
+                    m.d.comb += tbt.eq(t << 1)          # 16-bit texels
             with m.Default():
                 m.d.comb += tbt.eq(t)
+        if self._pvr2:
+            # yuv422: U and V are the low bytes of the row's left and right texels, at u_off + 2x
+            # and v_off + 2x (``x`` is the row: PowerVR2 offsets come transposed)
+            ct_pair = Signal(6)
+            m.d.comb += ct_pair.eq(Mux(self.color == _YUV422, self.x << 1, ct))
+            ct = ct_pair
         nwords = -(-(nbytes + 3) // 4) + 1     # 4-byte words of the padded entry (see stage 3)
         addr_bits = (4 * nwords - 1).bit_length()
         # The fields that ride beside the memories, one register per stage (assigned in one piece:
         # one register update per stage in a simulator instead of five).
+        cbits = len(self.color)
         carried = data.StructLayout({"start": addr_bits, "ustart": addr_bits, "vstart": addr_bits,
-                                     "compressed": 1, "color": 2})
+                                     "compressed": 1, "color": cbits})
         f1 = Signal(carried, name="fields_read")
         with m.If(self.en):
             m.d.sync += f1.eq(Cat((self.texel_off + tbt)[:addr_bits], (self.u_off + ct)[:addr_bits],
@@ -186,7 +218,7 @@ class CodebookROM(wiring.Component):
         bank = reg(codebook.bank, "bank_window")
         raw_word = reg(raw.word, "raw_window")
         f3 = reg(Cat(start[:2], ustart[:2], vstart[:2], f2.compressed, f2.color), "fields_window")
-        start, ustart, vstart, compressed, color = f3[0:2], f3[2:4], f3[4:6], f3[6], f3[7:9]
+        start, ustart, vstart, compressed, color = f3[0:2], f3[2:4], f3[4:6], f3[6], f3[7:7 + cbits]
 
         # Stage 4: the bank's words, then the bytes.
         window = pick(windows, bank)
@@ -199,15 +231,36 @@ class CodebookROM(wiring.Component):
             v.eq(pick(v_words, bank).bit_select(vstart << 3, 8)),
         ]
         out = Signal(32)
+        if not self._pvr2:                  # the paper's formats only
+            with m.If(~compressed):
+                m.d.comb += out.eq(raw_word)
+            with m.Elif(color == _YUV):
+                m.d.comb += out.eq(Cat(texel[:8], u, v, texel[24:]))
+            with m.Else():
+                m.d.comb += out.eq(texel)
+            with m.If(self.en):
+                m.d.sync += [
+                    self.samples.as_value().eq(out),
+                    self.color_out.eq(Mux(compressed, color, _RGBA)),
+                ]
+            return m
+        # With PowerVR2 formats: 16-bit texels expanded here (then rgba to the colour matrix); yuv422
+        # as (Y, U, V) with Y the texel's high byte (then yuv411's code: through the matrix).
+        color_out = Signal(2)               # what the colour matrix is told: the paper's codes only
+        m.d.comb += color_out.eq(Mux(compressed, color[:2], _RGBA))
         with m.If(~compressed):
             m.d.comb += out.eq(raw_word)
         with m.Elif(color == _YUV):
             m.d.comb += out.eq(Cat(texel[:8], u, v, texel[24:]))
+        with m.Elif(color == _YUV422):
+            m.d.comb += [out.eq(Cat(texel[8:16], u, v, texel[24:])), color_out.eq(_YUV)]
+        with m.Elif(color[2]):
+            m.d.comb += [out.eq(expand_texel(texel[:16], color)), color_out.eq(_RGBA)]
         with m.Else():
             m.d.comb += out.eq(texel)
         with m.If(self.en):
             m.d.sync += [
                 self.samples.as_value().eq(out),
-                self.color_out.eq(Mux(compressed, color, _RGBA)),
+                self.color_out.eq(color_out),
             ]
         return m

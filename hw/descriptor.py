@@ -29,9 +29,14 @@ def descriptor_widths(ts: TextureSet) -> dict:
     """Width of every descriptor field for the memories of ``ts`` (field name -> bits).
 
     ``base`` is wide enough for both the index memory and the raw memory, ``cb_base`` for the
-    codebook memory, the plane offsets for a byte of the widest entry.
+    codebook memory, the plane offsets for a byte of the widest entry. ``color`` is 2 bits (the
+    paper's four formats) unless the set holds a PowerVR2 texture (codes 4-7: 3 bits), and
+    ``layout`` is 1 bit only then (else 0 bits): a set of the paper's textures elaborates exactly
+    the paper's unit, and these widths are what the stages test to elaborate the PowerVR2 paths.
     """
     base_bits = bits_for(max(len(ts.index_words), len(ts.raw_words)))
+    valid = ts.descriptors["valid"] != 0
+    pvr2 = bool((ts.descriptors["layout"][valid] != 0).any() or (ts.descriptors["color"][valid] > 3).any())
     return {
         "valid": 1,
         "compressed": 1,
@@ -43,10 +48,11 @@ def descriptor_widths(ts: TextureSet) -> dict:
         "index_bits": 5,
         "cb_base": bits_for(len(ts.codebook)),
         "sublevel": 2,
-        "color": 2,
+        "color": 3 if pvr2 else 2,
         "texel_off": bits_for(ts.entry_bytes),
         "u_off": bits_for(ts.entry_bytes),
         "v_off": bits_for(ts.entry_bytes),
+        "layout": 1 if pvr2 else 0,
     }
 
 
@@ -115,7 +121,11 @@ class DescriptorTable(wiring.Component):
         init = [{name: int(row[name]) for name in DESCRIPTOR_FIELDS} for row in rows]
         depth = 1 << (texture_bits(self._ts) + LEVEL_BITS)       # every address decodes
         init += [{name: 0 for name in DESCRIPTOR_FIELDS}] * (depth - len(init))
-        m.submodules.table = table = memory.Memory(shape=self._layout, depth=depth, init=init)
+        # A set with PowerVR2 textures keeps the table in LUTs (as Yosys does for most paper sets):
+        # its twiddle adds logic after the read, and a block RAM's clock-to-output (4.3 ns on the
+        # ECP5-8) left too little of the cycle for it (89 MHz, docs/pvr2.md).
+        attrs = {"rom_style": "logic"} if self._widths["layout"] else None
+        m.submodules.table = table = memory.Memory(shape=self._layout, depth=depth, init=init, attrs=attrs)
         port = table.read_port(domain="sync")
         m.d.comb += [
             port.addr.eq(Cat(self.level, self.texture)),

@@ -100,7 +100,8 @@ class FrontEnd(wiring.Component):
 
         m.submodules.descriptor = desc = DescriptorTable(ts)
         m.submodules.address = addr = BlockAddress(
-            base_bits=widths["base"], k_bits=kb, raw_bits=addr_bits(len(ts.raw_words)))
+            base_bits=widths["base"], k_bits=kb, raw_bits=addr_bits(len(ts.raw_words)),
+            twiddle=widths["layout"] > 0)
         m.submodules.index_reader = idx = IndexReader(
             ts.index_words, word_bits=ts.word_bits, k_bits=kb, base_bits=widths["base"],
             one_port=self._one_port, bank_depth=self._bank_depth)
@@ -153,6 +154,8 @@ class FrontEnd(wiring.Component):
             addr.base.eq(row.base),
             addr.en.eq(upstream),
         ]
+        if addr.twiddle:                    # a set with PowerVR2 textures: the twiddled layout
+            m.d.comb += [addr.layout.eq(row.layout), addr.log2h.eq(row.log2h)]
         d2 = carry(row, upstream, "row_address")
 
         # Stages 3-7: index reader (stage 3 moves on upstream: the reader gates it with its hold).

@@ -108,7 +108,7 @@ class SideLayout(data.StructLayout):
         w = descriptor_widths(ts)
         super().__init__({
             "compressed": 1, "cb_base": w["cb_base"], "raw_addr": addr_bits(len(ts.raw_words)),
-            "x": 3, "y": 3, "log2bw": 2, "color": 2,
+            "x": 3, "y": 3, "log2bw": 2, "color": w["color"],
             "texel_off": w["texel_off"], "u_off": w["u_off"], "v_off": w["v_off"],
         })
 

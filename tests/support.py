@@ -21,7 +21,7 @@ from vqtex.hw.texel_fetch import LATENCY, REGISTERS
 from vqtex.sim.backends import simulate
 
 __all__ = ["REPO", "need", "shared_cache_dir", "image", "CONFIGS", "texture_set", "combined_set", "texture_sets",
-           "levels", "random_requests", "adversarial_requests", "back_to_back_requests", "straddle_offsets",
+           "levels", "random_requests", "random_dt", "adversarial_requests", "back_to_back_requests", "straddle_offsets",
            "assert_same", "compare_with_golden", "stream_put", "stream_get", "run_lockstep", "JFIF_BT601"]
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -297,3 +297,15 @@ def run_lockstep(dut, inputs: dict, outputs: list, latency: int, *, en: str = "e
     sim.add_testbench(bench)
     sim.run()
     return results
+
+
+def random_dt(width: int, height: int, fmt: int, n: int, seed: int) -> bytes:
+    """A Dreamcast VQ ``.dt`` made byte by byte (not by golden.pvr_set): a random codebook of ``n``
+    entries of pixel format ``fmt``, random index bytes ``256-n .. 255``, not mipmapped."""
+    rng = np.random.default_rng(seed)
+    body = rng.integers(0, 1 << 16, (n, 4)).astype("<u2").tobytes()
+    body += rng.integers(256 - n, 256, width * height // 4).astype(np.uint8).tobytes()
+    control = (1 << 30) | (fmt << 27)
+    size = 32 + len(body)
+    return (b"DcTx" + size.to_bytes(4, "little") + bytes([0, 0, n - 1, 0]) + width.to_bytes(2, "little")
+            + height.to_bytes(2, "little") + control.to_bytes(4, "little") + bytes(12) + body)

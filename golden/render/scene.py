@@ -219,6 +219,11 @@ class TextureSpec:
     encoding: dict                       # block (bw, bh), codebook_size, color, index_bits, ...
 
     @property
+    def dt(self) -> bool:
+        """The texture is a Dreamcast VQ ``.dt`` file: already compressed (PowerVR2 layout), used as is."""
+        return self.file is not None and self.file.suffix.lower() == ".dt"
+
+    @property
     def color(self) -> str:
         return self.encoding["color"]
 
@@ -330,6 +335,12 @@ class Scene:
                 img = generate(spec.generator, spec.size, spec.seed, **spec.params)
             except (TypeError, ValueError) as e:
                 raise SceneError(f"{self.path}: texture '{spec.name}': generator failed: {e}") from None
+        elif spec.dt:                    # the .dt's own level 0 is its uncompressed reference
+            from ..pvr import PvrError, read_dt
+            try:
+                return read_dt(spec.file).levels[0]
+            except PvrError as e:
+                raise SceneError(f"{self.path}: texture '{spec.name}': {e}") from None
         else:
             try:
                 img = read_image(spec.file)
@@ -544,7 +555,7 @@ def parse_scene(text: str, path: str | os.PathLike = "<scene>") -> Scene:
         if not isinstance(params, dict):
             ctx.fail(w, f"'params' must be a table, got {_tname(params)}")
         size = _vec(ctx, w, "size", t["size"], 2, integer=True, lo=1) if "size" in t else None
-        file = gen = None
+        file = gen = dt_header = None
         if "generator" in t:
             gen = _str(ctx, w, "generator", t["generator"], tuple(sorted(GENERATORS)))
             if size is None:
@@ -560,10 +571,21 @@ def parse_scene(text: str, path: str | os.PathLike = "<scene>") -> Scene:
             if params:
                 ctx.fail(w, "'params' only applies to generated textures")
             file = _find_file(ctx, w, _str(ctx, w, "file", t["file"]), scene_dir)
-            try:
-                fw, fh, _ = image_info(file)
-            except ImageIOError as e:
-                ctx.fail(w, str(e))
+            if file.suffix.lower() == ".dt":      # a Dreamcast VQ texture, used as it is compressed
+                from ..pvr import PvrError, read_dt
+                try:
+                    dt_header = read_dt(file, decode=False).header
+                except PvrError as e:
+                    ctx.fail(w, str(e))
+                fw, fh = dt_header.width, dt_header.height
+                bad = sorted(set(t) & set(TEXTURE_ENCODING_KEYS))
+                if bad:
+                    ctx.fail(w, f"'{bad[0]}' does not apply to a .dt texture (it is already compressed)")
+            else:
+                try:
+                    fw, fh, _ = image_info(file)
+                except ImageIOError as e:
+                    ctx.fail(w, str(e))
             if size is not None and size != (fw, fh):
                 ctx.fail(w, f"'size' {size[0]}x{size[1]} does not match {file.name} ({fw}x{fh})")
             size = (fw, fh)
@@ -579,6 +601,11 @@ def parse_scene(text: str, path: str | os.PathLike = "<scene>") -> Scene:
         group = _str(ctx, w, "group", t.get("group", tname))
         enc = _encoding(ctx, w, {k: v for k, v in t.items() if k in TEXTURE_ENCODING_KEYS},
                         group_enc.get(group, ENCODING_DEFAULTS))
+        if file is not None and dt_header is not None:
+            if group != tname:
+                ctx.fail(w, "a .dt texture has its own codebook: it cannot join group "
+                            f"'{group}'")
+            enc = dict(enc, color="rgba", mipmaps=dt_header.mipmapped)    # decoded texels; the file's levels
         specs.append(TextureSpec(tname, -1, file, gen, tuple(size), seed, dict(params), tuple(addr), group, enc))
 
     # groups: consistent settings, ids group by group
@@ -691,8 +718,11 @@ def load_scene(name_or_path: str | os.PathLike) -> Scene:
     return parse_scene(text, p)
 
 
-def build_texture_set(scene: Scene, images=None):
+def build_texture_set(scene: Scene, images=None, keep_levels=None, train_texels=None):
     """Encode a scene's textures into one compressed TextureSet; texture k is scene texture k.
+    ``keep_levels`` (per scene texture, the level numbers to store; None: all) encodes only those
+    (``golden.encode.encode``'s ``keep_levels``; ``golden.prune.encode_needed``); ``train_texels``
+    (per scene texture, None or (N, 3) level, i, j) trains the codebooks on those texels' blocks only.
 
     One ``golden.encode.encode`` call per group (its textures share a codebook), then
     ``golden.format.TextureSet.combine`` in group order (texture ids were assigned group by group).
@@ -705,10 +735,23 @@ def build_texture_set(scene: Scene, images=None):
     sets = []
     for g in dict.fromkeys(scene.groups):
         members = [t for t in scene.textures if t.group == g]
+        if members[0].dt:                            # already compressed: imported as it is
+            from ..pvr import PvrError
+            from ..pvr_set import import_dt
+            try:
+                sets.append(import_dt([members[0].file]))
+            except PvrError as e:
+                raise SceneError(f"{scene.path}: texture '{members[0].name}': {e}") from None
+            sets[-1].textures[0].name = members[0].name
+            continue
         enc = members[0].encoding
         bw, bh = (int(x) for x in enc["block"].split("x"))
         kwargs = dict(block=(bw, bh), codebook_size=enc["codebook_size"], color=enc["color"],
                       index_bits=enc["index_bits"], mipmaps=enc["mipmaps"], encoder=enc["encoder"],
                       seed=enc["seed"], names=[t.name for t in members])
+        if keep_levels is not None:
+            kwargs["keep_levels"] = [keep_levels[t.id] for t in members]
+        if train_texels is not None:
+            kwargs["train_texels"] = [train_texels[t.id] for t in members]
         sets.append(encode([images[t.id] for t in members], **kwargs))
     return sets[0] if len(sets) == 1 else TextureSet.combine(sets)

@@ -61,9 +61,10 @@ def _codebooks(scene, index_bits: int, color: str):
 
 
 def jobs(frame_step: int = 10, backend: str = "cxxrtl", scenes=SCENES, samplings=SAMPLINGS,
-         index_bits=INDEX_BITS, colors=COLORS) -> list[tuple]:
+         index_bits=INDEX_BITS, colors=COLORS, stream: str = "fixed") -> list[tuple]:
     """The sweep's jobs (arguments of :func:`point`), scene by scene."""
-    return [(s, m, b, c, frame_step, backend) for s in scenes for m in samplings for b in index_bits for c in colors]
+    return [(s, m, b, c, frame_step, backend, stream)
+            for s in scenes for m in samplings for b in index_bits for c in colors]
 
 
 def memory_bits(ts) -> dict:
@@ -75,9 +76,11 @@ def memory_bits(ts) -> dict:
 
 
 def point(scene_name: str, sampling: str, index_bits: int, color: str, frame_step: int = 10,
-          backend: str = "cxxrtl") -> dict:
+          backend: str = "cxxrtl", stream: str = "fixed") -> dict:
     """One point of the trade-off (a sweep job) over every ``frame_step``-th frame: see the module's
-    steps 1-4."""
+    steps 1-4. ``stream``: the renderer's request stream, "fixed" (eight requests a trilinear pixel,
+    as the paper's renderer issues them) or "sparse" (the requests that cannot change a pixel left
+    out; the same frames, fewer cycles: docs/skipping.md)."""
     from vqtex.golden.render.frame import frame_requests
     from vqtex.golden.render.metrics import frame_mse
     from vqtex.golden.render.pyramid import ReferenceSource
@@ -100,7 +103,7 @@ def point(scene_name: str, sampling: str, index_bits: int, color: str, frame_ste
         build_s = time.perf_counter() - t1
         sim_s = 0.0
         for f in frames:
-            reqs, sampler = frame_requests(scene, f, src, sampling)
+            reqs, sampler = frame_requests(scene, f, src, sampling, stream=stream)
             hw = np.column_stack([to_set[reqs[:, 0]], reqs[:, 1:]])
             t1 = time.perf_counter()
             two, one = units.run(hw, False), units.run(hw, True)
@@ -118,7 +121,7 @@ def point(scene_name: str, sampling: str, index_bits: int, color: str, frame_ste
     rates = ts.rates()
     return {
         "scene": scene_name, "sampling": sampling, "index_bits": index_bits,
-        "codebook_size": CODEBOOK_SIZE[index_bits], "color": color, "frames": n,
+        "codebook_size": CODEBOOK_SIZE[index_bits], "color": color, "frames": n, "stream": stream,
         "mse": round(mse, 3), "psnr": round(float(10 * np.log10(255.0 ** 2 / mse)), 2) if mse > 0 else None,
         "requests_per_frame": round(nreq / n), "cycles_per_frame_two_bank": round(cycles["two_bank"] / n),
         "cycles_per_frame_one_port": round(cycles["one_port"] / n),
@@ -160,7 +163,7 @@ class _Units:
 
 
 def sweep(frame_step: int = 10, backend: str = "cxxrtl", sweep: dict | None = None, **select) -> list[dict]:
-    """Every point (:func:`jobs`, narrowed by ``select``: scenes, samplings, index_bits, colors), run
+    """Every point (:func:`jobs`, narrowed by ``select``: scenes, samplings, index_bits, colors, stream), run
     with :func:`sim.bench.sweep.run_jobs` (``sweep``: its keyword arguments; default serial)."""
     from .sweep import run_jobs
     return run_jobs(point, jobs(frame_step, backend, **select), **(sweep or {"scheduler": "serial", "progress": False}))

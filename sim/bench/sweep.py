@@ -127,7 +127,7 @@ def run_jobs(fn: Callable[..., Any], jobs: Sequence[tuple], *, scheduler: str | 
     from distributed import Client, LocalCluster
     if scheduler is None:
         n = min(workers or default_workers(), len(jobs))
-        with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+        with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster, \
                 Client(cluster) as client:
             return _run_on(client, fn, jobs, bar)
     with Client(scheduler, timeout=CONNECT_TIMEOUT) as client:

@@ -33,7 +33,7 @@ import threading
 
 __all__ = ["CliError", "Parser", "block_size", "BACKEND_HELP", "add_json", "add_texture_set", "add_backend",
            "add_hardware_options", "add_tag_width", "emit", "warn", "warn_slow", "progress_enabled", "progress_line",
-           "Outputs", "check_folder", "IMAGE_SUFFIXES", "write_bytes", "write_json", "load_set", "with_default",
+           "Outputs", "check_folder", "IMAGE_SUFFIXES", "write_bytes", "write_json", "load_set", "is_dt", "with_default",
            "file_mode", "add_sweep_options", "sweep_options", "PYSIM_CYCLES_PER_SECOND", "SLOW_SECONDS", "STAGING_PREFIX"]
 
 #: Image file extensions an output image may have (all hold RGBA except JPEG and BMP, which drop alpha).
@@ -78,7 +78,8 @@ def add_json(p) -> None:
 
 def add_texture_set(p) -> None:
     """The positional ``.vqt`` input."""
-    p.add_argument("file", metavar="FILE.vqt", help="a texture set written by vqtex encode")
+    p.add_argument("file", metavar="FILE.vqt", help="a texture set written by vqtex encode or vqtex import, "
+                   "or a Dreamcast VQ texture (.dt, as pvrtex writes it: a set of one texture)")
 
 
 def add_backend(p, choices, default: str) -> None:
@@ -329,10 +330,23 @@ def write_json(path: str, obj) -> None:
     write_bytes(path, json.dumps(obj, indent=2, sort_keys=True).encode())
 
 
+def is_dt(path: str) -> bool:
+    """``path`` names a Dreamcast ``.dt`` texture (by its extension, any case)."""
+    return str(path).lower().endswith(".dt")
+
+
 def load_set(path: str):
-    """The ``TextureSet`` in ``path``; ``golden.format.FormatError`` (one line, naming the file) if it
-    is not a valid one."""
+    """The ``TextureSet`` in ``path`` (a ``.vqt``, or a ``.dt`` imported as a one-texture set in the
+    PowerVR2 layout); ``golden.format.FormatError`` (one line, naming the file) if it is not a valid
+    one."""
     from vqtex.golden.format import FormatError, TextureSet
+    if is_dt(path):
+        from vqtex.golden.pvr import PvrError
+        from vqtex.golden.pvr_set import import_dt
+        try:
+            return import_dt([path])
+        except PvrError as e:
+            raise FormatError(str(e).strip().splitlines()[0]) from None
     try:
         return TextureSet.load(path)
     except FormatError as e:

@@ -30,7 +30,8 @@ def _decoded(ts, args):
     if not 0 <= args.level < levels:
         raise CliError(f"texture {args.texture} has no level {args.level} (it has {levels})")
     img = decode(ts, args.texture, args.level)
-    return img, {"rgb": 3, "yuv411": 3, "rgba": 4, "intensity": 1}[ts.textures[args.texture].color]
+    return img, {"rgb": 3, "yuv411": 3, "rgba": 4, "intensity": 1, "rgb565": 3, "yuv422": 3, "argb1555": 4,
+                 "argb4444": 4}[ts.textures[args.texture].color]
 
 
 def add_parser(sub) -> None:

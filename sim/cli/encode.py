@@ -13,10 +13,19 @@ __all__ = ["add_parser", "cmd_encode"]
 def cmd_encode(args) -> int:
     from vqtex.golden.render.imageio import read_image
     with Outputs() as outs:
-        out = outs.add(args.output, (".vqt",), "a texture set")
-        images = [read_image(p) for p in args.images]
-        ts = _encode(args, images)
-        write_bytes(outs.path(out), ts.to_bytes())
+        if args.layout == "pvr2":           # Dreamcast PowerVR2 VQ (docs/pvr2.md)
+            from .encode_pvr2 import encode_pvr2_files
+            out = outs.add(args.output, (".dt", ".vqt"), "a Dreamcast texture or a texture set")
+            images = [read_image(p) for p in args.images]
+            ts, data = encode_pvr2_files(args, images, out)
+            write_bytes(outs.path(out), data)
+        else:
+            out = outs.add(args.output, (".vqt",), "a texture set")
+            images = [read_image(p) for p in args.images]
+            if args.color is None:
+                args.color = "rgb"
+            ts = _encode(args, images)
+            write_bytes(outs.path(out), ts.to_bytes())
     report = info_report(ts)
     add_psnr(report, ts, images)
     emit(report, args.json, info_text(ts, report) + f"\nwrote {args.output}")
@@ -50,15 +59,22 @@ def _encode(args, images):
 
 
 def add_parser(sub) -> None:
-    e = sub.add_parser("encode", help="compress images into a .vqt texture set (one shared codebook)")
+    e = sub.add_parser("encode", help="compress images into a .vqt texture set (one shared codebook), "
+                                      "or a Dreamcast .dt (--layout pvr2)")
     e.add_argument("images", nargs="+", metavar="IMAGE",
                    help="images (PNG, TIFF, ...), sides powers of two; all share one codebook")
-    e.add_argument("-o", "--output", required=True, help="the .vqt texture set to write")
+    e.add_argument("-o", "--output", required=True, help="the .vqt texture set to write (--layout pvr2: a .dt too)")
     e.add_argument("--block", type=block_size, default=(4, 4),
                    help=with_default("block WxH, powers of two 1..8 per side", "4x4"))
     e.add_argument("--codebook-size", "-k", type=int, default=256, help=with_default("codewords K, 2..4096", 256))
-    e.add_argument("--color", choices=["rgb", "rgba", "intensity", "yuv411"], default="rgb",
-                   help=with_default("colour format of the codewords (yuv411: U, V at half resolution)", "rgb"))
+    e.add_argument("--layout", choices=["paper", "pvr2"], default="paper",
+                   help=with_default("paper: the paper's layout (.vqt); pvr2: Dreamcast PowerVR2 VQ (2x2 blocks, "
+                                     "8-bit twiddled indices, 16-bit texels; -o OUT.dt as pvrtex writes it, or .vqt)",
+                                     "paper"))
+    e.add_argument("--color", choices=["rgb", "rgba", "intensity", "yuv411", "rgb565", "argb1555", "argb4444",
+                                       "yuv422"], default=None,
+                   help=with_default("colour format of the codewords (yuv411: U, V at half resolution; "
+                                     "rgb565, argb1555, argb4444, yuv422 with --layout pvr2)", "rgb; pvr2: rgb565"))
     e.add_argument("--index-bits", type=int, default=None,
                    help=with_default("index width b, 1..16", "ceil(log2 K)"))
     e.add_argument("--mipmaps", action="store_true",

@@ -68,7 +68,8 @@ def cmd_experiments(args) -> int:
                 hardware_tradeoff.check_plotting()          # before the work: one line if matplotlib is missing
             step = frames[1] - frames[0] if len(frames) > 1 else scene.frames
             scenes = (args.scene,) if args.scene else hardware_tradeoff.SCENES
-            rows = hardware_tradeoff.sweep(frame_step=step, backend=backend, sweep=sweep, scenes=scenes)
+            rows = hardware_tradeoff.sweep(frame_step=step, backend=backend, sweep=sweep, scenes=scenes,
+                                           stream=args.requests)
             if plot is not None:
                 hardware_tradeoff.plot(rows, outputs.path(plot))
                 extra["plot"] = args.plot
@@ -102,6 +103,10 @@ def add_parser(sub) -> None:
                                      "roads, other, grey, cutouts)",
                                      ", ".join(f"{t} {v}" for t, v in SCENES.items() if t != "hardware")
                                      + ", hardware both paper scenes"))
+    e.add_argument("--requests", choices=["fixed", "sparse"], default="fixed",
+                   help=with_default("hardware: the request stream, fixed (eight requests a trilinear pixel, as "
+                                     "the paper's renderer) or sparse (the requests that cannot change a pixel "
+                                     "left out: the same frames in fewer cycles)", "fixed"))
     e.add_argument("--paper-only", action="store_true",
                    help="tables 3 and 4: only the paper's rows, not ours below them")
     e.add_argument("--plot", metavar="FILE.png", default=None,

@@ -1,4 +1,4 @@
-"""``vqtex report area (FILE.vqt | --builtin four|tiny) [--one-port] [--json] ...`` and
+"""``vqtex report area (FILE.vqt | FILE.dt | --builtin four|tiny|pvr2) [--one-port] [--json] ...`` and
 ``vqtex report cycles FILE.vqt REQUESTS [--plot P.png] [--backend B] [--stall P] ...``.
 
 ``cycles`` simulates a request trace as ``vqtex sim`` does and reports where the cycles went,
@@ -32,6 +32,8 @@ BUILTINS = {
     "four": ("four_texture_set", "four bundled images, 128x128 mipmapped: rgb 4x4 K=256 8-bit (x2, one shared "
                                  "codebook), yuv411 4x4 K=256 12-bit, rgb 2x2 K=1024 12-bit (docs/area.md)"),
     "tiny": ("tiny_texture_set", "two 32x32 mipmapped textures (rgb 8-bit, yuv411 12-bit), K=16"),
+    "pvr2": ("pvr2_texture_set", "Dreamcast PowerVR2: four bundled images, 128x128 mipmapped, 2x2 K=256 8-bit "
+                                 "twiddled, rgb565, argb1555, yuv422, argb4444 (docs/pvr2.md)"),
 }
 
 

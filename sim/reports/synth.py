@@ -45,7 +45,7 @@ from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
 __all__ = [
-    "SynthError", "INSTALL_HINT", "DEVICE", "Harness", "four_texture_set", "tiny_texture_set",
+    "SynthError", "INSTALL_HINT", "DEVICE", "Harness", "four_texture_set", "tiny_texture_set", "pvr2_texture_set",
     "design_rtlil", "yosys_script", "run_yosys", "parse_yosys_stat", "run_nextpnr",
     "parse_nextpnr_report", "parse_nextpnr_log", "parse_memory_mapping", "count_memory_blocks", "stage_of",
     "signal_of", "design_memories", "area_report", "area_text", "tools_available",
@@ -109,6 +109,31 @@ def four_texture_set(size: int = 128, seed: int = 0):
     rgb2x2 = encode([img("hubble")], block=(2, 2), codebook_size=1024, color="rgb", index_bits=12,
                     mipmaps=True, seed=seed, names=["hubble"])
     return TextureSet.combine([rgb8, yuv12, rgb2x2])
+
+
+def pvr2_texture_set(size: int = 128, seed: int = 0):
+    """A Dreamcast PowerVR2 unit's set: four mipmapped ``size`` x ``size`` textures of the bundled
+    images encoded by :func:`golden.pvr_encode.encode_pvr2`, one per PowerVR2 colour format, each with
+    its 256-entry codebook of 2x2 16-bit texels: brick_red rgb565, road argb1555, chelsea yuv422,
+    hubble argb4444 (1024 codebook entries of 8 bytes, twiddled 8-bit index maps per level)."""
+    import numpy as np
+
+    from vqtex.golden.format import TextureSet
+    from vqtex.golden.pvr_encode import encode_pvr2
+    from vqtex.golden.render.imageio import read_image
+    from vqtex.golden.render.scene import DATA_DIR as here
+
+    sets = []
+    for name, color in (("brick_red", "rgb565"), ("road", "argb1555"), ("chelsea", "yuv422"), ("hubble", "argb4444")):
+        a = read_image(os.path.join(here, name + ".png"))
+        h, w = a.shape[:2]
+        if (h, w) != (size, size):
+            if h % size or w % size or h != w:
+                raise ValueError(f"{name}.png is {w}x{h}: cannot box-filter it to {size}x{size}")
+            f = h // size
+            a = a.reshape(size, f, size, f, -1).mean(axis=(1, 3)).round().astype(np.uint8)
+        sets.append(encode_pvr2(a, color, codebook_size=256, mipmaps=True, seed=seed, name=name)[0])
+    return TextureSet.combine(sets)
 
 
 def tiny_texture_set(seed: int = 0):

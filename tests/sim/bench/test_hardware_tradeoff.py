@@ -13,7 +13,7 @@ from vqtex.hw.texel_fetch import LATENCY
 from vqtex.sim.bench import hardware_tradeoff as ht
 from vqtex.sim.cli import main
 
-FIELDS = {"scene", "sampling", "index_bits", "codebook_size", "color", "frames", "mse", "psnr", "requests_per_frame",
+FIELDS = {"scene", "sampling", "index_bits", "codebook_size", "color", "frames", "stream", "mse", "psnr", "requests_per_frame",
           "cycles_per_frame_two_bank", "cycles_per_frame_one_port", "one_port_extra_pct", "straddles_per_frame",
           "memory_bits", "stored_bits", "overall_rate", "rtl_backend", "encode_seconds", "build_seconds",
           "simulate_seconds"}
@@ -42,7 +42,15 @@ def test_points_on_the_cycle_model(town):
         eight, twelve = rows[(sampling, 8)], rows[(sampling, 12)]
         assert twelve["memory_bits"]["index"] > eight["memory_bits"]["index"]
         assert twelve["requests_per_frame"] == eight["requests_per_frame"]
-    assert rows[("trilinear", 8)]["requests_per_frame"] == 8 * rows[("point", 8)]["requests_per_frame"]
+    assert rows[("trilinear", 8)]["requests_per_frame"] == 8 * rows[("point", 8)]["requests_per_frame"]  # fixed
+
+
+def test_sparse_stream_same_error_fewer_cycles(town):
+    fixed, sparse = (ht.point(town, "trilinear", 12, "rgb", 2, "golden", stream) for stream in ("fixed", "sparse"))
+    assert (fixed["stream"], sparse["stream"]) == ("fixed", "sparse")
+    assert sparse["mse"] == fixed["mse"] and sparse["memory_bits"] == fixed["memory_bits"]
+    assert sparse["requests_per_frame"] < fixed["requests_per_frame"]
+    assert sparse["cycles_per_frame_two_bank"] == sparse["requests_per_frame"] + LATENCY
 
 
 def test_compiled_rtl_gives_the_cycle_models_point(town):

@@ -1,0 +1,41 @@
+"""``vqtex report area`` on a Dreamcast .dt: synthesis of a PowerVR2 unit (Yosys only here; the
+placed-and-routed figures of --builtin pvr2 are in docs/pvr2.md)."""
+
+import json
+import os
+
+import pytest
+
+from tests.support import random_dt
+from vqtex.sim.cli import main
+from vqtex.sim.reports import synth
+
+
+def _need_tools():
+    missing = [name for name, ok in synth.tools_available().items() if not ok]
+    if missing:
+        msg = f"{', '.join(missing)} not installed (pip install '.[synth]')"
+        if os.environ.get("VQTEX_REQUIRE_TOOLS"):
+            pytest.fail(msg)
+        pytest.skip(msg)
+
+
+def _run(capsys, *argv):
+    capsys.readouterr()
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_report_area_of_a_dt_no_pnr(tmp_path, capsys):
+    _need_tools()
+    path = tmp_path / "small.dt"
+    path.write_bytes(random_dt(32, 16, 3, 40, seed=2))                 # yuv422, 40 entries, rectangular
+    code, out, err = _run(capsys, "report", "area", str(path), "--no-pnr", "--json")
+    assert code == 0, err
+    rep = json.loads(out)
+    assert rep["textures"] == 1 and rep["memory_images"]["entry_bytes"] == 8
+    assert rep["memory_images"]["codebook_entries"] == 40
+    u = rep["utilisation"]
+    assert u["luts"] > 0 and u["dsps"] > 0           # the Dreamcast colour matrix's products
+    assert rep["memories"]["fetch.front.descriptor.table"]["mapped_to"] == "logic"
