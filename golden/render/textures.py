@@ -1,8 +1,10 @@
-"""Procedural textures: wood, marble, checker, stripes.
+"""Procedural textures: wood, marble, checker, stripes; bricks, facade, noise and cutout (the many
+textures of the paper-sized town scene, ``town-paper``).
 
 Every generator is vectorised, deterministic for a given (size, seed, parameters) and *tileable*
 (the noise is periodic over the image), so the textures can be used with wrap addressing without
-seams. Each returns a uint8 RGB image (height, width, 3). ``size`` is (width, height).
+seams. Each returns a uint8 RGB image (height, width, 3), except ``cutout``, which returns RGBA
+(height, width, 4) with a transparent surround. ``size`` is (width, height).
 
     generate(name, size, seed, **params)   dispatches by name; ``GENERATORS`` lists the names.
 """
@@ -13,7 +15,8 @@ import inspect
 
 import numpy as np
 
-__all__ = ["GENERATORS", "generate", "periodic_noise", "fbm", "wood", "marble", "checker", "stripes"]
+__all__ = ["GENERATORS", "generate", "periodic_noise", "fbm", "wood", "marble", "checker", "stripes",
+           "bricks", "facade", "noise", "cutout"]
 
 
 def periodic_noise(width: int, height: int, cells: int, rng: np.random.Generator) -> np.ndarray:
@@ -145,7 +148,96 @@ def stripes(size=(256, 256), seed=0, bands: int = 6, sectors: int = 8) -> np.nda
     return _to_u8(rgb * (0.9 + 0.1 * periodic_noise(w, h, 16, rng))[..., None])
 
 
-GENERATORS = {"wood": wood, "marble": marble, "checker": checker, "stripes": stripes}
+def _two_colors(rng: np.random.Generator, colors) -> np.ndarray:
+    """``colors`` as a (2, 3) float array, or two random related colours (dark, light) from ``rng``."""
+    if colors is None:
+        base = rng.integers(60, 230, size=3).astype(np.float64)
+        return np.stack([base * 0.45, np.minimum(255, base * 1.1 + 20)])
+    colors = np.asarray(colors, np.float64)
+    if colors.shape != (2, 3):
+        raise ValueError("colors must be two RGB triples")
+    return colors
+
+
+def noise(size=(128, 128), seed=0, cells: int = 4, octaves: int = 5, colors=None) -> np.ndarray:
+    """Fractal noise ramped between two colours (asphalt, concrete, grass, dirt, plaster)."""
+    w, h = size
+    rng = np.random.default_rng(seed)
+    c = _two_colors(rng, colors)
+    t = fbm(w, h, rng, base_cells=int(cells), octaves=int(octaves))
+    t = (t - t.min()) / max(1e-9, np.ptp(t))
+    return _to_u8(_ramp(t, c))
+
+
+def bricks(size=(128, 128), seed=0, rows: int = 8, cols: int = 4, mortar: float = 0.08, colors=None) -> np.ndarray:
+    """A running-bond brick wall: ``rows`` courses of ``cols`` bricks, each brick its own shade,
+    light mortar joints ``mortar`` of a brick's height wide; ``colors`` (brick, mortar)."""
+    w, h = size
+    rng = np.random.default_rng(seed)
+    c = np.asarray(colors, np.float64) if colors is not None else \
+        np.stack([rng.integers(90, 200, 3).astype(np.float64) * np.array([1.0, 0.55, 0.45]), [200, 196, 186]])
+    if c.shape != (2, 3):
+        raise ValueError("bricks: colors must be two RGB triples")
+    rows, cols = max(1, int(rows)), max(1, int(cols))
+    u, v = _grid(w, h)
+    y = v * rows
+    course = np.minimum(y.astype(np.int64), rows - 1)
+    x = u * cols + 0.5 * (course & 1)
+    brick = (np.floor(x).astype(np.int64) % cols) + cols * course
+    fx, fy = x - np.floor(x), y - course
+    joint = (np.minimum(fy, 1 - fy) < mortar / 2) | (np.minimum(fx, 1 - fx) < mortar * cols / rows / 2)
+    shade = 0.8 + 0.4 * rng.random(rows * cols)[brick]
+    grain = 0.85 + 0.3 * fbm(w, h, rng, base_cells=8, octaves=3)
+    rgb = c[0] * (shade * grain)[..., None]
+    rgb[joint] = c[1] * grain[joint][..., None]
+    return _to_u8(rgb)
+
+
+def facade(size=(128, 128), seed=0, floors: int = 4, windows: int = 3, colors=None) -> np.ndarray:
+    """A building front: a plastered wall (``colors`` (wall, glass)) with ``floors`` x ``windows``
+    framed windows, some lit."""
+    w, h = size
+    rng = np.random.default_rng(seed)
+    c = np.asarray(colors, np.float64) if colors is not None else \
+        np.stack([rng.integers(120, 235, 3).astype(np.float64), rng.integers(20, 90, 3).astype(np.float64)])
+    if c.shape != (2, 3):
+        raise ValueError("facade: colors must be two RGB triples")
+    floors, windows = max(1, int(floors)), max(1, int(windows))
+    u, v = _grid(w, h)
+    fx, fy = u * windows - np.floor(u * windows), v * floors - np.floor(v * floors)
+    cell = np.floor(v * floors).astype(np.int64) * windows + np.floor(u * windows).astype(np.int64)
+    pane = (np.abs(fx - 0.5) < 0.28) & (np.abs(fy - 0.55) < 0.3)
+    frame = (np.abs(fx - 0.5) < 0.33) & (np.abs(fy - 0.55) < 0.35) & ~pane
+    lit = rng.random(floors * windows)[cell] < 0.3
+    wall = c[0] * (0.85 + 0.25 * fbm(w, h, rng, base_cells=4, octaves=4))[..., None]
+    glass = np.where(lit[..., None], np.array([235.0, 215.0, 140.0]), c[1]) * \
+        (0.8 + 0.2 * fy[..., None])
+    rgb = np.where(pane[..., None], glass, wall)
+    rgb[frame] = (235, 235, 230)
+    return _to_u8(rgb)
+
+
+def cutout(size=(128, 128), seed=0, sides: int = 0, rings: int = 2, colors=None) -> np.ndarray:
+    """An RGBA sign: a disc (``sides`` = 0) or regular polygon with ``rings`` coloured bands
+    (``colors`` (outer, inner)), transparent outside with a one-texel soft edge."""
+    w, h = size
+    rng = np.random.default_rng(seed)
+    c = _two_colors(rng, colors)
+    u, v = _grid(w, h)
+    x, y = 2 * u - 1, 2 * v - 1
+    r = np.hypot(x, y)
+    sides = int(sides)
+    if sides >= 3:   # distance to a regular polygon's edge, as a radius
+        a = np.arctan2(y, x) % (2 * np.pi / sides) - np.pi / sides
+        r = r * np.cos(a) / np.cos(np.pi / sides)
+    band = np.minimum((r * max(1, int(rings)) * 1.05).astype(np.int64), 64)
+    rgb = np.where((band & 1).astype(bool)[..., None], c[1], c[0]) * (0.9 + 0.1 * fbm(w, h, rng, 4, 3))[..., None]
+    alpha = np.clip((0.95 - r) * min(w, h) / 2, 0, 1) * 255
+    return np.concatenate([_to_u8(rgb), _to_u8(alpha)[..., None]], 2)
+
+
+GENERATORS = {"wood": wood, "marble": marble, "checker": checker, "stripes": stripes,
+              "bricks": bricks, "facade": facade, "noise": noise, "cutout": cutout}
 
 
 def generator_params(name: str) -> set[str]:
