@@ -8,8 +8,8 @@ Modules, in pipeline order:
 - ``mesh``: primitives.  ``camera``: look-at and perspective.
 - ``raster``: clipping, fixed-point edge functions (top-left rule), z-buffer, perspective-correct
   (s, t) with analytic derivatives.
-- ``sampling``: the two-phase sampler (``requests`` then ``resolve``), point and trilinear with
-  fixed-point weights, wrap/clamp.
+- ``sampling``: the two-phase sampler (``requests`` then ``resolve``), point, bilinear and trilinear with
+  fixed-point weights (golden.filter), wrap/clamp/mirror.
 - ``pyramid``: the TextureSource protocol and the uncompressed ReferenceSource.
 - ``frame``: ``render_frame`` and request-stream export.  ``metrics``: ``frame_mse``.
 - ``bench``: ``run()`` prints frame times and requests per frame.

@@ -10,6 +10,8 @@ calls; the same texels always give the same frame, bit for bit.
 **Request order.** Covered pixels in row-major order (y, then x); per pixel:
 
 - ``point``: 1 request, level 0, the nearest texel ``i = floor(s W0)``, ``j = floor(t H0)``.
+- ``bilinear``: 4 requests, the 2x2 footprint of level L0 (the finer of trilinear's two levels) in
+  the order below, weighted by the bilinear weights alone.
 - ``trilinear``: 8 requests, level L0 first then level L1, and within a level the 2x2 footprint in
   the order (i0, j0), (i1, j0), (i0, j1), (i1, j1). Every covered pixel issues all eight, even when
   a weight is zero (a constant-rate stream, as in the hardware). Uncovered pixels issue nothing and
@@ -39,13 +41,22 @@ half-integers; s W 256 is exact in float64 because W 256 is a power of two), ``i
 (sum 2^16), times the level weights ``256 - f`` for L0 and ``f`` for L1 (sum 2^8): eight weights that
 sum to exactly 2^24. Per channel ``out = (sum w_k texel_k + 2^23) >> 24``; the sum is below 2^32.
 
-**Addressing** per texture and axis: ``wrap`` (i mod W) or ``clamp`` (clip to [0, W-1]), applied to
-integer texel indices, so a clamped footprint at the border repeats the edge texel.
+**Addressing** per texture and axis: ``wrap`` (i mod W), ``clamp`` (clip to [0, W-1]) or ``mirror``
+(period 2W: 0..W-1, then W-1..0), applied to integer texel indices, so a clamped footprint at the
+border repeats the edge texel.
 
 **Far coordinates** (:func:`fold_coordinate`): before the footprint, a wrapped coordinate with
-``|s| >= 1`` loses its integer part (``s - floor(s)``, exact in float64) and a clamped one is clipped
-to [-1, 2]; NaN (and, wrapped, an infinity) is 0. The texels and the frame are exactly those of the
+``|s| >= 1`` loses its integer part (``s - floor(s)``, exact in float64), a mirrored one with
+``|s| >= 2`` loses a multiple of 2 (``s - 2 floor(s/2)``, exact) and a clamped one is clipped
+to [-1, 2]; NaN (and, wrapped or mirrored, an infinity) is 0. The texels and the frame are exactly those of the
 formulas above wherever ``s W 256`` fits int64, and coordinates of any size (1e15, inf) stay defined.
+
+**Fixed point** (:mod:`golden.filter`, the specification of the RTL filter): the folded coordinate is
+quantised to ``s_q = floor(s 2^F)`` with ``F = 8 + log2`` of the largest level-0 side; every floor
+above is then a shift of ``s_q`` (nested floors), so the footprint, the weights and the frame are
+those of the float formulas exactly. :meth:`Sampler.requests` computes them with
+:func:`golden.filter.footprint`; :meth:`Sampler.filter_inputs` gives the same per-pixel inputs the
+RTL filter takes.
 """
 
 from __future__ import annotations
@@ -54,6 +65,7 @@ from typing import Sequence
 
 import numpy as np
 
+from .. import filter as fixed
 from .raster import Fragments
 
 __all__ = [
@@ -63,7 +75,7 @@ __all__ = [
 
 FRAC_BITS = 8
 WEIGHT_BITS = 3 * FRAC_BITS
-MODES = ("point", "trilinear")
+MODES = ("point", "bilinear", "trilinear")
 BACKGROUND = (0, 0, 0, 255)
 _ONE = 1 << FRAC_BITS
 #: |lambda| never exceeds this (levels; finite where log2 would give -inf, +inf or NaN).
@@ -95,14 +107,18 @@ def address(i: np.ndarray, size: np.ndarray, wrap: np.ndarray) -> np.ndarray:
     return np.where(wrap, i & (size - 1), np.clip(i, 0, size - 1))
 
 
-def fold_coordinate(s: np.ndarray, wrap: np.ndarray) -> np.ndarray:
+def fold_coordinate(s: np.ndarray, wrap: np.ndarray, mirror=False) -> np.ndarray:
     """An equivalent texture coordinate, small enough that ``s W 256`` fits int64 at every level:
-    where ``wrap``, ``s - floor(s)`` if ``|s| >= 1`` (exact: Sterbenz), else ``s``; elsewhere ``s``
+    where ``wrap``, ``s - floor(s)`` if ``|s| >= 1`` (exact: Sterbenz), else ``s``; where ``mirror``
+    (and not ``wrap``), ``s - 2 floor(s / 2)`` if ``|s| >= 2`` (exact), else ``s``; elsewhere ``s``
     clipped to [-1, 2] (beyond, both texels of a footprint are already the edge texel). NaN, and
-    infinities where ``wrap``, become 0. Same texels and same filtered colour as ``s``."""
+    infinities where ``wrap`` or ``mirror``, become 0. Same texels and same filtered colour as ``s``.
+    The result is in (-1, 1) wrapped, (-2, 2) mirrored, [-1, 2] clamped."""
     s = np.asarray(s, np.float64)
     with np.errstate(invalid="ignore"):
-        folded = np.where(wrap, np.where(np.abs(s) >= 1, s - np.floor(s), s), np.clip(s, -1.0, 2.0))
+        folded = np.where(wrap, np.where(np.abs(s) >= 1, s - np.floor(s), s),
+                          np.where(mirror, np.where(np.abs(s) >= 2, s - 2 * np.floor(s / 2), s),
+                                   np.clip(s, -1.0, 2.0)))
     return np.nan_to_num(folded, nan=0.0)
 
 
@@ -115,21 +131,22 @@ def trilinear_weights(fu0, fv0, fu1, fv1, f) -> np.ndarray:
     return np.concatenate([bil(fu0, fv0) * (_ONE - f)[:, None], bil(fu1, fv1) * f[:, None]], 1)
 
 
-def _parse_address(a) -> tuple[bool, bool]:
+def _parse_address(a) -> tuple[int, int]:
+    """Addressing codes (golden.filter.ADDRESS_MODES) of the s and t axes."""
     if isinstance(a, str):
         a = (a, a)
-    if len(a) != 2 or any(m not in ("wrap", "clamp") for m in a):
-        raise ValueError(f"addressing must be 'wrap', 'clamp' or a pair of them, got {a!r}")
-    return a[0] == "wrap", a[1] == "wrap"
+    if len(a) != 2 or any(m not in fixed.ADDRESS_MODES for m in a):
+        raise ValueError(f"addressing must be 'wrap', 'clamp', 'mirror' or a pair of them, got {a!r}")
+    return fixed.ADDRESS_MODES.index(a[0]), fixed.ADDRESS_MODES.index(a[1])
 
 
 class Sampler:
-    """Point or trilinear sampling of one frame, split into requests() and resolve().
+    """Point, bilinear or trilinear sampling of one frame, split into requests() and resolve().
 
     Arguments:
         level_shapes: per texture id, [(width, height) of level 0, 1, ...] (power-of-two sizes).
-        address: per texture id, "wrap", "clamp" or a pair (s, t); default wrap everywhere.
-        mode: "point" or "trilinear".
+        address: per texture id, "wrap", "clamp", "mirror" or a pair (s, t); default wrap everywhere.
+        mode: "point", "bilinear" or "trilinear".
         background: RGBA of uncovered pixels.
     """
 
@@ -157,9 +174,12 @@ class Sampler:
             address = [address] * t
         if len(address) != t:
             raise ValueError("one addressing mode per texture")
-        wraps = [_parse_address(a) for a in address] or [(True, True)]
-        self._wrap_s = np.array([w[0] for w in wraps])
-        self._wrap_t = np.array([w[1] for w in wraps])
+        codes = [_parse_address(a) for a in address] or [(0, 0)]
+        self._addr_s = np.array([c[0] for c in codes], np.int64)
+        self._addr_t = np.array([c[1] for c in codes], np.int64)
+        self.levels = fixed.LevelTable(level_shapes) if t else fixed.LevelTable([[(1, 1)]])
+        #: fractional bits of the quantised coordinates (golden.filter.coordinate_frac_bits)
+        self.frac = fixed.coordinate_frac_bits(self.levels.max_log2)
         bg = tuple(int(c) for c in background)
         if len(bg) == 3:
             bg += (255,)
@@ -170,7 +190,7 @@ class Sampler:
 
     @property
     def requests_per_pixel(self) -> int:
-        return 1 if self.mode == "point" else 8
+        return fixed.TEXELS[self.mode]
 
     def lod(self, frags: Fragments) -> np.ndarray:
         """Unquantised lambda per fragment."""
@@ -184,39 +204,52 @@ class Sampler:
         tex = np.asarray(frags.tex, np.int64)
         if len(tex) and (tex.min() < 0 or tex.max() >= len(self._levels)):
             raise ValueError("fragment texture id out of range")
-        m = len(tex)
-        ws, wt = self._wrap_s[tex], self._wrap_t[tex]
-        sc, tc = fold_coordinate(frags.s, ws), fold_coordinate(frags.t, wt)
-        if self.mode == "point":
-            w0, h0 = self._widths[tex, 0], self._heights[tex, 0]
-            i = address(np.floor(sc * w0).astype(np.int64), w0, ws)
-            j = address(np.floor(tc * h0).astype(np.int64), h0, wt)
-            reqs = np.stack([tex, np.zeros(m, np.int64), i, j], 1)
-            weights = None
-        else:
-            lam = quantize_lod(self.lod(frags), self._levels[tex])
-            l0 = lam >> FRAC_BITS
-            f = lam & (_ONE - 1)
-            l1 = np.minimum(l0 + 1, self._levels[tex] - 1)
-            reqs = np.empty((m, 8, 4), np.int64)
-            reqs[:, :, 0] = tex[:, None]
-            fracs = []
-            for k, lv in enumerate((l0, l1)):
-                wl, hl = self._widths[tex, lv], self._heights[tex, lv]
-                u = np.floor(sc * (wl * _ONE)).astype(np.int64) - (_ONE >> 1)
-                v = np.floor(tc * (hl * _ONE)).astype(np.int64) - (_ONE >> 1)
-                i0, j0 = u >> FRAC_BITS, v >> FRAC_BITS
-                fracs += [u & (_ONE - 1), v & (_ONE - 1)]
-                i0a, i1a = address(i0, wl, ws), address(i0 + 1, wl, ws)
-                j0a, j1a = address(j0, hl, wt), address(j0 + 1, hl, wt)
-                b = 4 * k
-                reqs[:, b:b + 4, 1] = lv[:, None]
-                reqs[:, b:b + 4, 2] = np.stack([i0a, i1a, i0a, i1a], 1)
-                reqs[:, b:b + 4, 3] = np.stack([j0a, j0a, j1a, j1a], 1)
-            weights = trilinear_weights(fracs[0], fracs[1], fracs[2], fracs[3], f).astype(np.uint32)
-            reqs = reqs.reshape(-1, 4)
+        p = self.filter_inputs(frags, self.frac, tex=tex)
+        level, i, j, weight = fixed.footprint(self.levels, tex, p["s"], p["t"], p["lod"], p["mode"],
+                                              p["address_s"], p["address_t"], self.frac)
+        n = self.requests_per_pixel
+        reqs = np.stack([np.broadcast_to(tex[:, None], level.shape), level, i, j], 2)[:, :n].reshape(-1, 4)
+        weights = None if self.mode == "point" else weight[:, :n].astype(np.uint32)
         self._plan = (frags.width, frags.height, np.asarray(frags.pixel, np.int64), weights)
         return reqs
+
+    def filter_inputs(self, frags: Fragments, frac: int, *, tex=None) -> dict:
+        """The per-pixel inputs of the RTL filter (:mod:`golden.filter`): int64 arrays ``texture``,
+        ``s``, ``t`` (folded, quantised with ``frac`` fractional bits), ``lod`` (quantised, 0 in point
+        mode), ``mode``, ``address_s``, ``address_t`` (codes), one per fragment in request order.
+
+        Raises:
+            ValueError: if a fragment's texture id is out of range or ``frac`` is too small.
+        """
+        if tex is None:
+            tex = np.asarray(frags.tex, np.int64)
+            if len(tex) and (tex.min() < 0 or tex.max() >= len(self._levels)):
+                raise ValueError("fragment texture id out of range")
+        if frac < fixed.coordinate_frac_bits(self.levels.max_log2):
+            raise ValueError(f"{frac} fractional bits are too few for these textures")
+        m = len(tex)
+        a_s, a_t = self._addr_s[tex], self._addr_t[tex]
+        sc = fold_coordinate(frags.s, a_s == 0, a_s == 2)
+        tc = fold_coordinate(frags.t, a_t == 0, a_t == 2)
+        lam = (np.zeros(m, np.int64) if self.mode == "point"
+               else quantize_lod(self.lod(frags), self._levels[tex]))
+        return {"texture": tex, "s": fixed.quantize_coordinate(sc, frac), "t": fixed.quantize_coordinate(tc, frac),
+                "lod": lam, "mode": np.full(m, fixed.MODES.index(self.mode), np.int64),
+                "address_s": a_s, "address_t": a_t}
+
+    def place(self, colors: np.ndarray) -> np.ndarray:
+        """The frame (H, W, 4) uint8 from the filtered colours (M, 4) uint8 of the fragments of the
+        last requests() (the RTL filter's responses), in order; uncovered pixels get the background."""
+        if self._plan is None:
+            raise RuntimeError("place() before requests()")
+        width, height, pixel, _ = self._plan
+        c = np.asarray(colors)
+        if c.shape != (len(pixel), 4) or c.dtype != np.uint8:
+            raise ValueError(f"expected uint8 colours of shape ({len(pixel)}, 4), got {c.dtype} {c.shape}")
+        frame = np.empty((height * width, 4), np.uint8)
+        frame[:] = self.background
+        frame[pixel] = c
+        return frame.reshape(height, width, 4)
 
     def resolve(self, texels: np.ndarray) -> np.ndarray:
         """The frame (H, W, 4) uint8 from the texels (N, 4) uint8 answering requests(), in order."""
@@ -234,9 +267,5 @@ class Sampler:
         if self.mode == "point":
             frame[pixel] = tx
         else:
-            acc = np.zeros((len(pixel), 4), np.uint32)
-            tx = tx.reshape(-1, 8, 4)
-            for k in range(8):  # exact: the weights sum to 2^24, so acc < 2^32
-                acc += weights[:, k, None] * tx[:, k]
-            frame[pixel] = ((acc + (1 << (WEIGHT_BITS - 1))) >> WEIGHT_BITS).astype(np.uint8)
+            frame[pixel] = fixed.blend(weights, tx.reshape(len(pixel), -1, 4))
         return frame.reshape(height, width, 4)

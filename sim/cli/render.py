@@ -264,8 +264,9 @@ def add_parser(sub) -> None:
                    help="image to write (.png, ...); with several frames _NNNN is added before the extension")
     r.add_argument("--frames", help=with_default("frames to render: a Python slice A:B[:STEP] or one frame number",
                                                  "all"))
-    r.add_argument("--mode", choices=["point", "trilinear"], default="trilinear",
-                   help=with_default("point sampling of level 0, or trilinear mipmapping", "trilinear"))
+    r.add_argument("--mode", choices=["point", "bilinear", "trilinear"], default="trilinear",
+                   help=with_default("point sampling of level 0, bilinear filtering of the finer mip level, "
+                                     "or trilinear mipmapping", "trilinear"))
     add_backend(r, ["golden", "pysim", "cxxrtl", "verilator"], "golden")
     r.add_argument("--texture-set", metavar="FILE.vqt",
                    help=with_default("use this texture set instead of encoding the scene's textures",
