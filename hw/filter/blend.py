@@ -1,0 +1,114 @@
+"""Blend: weighted texels -> the filtered RGBA8888 colour of a pixel.
+
+Twin of :func:`golden.filter.blend`: per channel ``(sum_k w_k texel_k + 2^23) >> 24`` over the
+pixel's slots, which arrive in *groups* of ``lanes`` texels (one group per cycle; a pixel is one
+group or several in a row, marked ``first`` and ``last``). Two stages:
+
+1. *weigh*: per channel the group's ``sum_k w_k texel_k`` (``lanes`` 25x8-bit products and their
+   sum), registered with ``first``, ``last`` and the tag.
+2. *accumulate*: ``acc = (0 if first else acc) + sum``; on the ``last`` group the rounded colour
+   ``(acc + 2^23) >> 24`` is the output register (the stream's payload).
+
+Latency 2 (the last group of a pixel in cycle ``t``, its colour on ``o`` in cycle ``t + 2``);
+throughput one group per cycle. Stream backpressure: ``i.ready = ~weigh_valid | ~o.valid | o.ready``
+(combinational on ``o.ready``); all sums stay below 2^32 because the weights of a pixel sum to 2^24.
+"""
+
+from __future__ import annotations
+
+from amaranth import *
+from amaranth.lib import data, stream, wiring
+from amaranth.lib.wiring import In, Out
+
+from vqtex.golden import filter as spec
+
+from ..pipeline import ResponseLayout
+from .footprint import WEIGHT_WIDTH
+
+__all__ = ["Blend", "GroupLayout", "LATENCY"]
+
+#: Cycles from a pixel's last group to its colour.
+LATENCY = 2
+_ACC = 32
+
+
+class GroupLayout(data.StructLayout):
+    """One group of weighted texels: per lane the texel (r, g, b, a bytes, bits 0..31) and its weight;
+    ``first`` and ``last`` group of the pixel; the pixel's tag."""
+
+    def __init__(self, lanes: int, tag_width: int):
+        super().__init__({
+            "rgba": data.ArrayLayout(32, lanes), "weight": data.ArrayLayout(WEIGHT_WIDTH, lanes),
+            "first": 1, "last": 1, "tag": unsigned(tag_width),
+        })
+
+
+class Blend(wiring.Component):
+    """The blend stage of the texture filter (see the module docstring).
+
+    Arguments
+    ---------
+    lanes : int
+        Texels per group.
+    tag_width : int
+
+    Members
+    -------
+    i : In(stream.Signature(GroupLayout(lanes, tag_width)))
+    o : Out(stream.Signature(hw.pipeline.ResponseLayout(tag_width)))
+    """
+
+    def __init__(self, lanes: int, tag_width: int = 8):
+        self._lanes = lanes
+        self._tag_width = tag_width
+        super().__init__({
+            "i": In(stream.Signature(GroupLayout(lanes, tag_width))),
+            "o": Out(stream.Signature(ResponseLayout(tag_width))),
+        })
+
+    @property
+    def latency(self) -> int:
+        return LATENCY
+
+    def elaborate(self, platform):
+        m = Module()
+        lanes = self._lanes
+        half = 1 << (spec.WEIGHT_BITS - 1)
+
+        # Stage 1: weigh.
+        w_valid = Signal()
+        w_sum = [Signal(_ACC, name=f"sum_{'rgba'[c]}") for c in range(4)]
+        w_first, w_last = Signal(), Signal()
+        w_tag = Signal(self._tag_width)
+        take = Signal()                              # stage 2 takes stage 1's group this cycle
+        load = Signal()                              # stage 1 loads (it is empty or its group moves on)
+        m.d.comb += [
+            take.eq(w_valid & (~self.o.valid | self.o.ready)),
+            load.eq(~w_valid | take),
+            self.i.ready.eq(load),
+        ]
+        with m.If(load):
+            m.d.sync += [w_valid.eq(self.i.valid), w_first.eq(self.i.p.first), w_last.eq(self.i.p.last),
+                         w_tag.eq(self.i.p.tag)]
+            for c in range(4):
+                terms = [self.i.p.weight[k] * self.i.p.rgba[k][8 * c:8 * c + 8] for k in range(lanes)]
+                total = terms[0]
+                for term in terms[1:]:
+                    total = total + term
+                m.d.sync += w_sum[c].eq(total)
+
+        # Stage 2: accumulate, round, output register.
+        acc = [Signal(_ACC, name=f"acc_{'rgba'[c]}") for c in range(4)]
+        new = [Signal(_ACC, name=f"new_{'rgba'[c]}") for c in range(4)]
+        rounded = [Signal(_ACC + 1, name=f"rounded_{'rgba'[c]}") for c in range(4)]
+        for c in range(4):
+            m.d.comb += [new[c].eq(Mux(w_first, 0, acc[c]) + w_sum[c]), rounded[c].eq(new[c] + half)]
+        with m.If(self.o.ready):
+            m.d.sync += self.o.valid.eq(0)
+        with m.If(take):
+            m.d.sync += [acc[c].eq(new[c]) for c in range(4)]
+            with m.If(w_last):
+                m.d.sync += [self.o.valid.eq(1), self.o.p.tag.eq(w_tag)]
+                m.d.sync += [getattr(self.o.p, "rgba"[c]).eq(rounded[c][spec.WEIGHT_BITS:spec.WEIGHT_BITS + 8])
+                             for c in range(4)]
+        return m
