@@ -87,10 +87,14 @@ def _frame_path(pattern: str, frame: int, many: bool) -> str:
 
 
 def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall=0.0, seed=0,
-                 one_port=False, reference=True, images=None, progress=None, cycle_model=False):
+                 one_port=False, reference=True, images=None, progress=None, cycle_model=False,
+                 filter_in_rtl=False, lanes=4):
     """Render ``frames`` of ``scene`` from TextureSet ``ts``; yields one dict per frame with the frame,
     the golden frame when the backend is RTL (for comparison), cycle results and the reference MSE.
-    With the golden backend and ``cycle_model``, the cycles come from the exact cycle model (no RTL)."""
+    With the golden backend and ``cycle_model``, the cycles come from the exact cycle model (no RTL).
+    With ``filter_in_rtl`` the backend runs the texture filter (``hw.filter.TextureFilter`` with
+    ``lanes`` lanes) on the frame's per-pixel inputs instead of the texel-fetch unit on its texel
+    requests; the result's ``filter`` is its :class:`~vqtex.sim.backends.filter.FilterResult`."""
     from vqtex.golden.fetch import fetch
     from vqtex.golden.render.frame import frame_requests
     from vqtex.golden.render.metrics import frame_mse
@@ -110,7 +114,18 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
         golden_frame = sampler.resolve(golden_texels)
         out["golden_seconds"] = time.perf_counter() - t0
         out["requests"] = int(len(reqs))
-        if backend == "golden":
+        if filter_in_rtl:
+            from vqtex.sim.backends.filter import simulate_filter
+            pixels = sampler.filter_inputs(sampler.fragments, sampler.frac)
+            if f == frames[0]:
+                warn_slow(backend, int(len(pixels["mode"]) * 8 // lanes * len(frames)))
+            t0 = time.perf_counter()
+            res = simulate_filter(ts, pixels, backend=backend, lanes=lanes, frac=sampler.frac, stall=stall, seed=seed)
+            out["rtl_seconds"] = time.perf_counter() - t0
+            out["image"] = sampler.place(res.colors)
+            out["identical_to_golden"] = bool(np.array_equal(out["image"], golden_frame))
+            out["filter"] = res
+        elif backend == "golden":
             out["image"] = golden_frame
             if cycle_model and len(reqs):
                 from vqtex.sim.backends import simulate
@@ -206,6 +221,12 @@ def _frame_report(r: dict) -> dict:
     d = {"frame": r["frame"], "requests": r["requests"], "golden_seconds": round(r["golden_seconds"], 4)}
     if "mse" in r:
         d["mse"] = round(float(r["mse"]), 4)
+    if "filter" in r:
+        s = r["filter"]
+        d.update(rtl_seconds=round(r["rtl_seconds"], 4), pixels=int(s.pixels), cycles=int(s.cycles),
+                 pixels_per_clock=round(s.pixels_per_clock, 4), lanes=int(s.lanes), latency=int(s.latency),
+                 texels_fetched=int(s.texels), stall_cycles={k: int(v) for k, v in s.stall_cycles.items()},
+                 bank_conflicts=int(s.bank_conflicts), identical_to_golden=r["identical_to_golden"])
     if "sim" in r and r["sim"] is not None:
         s = r["sim"]
         d.update(rtl_seconds=round(r["rtl_seconds"], 4), cycles=int(s.cycles), latency=int(s.latency),
@@ -233,22 +254,40 @@ def cmd_render(args) -> int:
         ts = load_set(args.texture_set) if args.texture_set else encode_scene(scene, images)
         if ts.n_textures != len(scene.textures):
             raise CliError(f"{args.texture_set} holds {ts.n_textures} textures, the scene uses {len(scene.textures)}")
+        if args.filter_in_rtl and args.backend not in ("golden", "pysim", "cxxrtl"):
+            raise CliError(f"--filter-in-rtl runs on the golden, pysim or cxxrtl backend, not {args.backend}")
+        if args.filter_in_rtl and args.one_port:
+            raise CliError("--filter-in-rtl: the filter's lanes have two-bank index memories (no --one-port)")
         per_frame, mismatches = render_to_files(
             scene, ts, frames, frame_paths.get, images, outs=outs, on_frame=on_frame,
-            mode=args.mode, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port)
+            mode=args.mode, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port,
+            filter_in_rtl=args.filter_in_rtl, lanes=args.lanes)
         report = {
             "scene": scene.name, "mode": args.mode, "backend": args.backend, "frames": per_frame,
             "overall_rate": round(ts.rates()["overall"], 4),
             "mean_mse": round(float(np.mean([f["mse"] for f in per_frame])), 4),
         }
-        if args.backend != "golden":
+        if args.filter_in_rtl:
+            report["filter_in_rtl"] = True
+            report["lanes"] = args.lanes
+        if args.backend != "golden" or args.filter_in_rtl:
             report["identical_to_golden"] = not mismatches
             report["cycles_per_frame"] = round(float(np.mean([f["cycles"] for f in per_frame])), 1)
+        if args.filter_in_rtl:
+            pixels, cycles = sum(f["pixels"] for f in per_frame), sum(f["cycles"] for f in per_frame)
+            report["pixels_per_clock"] = round(pixels / cycles, 4) if cycles else 0.0
         if report_path:
             write_json(outs.path(report_path), report)
     text = [f"{scene.name}: {len(frames)} frame(s), {args.mode}, backend {args.backend}, "
             f"overall compression {report['overall_rate']:.2f}:1, mean frame MSE {report['mean_mse']:.3f}"]
-    if args.backend != "golden":
+    if args.filter_in_rtl:
+        stalls = {k: sum(f["stall_cycles"][k] for f in per_frame) for k in per_frame[0]["stall_cycles"]}
+        text.append(f"texture filter in the RTL ({args.lanes} lane{'s' if args.lanes > 1 else ''}), frames identical "
+                    f"to golden: {'yes' if not mismatches else 'NO, frames ' + str(mismatches)}; "
+                    f"{report['cycles_per_frame']:.0f} cycles per frame, {report['pixels_per_clock']:.3f} pixels "
+                    f"per clock; stall cycles: " + ", ".join(f"{k} {v}" for k, v in stalls.items())
+                    + "; bank conflicts: 0")
+    elif args.backend != "golden":
         text.append(f"RTL frames identical to golden: {'yes' if not mismatches else 'NO, frames ' + str(mismatches)}; "
                     f"{report['cycles_per_frame']:.0f} cycles per frame")
     emit(report, args.json, "\n".join(text))
@@ -272,6 +311,11 @@ def add_parser(sub) -> None:
                    help=with_default("use this texture set instead of encoding the scene's textures",
                                      "encode them with the scene's settings"))
     add_hardware_options(r)
+    r.add_argument("--filter-in-rtl", action="store_true",
+                   help="run the texture filter in the RTL (hw.filter: per-pixel (s, t, lod) in, filtered colour "
+                        "out) instead of the texel-fetch unit with the filtering in numpy (default: off)")
+    r.add_argument("--lanes", type=int, choices=[1, 2, 4, 8], default=4,
+                   help=with_default("texel-fetch lanes of the RTL filter (--filter-in-rtl): texels per clock", 4))
     r.add_argument("--report", metavar="REPORT.json", help=with_default("also write the JSON report here", "none"))
     r.add_argument("--reference", metavar="REF.png",
                    help=with_default("also write the frame rendered from the uncompressed textures "
