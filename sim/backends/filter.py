@@ -13,6 +13,8 @@ Backends
     Amaranth's simulator running ``TextureFilter`` (:mod:`sim.backends.filter_pysim`): tiny cases.
 ``cxxrtl``
     The compiled model (:mod:`sim.backends.filter_cxxrtl`).
+``verilator``
+    The exported Verilog under Verilator (:mod:`sim.backends.filter_verilator`).
 
 Every RTL backend presents the requests back to back from cycle 0, drives ``o.ready`` from
 :func:`sim.streams.ready_pattern` and counts cycles up to and including the cycle the last colour
@@ -26,15 +28,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from amaranth import Module
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
 from vqtex.golden import filter as spec
 from vqtex.golden.fetch import fetch
 from vqtex.golden.format import TextureSet
 
-__all__ = ["FilterResult", "simulate_filter", "golden_colors", "check_pixels", "FIELDS", "FILTER_BACKENDS"]
+__all__ = ["FilterResult", "simulate_filter", "golden_colors", "check_pixels", "FIELDS", "FILTER_BACKENDS",
+           "FilterTop", "texel_slots"]
 
 #: The per-pixel input fields, in the order of the filter request.
 FIELDS = ("texture", "s", "t", "lod", "mode", "address_s", "address_t")
-FILTER_BACKENDS = ("golden", "pysim", "cxxrtl")
+FILTER_BACKENDS = ("golden", "pysim", "cxxrtl", "verilator")
 #: Pixels the golden backend filters at a time (bounded temporaries).
 GOLDEN_CHUNK = 1 << 16
 
@@ -158,3 +165,44 @@ def texel_slots(mode: np.ndarray, lanes: int) -> int:
     """Texel slots the lanes fetch for these modes: per pixel ``ceil(used / lanes) * lanes``."""
     used = np.asarray([1, 4, 8])[np.asarray(mode, np.int64)]
     return int((-(-used // lanes) * lanes).sum())
+
+
+class FilterTop(wiring.Component):
+    """``hw.filter.TextureFilter`` with one port per stream member (``i_valid``, ``i_ready``,
+    ``i_payload``, ``o_valid``, ``o_ready``, ``o_payload``) and its strobes, for synthesis
+    (:mod:`sim.reports.synth`'s harness) and Verilog.
+
+    Arguments
+    ---------
+    texture_set : TextureSet
+    lanes, tag_width, frac
+        As for :class:`hw.filter.TextureFilter`.
+    """
+
+    def __init__(self, texture_set, *, lanes: int = 1, tag_width: int = 8, frac: int | None = None):
+        from vqtex.hw.filter import TextureFilter
+        self._filter = TextureFilter(texture_set, lanes=lanes, tag_width=tag_width, frac=frac)
+        f = self._filter
+        super().__init__({
+            "i_valid": In(1), "i_ready": Out(1), "i_payload": In(len(f.i.p.as_value())),
+            "o_valid": Out(1), "o_ready": In(1), "o_payload": Out(len(f.o.p.as_value())),
+            "stall_output": Out(1), "busy": Out(1),
+        })
+
+    @property
+    def filter(self):
+        return self._filter
+
+    @property
+    def latency(self) -> int:
+        return self._filter.latency
+
+    def elaborate(self, platform):
+        m = Module()
+        m.submodules.filter = f = self._filter
+        m.d.comb += [
+            f.i.valid.eq(self.i_valid), self.i_ready.eq(f.i.ready), f.i.p.eq(self.i_payload),
+            self.o_valid.eq(f.o.valid), f.o.ready.eq(self.o_ready), self.o_payload.eq(f.o.p),
+            self.stall_output.eq(f.stall_output), self.busy.eq(f.busy),
+        ]
+        return m

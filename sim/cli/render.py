@@ -254,8 +254,6 @@ def cmd_render(args) -> int:
         ts = load_set(args.texture_set) if args.texture_set else encode_scene(scene, images)
         if ts.n_textures != len(scene.textures):
             raise CliError(f"{args.texture_set} holds {ts.n_textures} textures, the scene uses {len(scene.textures)}")
-        if args.filter_in_rtl and args.backend not in ("golden", "pysim", "cxxrtl"):
-            raise CliError(f"--filter-in-rtl runs on the golden, pysim or cxxrtl backend, not {args.backend}")
         if args.filter_in_rtl and args.one_port:
             raise CliError("--filter-in-rtl: the filter's lanes have two-bank index memories (no --one-port)")
         per_frame, mismatches = render_to_files(

@@ -1,5 +1,6 @@
-"""The texture filter on the compiled CXXRTL backend: bit-exact against golden on large streams of
-hard cases, random backpressure, the same cycles and stalls as the pysim backend."""
+"""The texture filter on the compiled backends: CXXRTL bit-exact against golden on large streams of
+hard cases with random backpressure, the same cycles and stalls as pysim; the exported Verilog under
+Verilator the same as CXXRTL."""
 
 import os
 
@@ -53,3 +54,12 @@ def test_cxxrtl_and_pysim_count_the_same_cycles():
     b = simulate_filter(ts, px, backend="pysim", lanes=1, stall=0.4, seed=5)
     assert (a.colors == b.colors).all()
     assert (a.cycles, a.stall_cycles) == (b.cycles, b.stall_cycles)
+
+
+def test_verilator_filter_equals_cxxrtl():
+    need("g++", "verilator")
+    ts, frac, px = _pixels(3000, 4)
+    v = simulate_filter(ts, px, backend="verilator", lanes=2, stall=0.3, seed=2)
+    c = simulate_filter(ts, px, backend="cxxrtl", lanes=2, stall=0.3, seed=2)
+    assert (v.colors == golden_colors(ts, px, frac)).all()
+    assert (v.colors == c.colors).all() and (v.cycles, v.stall_cycles) == (c.cycles, c.stall_cycles)
