@@ -73,7 +73,9 @@ def build_filter_verilator(ts, *, lanes: int = 1, frac: int | None = None) -> Fi
     root = os.path.join(cache_dir(), "filter-verilator")
     key = index_get("filter-verilator", quick)
     if key and os.path.isfile(os.path.join(root, key, "libvq.so")):
+        from vqtex.hw.memories import elaborate
         top = FilterTop(ts, lanes=lanes, tag_width=TAG_WIDTH, frac=frac)
+        elaborate(top)                  # (its layouts are all the run needs; elaborated, so not "unused")
         return FilterBuild(os.path.join(root, key, "libvq.so"), top.filter, [], True, 0.0)
     verilog, top = export_filter_verilog(ts, lanes=lanes, tag_width=TAG_WIDTH, frac=frac)
     header = ports_header(top)
