@@ -2,16 +2,18 @@
 
 Twin of :func:`golden.filter.blend`: per channel ``(sum_k w_k texel_k + 2^23) >> 24`` over the
 pixel's slots, which arrive in *groups* of ``lanes`` texels (one group per cycle; a pixel is one
-group or several in a row, marked ``first`` and ``last``). Two stages:
+group or several in a row, marked ``first`` and ``last``). Three stages:
 
-1. *weigh*: per channel the group's ``sum_k w_k texel_k`` (``lanes`` 25x8-bit products and their
-   sum), registered with ``first``, ``last`` and the tag.
-2. *accumulate*: ``acc = (0 if first else acc) + sum``; on the ``last`` group the rounded colour
+1. *weigh*: per lane and channel ``w_k texel_k`` (25x8-bit products), registered with ``first``,
+   ``last`` and the tag.
+2. *sum*: per channel the group's ``sum_k w_k texel_k``, registered.
+3. *accumulate*: ``acc = (0 if first else acc) + sum``; on the ``last`` group the rounded colour
    ``(acc + 2^23) >> 24`` is the output register (the stream's payload).
 
-Latency 2 (the last group of a pixel in cycle ``t``, its colour on ``o`` in cycle ``t + 2``);
-throughput one group per cycle. Stream backpressure: ``i.ready = ~weigh_valid | ~o.valid | o.ready``
-(combinational on ``o.ready``); all sums stay below 2^32 because the weights of a pixel sum to 2^24.
+Latency 3 (the last group of a pixel in cycle ``t``, its colour on ``o`` in cycle ``t + 3``);
+throughput one group per cycle. Stream backpressure: each stage loads when it is empty or its
+content moves on, the last when ``~o.valid | o.ready`` (``i.ready`` is combinational on
+``o.ready``); all sums stay below 2^32 because the weights of a pixel sum to 2^24.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ from .footprint import WEIGHT_WIDTH
 __all__ = ["Blend", "GroupLayout", "LATENCY"]
 
 #: Cycles from a pixel's last group to its colour.
-LATENCY = 2
+LATENCY = 3
 _ACC = 32
 
 
@@ -75,29 +77,40 @@ class Blend(wiring.Component):
         lanes = self._lanes
         half = 1 << (spec.WEIGHT_BITS - 1)
 
-        # Stage 1: weigh.
+        # Stage 1: weigh (the products, registered: each multiplier between registers).
+        p_valid = Signal()
+        prod = [[Signal(_ACC + 1, name=f"product{k}_{'rgba'[c]}") for c in range(4)] for k in range(lanes)]
+        p_first, p_last = Signal(), Signal()
+        p_tag = Signal(self._tag_width)
+        # Stage 2: sum (the lanes' products added, registered).
         w_valid = Signal()
         w_sum = [Signal(_ACC, name=f"sum_{'rgba'[c]}") for c in range(4)]
         w_first, w_last = Signal(), Signal()
         w_tag = Signal(self._tag_width)
-        take = Signal()                              # stage 2 takes stage 1's group this cycle
-        load = Signal()                              # stage 1 loads (it is empty or its group moves on)
+        take = Signal()                              # stage 3 takes stage 2's group this cycle
+        load_w = Signal()                            # stage 2 loads (it is empty or its group moves on)
+        load_p = Signal()                            # stage 1 loads
         m.d.comb += [
             take.eq(w_valid & (~self.o.valid | self.o.ready)),
-            load.eq(~w_valid | take),
-            self.i.ready.eq(load),
+            load_w.eq(~w_valid | take),
+            load_p.eq(~p_valid | load_w),
+            self.i.ready.eq(load_p),
         ]
-        with m.If(load):
-            m.d.sync += [w_valid.eq(self.i.valid), w_first.eq(self.i.p.first), w_last.eq(self.i.p.last),
-                         w_tag.eq(self.i.p.tag)]
+        with m.If(load_p):
+            m.d.sync += [p_valid.eq(self.i.valid), p_first.eq(self.i.p.first), p_last.eq(self.i.p.last),
+                         p_tag.eq(self.i.p.tag)]
+            for k in range(lanes):
+                for c in range(4):
+                    m.d.sync += prod[k][c].eq(self.i.p.weight[k] * self.i.p.rgba[k][8 * c:8 * c + 8])
+        with m.If(load_w):
+            m.d.sync += [w_valid.eq(p_valid), w_first.eq(p_first), w_last.eq(p_last), w_tag.eq(p_tag)]
             for c in range(4):
-                terms = [self.i.p.weight[k] * self.i.p.rgba[k][8 * c:8 * c + 8] for k in range(lanes)]
-                total = terms[0]
-                for term in terms[1:]:
-                    total = total + term
+                total = prod[0][c]
+                for k in range(1, lanes):
+                    total = total + prod[k][c]
                 m.d.sync += w_sum[c].eq(total)
 
-        # Stage 2: accumulate, round, output register.
+        # Stage 3: accumulate, round, output register.
         acc = [Signal(_ACC, name=f"acc_{'rgba'[c]}") for c in range(4)]
         new = [Signal(_ACC, name=f"new_{'rgba'[c]}") for c in range(4)]
         rounded = [Signal(_ACC + 1, name=f"rounded_{'rgba'[c]}") for c in range(4)]

@@ -9,10 +9,11 @@ products, the same unused slots), four pipeline stages:
 2. *coordinates*: per level ``u = (s >> (frac - 8 - log2 W)) - 128`` (arithmetic shift),
    ``i0 = u >> 8``, ``i1 = i0 + 1``, ``fu = u & 255`` (the same for t); the point texel
    ``s >> (frac - log2 W0)``; every index through the addressing (wrap, clamp, mirror). Registered.
-3. *bilinear*: ``(256-fu)(256-fv), fu(256-fv), (256-fu)fv, fu fv`` per level (9x9-bit products).
-   Registered.
-4. *weights*: the bilinear products times ``256 - f`` and ``f`` (point: 2^24 in slot 0); the slots
-   in order, unused ones repeating slot 0. Registered: the output.
+3. *bilinear*: ``(256-fu)(256-fv), fu(256-fv), (256-fu)fv, fu fv`` per level (9x9-bit products;
+   point: 2^16 in slot 0 and 0 elsewhere), the level weights ``256 - f`` and ``f``, the slots in
+   order (unused ones repeating slot 0). Registered.
+4. *weights*: each slot's bilinear product times its level's weight (one 17x9-bit multiplier per
+   slot, between registers). Registered: the output.
 
 Latency 4, throughput one request per cycle; a stream in and out with backpressure (each stage
 loads when it is empty or its content moves on; ``i.ready`` is combinational on ``o.ready``).
@@ -245,45 +246,43 @@ class Footprint(wiring.Component):
             m.d.sync += [r2.idx[n].eq(v) for n, v in enumerate(idx)]
             m.d.sync += [r2.fr[n].eq(v) for n, v in enumerate(fr)]
 
-        # Stage 3: bilinear products per level.
+        # Stage 3: bilinear products per level, the slot order, the level weights.
         r3 = Signal(data.StructLayout({
-            "texture": tb, "mode": 2, "tag": self._tag_width, "f": 8,
-            "slots": data.ArrayLayout(TexelSlotLayout, 9),     # L0 footprint, L1 footprint, point
-            "bil": data.ArrayLayout(17, 8)}), name="bilinear")
+            "texture": tb, "tag": self._tag_width, "used": 4,
+            "slots": data.ArrayLayout(TexelSlotLayout, spec.SLOTS),
+            "bil": data.ArrayLayout(17, spec.SLOTS),           # point: 2^16 in slot 0, 0 elsewhere
+            "lw": data.ArrayLayout(9, 2)}), name="bilinear")  # 256 - f and f (f = 0 unless trilinear)
         slots = []
         for k, lv in enumerate((r2.l0, r2.l1)):
             i0, i1, j0, j1 = (r2.idx[4 * k + n] for n in range(4))
-            slots += [(lv, i0, j0), (lv, i1, j0), (lv, i0, j1), (lv, i1, j1)]
-        slots.append((C(0, LEVEL_BITS), r2.ip, r2.jp))
+            slots += [Cat(lv, i0, j0), Cat(lv, i1, j0), Cat(lv, i0, j1), Cat(lv, i1, j1)]
+        point = Cat(C(0, LEVEL_BITS), r2.ip, r2.jp)
+        products = []
+        for k in range(2):
+            fu, fv = r2.fr[2 * k], r2.fr[2 * k + 1]
+            gu, gv = C(one, 9) - fu, C(one, 9) - fv
+            products += [gu * gv, fu * gv, gu * fv, fu * fv]
         with m.If(load[2]):
-            m.d.sync += [r3.texture.eq(r2.texture), r3.mode.eq(r2.mode), r3.tag.eq(r2.tag), r3.f.eq(r2.f)]
-            for n, (lv, i, j) in enumerate(slots):
-                m.d.sync += r3.slots[n].eq(Cat(lv, i, j))
-            for k in range(2):
-                fu, fv = r2.fr[2 * k], r2.fr[2 * k + 1]
-                gu, gv = C(one, 9) - fu, C(one, 9) - fv
-                for n, prod in enumerate((gu * gv, fu * gv, gu * fv, fu * fv)):
-                    m.d.sync += r3.bil[4 * k + n].eq(prod)
+            m.d.sync += [r3.texture.eq(r2.texture), r3.tag.eq(r2.tag),
+                         r3.lw[0].eq(C(one, 9) - r2.f), r3.lw[1].eq(r2.f)]
+            with m.Switch(r2.mode):
+                with m.Case(_MODE_POINT):
+                    m.d.sync += r3.used.eq(1)
+                    for n in range(spec.SLOTS):
+                        m.d.sync += [r3.slots[n].eq(point), r3.bil[n].eq(one * one if n == 0 else 0)]
+                with m.Case(_MODE_BILINEAR):
+                    m.d.sync += r3.used.eq(4)
+                    for n in range(spec.SLOTS):
+                        m.d.sync += [r3.slots[n].eq(slots[n if n < 4 else 0]), r3.bil[n].eq(products[n])]
+                with m.Default():
+                    m.d.sync += r3.used.eq(8)
+                    for n in range(spec.SLOTS):
+                        m.d.sync += [r3.slots[n].eq(slots[n]), r3.bil[n].eq(products[n])]
 
-        # Stage 4: weights and slot order.
+        # Stage 4: the weights, bilinear product times level weight (one multiplier each, registered).
         out = self.o.p
         with m.If(load[3]):
-            m.d.sync += [out.texture.eq(r3.texture), out.tag.eq(r3.tag)]
-            gf = C(one, 9) - r3.f
-            with m.Switch(r3.mode):
-                with m.Case(_MODE_POINT):
-                    m.d.sync += out.used.eq(1)
-                    for n in range(spec.SLOTS):
-                        m.d.sync += [out.texels[n].eq(r3.slots[8]),
-                                     out.weights[n].eq(spec.WEIGHT_ONE if n == 0 else 0)]
-                with m.Case(_MODE_BILINEAR):
-                    m.d.sync += out.used.eq(4)
-                    for n in range(spec.SLOTS):
-                        m.d.sync += [out.texels[n].eq(r3.slots[n if n < 4 else 0]),
-                                     out.weights[n].eq(Cat(C(0, 8), r3.bil[n]) if n < 4 else 0)]
-                with m.Default():
-                    m.d.sync += out.used.eq(8)
-                    for n in range(spec.SLOTS):
-                        m.d.sync += [out.texels[n].eq(r3.slots[n]),
-                                     out.weights[n].eq(r3.bil[n] * (gf if n < 4 else r3.f))]
+            m.d.sync += [out.texture.eq(r3.texture), out.tag.eq(r3.tag), out.used.eq(r3.used)]
+            for n in range(spec.SLOTS):
+                m.d.sync += [out.texels[n].eq(r3.slots[n]), out.weights[n].eq(r3.bil[n] * r3.lw[n // 4])]
         return m
