@@ -73,3 +73,21 @@ def test_filter_in_rtl_refuses_what_it_cannot_do(tmp_path, scene_file, capsys):
         err = capsys.readouterr().err
         assert err.startswith("vqtex: error:") and err.count("\n") == 1
         assert not (tmp_path / "x.png").exists()
+
+
+def test_export_filter_verilog_lint_clean(tmp_path, capsys):
+    """vqtex export --filter-lanes: the filter's SystemVerilog, Verilator lint clean with the export's
+    waivers; its ports are the whole payloads."""
+    need("verilator")
+    from tests.hw.test_hw_filter import filter_set
+    vqt = tmp_path / "set.vqt"
+    filter_set().save(str(vqt))
+    out = tmp_path / "tf.sv"
+    assert main(["export", str(vqt), "-o", str(out), "--filter-lanes", "1", "--lint", "--json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    assert rep["module"] == "texture_filter" and rep["latency"] == 21 and rep["lint"] == "clean"
+    assert set(rep["ports"]) == {"i_valid", "i_ready", "i_payload", "o_valid", "o_ready", "o_payload",
+                                 "stall_output", "busy"}
+    assert "module texture_filter" in out.read_text()
+    assert main(["export", str(vqt), "-o", str(tmp_path / "x.v"), "--filter-lanes", "1", "--one-port"]) == 2
+    assert not (tmp_path / "x.v").exists()
