@@ -7,11 +7,13 @@ products, the same unused slots), four pipeline stages:
 1. *level*: ``L0 = lod >> 8``, ``f = lod & 255`` (0 unless trilinear), ``L1 = min(L0 + 1, last)``;
    the level table gives log2 of the width and height of L0, L1 and level 0. Registered.
 2. *coordinates*: per level ``u = (s >> (frac - 8 - log2 W)) - 128`` (arithmetic shift),
-   ``i0 = u >> 8``, ``i1 = i0 + 1``, ``fu = u & 255`` (the same for t); the point texel
-   ``s >> (frac - log2 W0)``; every index through the addressing (wrap, clamp, mirror). Registered.
-3. *bilinear*: ``(256-fu)(256-fv), fu(256-fv), (256-fu)fv, fu fv`` per level (9x9-bit products;
-   point: 2^16 in slot 0 and 0 elsewhere), the level weights ``256 - f`` and ``f``, the slots in
-   order (unused ones repeating slot 0). Registered.
+   ``i0 = u >> 8``, ``i1 = i0 + 1``, ``fu = u & 255`` and ``256 - fu`` (the same for t; level 0's
+   fractions are 0 in point mode); the point texel ``s >> (frac - log2 W0)``; every index through
+   the addressing (wrap, clamp, mirror). Registered.
+3. *bilinear*: ``(256-fu)(256-fv), fu(256-fv), (256-fu)fv, fu fv`` per level (9x9-bit products
+   between registers; point: 2^16 in slot 0 and 0 elsewhere, from its zero fractions), the level
+   weights ``256 - f`` and ``f`` (``f = 0`` unless trilinear), the slots in order (unused ones
+   repeating slot 0). Registered.
 4. *weights*: each slot's bilinear product times its level's weight (one 17x9-bit multiplier per
    slot, between registers). Registered: the output.
 
@@ -218,7 +220,7 @@ class Footprint(wiring.Component):
         r2 = Signal(data.StructLayout({
             "texture": tb, "mode": 2, "tag": self._tag_width, "l0": LEVEL_BITS, "l1": LEVEL_BITS, "f": 8,
             "idx": data.ArrayLayout(COORD_BITS, 8),     # per level: i0, i1, j0, j1
-            "fr": data.ArrayLayout(8, 4),               # per level: fu, fv
+            "fr": data.ArrayLayout(9, 8),               # per level: 256 - fu, fu, 256 - fv, fv
             "ip": COORD_BITS, "jp": COORD_BITS}), name="coords")
         idx, fr = [], []
         for k, (lw, lh) in enumerate(((r1.lw0, r1.lh0), (r1.lw1, r1.lh1))):
@@ -230,7 +232,11 @@ class Footprint(wiring.Component):
                 i1 = Signal(signed(len(u) - spec.FRAC_BITS + 1), name=f"i1_{k}{'st'[axis]}")
                 m.d.comb += [i0.eq(u >> spec.FRAC_BITS), i1.eq(i0 + 1)]
                 idx += [address(m, i0, lsz, mode, f"a0_{k}{'st'[axis]}"), address(m, i1, lsz, mode, f"a1_{k}{'st'[axis]}")]
-                fr.append(u[:spec.FRAC_BITS])
+                frac_part = Signal(spec.FRAC_BITS, name=f"f{k}{'st'[axis]}")
+                # point mode: level 0's fractions are 0, so its first bilinear product is 2^16 and
+                # the others 0 (the multipliers of stage 3 then need no multiplexer behind them)
+                m.d.comb += frac_part.eq(Mux((r1.mode == _MODE_POINT) & (k == 0), 0, u[:spec.FRAC_BITS]))
+                fr += [C(one, 9) - frac_part, frac_part]
         pts = []
         for axis, (c, lsz, mode) in enumerate(((s, r1.lwp, r1.address_s), (t, r1.lhp, r1.address_t))):
             sh = Signal(range(frac + 1), name=f"shift_point_{'st'[axis]}")
@@ -259,25 +265,22 @@ class Footprint(wiring.Component):
         point = Cat(C(0, LEVEL_BITS), r2.ip, r2.jp)
         products = []
         for k in range(2):
-            fu, fv = r2.fr[2 * k], r2.fr[2 * k + 1]
-            gu, gv = C(one, 9) - fu, C(one, 9) - fv
+            gu, fu, gv, fv = (r2.fr[4 * k + n] for n in range(4))
             products += [gu * gv, fu * gv, gu * fv, fu * fv]
         with m.If(load[2]):
             m.d.sync += [r3.texture.eq(r2.texture), r3.tag.eq(r2.tag),
                          r3.lw[0].eq(C(one, 9) - r2.f), r3.lw[1].eq(r2.f)]
+            m.d.sync += [r3.bil[n].eq(products[n]) for n in range(spec.SLOTS)]
             with m.Switch(r2.mode):
                 with m.Case(_MODE_POINT):
                     m.d.sync += r3.used.eq(1)
-                    for n in range(spec.SLOTS):
-                        m.d.sync += [r3.slots[n].eq(point), r3.bil[n].eq(one * one if n == 0 else 0)]
+                    m.d.sync += [r3.slots[n].eq(point) for n in range(spec.SLOTS)]
                 with m.Case(_MODE_BILINEAR):
                     m.d.sync += r3.used.eq(4)
-                    for n in range(spec.SLOTS):
-                        m.d.sync += [r3.slots[n].eq(slots[n if n < 4 else 0]), r3.bil[n].eq(products[n])]
+                    m.d.sync += [r3.slots[n].eq(slots[n if n < 4 else 0]) for n in range(spec.SLOTS)]
                 with m.Default():
                     m.d.sync += r3.used.eq(8)
-                    for n in range(spec.SLOTS):
-                        m.d.sync += [r3.slots[n].eq(slots[n]), r3.bil[n].eq(products[n])]
+                    m.d.sync += [r3.slots[n].eq(slots[n]) for n in range(spec.SLOTS)]
 
         # Stage 4: the weights, bilinear product times level weight (one multiplier each, registered).
         out = self.o.p
