@@ -2,22 +2,23 @@
 (level, i, j) and their eight integer weights.
 
 Twin of :func:`golden.filter.footprint` (the same shifts, the same 8-bit fractions, the same
-products, the same unused slots), four pipeline stages:
+products, the same unused slots), five pipeline stages:
 
 1. *level*: ``L0 = lod >> 8``, ``f = lod & 255`` (0 unless trilinear), ``L1 = min(L0 + 1, last)``;
    the level table gives log2 of the width and height of L0, L1 and level 0. Registered.
-2. *coordinates*: per level ``u = (s >> (frac - 8 - log2 W)) - 128`` (arithmetic shift),
-   ``i0 = u >> 8``, ``i1 = i0 + 1``, ``fu = u & 255`` and ``256 - fu`` (the same for t; level 0's
-   fractions are 0 in point mode); the point texel ``s >> (frac - log2 W0)``; every index through
-   the addressing (wrap, clamp, mirror). Registered.
-3. *bilinear*: ``(256-fu)(256-fv), fu(256-fv), (256-fu)fv, fu fv`` per level (9x9-bit products
+2. *shift*: per level ``u = (s >> (frac - 8 - log2 W)) - 128`` (arithmetic shift) and the
+   point texel's ``s >> (frac - log2 W0)`` (the same for t). Registered.
+3. *coordinates*: ``i0 = u >> 8``, ``i1 = i0 + 1``, ``fu = u & 255`` and ``256 - fu`` (the same
+   for t; level 0's fractions are 0 in point mode); every index through the addressing (wrap,
+   clamp, mirror). Registered.
+4. *bilinear*: ``(256-fu)(256-fv), fu(256-fv), (256-fu)fv, fu fv`` per level (9x9-bit products
    between registers; point: 2^16 in slot 0 and 0 elsewhere, from its zero fractions), the level
    weights ``256 - f`` and ``f`` (``f = 0`` unless trilinear), the slots in order (unused ones
    repeating slot 0). Registered.
-4. *weights*: each slot's bilinear product times its level's weight (one 17x9-bit multiplier per
+5. *weights*: each slot's bilinear product times its level's weight (one 17x9-bit multiplier per
    slot, between registers). Registered: the output.
 
-Latency 4, throughput one request per cycle; a stream in and out with backpressure (each stage
+Latency 5, throughput one request per cycle; a stream in and out with backpressure (each stage
 loads when it is empty or its content moves on; ``i.ready`` is combinational on ``o.ready``).
 """
 
@@ -37,7 +38,7 @@ __all__ = ["Footprint", "FilterRequestLayout", "FootprintLayout", "TexelSlotLayo
            "LOD_BITS", "WEIGHT_WIDTH", "level_table", "address"]
 
 #: Pipeline stages from a request to its footprint.
-LATENCY = 4
+LATENCY = 5
 #: Width of the level of detail: a level number and 8 fractional bits.
 LOD_BITS = LEVEL_BITS + spec.FRAC_BITS
 #: Width of a weight (up to 2^24 inclusive).
@@ -163,15 +164,16 @@ class Footprint(wiring.Component):
         one = 1 << spec.FRAC_BITS
 
         # -- stream control: stage k loads when empty or when its content moves on ----------------
-        valid = [Signal(name=f"valid_{n}") for n in ("level", "coords", "bilinear", "weights")]
-        load = [Signal(name=f"load_{n}") for n in ("level", "coords", "bilinear", "weights")]
-        nxt = [valid[k + 1] for k in range(3)]
-        downstream_ready = [~nxt[k] | load[k + 1] for k in range(3)] + [self.o.ready]
-        for k in range(4):
+        names = ("level", "shift", "coords", "bilinear", "weights")
+        valid = [Signal(name=f"valid_{n}") for n in names]
+        load = [Signal(name=f"load_{n}") for n in names]
+        n_st = len(names)
+        downstream_ready = [~valid[k + 1] | load[k + 1] for k in range(n_st - 1)] + [self.o.ready]
+        for k in range(n_st):
             m.d.comb += load[k].eq(~valid[k] | downstream_ready[k])
             with m.If(load[k]):
                 m.d.sync += valid[k].eq(self.i.valid if k == 0 else valid[k - 1])
-        m.d.comb += [self.i.ready.eq(load[0]), self.o.valid.eq(valid[3])]
+        m.d.comb += [self.i.ready.eq(load[0]), self.o.valid.eq(valid[-1])]
 
         # -- the level table: (texture, level) -> log2 width, log2 height (constants, a mux tree) ---
         nlev = 1 << LEVEL_BITS
@@ -215,8 +217,37 @@ class Footprint(wiring.Component):
                 r1.lw0.eq(lw0), r1.lh0.eq(lh0), r1.lw1.eq(lw1), r1.lh1.eq(lh1), r1.lwp.eq(lwp), r1.lhp.eq(lhp),
             ]
 
-        # Stage 2: coordinates and addressing.
+        # Stage 2: the shifts, u = (s >> (frac - 8 - log2 W)) - 128 per level and axis, and the point
+        # texel's s >> (frac - log2 W0).
         s, t = r1.s.as_signed(), r1.t.as_signed()
+        ub = len(s) + 1
+        rs = Signal(data.StructLayout({
+            "texture": tb, "mode": 2, "address_s": 2, "address_t": 2, "tag": self._tag_width,
+            "l0": LEVEL_BITS, "l1": LEVEL_BITS, "f": 8,
+            "lw0": 4, "lh0": 4, "lw1": 4, "lh1": 4, "lwp": 4, "lhp": 4,
+            "u": data.ArrayLayout(signed(ub), 4), "p": data.ArrayLayout(signed(len(s)), 2)}), name="shift")
+        shifted = []
+        for k, (lw, lh) in enumerate(((r1.lw0, r1.lh0), (r1.lw1, r1.lh1))):
+            for axis, (c, lsz) in enumerate(((s, lw), (t, lh))):
+                sh = Signal(range(frac + 1), name=f"shift{k}{'st'[axis]}")
+                u = Signal(signed(ub), name=f"u{k}{'st'[axis]}")
+                m.d.comb += [sh.eq(frac - spec.FRAC_BITS - lsz), u.eq((c >> sh) - (one >> 1))]
+                shifted.append(u)
+        points = []
+        for axis, (c, lsz) in enumerate(((s, r1.lwp), (t, r1.lhp))):
+            sh = Signal(range(frac + 1), name=f"shift_point_{'st'[axis]}")
+            ip = Signal(signed(len(c)), name=f"point_{'st'[axis]}")
+            m.d.comb += [sh.eq(frac - lsz), ip.eq(c >> sh)]
+            points.append(ip)
+        with m.If(load[1]):
+            m.d.sync += [getattr(rs, f).eq(getattr(r1, f)) for f in
+                         ("texture", "mode", "address_s", "address_t", "tag", "l0", "l1", "f",
+                          "lw0", "lh0", "lw1", "lh1", "lwp", "lhp")]
+            m.d.sync += [rs.u[n].eq(v) for n, v in enumerate(shifted)]
+            m.d.sync += [rs.p[n].eq(v) for n, v in enumerate(points)]
+
+        # Stage 3: coordinates and addressing.
+        r1 = rs
         r2 = Signal(data.StructLayout({
             "texture": tb, "mode": 2, "tag": self._tag_width, "l0": LEVEL_BITS, "l1": LEVEL_BITS, "f": 8,
             "idx": data.ArrayLayout(COORD_BITS, 8),     # per level: i0, i1, j0, j1
@@ -224,10 +255,8 @@ class Footprint(wiring.Component):
             "ip": COORD_BITS, "jp": COORD_BITS}), name="coords")
         idx, fr = [], []
         for k, (lw, lh) in enumerate(((r1.lw0, r1.lh0), (r1.lw1, r1.lh1))):
-            for axis, (c, lsz, mode) in enumerate(((s, lw, r1.address_s), (t, lh, r1.address_t))):
-                sh = Signal(range(frac + 1), name=f"shift{k}{'st'[axis]}")
-                u = Signal(signed(len(c) + 1), name=f"u{k}{'st'[axis]}")
-                m.d.comb += [sh.eq(frac - spec.FRAC_BITS - lsz), u.eq((c >> sh) - (one >> 1))]
+            for axis, (lsz, mode) in enumerate(((lw, r1.address_s), (lh, r1.address_t))):
+                u = r1.u[2 * k + axis].as_signed()
                 i0 = Signal(signed(len(u) - spec.FRAC_BITS), name=f"i0_{k}{'st'[axis]}")
                 i1 = Signal(signed(len(u) - spec.FRAC_BITS + 1), name=f"i1_{k}{'st'[axis]}")
                 m.d.comb += [i0.eq(u >> spec.FRAC_BITS), i1.eq(i0 + 1)]
@@ -238,13 +267,9 @@ class Footprint(wiring.Component):
                 m.d.comb += frac_part.eq(Mux((r1.mode == _MODE_POINT) & (k == 0), 0, u[:spec.FRAC_BITS]))
                 fr += [C(one, 9) - frac_part, frac_part]
         pts = []
-        for axis, (c, lsz, mode) in enumerate(((s, r1.lwp, r1.address_s), (t, r1.lhp, r1.address_t))):
-            sh = Signal(range(frac + 1), name=f"shift_point_{'st'[axis]}")
-            ip = Signal(signed(len(c)), name=f"point_{'st'[axis]}")
-            m.d.comb += [sh.eq(frac - lsz), ip.eq(c >> sh)]
-            pts.append(address(m, ip, lsz, mode, f"ap_{'st'[axis]}"))
-        load1 = load[1]
-        with m.If(load1):
+        for axis, (lsz, mode) in enumerate(((r1.lwp, r1.address_s), (r1.lhp, r1.address_t))):
+            pts.append(address(m, r1.p[axis].as_signed(), lsz, mode, f"ap_{'st'[axis]}"))
+        with m.If(load[2]):
             m.d.sync += [
                 r2.texture.eq(r1.texture), r2.mode.eq(r1.mode), r2.tag.eq(r1.tag), r2.l0.eq(r1.l0),
                 r2.l1.eq(r1.l1), r2.f.eq(r1.f), r2.ip.eq(pts[0]), r2.jp.eq(pts[1]),
@@ -252,7 +277,7 @@ class Footprint(wiring.Component):
             m.d.sync += [r2.idx[n].eq(v) for n, v in enumerate(idx)]
             m.d.sync += [r2.fr[n].eq(v) for n, v in enumerate(fr)]
 
-        # Stage 3: bilinear products per level, the slot order, the level weights.
+        # Stage 4: bilinear products per level, the slot order, the level weights.
         r3 = Signal(data.StructLayout({
             "texture": tb, "tag": self._tag_width, "used": 4,
             "slots": data.ArrayLayout(TexelSlotLayout, spec.SLOTS),
@@ -267,7 +292,7 @@ class Footprint(wiring.Component):
         for k in range(2):
             gu, fu, gv, fv = (r2.fr[4 * k + n] for n in range(4))
             products += [gu * gv, fu * gv, gu * fv, fu * fv]
-        with m.If(load[2]):
+        with m.If(load[3]):
             m.d.sync += [r3.texture.eq(r2.texture), r3.tag.eq(r2.tag),
                          r3.lw[0].eq(C(one, 9) - r2.f), r3.lw[1].eq(r2.f)]
             m.d.sync += [r3.bil[n].eq(products[n]) for n in range(spec.SLOTS)]
@@ -282,9 +307,9 @@ class Footprint(wiring.Component):
                     m.d.sync += r3.used.eq(8)
                     m.d.sync += [r3.slots[n].eq(slots[n]) for n in range(spec.SLOTS)]
 
-        # Stage 4: the weights, bilinear product times level weight (one multiplier each, registered).
+        # Stage 5: the weights, bilinear product times level weight (one multiplier each, registered).
         out = self.o.p
-        with m.If(load[3]):
+        with m.If(load[4]):
             m.d.sync += [out.texture.eq(r3.texture), out.tag.eq(r3.tag), out.used.eq(r3.used)]
             for n in range(spec.SLOTS):
                 m.d.sync += [out.texels[n].eq(r3.slots[n]), out.weights[n].eq(r3.bil[n] * r3.lw[n // 4])]
