@@ -2,15 +2,16 @@
 
 Twin of :func:`golden.filter.blend`: per channel ``(sum_k w_k texel_k + 2^23) >> 24`` over the
 pixel's slots, which arrive in *groups* of ``lanes`` texels (one group per cycle; a pixel is one
-group or several in a row, marked ``first`` and ``last``). Three stages:
+group or several in a row, marked ``first`` and ``last``). Four stages:
 
-1. *weigh*: per lane and channel ``w_k texel_k`` (25x8-bit products), registered with ``first``,
+1. *group*: the lanes' texels and weights, registered (nothing but wires behind the lanes' outputs).
+2. *weigh*: per lane and channel ``w_k texel_k`` (25x8-bit products), registered with ``first``,
    ``last`` and the tag.
-2. *sum*: per channel the group's ``sum_k w_k texel_k``, registered.
-3. *accumulate*: ``acc = (0 if first else acc) + sum``; on the ``last`` group the rounded colour
+3. *sum*: per channel the group's ``sum_k w_k texel_k``, registered.
+4. *accumulate*: ``acc = (0 if first else acc) + sum``; on the ``last`` group the rounded colour
    ``(acc + 2^23) >> 24`` is the output register (the stream's payload).
 
-Latency 3 (the last group of a pixel in cycle ``t``, its colour on ``o`` in cycle ``t + 3``);
+Latency 4 (the last group of a pixel in cycle ``t``, its colour on ``o`` in cycle ``t + 4``);
 throughput one group per cycle. Stream backpressure: each stage loads when it is empty or its
 content moves on, the last when ``~o.valid | o.ready`` (``i.ready`` is combinational on
 ``o.ready``); all sums stay below 2^32 because the weights of a pixel sum to 2^24.
@@ -30,7 +31,7 @@ from .footprint import WEIGHT_WIDTH
 __all__ = ["Blend", "GroupLayout", "LATENCY"]
 
 #: Cycles from a pixel's last group to its colour.
-LATENCY = 3
+LATENCY = 4
 _ACC = 32
 
 
@@ -77,31 +78,37 @@ class Blend(wiring.Component):
         lanes = self._lanes
         half = 1 << (spec.WEIGHT_BITS - 1)
 
-        # Stage 1: weigh (the products, registered: each multiplier between registers).
+        # Stage 1: the group, registered (the lanes' outputs come through their skid multiplexers).
+        g_valid = Signal()
+        g = Signal.like(self.i.p, name="group")
+        # Stage 2: weigh (the products, registered: each multiplier between registers).
         p_valid = Signal()
         prod = [[Signal(_ACC + 1, name=f"product{k}_{'rgba'[c]}") for c in range(4)] for k in range(lanes)]
         p_first, p_last = Signal(), Signal()
         p_tag = Signal(self._tag_width)
-        # Stage 2: sum (the lanes' products added, registered).
+        # Stage 3: sum (the lanes' products added, registered).
         w_valid = Signal()
         w_sum = [Signal(_ACC, name=f"sum_{'rgba'[c]}") for c in range(4)]
         w_first, w_last = Signal(), Signal()
         w_tag = Signal(self._tag_width)
-        take = Signal()                              # stage 3 takes stage 2's group this cycle
-        load_w = Signal()                            # stage 2 loads (it is empty or its group moves on)
-        load_p = Signal()                            # stage 1 loads
+        take = Signal()                              # stage 4 takes stage 3's group this cycle
+        load_w = Signal()                            # stage 3 loads (it is empty or its group moves on)
+        load_p = Signal()                            # stage 2 loads
+        load_g = Signal()                            # stage 1 loads
         m.d.comb += [
             take.eq(w_valid & (~self.o.valid | self.o.ready)),
             load_w.eq(~w_valid | take),
             load_p.eq(~p_valid | load_w),
-            self.i.ready.eq(load_p),
+            load_g.eq(~g_valid | load_p),
+            self.i.ready.eq(load_g),
         ]
+        with m.If(load_g):
+            m.d.sync += [g_valid.eq(self.i.valid), g.eq(self.i.p)]
         with m.If(load_p):
-            m.d.sync += [p_valid.eq(self.i.valid), p_first.eq(self.i.p.first), p_last.eq(self.i.p.last),
-                         p_tag.eq(self.i.p.tag)]
+            m.d.sync += [p_valid.eq(g_valid), p_first.eq(g.first), p_last.eq(g.last), p_tag.eq(g.tag)]
             for k in range(lanes):
                 for c in range(4):
-                    m.d.sync += prod[k][c].eq(self.i.p.weight[k] * self.i.p.rgba[k][8 * c:8 * c + 8])
+                    m.d.sync += prod[k][c].eq(g.weight[k] * g.rgba[k][8 * c:8 * c + 8])
         with m.If(load_w):
             m.d.sync += [w_valid.eq(p_valid), w_first.eq(p_first), w_last.eq(p_last), w_tag.eq(p_tag)]
             for c in range(4):
@@ -110,7 +117,7 @@ class Blend(wiring.Component):
                     total = total + prod[k][c]
                 m.d.sync += w_sum[c].eq(total)
 
-        # Stage 3: accumulate, round, output register.
+        # Stage 4: accumulate, round, output register.
         acc = [Signal(_ACC, name=f"acc_{'rgba'[c]}") for c in range(4)]
         new = [Signal(_ACC, name=f"new_{'rgba'[c]}") for c in range(4)]
         rounded = [Signal(_ACC + 1, name=f"rounded_{'rgba'[c]}") for c in range(4)]
