@@ -8,9 +8,9 @@ Modules, in pipeline order:
 - ``mesh``: primitives.  ``camera``: look-at and perspective.
 - ``raster``: clipping, fixed-point edge functions (top-left rule), z-buffer, perspective-correct
   (s, t) with analytic derivatives.
-- ``sampling``: the two-phase sampler (``requests`` then ``resolve``), point and trilinear with
-  fixed-point weights, wrap/clamp. ``sparse``: the sparse request stream (no zero-weight request, no
-  repeat; the same frames). ``fovea``: the foveation LOD bias.
+- ``sampling``: the two-phase sampler (``requests`` then ``resolve``), point, bilinear and trilinear
+  with fixed-point weights (golden.filter), wrap/clamp/mirror. ``sparse``: the sparse request stream
+  (no zero-weight request, no repeat; the same frames). ``fovea``: the foveation LOD bias.
 - ``pyramid``: the TextureSource protocol and the uncompressed ReferenceSource.
 - ``frame``: ``render_frame`` and request-stream export.  ``metrics``: ``frame_mse``.
 - ``bench``: ``run()`` prints frame times and requests per frame.

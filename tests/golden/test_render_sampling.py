@@ -200,4 +200,4 @@ def test_sampler_rejects_bad_configuration():
     with pytest.raises(ValueError):
         Sampler([[(6, 8)]])
     with pytest.raises(ValueError):
-        Sampler([[(8, 8)]], address=["mirror"])
+        Sampler([[(8, 8)]], address=["border"])

@@ -102,7 +102,7 @@ def test_convert_channels():
     (lambda t: t.replace('[camera]\nposition = [0, 1, 3]\n', '[camera]\n'), "missing key 'position'"),
     (lambda t: t.replace('position = [0, 1, 3]', 'position = [0, 0, 0]'), "camera position equals its target"),
     (lambda t: t + '[[texture]]\nname = "a"\ngenerator = "wood"\nsize = [8, 8]\n', "duplicate texture name 'a'"),
-    (lambda t: t.replace('size = [16, 16]', 'size = [16, 16]\naddress = "mirror"'), "'address' must be"),
+    (lambda t: t.replace('size = [16, 16]', 'size = [16, 16]\naddress = "border"'), "'address' must be"),
     (lambda t: t.replace('size = [16, 16]', 'size = [16, 16]\ncodebook_size = 1'), "'codebook_size' must be >= 2"),
     (lambda t: t.replace('size = [16, 16]', 'size = [16, 16]\nblock = "3x4"'), "'block' must look like"),
     (lambda t: t.replace('size = [16, 16]', 'size = [16, 16]\ncolor = "cmyk"'), "'color' must be one of"),

@@ -80,6 +80,11 @@ def test_prune_renders_identical_frames_and_sim_refuses_the_rest(topspin_set, tm
     code, out, err = run(capsys, "sim", pruned, tmp_path / "other.npy", "-o", tmp_path / "r.npy")
     assert code == 2 and err.count("\n") == 1 and "pruned from this texture set" in err, err
     assert not (tmp_path / "r.npy").exists()
+    # the RTL filter fetches every texel of a footprint (zero weights too): a pruned set is refused
+    code, out, err = run(capsys, "render", scene_file, "--frames", "0", "--texture-set", pruned, "--filter-in-rtl",
+                         "-o", tmp_path / "f.png")
+    assert code == 2 and err.count("\n") == 1 and "is pruned" in err, err
+    assert not (tmp_path / "f.png").exists()
     need_tools("g++")
     code, out, err = run(capsys, "sim", pruned, tmp_path / "own.npy", "-o", tmp_path / "r.npy", "--backend", "cxxrtl")
     assert code == 0, err

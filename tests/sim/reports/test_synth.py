@@ -274,3 +274,29 @@ def test_report_area_tiny(tmp_path, capsys, monkeypatch):
         assert (keep / name).is_file(), name
     # the same run, as text
     assert "Fmax" in synth.area_text(rep) and "critical path" in synth.area_text(rep)
+
+
+# ---------------------------------------------------------------------------------------------
+# the texture filter in the harness (no tools: the design the tools would get)
+
+def test_filter_harness_and_memories():
+    from vqtex.sim.backends.filter import FilterTop
+    ts = synth.tiny_texture_set()
+    top = FilterTop(ts, lanes=2)
+    harness = synth.Harness(ts, unit=top)
+    assert harness.port_bits == sum(len(getattr(top, n)) for n in top.signature.members)
+    from amaranth.back import rtlil
+    il = rtlil.convert(harness, name=synth.HARNESS_NAME, emit_src=False)
+    assert "vqtex_harness.unit" in il
+    mems = synth.design_memories(ts, filter_lanes=2)
+    unit = synth.design_memories(ts)
+    # each lane holds the texel-fetch unit's memories, under filter.laneK instead of fetch
+    for k in range(2):
+        assert {n.replace(f"filter.lane{k}.", "fetch."): v for n, v in mems.items()
+                if n.startswith(f"filter.lane{k}.")} == unit
+    assert len(mems) == 2 * len(unit)
+
+
+def test_filter_lanes_refuses_one_port(capsys):
+    code, out, err = _run(capsys, "report", "area", "--builtin", "tiny", "--filter-lanes", "4", "--one-port")
+    assert code == 2 and out == "" and err.count("\n") == 1 and "--one-port" in err

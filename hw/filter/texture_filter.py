@@ -1,0 +1,198 @@
+"""TextureFilter: the texture sampler in the RTL. A filter request (texture, s, t, level of detail,
+mode, addressing, tag) goes in; the filtered RGBA8888 colour comes out with its tag, in order::
+
+    footprint (5 cycles) -> sequencer -> texel-fetch lanes (14 cycles) -> blend (4 cycles)
+
+* :class:`hw.filter.footprint.Footprint` computes the pixel's texel slots and weights (the twin of
+  :func:`golden.filter.footprint`);
+* the *sequencer* issues them to the ``lanes`` texel-fetch lanes, ``lanes`` slots per cycle, in
+  ``ceil(used / lanes)`` groups (a point pixel is 1 slot, bilinear 4, trilinear 8); a slot's weight
+  and the pixel's ``first``/``last`` marks and tag ride through the lane as its request tag;
+* each lane is the paper's unit, :class:`hw.texel_fetch.TexelFetch`, unchanged, with its own copy of
+  the memories (the lanes run in lock step: same ``valid``, same ``ready``);
+* :class:`hw.filter.blend.Blend` weighs each group and accumulates the pixel's colour (the twin of
+  :func:`golden.filter.blend`).
+
+Throughput: one group per cycle, so with ``lanes`` = 1 a point pixel per clock, a bilinear pixel every
+4 and a trilinear pixel every 8; with 4 lanes a bilinear pixel per clock and a trilinear pixel every 2;
+with 8 lanes (the second set) a trilinear pixel per clock. Latency (``LATENCY``): a pixel accepted in
+cycle ``t`` whose slots go out in ``g`` groups without stalls is on ``o`` in cycle
+``t + LATENCY + g - 1`` with ``LATENCY = 5 + 14 + 4 = 23``.
+
+Stream backpressure throughout: ``i`` and ``o`` are ``amaranth.lib.stream`` streams; a stalled output
+holds the blend, which holds the lanes (their own skid registers), which hold the sequencer and the
+footprint; nothing is lost, duplicated or reordered.
+"""
+
+from __future__ import annotations
+
+from amaranth import *
+from amaranth.lib import stream, wiring
+from amaranth.lib.wiring import In, Out
+
+from vqtex.golden import filter as spec
+from vqtex.golden.format import TextureSet
+
+from ..banked_rom import BANK_DEPTH, pick
+from ..descriptor import texture_bits
+from ..pipeline import LATENCY as FETCH_LATENCY
+from ..pipeline import ResponseLayout
+from ..texel_fetch import TexelFetch
+from . import blend, footprint
+from .blend import Blend
+from .footprint import WEIGHT_WIDTH, FilterRequestLayout, Footprint, TexelSlotLayout, level_table
+
+__all__ = ["TextureFilter", "LATENCY", "LANES"]
+
+#: Cycles from accepting a request to its colour on the output (a one-group pixel, no stalls).
+LATENCY = footprint.LATENCY + FETCH_LATENCY + blend.LATENCY
+#: Lane counts the filter can be built with (they divide the eight slots of a footprint).
+LANES = (1, 2, 4, 8)
+
+
+class TextureFilter(wiring.Component):
+    """The texture filter holding the memories of one texture set (see the module docstring).
+
+    Arguments
+    ---------
+    texture_set : TextureSet
+    lanes : int
+        Texel-fetch lanes, 1, 2, 4 or 8: texels fetched per cycle.
+    tag_width : int
+        Width of the pixel tag.
+    frac : int or None
+        Fractional bits of ``s`` and ``t`` (default ``golden.filter.coordinate_frac_bits`` of the
+        set's largest level 0; at least that).
+    bank_depth : int
+        As for :class:`hw.texel_fetch.TexelFetch`.
+
+    Members
+    -------
+    i : In(stream.Signature(FilterRequestLayout(texture_bits, frac + 3, tag_width)))
+        Filter requests (see :class:`hw.filter.footprint.FilterRequestLayout`; the level of detail at
+        most 256 times the texture's last level, ``s`` and ``t`` in [-2, 2]).
+    o : Out(stream.Signature(hw.pipeline.ResponseLayout(tag_width)))
+        Filtered colours with their tags, in request order.
+    stall_output : Out(1)
+        ``o.valid & ~o.ready``: a cycle of output backpressure.
+    busy : Out(1)
+        ``i.valid & ~i.ready``: a request waits (the lanes are on an earlier pixel's groups, or
+        backpressure reached the input).
+
+    Raises
+    ------
+    TypeError, ValueError
+        On a bad texture set, lane count or fractional bits.
+    """
+
+    def __new__(cls, texture_set: TextureSet, *, lanes: int = 1, tag_width: int = 8, frac: int | None = None,
+                **kwargs):
+        # Parameters are checked before the instance exists (a rejected one is never reported by
+        # Amaranth as an elaboratable that was not used).
+        if not isinstance(texture_set, TextureSet):
+            raise TypeError(f"texture_set must be a TextureSet, not {type(texture_set).__name__}")
+        if lanes not in LANES:
+            raise ValueError(f"lanes must be one of {LANES}, not {lanes!r}")
+        if not isinstance(tag_width, int) or tag_width < 0:
+            raise TypeError(f"tag_width must be a non-negative integer, not {tag_width!r}")
+        minimum = spec.coordinate_frac_bits(level_table(texture_set).max_log2)
+        if frac is not None and frac < minimum:
+            raise ValueError(f"frac {frac} is below {minimum} for this texture set")
+        return super().__new__(cls)
+
+    def __init__(self, texture_set: TextureSet, *, lanes: int = 1, tag_width: int = 8, frac: int | None = None,
+                 bank_depth: int = BANK_DEPTH):
+        self._ts = texture_set
+        self._table = level_table(texture_set)
+        minimum = spec.coordinate_frac_bits(self._table.max_log2)
+        self._frac = minimum if frac is None else int(frac)
+        self._lanes = lanes
+        self._tag_width = tag_width
+        self._bank_depth = bank_depth
+        self._texture_bits = texture_bits(texture_set)
+        super().__init__({
+            "i": In(stream.Signature(FilterRequestLayout(self._texture_bits, spec.coordinate_bits(self._frac),
+                                                         tag_width))),
+            "o": Out(stream.Signature(ResponseLayout(tag_width))),
+            "stall_output": Out(1),
+            "busy": Out(1),
+        })
+
+    @property
+    def latency(self) -> int:
+        return LATENCY
+
+    @property
+    def lanes(self) -> int:
+        return self._lanes
+
+    @property
+    def frac(self) -> int:
+        return self._frac
+
+    @property
+    def texture_set(self) -> TextureSet:
+        return self._ts
+
+    def elaborate(self, platform):
+        m = Module()
+        lanes = self._lanes
+        tw = self._tag_width
+        lane_tag = WEIGHT_WIDTH + 2 + tw          # weight, first, last, pixel tag
+
+        m.submodules.footprint = fp = Footprint(self._table, texture_bits=self._texture_bits, frac=self._frac,
+                                                tag_width=tw)
+        m.submodules.blend = bl = Blend(lanes, tw)
+        fetch = []
+        for k in range(lanes):
+            f = TexelFetch(self._ts, tag_width=lane_tag, bank_depth=self._bank_depth)
+            m.submodules[f"lane{k}"] = f
+            fetch.append(f)
+        wiring.connect(m, wiring.flipped(self.i), fp.i)
+        wiring.connect(m, bl.o, wiring.flipped(self.o))
+        m.d.comb += [
+            self.stall_output.eq(self.o.valid & ~self.o.ready),
+            self.busy.eq(self.i.valid & ~self.i.ready),
+        ]
+
+        # -- sequencer: the footprint's slots, ``lanes`` per cycle --------------------------------
+        groups = spec.SLOTS // lanes
+        group = Signal(range(max(groups, 2)), name="group")
+        last = Signal(name="last_group")
+        issue = Signal(name="issue")                 # the lanes take a group this cycle
+        fpp = fp.o.p
+        m.d.comb += [
+            last.eq((group + 1) * lanes >= fpp.used),
+            issue.eq(fp.o.valid & fetch[0].i.ready),
+            fp.o.ready.eq(fetch[0].i.ready & last),
+        ]
+        with m.If(issue):
+            m.d.sync += group.eq(Mux(last, 0, group + 1))
+        for k, f in enumerate(fetch):
+            slots = [k + lanes * g for g in range(groups)]
+            texel = TexelSlotLayout(pick([fpp.texels[n].as_value() for n in slots], group))
+            weight = pick([fpp.weights[n] for n in slots], group)
+            m.d.comb += [
+                f.i.valid.eq(fp.o.valid),
+                f.i.p.texture.eq(fpp.texture),
+                f.i.p.level.eq(texel.level),
+                f.i.p.i.eq(texel.i),
+                f.i.p.j.eq(texel.j),
+                f.i.p.tag.eq(Cat(weight, group == 0, last, fpp.tag)),
+            ]
+
+        # -- the lanes' responses, one group per cycle, into the blend ---------------------------
+        head = fetch[0].o.p.tag
+        m.d.comb += [
+            bl.i.valid.eq(fetch[0].o.valid),
+            bl.i.p.first.eq(head[WEIGHT_WIDTH]),
+            bl.i.p.last.eq(head[WEIGHT_WIDTH + 1]),
+            bl.i.p.tag.eq(head[WEIGHT_WIDTH + 2:]),
+        ]
+        for k, f in enumerate(fetch):
+            m.d.comb += [
+                f.o.ready.eq(bl.i.ready),
+                bl.i.p.rgba[k].eq(Cat(f.o.p.r, f.o.p.g, f.o.p.b, f.o.p.a)),
+                bl.i.p.weight[k].eq(f.o.p.tag[:WEIGHT_WIDTH]),
+            ]
+        return m

@@ -1,0 +1,65 @@
+"""The texture filter on the compiled backends: CXXRTL bit-exact against golden on large streams of
+hard cases with random backpressure, the same cycles and stalls as pysim; the exported Verilog under
+Verilator the same as CXXRTL."""
+
+import os
+
+import numpy as np
+import pytest
+
+from tests.hw.test_hw_filter import edge_pixels, filter_set
+from tests.support import need, shared_cache_dir
+from vqtex.golden import filter as spec
+from vqtex.hw.filter import LATENCY
+from vqtex.hw.filter.footprint import level_table
+from vqtex.sim.backends.filter import golden_colors, simulate_filter
+
+
+@pytest.fixture(scope="module", autouse=True)
+def cache():
+    old = os.environ.get("VQTEX_CACHE")
+    os.environ["VQTEX_CACHE"] = shared_cache_dir()
+    yield
+    if old is None:
+        os.environ.pop("VQTEX_CACHE", None)
+    else:
+        os.environ["VQTEX_CACHE"] = old
+
+
+def _pixels(n, seed):
+    ts = filter_set()
+    frac = spec.coordinate_frac_bits(level_table(ts).max_log2)
+    return ts, frac, edge_pixels(level_table(ts), frac, n, seed)
+
+
+@pytest.mark.parametrize("lanes,stall", [(1, 0.3), (4, 0.0), (4, 0.5)])
+def test_cxxrtl_filter_against_golden(lanes, stall):
+    need("g++")
+    ts, frac, px = _pixels(20000, lanes + int(10 * stall))
+    res = simulate_filter(ts, px, backend="cxxrtl", lanes=lanes, stall=stall, seed=11)
+    assert (res.colors == golden_colors(ts, px, frac)).all()
+    groups = int((-(-np.array([1, 4, 8])[px["mode"]] // lanes)).sum())
+    if stall == 0:
+        assert res.cycles == groups + LATENCY
+        assert res.stall_cycles["output_backpressure"] == 0
+    else:
+        assert res.cycles > groups + LATENCY
+        assert res.stall_cycles["output_backpressure"] > 0
+
+
+def test_cxxrtl_and_pysim_count_the_same_cycles():
+    need("g++")
+    ts, frac, px = _pixels(50, 9)
+    a = simulate_filter(ts, px, backend="cxxrtl", lanes=1, stall=0.4, seed=5)
+    b = simulate_filter(ts, px, backend="pysim", lanes=1, stall=0.4, seed=5)
+    assert (a.colors == b.colors).all()
+    assert (a.cycles, a.stall_cycles) == (b.cycles, b.stall_cycles)
+
+
+def test_verilator_filter_equals_cxxrtl():
+    need("g++", "verilator")
+    ts, frac, px = _pixels(3000, 4)
+    v = simulate_filter(ts, px, backend="verilator", lanes=2, stall=0.3, seed=2)
+    c = simulate_filter(ts, px, backend="cxxrtl", lanes=2, stall=0.3, seed=2)
+    assert (v.colors == golden_colors(ts, px, frac)).all()
+    assert (v.colors == c.colors).all() and (v.cycles, v.stall_cycles) == (c.cycles, c.stall_cycles)
