@@ -52,16 +52,24 @@ class BlockAddress(wiring.Component):
     x, y : Out(3)
         Offset inside the block.
     raw_addr : Out(raw_bits)
-        Raw memory word of texel (i, j).
+        Raw memory word of texel (i, j) (0 when ``raw`` is false).
+
+    Arguments
+    ---------
+    base_bits, k_bits, raw_bits : int
+        As above.
+    raw : bool
+        The set has raw levels (default): compute ``raw_addr`` (an adder); else leave it 0.
     """
 
-    def __init__(self, *, base_bits: int, k_bits: int, raw_bits: int):
+    def __init__(self, *, base_bits: int, k_bits: int, raw_bits: int, raw: bool = True):
         for name, v in (("base_bits", base_bits), ("k_bits", k_bits), ("raw_bits", raw_bits)):
             if not isinstance(v, int) or v < 1:
                 raise TypeError(f"{name} must be a positive integer, not {v!r}")
         if k_bits > 2 * COORD_BITS:
             raise ValueError(f"k_bits {k_bits} exceeds {2 * COORD_BITS}")
         self._k_bits = k_bits
+        self._raw = bool(raw)
         super().__init__({
             "i": In(COORD_BITS),
             "j": In(COORD_BITS),
@@ -91,6 +99,7 @@ class BlockAddress(wiring.Component):
                 self.k.eq(((by << row_shift) | bx)[:self._k_bits]),
                 self.x.eq(self.i & ~(C((1 << COORD_BITS) - 1, COORD_BITS) << self.log2bw)),
                 self.y.eq(self.j & ~(C((1 << COORD_BITS) - 1, COORD_BITS) << self.log2bh)),
-                self.raw_addr.eq(self.base + (self.j << self.log2w) + self.i),
             ]
+            if self._raw:
+                m.d.sync += self.raw_addr.eq(self.base + (self.j << self.log2w) + self.i)
         return m

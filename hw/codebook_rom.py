@@ -18,6 +18,7 @@ from amaranth.lib.wiring import In, Out
 from vqtex.golden.format import COLOR_CODES
 
 from .banked_rom import BANK_DEPTH, BankedROM, pick
+from .features import Features
 from .registers import enabled_register
 
 __all__ = ["CodebookROM", "SamplesLayout", "LATENCY"]
@@ -66,11 +67,18 @@ class CodebookROM(wiring.Component):
         Widths of the codebook base, the raw address and the plane offsets.
     bank_depth : int
         Entries per block RAM bank of each memory (:class:`hw.banked_rom.BankedROM`).
+    features : hw.features.Features, optional
+        What the texture set needs (default: everything, the full ROM). Specialised: no codebook
+        memory without compressed levels, no raw memory or raw select without raw levels, the
+        texel select only for the colour formats present (``tb * t`` without a multiplexer for one
+        bytes-per-texel), U and V only with yuv411, and every descriptor field in
+        ``features.constants`` a constant (its input ignored; ``texel_off`` = 0 needs no adder,
+        ``cb_base`` = 0 none either).
 
     Members
     -------
-    index : In(16)
-        The block's index.
+    index : In(features.index_bits)
+        The block's index (16 bits in the full ROM).
     cb_base : In(cb_bits)
         Entry of codeword 0 of the texture's codebook.
     raw_addr : In(raw_bits)
@@ -94,7 +102,7 @@ class CodebookROM(wiring.Component):
     """
 
     def __init__(self, codebook, raw_words, *, cb_bits: int, raw_bits: int, off_bits: int,
-                 bank_depth: int = BANK_DEPTH):
+                 bank_depth: int = BANK_DEPTH, features: Features | None = None):
         codebook = np.asarray(codebook, dtype=np.uint8)
         if codebook.ndim != 2:
             raise ValueError("codebook memory must be a 2-D uint8 array")
@@ -102,8 +110,9 @@ class CodebookROM(wiring.Component):
         self._entries = _entry_ints(codebook) or [0]
         self._raw = [int(v) for v in np.asarray(raw_words, dtype=np.uint32).tolist()] or [0]
         self._bank_depth = bank_depth
+        self._features = features if features is not None else Features.full()
         super().__init__({
-            "index": In(16),
+            "index": In(self._features.index_bits),
             "cb_base": In(cb_bits),
             "raw_addr": In(raw_bits),
             "compressed": In(1),
@@ -123,15 +132,29 @@ class CodebookROM(wiring.Component):
     def latency(self) -> int:
         return LATENCY
 
+    def _input(self, name: str):
+        """The input ``name``, or its constant when the features make it one (a descriptor field
+        with one value in every row that reads it)."""
+        port = getattr(self, name)
+        if name in self._features.constants:
+            return C(self._features.constants[name], len(port))
+        return port
+
     def elaborate(self, platform):
         m = Module()
+        feat = self._features
         nbytes = self._entry_bytes
-        m.submodules.codebook = codebook = BankedROM(self._entries, width=nbytes * 8, bank_depth=self._bank_depth)
-        m.submodules.raw = raw = BankedROM(self._raw, width=32, bank_depth=self._bank_depth)
-        m.d.comb += [
-            codebook.addr.eq(self.cb_base + self.index), codebook.en.eq(self.en),
-            raw.addr.eq(self.raw_addr), raw.en.eq(self.en),
-        ]
+        cb_base, log2bw, color_in = self._input("cb_base"), self._input("log2bw"), self._input("color")
+        texel_off, u_off, v_off = self._input("texel_off"), self._input("u_off"), self._input("v_off")
+        compressed_in = self._input("compressed")
+        yuv = feat.matrix                   # U and V selects (yuv411 levels present)
+        if feat.compressed:
+            m.submodules.codebook = codebook = BankedROM(self._entries, width=nbytes * 8, bank_depth=self._bank_depth)
+            m.d.comb += [codebook.addr.eq(self.index if _is_zero(cb_base) else cb_base + self.index),
+                         codebook.en.eq(self.en)]
+        if feat.raw:
+            m.submodules.raw = raw = BankedROM(self._raw, width=32, bank_depth=self._bank_depth)
+            m.d.comb += [raw.addr.eq(self.raw_addr), raw.en.eq(self.en)]
 
         def reg(value, name):
             return enabled_register(m, self.en, value, name)
@@ -141,39 +164,58 @@ class CodebookROM(wiring.Component):
         tbt = Signal(8)                     # tb * t
         lcw = Signal(2)
         ct = Signal(6)
-        m.d.comb += [
-            t.eq((self.y << self.log2bw) | self.x),
-            lcw.eq(Mux(self.log2bw > 0, self.log2bw - 1, 0)),
-            ct.eq(((self.y >> 1) << lcw) | (self.x >> 1)),
-        ]
-        with m.Switch(self.color):
-            with m.Case(_RGB):
-                m.d.comb += tbt.eq((t << 1) + t)
-            with m.Case(_RGBA):
-                m.d.comb += tbt.eq(t << 2)
-            with m.Default():
-                m.d.comb += tbt.eq(t)
+        m.d.comb += t.eq((self.y << log2bw) | self.x)
+        if yuv:
+            m.d.comb += [
+                lcw.eq(Mux(log2bw > 0, log2bw - 1, 0)),
+                ct.eq(((self.y >> 1) << lcw) | (self.x >> 1)),
+            ]
+        per_texel = {code: {_RGB: 3, _RGBA: 4}.get(code, 1) for code in feat.color_codes}
+        times = {3: (t << 1) + t, 4: t << 2, 1: t}
+        if len(set(per_texel.values())) == 1:
+            m.d.comb += tbt.eq(times[next(iter(per_texel.values()))])
+        else:
+            with m.Switch(color_in):
+                with m.Case(_RGB):
+                    m.d.comb += tbt.eq(times[3])
+                with m.Case(_RGBA):
+                    m.d.comb += tbt.eq(times[4])
+                with m.Default():
+                    m.d.comb += tbt.eq(times[1])
         nwords = -(-(nbytes + 3) // 4) + 1     # 4-byte words of the padded entry (see stage 3)
         addr_bits = (4 * nwords - 1).bit_length()
         # The fields that ride beside the memories, one register per stage (assigned in one piece:
-        # one register update per stage in a simulator instead of five).
-        carried = data.StructLayout({"start": addr_bits, "ustart": addr_bits, "vstart": addr_bits,
-                                     "compressed": 1, "color": 2})
+        # one register update per stage in a simulator instead of five). Constants ride nowhere.
+        ride = {"start": addr_bits}
+        if yuv:
+            ride.update(ustart=addr_bits, vstart=addr_bits)
+        if feat.variable("compressed"):
+            ride["compressed"] = 1
+        if feat.variable("color"):
+            ride["color"] = 2
+        carried = data.StructLayout(ride)
+        values = {"start": (tbt if _is_zero(texel_off) else texel_off + tbt)[:addr_bits],
+                  "ustart": (u_off + ct)[:addr_bits], "vstart": (v_off + ct)[:addr_bits],
+                  "compressed": compressed_in, "color": color_in}
         f1 = Signal(carried, name="fields_read")
         with m.If(self.en):
-            m.d.sync += f1.eq(Cat((self.texel_off + tbt)[:addr_bits], (self.u_off + ct)[:addr_bits],
-                                  (self.v_off + ct)[:addr_bits], self.compressed, self.color))
+            m.d.sync += f1.eq(Cat(*(values[name] for name in ride)))
 
         # Stage 2: the banks' data registers (in BankedROM); the fields follow.
         f2 = reg(f1, "fields_data")
-        start, ustart, vstart = f2.start, f2.ustart, f2.vstart
+
+        def field(view, name):
+            return getattr(view, name) if name in ride else values[name]
+
+        start = f2.start
+        ustart, vstart = (f2.ustart, f2.vstart) if yuv else (None, None)
 
         # Stage 3: per codebook bank, the 4-byte words holding the texel (two: a 64-bit window) and
         # U and V, each picked from a list of words by the word number (a multiplexer of whole
         # words; no shifter). The entry is padded with three copies of its last byte, so that every
         # byte address up to last + 3 reads what the golden model's clamp reads, then with zeros.
         windows, u_words, v_words = [], [], []
-        for k in range(codebook.banks):
+        for k in range(codebook.banks if feat.compressed else 0):
             entry = codebook.data[k]
             last = entry[(nbytes - 1) * 8:]
             padded = Cat(entry, last, last, last)
@@ -181,33 +223,55 @@ class CodebookROM(wiring.Component):
                      for n in range(nwords - 1)] + [C(0, 32)]
             windows.append(reg(pick([Cat(words[n], words[n + 1]) for n in range(nwords - 1)], start[2:]),
                                f"window{k}"))
-            u_words.append(reg(pick(words, ustart[2:]), f"u_word{k}"))
-            v_words.append(reg(pick(words, vstart[2:]), f"v_word{k}"))
-        bank = reg(codebook.bank, "bank_window")
-        raw_word = reg(raw.word, "raw_window")
-        f3 = reg(Cat(start[:2], ustart[:2], vstart[:2], f2.compressed, f2.color), "fields_window")
-        start, ustart, vstart, compressed, color = f3[0:2], f3[2:4], f3[4:6], f3[6], f3[7:9]
+            if yuv:
+                u_words.append(reg(pick(words, ustart[2:]), f"u_word{k}"))
+                v_words.append(reg(pick(words, vstart[2:]), f"v_word{k}"))
+        bank = reg(codebook.bank, "bank_window") if feat.compressed else None
+        raw_word = reg(raw.word, "raw_window") if feat.raw else None
+        low = {"start": start[:2]}
+        if yuv:
+            low.update(ustart=ustart[:2], vstart=vstart[:2])
+        low.update({name: getattr(f2, name) for name in ("compressed", "color") if name in ride})
+        f3 = reg(Cat(*low.values()), "fields_window")
+        f3 = data.StructLayout({name: len(v) for name, v in low.items()})(f3)
+        compressed = field(f3, "compressed")
+        color = field(f3, "color")
 
         # Stage 4: the bank's words, then the bytes.
-        window = pick(windows, bank)
-        texel = Signal(32)
-        u = Signal(8)
-        v = Signal(8)
-        m.d.comb += [
-            texel.eq(window.bit_select(start << 3, 32)),
-            u.eq(pick(u_words, bank).bit_select(ustart << 3, 8)),
-            v.eq(pick(v_words, bank).bit_select(vstart << 3, 8)),
-        ]
         out = Signal(32)
-        with m.If(~compressed):
-            m.d.comb += out.eq(raw_word)
-        with m.Elif(color == _YUV):
-            m.d.comb += out.eq(Cat(texel[:8], u, v, texel[24:]))
-        with m.Else():
-            m.d.comb += out.eq(texel)
+        if feat.compressed:
+            window = pick(windows, bank)
+            texel = Signal(32)
+            m.d.comb += texel.eq(window.bit_select(f3.start << 3, 32))
+            if yuv:
+                u = Signal(8)
+                v = Signal(8)
+                m.d.comb += [
+                    u.eq(pick(u_words, bank).bit_select(f3.ustart << 3, 8)),
+                    v.eq(pick(v_words, bank).bit_select(f3.vstart << 3, 8)),
+                ]
+        branches = []                       # (condition, value), first match; the last unconditional
+        if feat.raw:
+            branches.append((~compressed, raw_word))
+        if feat.compressed and yuv:
+            branches.append((color == _YUV, Cat(texel[:8], u, v, texel[24:])))
+        if feat.compressed:
+            branches.append((None, texel))
+        if len(branches) == 1:
+            m.d.comb += out.eq(branches[0][1])
+        else:
+            for n, (cond, value) in enumerate(branches):
+                with (m.If(cond) if n == 0 else m.Elif(cond) if cond is not None and n < len(branches) - 1
+                      else m.Else()):
+                    m.d.comb += out.eq(value)
         with m.If(self.en):
             m.d.sync += [
                 self.samples.as_value().eq(out),
                 self.color_out.eq(Mux(compressed, color, _RGBA)),
             ]
         return m
+
+
+def _is_zero(value) -> bool:
+    """``value`` is the constant 0 (a field the features made constant)."""
+    return isinstance(value, Const) and value.value == 0

@@ -134,9 +134,9 @@ class Harness(wiring.Component):
     """:class:`sim.backends.verilog.TexelFetchTop` with a flip-flop on every port (see the module
     docstring). The unit is the submodule ``unit``; the harness has the same ports."""
 
-    def __init__(self, texture_set, *, one_port: bool = False, tag_width: int = 8):
+    def __init__(self, texture_set, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True):
         from vqtex.sim.backends.design import TexelFetchTop
-        self.unit = TexelFetchTop(texture_set, one_port=one_port, tag_width=tag_width)
+        self.unit = TexelFetchTop(texture_set, one_port=one_port, tag_width=tag_width, specialise=specialise)
         super().__init__({name: (In if m.flow == In else Out)(m.shape)
                           for name, m in self.unit.signature.members.items()})
 
@@ -156,11 +156,11 @@ class Harness(wiring.Component):
         return m
 
 
-def design_rtlil(ts, *, one_port: bool = False, tag_width: int = 8) -> str:
+def design_rtlil(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True) -> str:
     """RTLIL of :class:`Harness` for ``ts`` (top module ``vqtex_harness``, unit ``vqtex_harness.unit``)."""
     from amaranth.back import rtlil
-    return rtlil.convert(Harness(ts, one_port=one_port, tag_width=tag_width), name=HARNESS_NAME,
-                         emit_src=False)
+    return rtlil.convert(Harness(ts, one_port=one_port, tag_width=tag_width, specialise=specialise),
+                         name=HARNESS_NAME, emit_src=False)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -475,8 +475,9 @@ def stage_of(name: str) -> str:
 
 def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool = True, freq: float = 150.0,
                 seed: int = 1, workdir: str | None = None, timeout: float | None = None,
-                name: str | None = None, progress=None) -> dict:
-    """Synthesize (and unless ``place`` is false, place and route) the unit holding ``ts``.
+                name: str | None = None, progress=None, specialise: bool = True) -> dict:
+    """Synthesize (and unless ``place`` is false, place and route) the unit holding ``ts``: the
+    specialised unit (:class:`hw.features.Features`), or with ``specialise=False`` the full one.
 
     ``progress(message)``, when given, is called as each long step starts (elaboration, synthesis,
     place and route).
@@ -492,11 +493,12 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
     progress = progress or (lambda message: None)
     t0 = time.perf_counter()
     progress("elaborating the unit (Amaranth to RTLIL)")
-    harness = Harness(ts, one_port=one_port, tag_width=tag_width)
+    harness = Harness(ts, one_port=one_port, tag_width=tag_width, specialise=specialise)
     from amaranth.back import rtlil
     il = rtlil.convert(harness, name=HARNESS_NAME, emit_src=False)
     t_rtlil = time.perf_counter() - t0
-    shapes = design_memories(ts, one_port=one_port, tag_width=tag_width)
+    shapes = design_memories(ts, one_port=one_port, tag_width=tag_width, specialise=specialise)
+    features = harness.unit.fetch.features
 
     def go(folder):
         progress("synthesis (Yosys), typically 10-40 s")
@@ -507,6 +509,8 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
             "design": name or "texture set",
             "device": f"{DEVICE['device']}-{DEVICE['speed']} {DEVICE['package']}",
             "index_reader": "one-port" if one_port else "two-bank",
+            "unit": "specialised" if features.specialised else "full",
+            "features": features.to_dict(),
             "tag_width": tag_width,
             "latency": LATENCY,
             "textures": ts.n_textures,
@@ -537,13 +541,13 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
         return go(folder)
 
 
-def design_memories(ts, *, one_port: bool = False, tag_width: int = 8) -> dict:
+def design_memories(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True) -> dict:
     """Every memory of ``TexelFetch(ts)`` -> ``(depth, width)``, named as Yosys names it inside the
     unit (``fetch.back.codebook_rom.codebook.bank0``, ``fetch.front.descriptor.table``): the banks of
     :class:`hw.banked_rom.BankedROM` are memories of their own."""
     from vqtex.hw.memories import elaborate, memories
     from vqtex.hw.texel_fetch import TexelFetch
-    top = TexelFetch(ts, one_port=one_port, tag_width=tag_width)
+    top = TexelFetch(ts, one_port=one_port, tag_width=tag_width, specialise=specialise)
     return {".".join(("fetch",) + mem.path): (mem.depth, mem.width) for mem in memories(elaborate(top))}
 
 
@@ -562,7 +566,8 @@ def _memory_shapes(shapes: dict, mapped: dict) -> dict:
 def area_text(rep: dict) -> str:
     u = rep["utilisation"]
     lines = [
-        f"{rep['design']}: {rep['textures']} texture(s), {rep['index_reader']} index reader, "
+        f"{rep['design']}: {rep['textures']} texture(s), {rep.get('unit', 'full')} unit, "
+        f"{rep['index_reader']} index reader, "
         f"tag width {rep['tag_width']}, latency {rep.get('latency', '?')}, on {rep['device']}",
         f"  LUT4 {u.get('luts', 0)}  FF {u.get('ffs', 0)}  DP16KD {u.get('brams', 0)}  "
         f"MULT18X18D {u.get('dsps', 0)}  CCU2C {u.get('carry', 0)}  DPR16X4 {u.get('dist_ram', 0)}  "

@@ -1,0 +1,248 @@
+"""What a texture set needs of the texel-fetch unit: the one place the unit is specialised.
+
+:class:`Features` is computed from a :class:`golden.format.TextureSet` (``Features.of(ts)``) and
+handed to every block of :class:`hw.texel_fetch.TexelFetch`; each optional piece of logic is guarded
+by one of its fields, so that the unit elaborates only what the set's memories can ask of it:
+
+============================  ===============================================================
+field                         what it removes when the set does not need it
+============================  ===============================================================
+``compressed``                the index reader and the codebook memory (every level raw)
+``raw``                       the raw memory, the raw address adder, the raw path of the select
+``colors``                    the colour formats' texel selects and bypasses; without yuv411
+                              the colour matrix (offsets, products, sums, clamps) and the U, V
+                              selects of the codebook ROM
+``index_widths``              the ``k * b`` multiplier (one to three widths: shifts and adds),
+                              the index mask (one width), index bits above the widest
+``straddle``                  the odd bank and the word pair (no index crosses a word: every
+                              width divides the word, or the maps are too short to cross)
+``sublevels``                 (reported) no level reads a sub-level of an extended codeword:
+                              the plane offset adder goes, ``texel_off`` being constant 0
+``constants``                 every descriptor field that holds one value in every row that
+                              reads it is a constant, not a column of the descriptor table nor a
+                              register beside the index (cb_base, log2bw, colour, offsets, ...)
+============================  ===============================================================
+
+The colour matrix's products exist only for its non-zero coefficients, and a coefficient 0, +-1 or
++-2^n is a shift, not a multiplier (:class:`hw.color_matrix.ColorMatrix`).
+
+``Features.full(ts)`` is the unit that serves any request of any set with these memory shapes:
+every path present, every descriptor field stored (the unit as it was before specialisation).
+Both are bit-exact on every valid request; the specialised unit does not check requests (no unit
+does: :func:`golden.fetch.check_requests` does).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from math import gcd
+
+import numpy as np
+from amaranth import C
+from amaranth.utils import bits_for, ceil_log2
+
+from vqtex.golden.format import COLOR_CODES, COLORS, DESCRIPTOR_FIELDS, MAX_LEVELS, TextureSet, log2
+
+__all__ = ["Features", "READ_BY", "ALL_WIDTHS", "Fields"]
+
+#: The descriptor fields the hardware reads, and in which rows: ``all`` (every level), ``compressed``
+#: (compressed levels), ``yuv`` (compressed yuv411 levels). The table's other fields (``valid``,
+#: ``log2h``, ``sublevel``) are never read by the unit (requests are valid; the sub-level is in the
+#: plane offsets and ``log2bw``).
+READ_BY = {
+    "compressed": "all", "base": "all", "log2w": "all",
+    "log2bw": "compressed", "log2bh": "compressed", "index_bits": "compressed", "cb_base": "compressed",
+    "color": "compressed", "texel_off": "compressed",
+    "u_off": "yuv", "v_off": "yuv",
+}
+#: Every index width the format allows.
+ALL_WIDTHS = tuple(range(1, 17))
+
+
+def _straddles(ts: TextureSet) -> bool:
+    """Whether any index of any compressed level crosses a word boundary: index ``k`` of a map of
+    ``b``-bit indices starts at bit ``k*b mod W`` of its word; the offsets repeat every ``W`` indices,
+    so the first ``min(blocks, W)`` of each map decide (rows x W, vectorised)."""
+    d = ts.descriptors[(ts.descriptors["valid"] != 0) & (ts.descriptors["compressed"] != 0)]
+    if not len(d):
+        return False
+    W = ts.word_bits
+    b = d["index_bits"].astype(np.int64)[:, None]
+    span = (d["log2w"].astype(np.int64) - d["log2bw"] + d["log2h"] - d["log2bh"])[:, None]
+    k = np.arange(W, dtype=np.int64)[None, :]
+    present = k < (np.int64(1) << np.minimum(span, 30))
+    return bool((present & ((k * b) % W + b > W)).any())
+
+
+@dataclass(frozen=True)
+class Features:
+    """The parts of the texel-fetch unit a texture set needs (see the module docstring).
+
+    Members
+    -------
+    specialised : bool
+        False for :meth:`full` (every path, every descriptor field).
+    compressed, raw : bool
+        Some level is compressed / stored raw.
+    colors : frozenset of str
+        Colour formats of the compressed levels (``golden.format.COLORS`` names).
+    index_widths : tuple of int
+        Index widths ``b`` of the compressed levels, ascending.
+    straddle : bool
+        Some index crosses a word boundary of the index memory.
+    sublevels : bool
+        Some level reads a sub-level (> 0) of an extended codeword.
+    constants : dict
+        Descriptor field -> its value in every row that reads it (:data:`READ_BY`).
+    level_bits, texture_bits : int
+        Bits of the level and texture numbers the descriptor table decodes.
+    """
+    specialised: bool
+    compressed: bool
+    raw: bool
+    colors: frozenset
+    index_widths: tuple
+    straddle: bool
+    sublevels: bool
+    constants: dict = field(default_factory=dict, compare=True)
+    level_bits: int = log2(MAX_LEVELS)
+    texture_bits: int = 1
+
+    # -- construction ---------------------------------------------------------------------------
+    @classmethod
+    def of(cls, ts: TextureSet) -> "Features":
+        """What ``ts`` needs: the specialised unit."""
+        d = ts.descriptors
+        valid = d["valid"] != 0
+        comp = valid & (d["compressed"] != 0)
+        yuv = comp & (d["color"] == COLOR_CODES["yuv411"])
+        rows = {"all": valid, "compressed": comp, "yuv": yuv}
+        constants = {}
+        for name, who in READ_BY.items():
+            values = np.unique(d[name][rows[who]])
+            if len(values) <= 1:            # one value, or no row reads it (then any value: 0)
+                constants[name] = int(values[0]) if len(values) else 0
+        levels = max(t.levels for t in ts.textures)
+        return cls(
+            specialised=True,
+            compressed=bool(comp.any()),
+            raw=bool((valid & ~comp).any()),
+            colors=frozenset(COLORS[c] for c in np.unique(d["color"][comp]).tolist()),
+            index_widths=tuple(int(b) for b in np.unique(d["index_bits"][comp])),
+            straddle=_straddles(ts),
+            sublevels=bool((d["sublevel"][comp] > 0).any()),
+            constants=constants,
+            level_bits=ceil_log2(levels),
+            texture_bits=ceil_log2(ts.n_textures),
+        )
+
+    @classmethod
+    def full(cls, ts: TextureSet | None = None) -> "Features":
+        """Every path and every descriptor field: the unspecialised unit (``ts`` sets the texture
+        bits the descriptor table decodes; the blocks below it do not need it)."""
+        return cls(specialised=False, compressed=True, raw=True, colors=frozenset(COLORS),
+                   index_widths=ALL_WIDTHS, straddle=True, sublevels=True, constants={},
+                   level_bits=log2(MAX_LEVELS), texture_bits=bits_for(ts.n_textures - 1) if ts is not None else 1)
+
+    @classmethod
+    def for_set(cls, ts: TextureSet, specialise: bool) -> "Features":
+        return cls.of(ts) if specialise else cls.full(ts)
+
+    # -- derived ----------------------------------------------------------------------------------
+    @property
+    def matrix(self) -> bool:
+        """The colour matrix is built (some level is yuv411)."""
+        return "yuv411" in self.colors
+
+    @property
+    def color_codes(self) -> frozenset:
+        """Colour codes of the compressed levels."""
+        return frozenset(COLOR_CODES[c] for c in self.colors)
+
+    @property
+    def output_codes(self) -> frozenset:
+        """Colour codes the colour matrix can receive: the compressed levels', and rgba for raw levels."""
+        return self.color_codes | ({COLOR_CODES["rgba"]} if self.raw else frozenset())
+
+    @property
+    def index_bits(self) -> int:
+        """Width of an index out of the index reader: the widest index present (16 in the full unit)."""
+        return max(self.index_widths) if self.index_widths else 1
+
+    @property
+    def index_unit(self) -> int:
+        """Every index starts at a multiple of this many bits of its word (the greatest power of two
+        dividing every width; 1 in the full unit): the extract selects among whole units."""
+        g = 0
+        for b in self.index_widths:
+            g = gcd(g, b)
+        return (g & -g) if g else 1
+
+    @property
+    def multiplier(self) -> bool:
+        """``k * b`` needs a multiplier (more than three index widths); else shifts and adds."""
+        return len(self.index_widths) > 3
+
+    @property
+    def stored_fields(self) -> tuple:
+        """The descriptor table's columns: every field in the full unit; the fields the hardware reads
+        that are not constants in the specialised one."""
+        if not self.specialised:
+            return tuple(DESCRIPTOR_FIELDS)
+        return tuple(n for n in DESCRIPTOR_FIELDS if n in READ_BY and n not in self.constants)
+
+    def variable(self, name: str) -> bool:
+        """The descriptor field ``name`` differs between rows (it is not a constant)."""
+        return name not in self.constants
+
+    def to_dict(self) -> dict:
+        """JSON-able summary (for reports)."""
+        return {
+            "specialised": self.specialised, "compressed": self.compressed, "raw": self.raw,
+            "colors": sorted(self.colors, key=COLORS.index), "index_widths": list(self.index_widths),
+            "straddle": self.straddle, "sublevels": self.sublevels, "color_matrix": self.matrix,
+            "k_times_b": "multiplier" if self.multiplier else "shifts and adds",
+            "constant_fields": dict(sorted(self.constants.items())),
+            "descriptor_columns": list(self.stored_fields),
+        }
+
+    def describe(self) -> str:
+        """One line for the command line."""
+        if not self.specialised:
+            return "full unit (every path, every descriptor field)"
+        parts = [("compressed" if self.compressed else "") + ("+raw" if self.raw and self.compressed else
+                                                              "raw" if self.raw else ""),
+                 "/".join(sorted(self.colors, key=COLORS.index)) or "no codebook",
+                 "b=" + ",".join(map(str, self.index_widths)) if self.index_widths else "no indices",
+                 "straddling" if self.straddle else "no straddles",
+                 "sub-levels" if self.sublevels else "no sub-levels",
+                 "colour matrix" if self.matrix else "no colour matrix",
+                 f"{len(self.constants)} constant descriptor fields"]
+        return "specialised: " + ", ".join(p for p in parts if p)
+
+
+class Fields:
+    """Named values of which some are constants: ``fields.name`` is the field of ``view`` (a
+    ``data.View`` of a layout holding the variable fields) or, for a constant, ``C(value, width)``.
+
+    Arguments
+    ---------
+    view : data.View or None
+        The variable fields.
+    constants : dict
+        Field -> value, for the fields ``view`` does not hold.
+    widths : dict
+        Field -> width, for the constants.
+    """
+
+    def __init__(self, view, constants: dict, widths: dict):
+        self._view = view
+        self._constants = constants
+        self._widths = widths
+
+    def __getattr__(self, name):
+        if name.startswith("_"):
+            raise AttributeError(name)
+        if name in self._constants:
+            return C(self._constants[name], self._widths[name])
+        return getattr(self._view, name)
