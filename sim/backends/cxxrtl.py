@@ -90,8 +90,17 @@ _SLICE = re.compile(r"\b([A-Za-z_]\w*(?:\.curr|\.next)?)\.slice<(\d+(?:,\d+)?)>\
 def _fast_slices(src: str) -> str:
     """Every rvalue ``x.slice<stop, start>()`` of a named value (a wire's ``curr``/``next``, a local)
     as ``vq_slice<stop, start>(x)`` (vq_ops.h): the same bits, without CXXRTL's copy and shift of
-    the whole operand (the 504-bit codebook registers are sliced a dozen times a cycle)."""
-    return _SLICE.sub(lambda m: f"vq_slice<{m.group(2)}>({m.group(1)})", src)
+    the whole operand (the 504-bit codebook registers are sliced a dozen times a cycle).
+
+    Only right of a statement's ``=``: CXXRTL assigns to a concatenation of slices
+    (``x.slice<14>().concat(x.slice<1,0>()) = ...``, as it writes a constant-masked field of a
+    specialised unit), and a ``vq_slice`` there would assign to a copy."""
+    def line(text):
+        at = text.find(" = ")
+        if at < 0:
+            return _SLICE.sub(lambda m: f"vq_slice<{m.group(2)}>({m.group(1)})", text)
+        return text[:at] + _SLICE.sub(lambda m: f"vq_slice<{m.group(2)}>({m.group(1)})", text[at:])
+    return "\n".join(line(text) for text in src.split("\n"))
 
 
 _SHIFT = re.compile(r"\b(shl_uu|shr_uu|shift_uu)<")
