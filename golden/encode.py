@@ -172,7 +172,7 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
            index_bits: int | None = None, mipmaps: bool = False, encoder: str = "gla", seed: int = 0,
            mip_training: str = "average", names=None, word_bits: int = 32,
            matrix: ColorMatrix = JFIF_BT601, raw_below: int = RAW_BELOW, max_iter: int = 100,
-           tol: float = 1e-3, raw: bool = False) -> TextureSet:
+           tol: float = 1e-3, raw: bool = False, keep_levels=None) -> TextureSet:
     """Compress ``images`` (list of (H, W[, C]) uint8) into one texture group sharing a codebook.
 
     Arguments
@@ -183,6 +183,10 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
     mip_training : "average" (the paper) or "joint" (train on all sub-levels).
     raw_below : mip levels narrower or shorter than this are stored raw.
     raw : store every level uncompressed (the baseline of the paper's Table 5).
+    keep_levels : per image, the level numbers to store (None: all levels of every image). The others
+        are absent (``TextureInfo.absent_levels``, as in a pruned set): a level group none of whose
+        levels is kept is neither trained on nor stored, so the codebook is trained on the blocks of
+        the kept level groups only (``golden.prune.encode_needed``).
     max_iter, tol : GLA's stop rule: stop when the distortion's relative decrease falls to ``tol``
         (``D_{m-1} - D_m <= tol * D_m``) or after ``max_iter`` iterations (``golden.codebook.gla``).
 
@@ -213,6 +217,12 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
             ok = ok and top.shape[0] % bh == 0 and top.shape[1] % bw == 0 and not raw
             plan.append(ok)
         plans.append(plan)
+    if keep_levels is None:
+        stored = [[True] * len(pyr) for pyr in pyrs]
+    else:
+        if len(keep_levels) != len(images):
+            raise EncodeError(f"keep_levels lists {len(keep_levels)} images, not {len(images)}")
+        stored = [[L in set(int(x) for x in keep) for L in range(len(pyr))] for keep, pyr in zip(keep_levels, pyrs)]
 
     # Training vectors: the top level of every compressed level group.
     weights_by_sub = [4.0 ** s for s in range(nsub)]
@@ -220,7 +230,7 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
     vecs = []
     for t, (pyr, plan) in enumerate(zip(pyrs, plans)):
         for L in range(0, len(pyr), nsub):
-            if not plan[L]:
+            if not plan[L] or not any(stored[t][L: L + nsub]):
                 continue
             groups.append((t, L))
             if mip_training == "joint":
@@ -275,8 +285,10 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
         for L, lv in enumerate(pyr):
             h, w = lv.shape[:2]
             row = descriptors[t, L]
-            row["valid"] = 1
             row["log2w"], row["log2h"] = log2(w), log2(h)
+            if not stored[t][L]:
+                continue                                # absent: only its size is kept
+            row["valid"] = 1
             if plan[L]:
                 s = L % nsub
                 row["compressed"] = 1
@@ -293,9 +305,11 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
                 rw += w * h
         textures.append(TextureInfo(
             name=str(names[t]), width=pyr[0].shape[1], height=pyr[0].shape[0], levels=len(pyr),
-            color=color, block=block, codebook=0 if any(plan) else -1, index_bits=b, mipmapped=bool(mipmaps),
+            color=color, block=block, codebook=0 if any(p and k for p, k in zip(plan, stored[t])) else -1,
+            index_bits=b, mipmapped=bool(mipmaps),
             params={"codebook_size": codebook_size, "encoder": encoder, "seed": seed,
-                    "mip_training": mip_training, "raw_below": raw_below}))
+                    "mip_training": mip_training, "raw_below": raw_below},
+            absent_levels=[L for L in range(len(pyr)) if not stored[t][L]]))
     dt = np.dtype(f"<u{word_bits // 8}")
     index_parts.append(np.zeros(1, dt))
     codebooks = [CodebookInfo(color, block, nsub, codebook_size, 0)] if groups else []

@@ -31,7 +31,8 @@ class RequestError(ValueError):
 
 
 def check_requests(ts: TextureSet, tex, level, i, j) -> None:
-    """Raise :class:`RequestError` (one line) unless every request is inside its level."""
+    """Raise :class:`RequestError` (one line) unless every request is inside its level, and, in a
+    pruned set (``golden.prune``), its level and block are stored."""
     tex, level, i, j = (np.asarray(a, dtype=np.int64) for a in (tex, level, i, j))
     bad = (tex < 0) | (tex >= ts.n_textures) | (level < 0) | (level >= MAX_LEVELS)
     if bad.any():
@@ -41,12 +42,25 @@ def check_requests(ts: TextureSet, tex, level, i, j) -> None:
     bad = ~d["valid"].astype(bool)
     if bad.any():
         n = int(np.argmax(bad))
-        raise RequestError(f"request {n}: texture {int(tex[n])} has no level {int(level[n])}")
+        t, L = int(tex[n]), int(level[n])
+        if L < ts.textures[t].levels:
+            raise RequestError(f"request {n}: texture {t} level {L} was pruned from this texture set "
+                               f"(the frames it was pruned for never read it)")
+        raise RequestError(f"request {n}: texture {t} has no level {L}")
     bad = (i < 0) | (j < 0) | (i >= (1 << d["log2w"].astype(np.int64))) | (j >= (1 << d["log2h"].astype(np.int64)))
     if bad.any():
         n = int(np.argmax(bad))
         raise RequestError(f"request {n}: texel ({int(i[n])}, {int(j[n])}) is outside texture "
                            f"{int(tex[n])} level {int(level[n])} ({1 << int(d['log2w'][n])}x{1 << int(d['log2h'][n])})")
+    comp = d["compressed"].astype(bool)
+    if ts.present_blocks is not None and comp.any():
+        k, _, _ = block_address(d[comp], i[comp], j[comp])
+        bad = ~ts.block_present(tex[comp], level[comp], k)
+        if bad.any():
+            n = int(np.flatnonzero(comp)[np.argmax(bad)])
+            raise RequestError(f"request {n}: texel ({int(i[n])}, {int(j[n])}) of texture {int(tex[n])} level "
+                               f"{int(level[n])} is in a block pruned from this texture set (the frames it was "
+                               f"pruned for never read it)")
 
 
 def random_requests(ts: TextureSet, n: int, seed: int = 0) -> np.ndarray:
@@ -177,10 +191,14 @@ def decode(ts: TextureSet, tex: int, level: int = 0) -> np.ndarray:
     """A whole level as an (h, w, 4) uint8 RGBA image.
 
     An independent path from :func:`fetch` (whole index maps unpacked, whole codewords tiled), so
-    that "fetch over every texel equals decode" checks the per-texel address arithmetic.
+    that "fetch over every texel equals decode" checks the per-texel address arithmetic. In a pruned
+    set (``golden.prune``) a level it does not store raises :class:`RequestError` and the texels of
+    blocks it does not store are (0, 0, 0, 0).
     """
     d = ts.descriptor(tex, level)
     if not d["valid"]:
+        if level < ts.textures[tex].levels:
+            raise RequestError(f"texture {tex} level {level} was pruned from this texture set")
         raise RequestError(f"texture {tex} has no level {level}")
     w, h = 1 << d["log2w"], 1 << d["log2h"]
     if not d["compressed"]:
@@ -211,4 +229,8 @@ def decode(ts: TextureSet, tex: int, level: int = 0) -> np.ndarray:
             out[..., 1] = out[..., 2] = out[..., 0]
     if color != COLOR_CODES["rgba"]:
         out[..., 3] = 255
+    if ts.present_blocks is not None:                 # a pruned set: blocks it no longer holds are (0, 0, 0, 0)
+        k = np.arange(nbx * nby)
+        gone = ~ts.block_present(np.full(k.shape, tex), np.full(k.shape, level), k).reshape(nby, nbx)
+        out[np.repeat(np.repeat(gone, bh, axis=0), bw, axis=1)] = 0
     return out

@@ -157,6 +157,20 @@ class TextureInfo(_Record):
     index_bits: int
     mipmapped: bool
     params: dict = field(default_factory=dict)
+    #: Levels a pruned set does not store (``golden.prune``): their descriptor rows are not valid but
+    #: keep the level's size, so level numbers and shapes (and a scene's requests) stay as they were.
+    absent_levels: list = field(default_factory=list)
+
+    def to_dict(self):
+        d = super().to_dict()
+        d["absent_levels"] = [int(L) for L in d["absent_levels"]]
+        if not d["absent_levels"]:
+            del d["absent_levels"]                  # the header of a set that is not pruned is unchanged
+        return d
+
+    def stored(self, level: int) -> bool:
+        """Whether ``level`` exists and this set stores it."""
+        return 0 <= level < self.levels and level not in self.absent_levels
 
 
 
@@ -197,6 +211,12 @@ class TextureSet:
     descriptors : structured ndarray (n_textures, MAX_LEVELS) of :data:`DESCRIPTOR_DTYPE`
     textures, codebooks : metadata lists
     matrix : ColorMatrix used for yuv411 textures
+    present_blocks : ndarray uint8 or None
+        Only in a pruned set (``golden.prune``): for every stored compressed level, in texture then
+        level order, one bit per block of the level's index map (bit ``k % 8`` of byte ``k // 8`` of
+        the level's share, each share a whole number of bytes), 1 where block ``k`` is stored. A
+        block whose bit is 0 has lost its codeword: requests for it are refused
+        (:func:`golden.fetch.check_requests`). ``None``: every block of every stored level is there.
     """
     word_bits: int
     index_words: np.ndarray
@@ -206,6 +226,7 @@ class TextureSet:
     textures: list
     codebooks: list
     matrix: ColorMatrix = JFIF_BT601
+    present_blocks: np.ndarray | None = None
 
     # -- queries ------------------------------------------------------------------------------
     @property
@@ -222,6 +243,29 @@ class TextureSet:
         return [(1 << int(d["log2w"][L]), 1 << int(d["log2h"][L]))
                 for L in range(self.textures[tex].levels)]
 
+    def present_rows(self):
+        """(rows, offsets, nblocks): the stored compressed (texture, level) rows as a bool
+        (n_textures, MAX_LEVELS) array, each row's first byte in :attr:`present_blocks` and its block
+        count (int64 arrays of the same shape, 0 elsewhere)."""
+        d = self.descriptors
+        rows = d["valid"].astype(bool) & d["compressed"].astype(bool)
+        shift_w = np.where(rows, d["log2w"].astype(np.int64) - d["log2bw"].astype(np.int64), 0)
+        shift_h = np.where(rows, d["log2h"].astype(np.int64) - d["log2bh"].astype(np.int64), 0)
+        nblocks = np.where(rows, 1 << np.clip(shift_w + shift_h, 0, 24), 0)
+        nbytes = (nblocks + 7) // 8
+        offsets = (np.cumsum(nbytes) - nbytes.ravel()).reshape(nbytes.shape)
+        return rows, offsets, nblocks
+
+    def block_present(self, tex, level, k) -> np.ndarray:
+        """bool per request: block ``k`` of (tex, level) is stored (always True without
+        :attr:`present_blocks`; the rows must be stored compressed rows)."""
+        k = np.asarray(k, np.int64)
+        if self.present_blocks is None:
+            return np.ones(k.shape, bool)
+        _, offsets, _ = self.present_rows()
+        byte = offsets[np.asarray(tex, np.int64), np.asarray(level, np.int64)] + (k >> 3)
+        return ((self.present_blocks[byte] >> (k & 7).astype(np.uint8)) & 1).astype(bool)
+
     def descriptor(self, tex: int, level: int) -> dict:
         row = self.descriptors[tex, level]
         return {name: int(row[name]) for name in DESCRIPTOR_FIELDS}
@@ -233,7 +277,8 @@ class TextureSet:
         32 for rgba, 8 for intensity). ``overall``: original bits of every stored level over the bits
         actually stored for them: index maps, raw levels, and the texture's share of its codebook
         (a shared codebook is split in proportion to the level-0 texels of the textures sharing it).
-        With ``tex=None`` the whole set: total original bits over total stored bits.
+        With ``tex=None`` the whole set: total original bits over total stored bits. Levels a pruned
+        set does not store count neither way (a texture with none stored has an overall rate of 1).
         """
         if tex is None:
             orig = stored = 0.0
@@ -241,12 +286,14 @@ class TextureSet:
                 r = self.rates(t)
                 orig += r["original_bits"]
                 stored += r["stored_bits"]
-            return {"overall": orig / stored, "original_bits": orig, "stored_bits": stored}
+            return {"overall": orig / stored if stored else 1.0, "original_bits": orig, "stored_bits": stored}
         info = self.textures[tex]
         src_bits = {"rgb": 24, "rgba": 32, "intensity": 8, "yuv411": 24}[info.color]
         orig = index = raw = 0
         for L, (w, h) in enumerate(self.level_shapes(tex)):
             d = self.descriptors[tex, L]
+            if not d["valid"]:
+                continue                              # pruned: neither original nor stored
             orig += w * h * src_bits
             if d["compressed"]:
                 if d["sublevel"] == 0:
@@ -264,7 +311,7 @@ class TextureSet:
         stored = index + raw + cb_share
         return {
             "base": (bw * bh * src_bits / info.index_bits) if info.codebook >= 0 else 1.0,
-            "overall": orig / stored,
+            "overall": orig / stored if stored else 1.0,     # a pruned texture: nothing for nothing
             "original_bits": orig, "stored_bits": stored,
             "index_bits_total": index, "raw_bits": raw, "codebook_bits_share": cb_share,
         }
@@ -286,10 +333,14 @@ class TextureSet:
         for t, info in enumerate(self.textures):
             if not (1 <= info.levels <= MAX_LEVELS):
                 raise FormatError(f"texture {t}: {info.levels} levels")
+            absent = info.absent_levels
+            if (not isinstance(absent, list) or any(type(L) is not int for L in absent)
+                    or absent != sorted(set(absent)) or any(not 0 <= L < info.levels for L in absent)):
+                raise FormatError(f"texture {t}: absent levels must be distinct increasing level numbers")
             for L in range(MAX_LEVELS):
                 row = d[t, L]
-                if bool(row["valid"]) != (L < info.levels):
-                    raise FormatError(f"texture {t} level {L}: valid flag disagrees with level count")
+                if bool(row["valid"]) != info.stored(L):
+                    raise FormatError(f"texture {t} level {L}: valid flag disagrees with the stored levels")
                 if not row["valid"]:
                     continue
                 if row["log2w"] > 12 or row["log2h"] > 12:      # before any shift by them
@@ -312,6 +363,14 @@ class TextureSet:
                         raise FormatError(f"texture {t} level {L}: plane offset outside the entry")
                 elif int(row["base"]) + w * h > len(self.raw_words):
                     raise FormatError(f"texture {t} level {L}: raw level runs past the raw memory")
+        if self.present_blocks is not None:
+            pb = self.present_blocks
+            if pb.dtype != np.uint8 or pb.ndim != 1:
+                raise FormatError("block presence must be a 1-D uint8 array")
+            rows, offsets, nblocks = self.present_rows()
+            need = int((offsets + (nblocks + 7) // 8).max(initial=0))
+            if len(pb) != need:
+                raise FormatError(f"block presence holds {len(pb)} bytes, the stored compressed levels need {need}")
 
     def check_consistency(self) -> None:
         """Check that the metadata, the codebooks and every descriptor row agree, as the encoder
@@ -340,6 +399,8 @@ class TextureSet:
                 where = f"texture {t} level {L}"
                 if (int(row["log2w"]), int(row["log2h"])) != (max(0, lw - L), max(0, lh - L)):
                     raise FormatError(f"{where}: size disagrees with the texture's")
+                if not row["valid"] and row["compressed"]:
+                    raise FormatError(f"{where}: an absent level marked compressed")
                 if not row["compressed"]:
                     continue
                 s = int(row["sublevel"])
@@ -353,8 +414,12 @@ class TextureSet:
                 if (int(row["texel_off"]), int(row["u_off"]), int(row["v_off"])) != tuple(cb.layout.planes[s]):
                     raise FormatError(f"{where}: plane offsets disagree with the codeword layout")
                 if s:
-                    group = d[t, L - s] if L >= s else None
-                    if group is None or not group["compressed"] or int(group["sublevel"]) or group["base"] != row["base"]:
+                    if L < s:
+                        raise FormatError(f"{where}: sub-level {s} of a group that would start before level 0")
+                    # the group's first stored level: its top, unless a pruned set dropped that
+                    first = next(M for M in range(L - s, L + 1) if d[t, M]["valid"])
+                    group = d[t, first]
+                    if not group["compressed"] or int(group["sublevel"]) != first - (L - s) or group["base"] != row["base"]:
                         raise FormatError(f"{where}: sub-level {s} does not read its level group's index map")
 
     def check_indices(self) -> None:
@@ -366,8 +431,9 @@ class TextureSet:
             size = self.codebooks[info.codebook].size
             for L in range(info.levels):
                 row = self.descriptors[t, L]
-                if not row["compressed"] or row["sublevel"]:
-                    continue
+                s = int(row["sublevel"])
+                if not row["compressed"] or (s and self.descriptors[t, L - 1]["compressed"]):
+                    continue                          # checked from the group's first stored level
                 n = (1 << int(row["log2w"]) >> int(row["log2bw"])) * (1 << int(row["log2h"]) >> int(row["log2bh"]))
                 b = int(row["index_bits"])
                 step = self.word_bits * (1 << 14)          # indices per chunk: a whole number of words
@@ -388,6 +454,8 @@ class TextureSet:
         if not sets:
             raise FormatError("nothing to combine")
         wb, matrix = sets[0].word_bits, sets[0].matrix
+        if any(s.present_blocks is not None for s in sets):
+            raise FormatError("sets pruned to blocks are not combined (combine, then prune)")
         if any(s.word_bits != wb or s.matrix != matrix for s in sets):
             raise FormatError("combined texture sets must share word width and colour matrix")
         entry_bytes = max(s.entry_bytes for s in sets)
@@ -439,8 +507,12 @@ class TextureSet:
             "raw_words": np.ascontiguousarray(self.raw_words),
             "descriptors": np.ascontiguousarray(self.descriptors),
         }
+        names = _ARRAYS
+        if self.present_blocks is not None:
+            arrays["present_blocks"] = np.ascontiguousarray(self.present_blocks, np.uint8)
+            names = _ARRAYS + ("present_blocks",)
         table, blobs, off = {}, [], 0
-        for name in _ARRAYS:
+        for name in names:
             a = arrays[name]
             raw = a.tobytes()
             table[name] = {"shape": list(a.shape), "offset": off, "nbytes": len(raw),
@@ -491,6 +563,7 @@ class TextureSet:
                 textures=[TextureInfo.from_dict(t) for t in header["textures"]],
                 codebooks=[CodebookInfo.from_dict(c) for c in header["codebooks"]],
                 matrix=ColorMatrix.from_dict(header["matrix"]),
+                present_blocks=arrays.get("present_blocks"),
             )
             ts.validate()
             ts.check_consistency()

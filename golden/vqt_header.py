@@ -14,6 +14,8 @@ or raises :class:`~.format.FormatError` with one line. Contract:
 - Each array is described by a dtype from a fixed list for that array (no structured, object or
   comma dtypes), a shape of the right rank, and an offset and byte count that lie inside the
   ``body_size`` bytes that follow the header: the caller allocates at most what the file holds.
+- A pruned set (``golden.prune``) may also hold, per texture, ``absent_levels`` (distinct increasing
+  level numbers below its level count, at least one) and the array ``present_blocks`` (bytes).
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ import numpy as np
 from .constants import (COLORS, DESCRIPTOR_DTYPE, DESCRIPTOR_FIELDS, MAX_LEVELS, MAX_SIZE, WORD_BITS_ALLOWED,
                         FormatError)
 
-__all__ = ["parse_header", "MAX_HEADER_BYTES", "MAX_DEPTH", "MAX_TEXTURES", "ARRAY_DTYPES"]
+__all__ = ["parse_header", "MAX_HEADER_BYTES", "MAX_DEPTH", "MAX_TEXTURES", "ARRAY_DTYPES", "OPTIONAL_ARRAYS"]
 
 MAX_HEADER_BYTES = 16 << 20
 MAX_DEPTH = 16
@@ -37,7 +39,10 @@ ARRAY_DTYPES = {
     "codebook": (("|u1",), 2),
     "raw_words": (("<u4",), 1),
     "descriptors": (("descriptor",), 2),
+    "present_blocks": (("|u1",), 1),
 }
+#: Arrays only a pruned set holds (``golden.prune``); every other array is in every file.
+OPTIONAL_ARRAYS = ("present_blocks",)
 _TEXTURE_KEYS = {"name", "width", "height", "levels", "color", "block", "codebook", "index_bits", "mipmapped", "params"}
 _CODEBOOK_KEYS = {"color", "block", "nsub", "size", "base"}
 _HEADER_KEYS = {"word_bits", "entry_bytes", "descriptor_fields", "matrix", "textures", "codebooks", "arrays"}
@@ -126,7 +131,7 @@ def _matrix(m):
 
 def _texture(t, k):
     what = f"texture {k}"
-    _dict(t, what, _TEXTURE_KEYS)
+    _dict(t, what, _TEXTURE_KEYS, optional=("absent_levels",))
     if type(t["name"]) is not str or len(t["name"]) > 256:
         _fail(f"{what} name must be a string of at most 256 characters")
     _pow2(t["width"], f"{what} width", MAX_SIZE)
@@ -142,6 +147,11 @@ def _texture(t, k):
     if type(params) is not dict or len(params) > 64 or any(
             type(key) is not str or type(v) not in (str, int, float, bool, type(None)) for key, v in params.items()):
         _fail(f"{what} params must be a flat object of at most 64 scalars")
+    if "absent_levels" in t:
+        absent = [_int(L, f"{what} absent level", 0, t["levels"] - 1)
+                  for L in _list(t["absent_levels"], f"{what} absent_levels", 1, t["levels"])]
+        if absent != sorted(set(absent)):
+            _fail(f"{what} absent_levels must be distinct and increasing")
     return t
 
 
@@ -157,9 +167,11 @@ def _codebook(c, k):
 
 
 def _arrays(a, body_size):
-    _dict(a, "arrays", set(ARRAY_DTYPES))
+    _dict(a, "arrays", set(ARRAY_DTYPES) - set(OPTIONAL_ARRAYS), optional=OPTIONAL_ARRAYS)
     out = {}
     for name, (dtypes, rank) in ARRAY_DTYPES.items():
+        if name not in a:
+            continue
         spec = _dict(a[name], f"array {name}", {"shape", "offset", "nbytes", "dtype"})
         if spec["dtype"] not in dtypes:
             _fail(f"array {name} has dtype {spec['dtype']!r:.40}, not one of {dtypes}")

@@ -688,8 +688,10 @@ def load_scene(name_or_path: str | os.PathLike) -> Scene:
     return parse_scene(text, p)
 
 
-def build_texture_set(scene: Scene, images=None):
+def build_texture_set(scene: Scene, images=None, keep_levels=None):
     """Encode a scene's textures into one compressed TextureSet; texture k is scene texture k.
+    ``keep_levels`` (per scene texture, the level numbers to store; None: all) encodes only those
+    (``golden.encode.encode``'s ``keep_levels``; ``golden.prune.encode_needed``).
 
     One ``golden.encode.encode`` call per group (its textures share a codebook), then
     ``golden.format.TextureSet.combine`` in group order (texture ids were assigned group by group).
@@ -707,5 +709,7 @@ def build_texture_set(scene: Scene, images=None):
         kwargs = dict(block=(bw, bh), codebook_size=enc["codebook_size"], color=enc["color"],
                       index_bits=enc["index_bits"], mipmaps=enc["mipmaps"], encoder=enc["encoder"],
                       seed=enc["seed"], names=[t.name for t in members])
+        if keep_levels is not None:
+            kwargs["keep_levels"] = [keep_levels[t.id] for t in members]
         sets.append(encode([images[t.id] for t in members], **kwargs))
     return sets[0] if len(sets) == 1 else TextureSet.combine(sets)

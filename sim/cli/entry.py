@@ -15,13 +15,13 @@ from __future__ import annotations
 
 import sys
 
-from . import bench, cache, decode, demo, encode, experiments, export, info, render, report, simulate
+from . import bench, cache, decode, demo, encode, experiments, export, info, need, prune, render, report, simulate
 from .common import CliError, Parser
 
 __all__ = ["main", "build_parser", "version", "COMMANDS"]
 
 #: The subcommand modules, in the order ``vqtex --help`` lists them.
-COMMANDS = (encode, info, decode, simulate, render, demo, export, report, bench, experiments, cache)
+COMMANDS = (encode, info, decode, simulate, render, need, prune, demo, export, report, bench, experiments, cache)
 
 
 def build_parser() -> Parser:

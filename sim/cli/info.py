@@ -22,6 +22,7 @@ def info_report(ts) -> dict:
             "codebook_size": cb.size if cb else 0, "mipmapped": info.mipmapped,
             "compressed_levels": [L for L in range(len(levels)) if ts.descriptors[t, L]["compressed"]],
             "base_rate": round(r["base"], 4), "overall_rate": round(r["overall"], 4),
+            "absent_levels": list(info.absent_levels),
         })
     return {
         "textures": textures,
@@ -55,6 +56,11 @@ def info_text(ts, report) -> str:
         lines.append(f"{t['id']:>3} {t['name'][:16]:<16} {t['width']:>4}x{t['height']:<5} {t['levels']:>3} "
                      f"{t['color']:<9} {t['block']:<5} {t['index_bits']:>3} {t['codebook_size']:>5} "
                      f"{t['base_rate']:>7.2f}:1 {t['overall_rate']:>6.2f}:1")
+    pruned = [t for t in report["textures"] if t["absent_levels"]]
+    if pruned or ts.present_blocks is not None:
+        lines.append("pruned set (vqtex prune): " + "; ".join(
+            f"texture {t['id']} levels {', '.join(map(str, t['absent_levels']))} absent" for t in pruned)
+            + ("; only the blocks its frames touched" if ts.present_blocks is not None else ""))
     if any("psnr_db" in t for t in report["textures"]):
         lines.append("PSNR against the uncompressed image, dB, by mip level (0 first):")
         lines += [f"{t['id']:>3} {t['name'][:16]:<16} {_psnr_text(t['psnr_db'])}" for t in report["textures"]]

@@ -91,12 +91,13 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
     """Render ``frames`` of ``scene`` from TextureSet ``ts``; yields one dict per frame with the frame,
     the golden frame when the backend is RTL (for comparison), cycle results and the reference MSE.
     With the golden backend and ``cycle_model``, the cycles come from the exact cycle model (no RTL)."""
-    from vqtex.golden.fetch import fetch
+    from vqtex.golden.fetch import check_requests, fetch
     from vqtex.golden.render.frame import frame_requests
     from vqtex.golden.render.metrics import frame_mse
     from vqtex.golden.render.pyramid import ReferenceSource
     from vqtex.golden.render.pyramid import VQSource
     src = VQSource(ts)
+    pruned = ts.present_blocks is not None or any(t.absent_levels for t in ts.textures)
     ref_src = None
     if reference:
         if images is None:
@@ -106,10 +107,13 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
         out = {"frame": f}
         t0 = time.perf_counter()
         reqs, sampler = frame_requests(scene, f, src, mode)
+        if pruned:                                      # a pruned set refuses what it does not hold
+            check_requests(ts, reqs[:, 0], reqs[:, 1], reqs[:, 2], reqs[:, 3])
         golden_texels = fetch(ts, reqs[:, 0], reqs[:, 1], reqs[:, 2], reqs[:, 3])
         golden_frame = sampler.resolve(golden_texels)
         out["golden_seconds"] = time.perf_counter() - t0
         out["requests"] = int(len(reqs))
+        out["request_stream"] = reqs                    # for the need analysis of --report
         if backend == "golden":
             out["image"] = golden_frame
             if cycle_model and len(reqs):
@@ -202,6 +206,20 @@ def _extra_outputs(args, outs, frames):
     return write
 
 
+class _NeedReport:
+    """``--report``'s need analysis (``golden.need``), fed each frame's requests as it is rendered;
+    each frame's report gets its figures under ``need``."""
+
+    def __init__(self, ts, then=None):
+        from vqtex.golden.need import NeedCounter
+        self.counter, self.then = NeedCounter(ts), then
+
+    def on_frame(self, r):
+        done = dict(self.then(r) or {}) if self.then else {}
+        done["need"] = self.counter.add(r["frame"], r["request_stream"]).to_dict()
+        return done
+
+
 def _frame_report(r: dict) -> dict:
     d = {"frame": r["frame"], "requests": r["requests"], "golden_seconds": round(r["golden_seconds"], 4)}
     if "mse" in r:
@@ -230,9 +248,18 @@ def cmd_render(args) -> int:
             raise CliError(f"--diff-scale {args.diff_scale} must be at least 1")
         on_frame = _extra_outputs(args, outs, frames)
         images = [img for img, _ in scene.load_textures()]
-        ts = load_set(args.texture_set) if args.texture_set else encode_scene(scene, images)
+        if args.encode_needed and args.texture_set:
+            raise CliError("--encode-needed encodes the scene's textures: it does not go with --texture-set")
+        if args.encode_needed:
+            from vqtex.golden.prune import encode_needed
+            ts = encode_needed(scene, frames, args.mode, images)[0]
+        else:
+            ts = load_set(args.texture_set) if args.texture_set else encode_scene(scene, images)
         if ts.n_textures != len(scene.textures):
             raise CliError(f"{args.texture_set} holds {ts.n_textures} textures, the scene uses {len(scene.textures)}")
+        need = _NeedReport(ts, on_frame) if report_path else None
+        if need is not None:
+            on_frame = need.on_frame
         per_frame, mismatches = render_to_files(
             scene, ts, frames, frame_paths.get, images, outs=outs, on_frame=on_frame,
             mode=args.mode, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port)
@@ -245,6 +272,7 @@ def cmd_render(args) -> int:
             report["identical_to_golden"] = not mismatches
             report["cycles_per_frame"] = round(float(np.mean([f["cycles"] for f in per_frame])), 1)
         if report_path:
+            report["need"] = need.counter.result().summary(per_frame=False)
             write_json(outs.path(report_path), report)
     text = [f"{scene.name}: {len(frames)} frame(s), {args.mode}, backend {args.backend}, "
             f"overall compression {report['overall_rate']:.2f}:1, mean frame MSE {report['mean_mse']:.3f}"]
@@ -270,6 +298,9 @@ def add_parser(sub) -> None:
     r.add_argument("--texture-set", metavar="FILE.vqt",
                    help=with_default("use this texture set instead of encoding the scene's textures",
                                      "encode them with the scene's settings"))
+    r.add_argument("--encode-needed", action="store_true",
+                   help="encode only what the rendered frames need (their levels; codebooks trained on those, "
+                        "then pruned: golden.prune.encode_needed; default: encode everything)")
     add_hardware_options(r)
     r.add_argument("--report", metavar="REPORT.json", help=with_default("also write the JSON report here", "none"))
     r.add_argument("--reference", metavar="REF.png",

@@ -1,0 +1,105 @@
+"""Pruned texture sets (golden.prune): the frames they were pruned for are identical, everything
+else is refused, and the container round-trips them."""
+
+import numpy as np
+import pytest
+
+from vqtex.golden.fetch import RequestError, check_requests, fetch
+from vqtex.golden.format import FormatError, TextureSet
+from vqtex.golden.need import analyse, scene_streams
+from vqtex.golden.prune import encode_needed, prune, pruned_bytes, touched_levels
+from vqtex.golden.render.frame import render_frame
+from vqtex.golden.render.pyramid import VQSource
+from vqtex.golden.render.scene import build_texture_set, builtin_scene_path, parse_scene
+
+#: built-in scene -> (its size line, a small size, the frames pruned for, a frame outside them)
+SMALL = {"topspin": ("size = [400, 400]", "size = [72, 72]", [0, 6], 25),
+         "town": ("size = [400, 300]", "size = [80, 60]", [0, 30], 59)}
+
+
+def small_scene(name):
+    old, new, _, _ = SMALL[name]
+    text = builtin_scene_path(name).read_text()
+    assert old in text
+    return parse_scene(text.replace(old, new), builtin_scene_path(name))
+
+
+@pytest.fixture(scope="module", params=sorted(SMALL))
+def pruned(request):
+    name = request.param
+    scene = small_scene(name)
+    ts = build_texture_set(scene)
+    frames = SMALL[name][2]
+    need = analyse(ts, scene_streams(scene, ts, frames))
+    return name, scene, ts, frames, need, TextureSet.from_bytes(prune(ts, need).to_bytes())
+
+
+def test_frames_pruned_for_are_identical(pruned):
+    name, scene, ts, frames, _, p = pruned
+    for f in frames:
+        assert np.array_equal(render_frame(scene, f, VQSource(p)), render_frame(scene, f, VQSource(ts))), (name, f)
+
+
+def test_pruned_set_is_smaller_and_says_what_is_absent(pruned):
+    name, scene, ts, frames, need, p = pruned
+    before, after = pruned_bytes(ts), pruned_bytes(p)
+    assert after["codebook"] + after["index"] + after["raw"] < before["codebook"] + before["index"] + before["raw"]
+    lv = need.levels
+    for t, info in enumerate(p.textures):
+        assert info.absent_levels == [L for L in range(info.levels) if not lv[t, L]]
+        assert p.level_shapes(t) == ts.level_shapes(t)                  # level numbers and sizes stay
+    assert sorted(cb.size for cb in p.codebooks) == sorted(int(u.sum()) for u in need.codewords if u.any())
+    assert all(p.textures[t].index_bits == max(1, int(np.ceil(np.log2(p.codebooks[p.textures[t].codebook].size))))
+               for t in range(p.n_textures) if p.textures[t].codebook >= 0)
+    if name == "town":                                                  # 12-bit maps get narrower
+        assert max(t.index_bits for t in p.textures if t.codebook >= 0) < 12
+
+
+def test_requests_outside_the_need_are_refused(pruned):
+    name, scene, ts, frames, need, p = pruned
+    other = next(scene_streams(scene, ts, [SMALL[name][3]]))[1]
+    with pytest.raises(RequestError, match="pruned from this texture set"):
+        check_requests(p, *other.T)
+    # exactly the requests of untouched levels or blocks are refused, one at a time
+    rng = np.random.default_rng(1)
+    some = other[rng.choice(len(other), 300, replace=False)]
+    keep = np.zeros(len(some), bool)
+    for n, r in enumerate(some):
+        t, L, i, j = (int(x) for x in r)
+        if need.levels[t, L]:
+            d = ts.descriptor(t, L)
+            bx, by = (i >> d["log2bw"], j >> d["log2bh"]) if d["compressed"] else (i, j)
+            keep[n] = (not d["compressed"]) or need.touched_blocks(t, L)[by, bx]
+        try:
+            check_requests(p, *r[:, None])
+            accepted = True
+        except RequestError:
+            accepted = False
+        assert accepted == keep[n], (n, r)
+    assert np.array_equal(fetch(p, *some[keep].T), fetch(ts, *some[keep].T))
+
+
+def test_pruning_again_for_the_same_frames_changes_nothing(pruned):
+    name, scene, ts, frames, need, p = pruned
+    again = prune(p, analyse(p, scene_streams(scene, p, frames)))
+    assert again == p
+
+
+def test_encode_needed_stores_only_touched_levels():
+    scene = small_scene("town")
+    frames = [0]
+    keep = touched_levels(scene, frames)
+    p, need = encode_needed(scene, frames)
+    for t, info in enumerate(p.textures):
+        stored = [L for L in range(info.levels) if L not in info.absent_levels]
+        assert stored == keep[t]
+    assert not all(keep)                                                # town: some textures unseen
+    for f, reqs in scene_streams(scene, p, frames):
+        check_requests(p, *reqs.T)
+        assert np.array_equal(fetch(p, *reqs.T), fetch(need.ts, *reqs.T))
+
+
+def test_combining_block_pruned_sets_is_refused(pruned):
+    p = pruned[-1]
+    with pytest.raises(FormatError, match="combine, then prune"):
+        TextureSet.combine([p, p])
