@@ -77,3 +77,27 @@ def test_verilator_lint_clean_specialised(tmp_path, name, capsys):
     CASES[name][0]().save(path)
     code = main(["export", str(path), "-o", str(tmp_path / "tf.v"), "--lint"])
     assert code == 0, capsys.readouterr().err
+
+
+def test_pruned_small_town_specialised_on_cxxrtl():
+    """A set pruned for two frames of a small town (absent levels, fewer codewords, 12-bit indices
+    renumbered narrower): its specialised unit is no wider than the unpruned set's, and answers
+    those frames' requests on the compiled backend exactly as golden answers the unpruned set."""
+    need("g++")
+    from tests.golden.test_prune import SMALL, small_scene
+    from vqtex.golden.need import analyse, scene_streams
+    from vqtex.golden.prune import prune
+    from vqtex.golden.render.scene import build_texture_set
+    from vqtex.hw.features import Features
+    scene = small_scene("town")
+    ts = build_texture_set(scene)
+    frames = SMALL["town"][2]
+    p = prune(ts, analyse(ts, scene_streams(scene, ts, frames)))
+    full, pruned = Features.of(ts), Features.of(p)
+    assert pruned.index_bits <= full.index_bits and set(pruned.colors) <= set(full.colors)
+    assert (p.descriptors["valid"] == 0).sum() > (ts.descriptors["valid"] == 0).sum()     # absent levels
+    req = np.concatenate([r for _, r in scene_streams(scene, ts, frames)])
+    req = req[np.random.default_rng(0).permutation(len(req))[:4000]]
+    got = simulate(p, req, backend="cxxrtl", stall=0.2, seed=6)
+    assert np.array_equal(got.responses, fetch(ts, *req.T))
+    assert_same(got, simulate(p, req, backend="golden", stall=0.2, seed=6), "pruned town")
