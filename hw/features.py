@@ -48,7 +48,9 @@ __all__ = ["Features", "READ_BY", "ALL_WIDTHS", "Fields"]
 #: The descriptor fields the hardware reads, and in which rows: ``all`` (every level), ``compressed``
 #: (compressed levels), ``yuv`` (compressed yuv411 levels). The table's other fields (``valid``,
 #: ``log2h``, ``sublevel``) are never read by the unit (requests are valid; the sub-level is in the
-#: plane offsets and ``log2bw``).
+#: plane offsets and ``log2bw``). A block that comes to read another descriptor field must add it
+#: here: a specialised table stores only these (a field missing here is neither stored nor a
+#: constant, and reading it from ``DescriptorTable.fields()`` fails at elaboration).
 READ_BY = {
     "compressed": "all", "base": "all", "log2w": "all",
     "log2bw": "compressed", "log2bh": "compressed", "index_bits": "compressed", "cb_base": "compressed",
@@ -210,8 +212,8 @@ class Features:
         """One line for the command line."""
         if not self.specialised:
             return "full unit (every path, every descriptor field)"
-        parts = [("compressed" if self.compressed else "") + ("+raw" if self.raw and self.compressed else
-                                                              "raw" if self.raw else ""),
+        levels = {(True, True): "compressed+raw", (True, False): "compressed", (False, True): "raw"}
+        parts = [levels[self.compressed, self.raw],
                  "/".join(sorted(self.colors, key=COLORS.index)) or "no codebook",
                  "b=" + ",".join(map(str, self.index_widths)) if self.index_widths else "no indices",
                  "straddling" if self.straddle else "no straddles",
