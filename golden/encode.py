@@ -168,11 +168,30 @@ def _check(images, block, codebook_size, color, index_bits, encoder, mip_trainin
             raise EncodeError(f"image {n} is {w}x{h}: sides must be powers of two from 1 to {MAX_SIZE}")
 
 
+def _trained_blocks(texels, top: int, nsub: int, plan, shape, block):
+    """bool (blocks of the group at ``top``,): the blocks ``texels`` ((N, 3) level, i, j) fall in at
+    the group's compressed levels; None for ``texels`` None (every block)."""
+    if texels is None:
+        return None
+    h, w = shape[:2]
+    bw, bh = block
+    nbx = w // bw
+    mask = np.zeros(nbx * (h // bh), bool)
+    tx = np.asarray(texels, np.int64).reshape(-1, 3)
+    for s in range(nsub):
+        if top + s >= len(plan) or not plan[top + s]:
+            continue
+        at = tx[tx[:, 0] == top + s]
+        k = (at[:, 2] >> (log2(bh) - s)) * nbx + (at[:, 1] >> (log2(bw) - s))
+        mask[k[(k >= 0) & (k < len(mask))]] = True
+    return mask
+
+
 def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb",
            index_bits: int | None = None, mipmaps: bool = False, encoder: str = "gla", seed: int = 0,
            mip_training: str = "average", names=None, word_bits: int = 32,
            matrix: ColorMatrix = JFIF_BT601, raw_below: int = RAW_BELOW, max_iter: int = 100,
-           tol: float = 1e-3, raw: bool = False, keep_levels=None) -> TextureSet:
+           tol: float = 1e-3, raw: bool = False, keep_levels=None, train_texels=None) -> TextureSet:
     """Compress ``images`` (list of (H, W[, C]) uint8) into one texture group sharing a codebook.
 
     Arguments
@@ -187,6 +206,10 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
         are absent (``TextureInfo.absent_levels``, as in a pruned set): a level group none of whose
         levels is kept is neither trained on nor stored, so the codebook is trained on the blocks of
         the kept level groups only (``golden.prune.encode_needed``).
+    train_texels : per image, None or an (N, 3) integer array of texels (level, i, j): the codebook
+        is trained only on the blocks of compressed levels these texels fall in (every level group's
+        blocks for an image given None); indices are still chosen for every block of every stored
+        group. ``golden.prune.encode_needed(..., train="blocks")``.
     max_iter, tol : GLA's stop rule: stop when the distortion's relative decrease falls to ``tol``
         (``D_{m-1} - D_m <= tol * D_m``) or after ``max_iter`` iterations (``golden.codebook.gla``).
 
@@ -223,16 +246,21 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
         if len(keep_levels) != len(images):
             raise EncodeError(f"keep_levels lists {len(keep_levels)} images, not {len(images)}")
         stored = [[L in set(int(x) for x in keep) for L in range(len(pyr))] for keep, pyr in zip(keep_levels, pyrs)]
+    if train_texels is not None and len(train_texels) != len(images):
+        raise EncodeError(f"train_texels lists {len(train_texels)} images, not {len(images)}")
 
     # Training vectors: the top level of every compressed level group.
     weights_by_sub = [4.0 ** s for s in range(nsub)]
     groups = []                                     # (texture, top level)
     vecs = []
+    train = []                                      # per group, the blocks trained on (None: all)
     for t, (pyr, plan) in enumerate(zip(pyrs, plans)):
         for L in range(0, len(pyr), nsub):
-            if not plan[L] or not any(stored[t][L: L + nsub]):
+            if not plan[L] or not any(stored[t][M] and plan[M] for M in range(L, min(L + nsub, len(pyr)))):
                 continue
             groups.append((t, L))
+            train.append(_trained_blocks(train_texels[t] if train_texels is not None else None,
+                                         L, nsub, plan, pyr[L].shape, (bw, bh)))
             if mip_training == "joint":
                 parts = []
                 for s in range(nsub):
@@ -248,11 +276,17 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
         allv = np.concatenate(vecs, dtype=np.float32)  # rounds as astype does, without a float64 copy
         sizes = [len(v) for v in vecs]
         del vecs                                    # (the 4096x4096 encode's peak memory)
+        some = None if all(m is None for m in train) else np.concatenate(
+            [np.ones(n, bool) if m is None else m for m, n in zip(train, sizes)])
+        if some is not None and not some.any():
+            some = None                             # nothing touched: train on everything stored
+        tv = allv if some is None else allv[some]
         if encoder == "gla":
-            code, idx = vq.design(allv, codebook_size, method="gla", seed=seed, max_iter=max_iter, tol=tol)
+            code, idx = vq.design(tv, codebook_size, method="gla", seed=seed, max_iter=max_iter, tol=tol)
         else:                                       # the paper's TSVQ with tree-search encoding
-            tree = vq.tsvq_tree(allv, codebook_size, seed=seed)
+            tree = vq.tsvq_tree(tv, codebook_size, seed=seed)
             code, idx = tree.codebook, tree.encode(allv)
+        del tv
         code = np.asarray(code, dtype=np.float64)
         if mip_training == "joint":
             ends = [layout.planes[s][0] for s in range(1, nsub)] + [layout.size]

@@ -7,7 +7,7 @@ reports
 * which **textures**, **levels**, **level groups** and **blocks** are touched. A block of a compressed
   level is a block of its level group's index map (block ``k`` of :func:`~.fetch.block_address`:
   levels ``n, n+1, n+2`` of a group share one block grid); a "block" of a raw level is one texel
-  (one raw word). Counts of requests per block are kept per (texture, level): :attr:`Need.blocks`.
+  (one raw word). Counts of requests per block are kept per (texture, level): :meth:`Need.blocks`.
 * which **codewords** the touched blocks use, per codebook (the indices the touched blocks' maps hold);
 * the **colour formats**, **index widths** and **sub-levels** of the touched levels;
 * per frame, the **distinct words** of each memory a frame reads against what is stored: index
@@ -32,8 +32,9 @@ Public API::
     heat_image(need, tex, level, min_side=256) -> (H, W, 4) uint8 picture of the blocks touched
     Need.textures, .levels, .groups, .blocks(t, L), .touched_blocks(t, L), .group_blocks(t, top), .codewords,
         .frames, .formats(), .summary(per_frame=True)
-    scene_streams(scene, source, frames, mode="trilinear") -> iterator of (frame, requests)
+    scene_streams(scene, source, frames, mode="trilinear", **options) -> iterator of (frame, requests)
     scene_level_shapes(scene) -> [[(w, h), ...] per texture]
+    distinct_requests(streams) -> (M, 4) int64, the union of several streams' requests
     request_blocks(ts, reqs) -> RequestBlocks     buffer_hits(keys) -> bool    cache_hits(keys, sets, ways) -> bool
 """
 
@@ -48,7 +49,8 @@ from .fetch import block_address, read_index, straddles
 from .format import TextureSet
 
 __all__ = ["CacheSpec", "FrameNeed", "Need", "RequestBlocks", "analyse", "request_blocks", "buffer_hits",
-           "cache_hits", "scene_streams", "scene_level_shapes", "row_grids", "NeedCounter", "heat_image"]
+           "cache_hits", "scene_streams", "scene_level_shapes", "row_grids", "NeedCounter", "heat_image",
+           "distinct_requests"]
 
 
 @dataclass(frozen=True)
@@ -314,9 +316,13 @@ class Need:
         codebooks = [{"codebook": c, "size": cb.size, "used": int(self.codewords[c].sum())}
                      for c, cb in enumerate(ts.codebooks)]
         groups = self.groups
-        n_groups = sum(1 for t, info in enumerate(ts.textures) for L in range(info.levels)
-                       if valid[t, L] and (not comp[t, L] or d["sublevel"][t, L] == 0))
-        group_blocks = sum(int(self.group_blocks(t, top).sum()) for t, top, _ in groups if comp[t, top])
+        stored_groups = {}                            # (texture, top) -> blocks of its map (0: a raw level)
+        for t, L in zip(*np.nonzero(valid)):
+            t, L = int(t), int(L)
+            top = L - int(d["sublevel"][t, L]) if comp[t, L] else L
+            stored_groups[(t, top)] = int(self.grids[0][t, L] * self.grids[1][t, L]) if comp[t, L] else 0
+        n_groups = len(stored_groups)
+        group_blocks = sum(int(self.group_blocks(t, top).sum()) for t, top, _ in groups if stored_groups[(t, top)])
         fr = self.frames
         total = {
             "frames": len(fr), "requests": sum(f.requests for f in fr),
@@ -329,12 +335,10 @@ class Need:
         touched = {"index_words": int(self.index_words.sum()), "codebook_entries": int(self.codebook_entries.sum()),
                    "raw_words": int(self.raw_words.sum())}
         out = {
-            "textures": {"stored": ts.n_textures, "touched": int(self.textures.sum())},
+            "textures": {"stored": int(valid.any(axis=1).sum()), "touched": int(self.textures.sum())},
             "levels": {"stored": int(valid.sum()), "touched": int(lv.sum())},
             "level_groups": {"stored": n_groups, "touched": len(groups)},
-            "compressed_blocks": {"stored": int(sum(int(self.grids[0][t, L] * self.grids[1][t, L])
-                                                    for t, L in zip(*np.nonzero(comp & (d["sublevel"] == 0))))),
-                                  "touched": group_blocks},
+            "compressed_blocks": {"stored": sum(stored_groups.values()), "touched": group_blocks},
             "codewords": {"stored": int(sum(cb.size for cb in ts.codebooks)),
                           "used": int(sum(int(c.sum()) for c in self.codewords))},
             "formats": self.formats(),
@@ -454,6 +458,20 @@ def heat_image(need: Need, tex: int, level: int, min_side: int = 256) -> np.ndar
     return np.repeat(np.repeat(out, scale, axis=0), scale, axis=1)
 
 
+def distinct_requests(streams) -> np.ndarray:
+    """The distinct requests (M, 4) int64 of several request streams (each (N, 4), valid: sizes up to
+    4096 and at most 4096 textures), sorted by (texture, level, j, i): what a set must hold to answer
+    them all. Per stream one sort; the union is kept as 40-bit keys."""
+    acc = np.zeros(0, np.int64)
+    for reqs in streams:
+        r = np.asarray(reqs, np.int64).reshape(-1, 4)
+        key = ((((r[:, 0] * MAX_LEVELS + r[:, 1]) << 12) | r[:, 3]) << 12) | r[:, 2]
+        acc = np.union1d(acc, key)
+    mask = (1 << 12) - 1
+    row = acc >> 24
+    return np.stack([row // MAX_LEVELS, row % MAX_LEVELS, acc & mask, (acc >> 12) & mask], 1)
+
+
 def scene_level_shapes(scene) -> list[list[tuple[int, int]]]:
     """Per scene texture, the (width, height) of every level the scene's encoding gives it (a full
     pyramid down to 1x1 with mipmaps, else level 0 only): enough to issue the scene's requests
@@ -466,10 +484,11 @@ def scene_level_shapes(scene) -> list[list[tuple[int, int]]]:
     return out
 
 
-def scene_streams(scene, source, frames, mode: str = "trilinear"):
+def scene_streams(scene, source, frames, mode: str = "trilinear", **options):
     """Yield (frame, requests (N, 4) int64) of ``frames`` of ``scene``; ``source`` is a TextureSet,
-    any texture source with ``level_shapes``, or the list of level shapes per texture."""
+    any texture source with ``level_shapes``, or the list of level shapes per texture; ``options``
+    are ``golden.render.frame.frame_requests``'s (``stream="sparse"`` or ``"fixed"``, ``fovea``)."""
     from .render.frame import frame_requests
     for f in frames:
-        reqs, _ = frame_requests(scene, f, source, mode)
+        reqs, _ = frame_requests(scene, f, source, mode, **options)
         yield f, reqs

@@ -29,7 +29,8 @@ import numpy as np
 
 from .format import (CodebookInfo, TextureInfo, TextureSet, default_index_bits, pack_indices, unpack_indices)
 
-__all__ = ["prune", "pruned_bytes", "stored_counts", "prune_report", "touched_levels", "encode_needed"]
+__all__ = ["prune", "pruned_bytes", "stored_counts", "prune_report", "touched_texels", "touched_levels",
+           "encode_needed", "TRAIN_ON"]
 
 
 def _group_rows(d, t: int, top: int, levels: int, keep: np.ndarray) -> list[int]:
@@ -173,28 +174,50 @@ def prune_report(before: TextureSet, after: TextureSet, **extra) -> dict:
     return {**out, **extra}
 
 
-def touched_levels(scene, frames, mode: str = "trilinear") -> list[list[int]]:
-    """Per scene texture, the levels ``frames`` request, found before anything is encoded (the
-    requests depend only on the level shapes, :func:`golden.need.scene_level_shapes`)."""
+def touched_texels(scene, frames, mode: str = "trilinear", **options) -> np.ndarray:
+    """The distinct requests (M, 4) of ``frames`` of ``scene``, found before anything is encoded (the
+    requests depend only on the level shapes, :func:`golden.need.scene_level_shapes`); ``options``
+    are the request stream's (``stream``, ``fovea``: :func:`golden.need.scene_streams`)."""
+    from .need import distinct_requests, scene_level_shapes, scene_streams
+    return distinct_requests(r for _, r in scene_streams(scene, scene_level_shapes(scene), frames, mode, **options))
+
+
+def touched_levels(scene, frames=None, mode: str = "trilinear", texels=None) -> list[list[int]]:
+    """Per scene texture, the levels ``frames`` request (or the distinct requests ``texels`` of
+    :func:`touched_texels` hold)."""
     from .constants import MAX_LEVELS
-    from .need import scene_level_shapes, scene_streams
+    if texels is None:
+        texels = touched_texels(scene, frames, mode)
     seen = np.zeros((len(scene.textures), MAX_LEVELS), bool)
-    for _, reqs in scene_streams(scene, scene_level_shapes(scene), frames, mode):
-        seen.ravel()[np.unique(reqs[:, 0] * MAX_LEVELS + reqs[:, 1])] = True
+    seen.ravel()[np.unique(texels[:, 0] * MAX_LEVELS + texels[:, 1])] = True
     return [np.flatnonzero(row).tolist() for row in seen]
 
 
-def encode_needed(scene, frames, mode: str = "trilinear", images=None, cache=None):
-    """Encode only what ``frames`` of ``scene`` need: the levels they touch (the codebooks are
-    trained on the blocks of the touched level groups only), then :func:`prune` to the codewords and
-    blocks they touch. Returns (pruned set, the :class:`golden.need.Need` of the encoded set).
+#: What ``encode_needed`` trains the codebooks on: every block of the touched level groups, or only
+#: the blocks the frames touch.
+TRAIN_ON = ("levels", "blocks")
 
-    The frames rendered from it differ from those of the full encode wherever the codebooks differ
-    (they were trained on fewer blocks: all of them visible in these frames); they are identical to
-    the frames of the encoded set before pruning."""
-    from .need import CacheSpec, analyse, scene_streams
+
+def encode_needed(scene, frames, mode: str = "trilinear", images=None, cache=None, train: str = "levels",
+                  **options):
+    """Encode only what ``frames`` of ``scene`` need: the levels they touch, the codebooks trained on
+    the blocks of the touched level groups (``train="levels"``) or on the touched blocks only
+    (``train="blocks"``), then :func:`prune` to the codewords and blocks they touch. ``options``
+    choose the request stream (:func:`touched_texels`; default the sparse stream ``vqtex render`` issues). Returns (pruned set, the :class:`golden.need.Need` of the encoded set over
+    the frames' distinct requests: its counts are distinct texels per block, not requests).
+
+    The frames are rasterised once (:func:`touched_texels`). The frames rendered from the result
+    differ from those of the full encode wherever the codebooks differ (they were trained on fewer
+    blocks: all of them visible in these frames); they are identical to the frames of the encoded
+    set before pruning."""
+    from .need import CacheSpec, analyse
     from .render.scene import build_texture_set
-    keep = touched_levels(scene, frames, mode)
-    ts = build_texture_set(scene, images, keep_levels=keep)
-    need = analyse(ts, scene_streams(scene, ts, frames, mode), cache=cache or CacheSpec(), per_frame=False)
+    if train not in TRAIN_ON:
+        raise ValueError(f"train must be one of {TRAIN_ON}, not {train!r}")
+    texels = touched_texels(scene, frames, mode, **options)
+    per_texture = None
+    if train == "blocks":
+        per_texture = [texels[texels[:, 0] == t][:, 1:] for t in range(len(scene.textures))]
+    ts = build_texture_set(scene, images, keep_levels=touched_levels(scene, texels=texels), train_texels=per_texture)
+    need = analyse(ts, [texels], cache=cache or CacheSpec(), per_frame=False)
     return prune(ts, need), need

@@ -9,7 +9,8 @@ Modules, in pipeline order:
 - ``raster``: clipping, fixed-point edge functions (top-left rule), z-buffer, perspective-correct
   (s, t) with analytic derivatives.
 - ``sampling``: the two-phase sampler (``requests`` then ``resolve``), point and trilinear with
-  fixed-point weights, wrap/clamp.
+  fixed-point weights, wrap/clamp. ``sparse``: the sparse request stream (no zero-weight request, no
+  repeat; the same frames). ``fovea``: the foveation LOD bias.
 - ``pyramid``: the TextureSource protocol and the uncompressed ReferenceSource.
 - ``frame``: ``render_frame`` and request-stream export.  ``metrics``: ``frame_mse``.
 - ``bench``: ``run()`` prints frame times and requests per frame.

@@ -52,39 +52,44 @@ def fragments(scene, frame_no: float) -> Fragments:
     return rasterize(clip, st, tex, scene.width, scene.height, scene.camera_at(frame_no).near)
 
 
-def plan_frame(scene, frame_no: float, source: TextureSource | Sequence, mode: str = "trilinear") -> Sampler:
+def plan_frame(scene, frame_no: float, source: TextureSource | Sequence, mode: str = "trilinear", *,
+               stream: str = "sparse", fovea=None) -> Sampler:
     """A Sampler for one frame with its fragments attached as ``sampler.fragments``.
 
-    ``source`` is a TextureSource or directly the list of level shapes per texture.
+    ``source`` is a TextureSource or directly the list of level shapes per texture; ``stream`` and
+    ``fovea`` are the Sampler's (the sparse or fixed request stream, an optional LOD bias).
     """
-    sampler = Sampler(_shapes(scene, source), scene.addressing, mode, scene.background)
+    sampler = Sampler(_shapes(scene, source), scene.addressing, mode, scene.background, stream=stream, fovea=fovea)
     sampler.fragments = fragments(scene, frame_no)
     return sampler
 
 
-def frame_requests(scene, frame_no: float, source, mode: str = "trilinear"):
-    """(requests (N, 4) int64, sampler) of one frame; resolve with ``sampler.resolve(texels)``."""
-    sampler = plan_frame(scene, frame_no, source, mode)
+def frame_requests(scene, frame_no: float, source, mode: str = "trilinear", **options):
+    """(requests (N, 4) int64, sampler) of one frame; resolve with ``sampler.resolve(texels)``.
+    ``options``: :func:`plan_frame`'s ``stream`` and ``fovea``."""
+    sampler = plan_frame(scene, frame_no, source, mode, **options)
     return sampler.requests(sampler.fragments), sampler
 
 
-def resolve_frame(scene, frame_no: float, source, texels: np.ndarray, mode: str = "trilinear") -> np.ndarray:
+def resolve_frame(scene, frame_no: float, source, texels: np.ndarray, mode: str = "trilinear",
+                  **options) -> np.ndarray:
     """The frame from externally fetched texels answering ``frame_requests`` (same arguments)."""
-    _, sampler = frame_requests(scene, frame_no, source, mode)
+    _, sampler = frame_requests(scene, frame_no, source, mode, **options)
     return sampler.resolve(texels)
 
 
-def render_frame(scene, frame_no: float, source: TextureSource, mode: str = "trilinear") -> np.ndarray:
-    """Render frame ``frame_no`` of ``scene`` with texels from ``source``: (H, W, 4) uint8 RGBA."""
-    reqs, sampler = frame_requests(scene, frame_no, source, mode)
+def render_frame(scene, frame_no: float, source: TextureSource, mode: str = "trilinear", **options) -> np.ndarray:
+    """Render frame ``frame_no`` of ``scene`` with texels from ``source``: (H, W, 4) uint8 RGBA.
+    ``options``: :func:`plan_frame`'s ``stream`` and ``fovea``."""
+    reqs, sampler = frame_requests(scene, frame_no, source, mode, **options)
     texels = source.fetch(reqs[:, 0], reqs[:, 1], reqs[:, 2], reqs[:, 3])
     return sampler.resolve(np.asarray(texels, np.uint8))
 
 
-def render_frames(scene, source: TextureSource, mode: str = "trilinear", frames=None):
+def render_frames(scene, source: TextureSource, mode: str = "trilinear", frames=None, **options):
     """Yield (frame_no, frame) for ``frames`` (default: all of the scene's frames)."""
     for f in range(scene.frames) if frames is None else frames:
-        yield f, render_frame(scene, f, source, mode)
+        yield f, render_frame(scene, f, source, mode, **options)
 
 
 def save_requests(path: str | os.PathLike, reqs: np.ndarray) -> None:

@@ -10,10 +10,13 @@ calls; the same texels always give the same frame, bit for bit.
 **Request order.** Covered pixels in row-major order (y, then x); per pixel:
 
 - ``point``: 1 request, level 0, the nearest texel ``i = floor(s W0)``, ``j = floor(t H0)``.
-- ``trilinear``: 8 requests, level L0 first then level L1, and within a level the 2x2 footprint in
-  the order (i0, j0), (i1, j0), (i0, j1), (i1, j1). Every covered pixel issues all eight, even when
-  a weight is zero (a constant-rate stream, as in the hardware). Uncovered pixels issue nothing and
-  get the background colour.
+- ``trilinear``: level L0 first then level L1, and within a level the 2x2 footprint in the order
+  (i0, j0), (i1, j0), (i0, j1), (i1, j1). With ``stream="fixed"`` every covered pixel issues all
+  eight, even when a weight is zero (a constant-rate stream). With ``stream="sparse"`` (the default)
+  the same stream leaves out what cannot change the pixel (:mod:`golden.render.sparse`): requests
+  of weight 0, and a texel named twice in the footprint is requested once, at its first place, with
+  the weights added; 1 to 8 requests per pixel, and the same frame bit for bit. Uncovered pixels
+  issue nothing and get the background colour.
 
 **Level of detail** (per pixel, from the rasterizer's analytic derivatives and the level-0 size
 W0 x H0 of the pixel's texture)::
@@ -29,7 +32,8 @@ no level or blend.
 lambda is quantised to ``FRAC_BITS`` = 8 fractional bits with round to
 nearest, ``lam = floor(lambda 256 + 1/2)``, clamped to [0, 256 (levels - 1)]; ``L0 = lam >> 8``,
 level blend ``f = lam & 255``, ``L1 = min(L0 + 1, levels - 1)``. lambda <= 0 (magnification) thus
-gives bilinear filtering of level 0.
+gives bilinear filtering of level 0. With a :class:`~golden.render.fovea.Fovea`, its integer bias
+(1/256 levels, 0 inside the fovea) is added to ``floor(lambda 256 + 1/2)`` before the clamp.
 
 **Bilinear footprint** in level L of size W x H: ``u = floor(s W 256) - 128`` (texel centres at
 half-integers; s W 256 is exact in float64 because W 256 is a power of two), ``i0 = u >> 8``,
@@ -54,11 +58,13 @@ from typing import Sequence
 
 import numpy as np
 
+from .fovea import Fovea
 from .raster import Fragments
+from .sparse import STREAMS, SkipCounts, sparse_stream, stream_offsets
 
 __all__ = [
     "FRAC_BITS", "WEIGHT_BITS", "LOD_LIMIT", "MODES", "BACKGROUND", "level_of_detail", "quantize_lod",
-    "address", "fold_coordinate", "trilinear_weights", "Sampler",
+    "address", "fold_coordinate", "trilinear_weights", "Sampler", "STREAMS",
 ]
 
 FRAC_BITS = 8
@@ -83,10 +89,14 @@ def level_of_detail(frags: Fragments, width0: np.ndarray, height0: np.ndarray) -
     return np.clip(np.nan_to_num(lam, nan=-LOD_LIMIT, posinf=LOD_LIMIT, neginf=-LOD_LIMIT), -LOD_LIMIT, LOD_LIMIT)
 
 
-def quantize_lod(lam: np.ndarray, levels: np.ndarray) -> np.ndarray:
-    """lambda -> int64 with FRAC_BITS fraction, round to nearest, clamped to [0, (levels-1) 2^8]."""
+def quantize_lod(lam: np.ndarray, levels: np.ndarray, bias: np.ndarray | None = None) -> np.ndarray:
+    """lambda -> int64 with FRAC_BITS fraction, round to nearest, plus ``bias`` (integer 1/256 levels,
+    default 0), clamped to [0, (levels-1) 2^8]. Exact: ``floor(x + b) == floor(x) + b`` for integer b
+    (here |x| <= 2^15 and |b| <= 2^14, so ``x + b`` is exact in float64)."""
     top = (np.asarray(levels, np.int64) - 1) * _ONE
     x = np.nan_to_num(np.asarray(lam, np.float64) * _ONE + 0.5, nan=0.0, neginf=0.0)
+    if bias is not None:
+        x = x + np.asarray(bias, np.int64)
     return np.floor(np.minimum(np.maximum(x, 0.0), top)).astype(np.int64)
 
 
@@ -131,13 +141,27 @@ class Sampler:
         address: per texture id, "wrap", "clamp" or a pair (s, t); default wrap everywhere.
         mode: "point" or "trilinear".
         background: RGBA of uncovered pixels.
+        stream: "sparse" (default: no request that cannot change the pixel) or "fixed" (every pixel
+            issues its whole footprint, 8 requests in trilinear mode); the same frames.
+        fovea: an optional :class:`~golden.render.fovea.Fovea`: its LOD bias (trilinear only).
+
+    After :meth:`requests`: ``counts`` (M,) int64 requests per covered pixel, ``weights`` (N,) uint32
+    per request (2^24 in point mode), ``lam`` (M,) int64 quantised LOD per pixel (trilinear; None in
+    point mode) and ``skipped`` (:class:`~golden.render.sparse.SkipCounts`).
     """
 
     def __init__(self, level_shapes: Sequence[Sequence[tuple[int, int]]], address=None,
-                 mode: str = "trilinear", background=BACKGROUND):
+                 mode: str = "trilinear", background=BACKGROUND, stream: str = "sparse",
+                 fovea: Fovea | None = None):
         if mode not in MODES:
             raise ValueError(f"unknown sampling mode {mode!r} (known: {', '.join(MODES)})")
+        if stream not in STREAMS:
+            raise ValueError(f"unknown request stream {stream!r} (known: {', '.join(STREAMS)})")
+        if fovea is not None and not isinstance(fovea, Fovea):
+            raise TypeError(f"fovea must be a Fovea or None, got {type(fovea).__name__}")
         self.mode = mode
+        self.stream = stream
+        self.fovea = fovea
         t = len(level_shapes)
         nlev = max((len(s) for s in level_shapes), default=1)
         self._widths = np.ones((max(t, 1), nlev), np.int64)
@@ -167,9 +191,11 @@ class Sampler:
             raise ValueError(f"background must be RGB or RGBA bytes, got {background!r}")
         self.background = np.array(bg, np.uint8)
         self._plan = None
+        self.counts = self.weights = self.lam = self.skipped = None
 
     @property
     def requests_per_pixel(self) -> int:
+        """Requests per covered pixel of the fixed stream (the most a pixel issues)."""
         return 1 if self.mode == "point" else 8
 
     def lod(self, frags: Fragments) -> np.ndarray:
@@ -194,7 +220,8 @@ class Sampler:
             reqs = np.stack([tex, np.zeros(m, np.int64), i, j], 1)
             weights = None
         else:
-            lam = quantize_lod(self.lod(frags), self._levels[tex])
+            bias = None if self.fovea is None else self.fovea.bias(frags.pixel, frags.width)
+            lam = quantize_lod(self.lod(frags), self._levels[tex], bias)
             l0 = lam >> FRAC_BITS
             f = lam & (_ONE - 1)
             l1 = np.minimum(l0 + 1, self._levels[tex] - 1)
@@ -215,16 +242,27 @@ class Sampler:
                 reqs[:, b:b + 4, 3] = np.stack([j0a, j0a, j1a, j1a], 1)
             weights = trilinear_weights(fracs[0], fracs[1], fracs[2], fracs[3], f).astype(np.uint32)
             reqs = reqs.reshape(-1, 4)
-        self._plan = (frags.width, frags.height, np.asarray(frags.pixel, np.int64), weights)
+        self.lam = None if self.mode == "point" else lam
+        k = self.requests_per_pixel
+        if weights is None:
+            weights = np.full((m, k), 1 << WEIGHT_BITS, np.uint32)
+        if self.stream == "sparse" and k > 1:
+            spans = (len(self._levels), self._widths.shape[1], self._widths.max(), self._heights.max())
+            reqs, weights, counts, self.skipped = sparse_stream(reqs.reshape(m, k, 4), weights, spans)
+        else:
+            weights, counts = weights.reshape(-1), np.full(m, k, np.int64)
+            self.skipped = SkipCounts(m * k, 0, 0)
+        self.counts, self.weights = counts, weights
+        self._plan = (frags.width, frags.height, np.asarray(frags.pixel, np.int64), weights, counts)
         return reqs
 
     def resolve(self, texels: np.ndarray) -> np.ndarray:
         """The frame (H, W, 4) uint8 from the texels (N, 4) uint8 answering requests(), in order."""
         if self._plan is None:
             raise RuntimeError("resolve() before requests()")
-        width, height, pixel, weights = self._plan
+        width, height, pixel, weights, counts = self._plan
         tx = np.asarray(texels)
-        n = len(pixel) * self.requests_per_pixel
+        n = len(weights)
         if tx.shape != (n, 4):
             raise ValueError(f"expected texels of shape ({n}, 4), got {tx.shape}")
         if tx.dtype != np.uint8:
@@ -234,9 +272,11 @@ class Sampler:
         if self.mode == "point":
             frame[pixel] = tx
         else:
+            # per pixel sum w texel over its requests; exact: the weights sum to 2^24, so acc < 2^32
             acc = np.zeros((len(pixel), 4), np.uint32)
-            tx = tx.reshape(-1, 8, 4)
-            for k in range(8):  # exact: the weights sum to 2^24, so acc < 2^32
-                acc += weights[:, k, None] * tx[:, k]
+            some = counts > 0
+            if some.any():
+                acc[some] = np.add.reduceat(weights[:, None] * tx, stream_offsets(counts)[some], axis=0,
+                                            dtype=np.uint32)
             frame[pixel] = ((acc + (1 << (WEIGHT_BITS - 1))) >> WEIGHT_BITS).astype(np.uint8)
         return frame.reshape(height, width, 4)

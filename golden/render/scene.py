@@ -688,10 +688,11 @@ def load_scene(name_or_path: str | os.PathLike) -> Scene:
     return parse_scene(text, p)
 
 
-def build_texture_set(scene: Scene, images=None, keep_levels=None):
+def build_texture_set(scene: Scene, images=None, keep_levels=None, train_texels=None):
     """Encode a scene's textures into one compressed TextureSet; texture k is scene texture k.
     ``keep_levels`` (per scene texture, the level numbers to store; None: all) encodes only those
-    (``golden.encode.encode``'s ``keep_levels``; ``golden.prune.encode_needed``).
+    (``golden.encode.encode``'s ``keep_levels``; ``golden.prune.encode_needed``); ``train_texels``
+    (per scene texture, None or (N, 3) level, i, j) trains the codebooks on those texels' blocks only.
 
     One ``golden.encode.encode`` call per group (its textures share a codebook), then
     ``golden.format.TextureSet.combine`` in group order (texture ids were assigned group by group).
@@ -711,5 +712,7 @@ def build_texture_set(scene: Scene, images=None, keep_levels=None):
                       seed=enc["seed"], names=[t.name for t in members])
         if keep_levels is not None:
             kwargs["keep_levels"] = [keep_levels[t.id] for t in members]
+        if train_texels is not None:
+            kwargs["train_texels"] = [train_texels[t.id] for t in members]
         sets.append(encode([images[t.id] for t in members], **kwargs))
     return sets[0] if len(sets) == 1 else TextureSet.combine(sets)

@@ -7,11 +7,12 @@ For each scene, over all its frames (topspin 50, town 60), side by side in one r
   codewords touched against stored, distinct memory words, block-buffer and cache hits, and its time;
 * ``golden.prune.prune`` of the full set: what is stored before and after, memory and file bytes,
   and that every 10th frame renders identically from the pruned set;
-* the full encode (``build_texture_set``) against ``encode_needed`` (touched levels from the
-  requests, encode of those, need analysis and prune), each best of ``--repeat`` runs alternating,
-  with the parts of ``encode_needed`` timed separately;
-* frame MSE against the uncompressed textures (every 10th frame) of the full encode and of the
-  encode for the frames (its codebooks are trained on fewer blocks, so its frames differ).
+* the full encode (``build_texture_set``) against ``encode_needed`` (the frames' distinct requests
+  from rasterising them, encode of the touched levels, need analysis and prune), each best of
+  ``--repeat`` runs alternating, with the parts of ``encode_needed`` timed separately;
+* ``encode_needed(train="blocks")`` (codebooks trained on the touched blocks only), one run;
+* frame MSE against the uncompressed textures (every 10th frame) of the full encode and of the two
+  encodes for the frames (their codebooks are trained on fewer blocks, so their frames differ).
 """
 
 from __future__ import annotations
@@ -37,7 +38,7 @@ def _best(fn, repeat):
 
 def scene_bench(name: str, repeat: int = 2, check_step: int = 10) -> dict:
     from vqtex.golden.need import analyse, scene_level_shapes, scene_streams
-    from vqtex.golden.prune import prune, prune_report, touched_levels
+    from vqtex.golden.prune import encode_needed, prune, prune_report, touched_levels, touched_texels
     from vqtex.golden.render.frame import render_frame
     from vqtex.golden.render.metrics import frame_mse
     from vqtex.golden.render.pyramid import VQSource
@@ -52,15 +53,14 @@ def scene_bench(name: str, repeat: int = 2, check_step: int = 10) -> dict:
         full = build_texture_set(scene, images)
         dt = time.perf_counter() - t0
         full_s = dt if full_s is None else min(full_s, dt)
-        t0 = time.perf_counter()
-        keep = touched_levels(scene, frames)
+        t0 = time.perf_counter()                          # encode_needed, step by step
+        texels = touched_texels(scene, frames)
         t1 = time.perf_counter()
-        partial = build_texture_set(scene, images, keep_levels=keep)
+        partial = build_texture_set(scene, images, keep_levels=touched_levels(scene, texels=texels))
         t2 = time.perf_counter()
-        need_p = analyse(partial, scene_streams(scene, partial, frames), per_frame=False)
-        needed = prune(partial, need_p)
+        needed = prune(partial, analyse(partial, [texels], per_frame=False))
         t3 = time.perf_counter()
-        run_parts = {"touched_levels": t1 - t0, "encode": t2 - t1, "analyse_and_prune": t3 - t2}
+        run_parts = {"rasterise_frames": t1 - t0, "encode": t2 - t1, "analyse_and_prune": t3 - t2}
         if needed_s is None or t3 - t0 < needed_s:
             needed_s, parts = t3 - t0, run_parts
     t0 = time.perf_counter()
@@ -69,12 +69,16 @@ def scene_bench(name: str, repeat: int = 2, check_step: int = 10) -> dict:
     t0 = time.perf_counter()
     pruned = prune(full, need)
     prune_s = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    blocks, _ = encode_needed(scene, frames, images=images, train="blocks")
+    blocks_s = time.perf_counter() - t0
     ref = scene.reference_source(images)
     check = frames[::check_step]
     identical = all(np.array_equal(render_frame(scene, f, VQSource(pruned)), render_frame(scene, f, VQSource(full)))
                     for f in check)
     mse_full = [frame_mse(render_frame(scene, f, VQSource(full)), render_frame(scene, f, ref)) for f in check]
     mse_needed = [frame_mse(render_frame(scene, f, VQSource(needed)), render_frame(scene, f, ref)) for f in check]
+    mse_blocks = [frame_mse(render_frame(scene, f, VQSource(blocks)), render_frame(scene, f, ref)) for f in check]
     summary = need.summary(per_frame=False)
     fr = need.frames
     per_frame = {k: round(float(np.mean([getattr(f, k) for f in fr])), 1)
@@ -89,9 +93,11 @@ def scene_bench(name: str, repeat: int = 2, check_step: int = 10) -> dict:
         "prune": prune_report(full, pruned), "prune_seconds": round(prune_s, 3),
         "pruned_frames_identical": identical, "frames_checked": check,
         "encode_needed": prune_report(full, needed),
+        "encode_needed_blocks": prune_report(full, blocks), "encode_needed_blocks_seconds": round(blocks_s, 2),
         "encode_seconds": {"full": round(full_s, 2), "needed": round(needed_s, 2),
                            **{k: round(v, 2) for k, v in parts.items()}},
-        "mse": {"full": round(float(np.mean(mse_full)), 4), "needed": round(float(np.mean(mse_needed)), 4)},
+        "mse": {"full": round(float(np.mean(mse_full)), 4), "needed": round(float(np.mean(mse_needed)), 4),
+                "needed_blocks": round(float(np.mean(mse_blocks)), 4)},
     }
 
 
@@ -119,10 +125,12 @@ def _text(r: dict) -> str:
         f"{p['before']['bytes']['file']} -> {p['after']['bytes']['file']}; frames {r['frames_checked']} identical: "
         f"{r['pruned_frames_identical']}",
         f"  encode for the frames: levels {ch(e, 'levels')}, codewords {ch(e, 'codewords')}, memory bytes "
-        f"{ch(e, 'memory_bytes')}; seconds full {es['full']} vs needed {es['needed']} (touched levels "
-        f"{es['touched_levels']}, encode {es['encode']}, analyse and prune {es['analyse_and_prune']})",
+        f"{ch(e, 'memory_bytes')}; seconds full {es['full']} vs needed {es['needed']} (rasterise the frames "
+        f"{es['rasterise_frames']}, encode {es['encode']}, analyse and prune {es['analyse_and_prune']})",
+        f"  encode for the frames, trained on the touched blocks only: {r['encode_needed_blocks_seconds']} s (one run), "
+        f"codewords {ch(r['encode_needed_blocks'], 'codewords')}, memory bytes {ch(r['encode_needed_blocks'], 'memory_bytes')}",
         f"  frame MSE vs uncompressed (frames {r['frames_checked']}): full encode {r['mse']['full']}, encoded for the "
-        f"frames {r['mse']['needed']}",
+        f"frames {r['mse']['needed']}, trained on the touched blocks {r['mse']['needed_blocks']}",
     ])
 
 

@@ -34,7 +34,7 @@ import threading
 __all__ = ["CliError", "Parser", "block_size", "BACKEND_HELP", "add_json", "add_texture_set", "add_backend",
            "add_hardware_options", "add_unit", "add_tag_width", "emit", "warn", "warn_slow", "progress_enabled", "progress_line",
            "Outputs", "check_folder", "IMAGE_SUFFIXES", "write_bytes", "write_json", "load_set", "with_default",
-           "file_mode", "PYSIM_CYCLES_PER_SECOND", "SLOW_SECONDS", "STAGING_PREFIX"]
+           "file_mode", "add_sweep_options", "sweep_options", "PYSIM_CYCLES_PER_SECOND", "SLOW_SECONDS", "STAGING_PREFIX"]
 
 #: Image file extensions an output image may have (all hold RGBA except JPEG and BMP, which drop alpha).
 IMAGE_SUFFIXES = (".png", ".tif", ".tiff", ".exr", ".tga", ".bmp", ".jpg", ".jpeg")
@@ -119,6 +119,24 @@ def add_unit(p, *, both: bool = False) -> None:
 def add_tag_width(p) -> None:
     p.add_argument("--tag-width", type=int, default=8,
                    help=with_default("bits of the request tag carried to the response, 0..16", 8))
+
+
+def add_sweep_options(p) -> None:
+    """``--scheduler`` and ``--workers`` for commands that run a sweep of independent jobs
+    (:func:`vqtex.sim.bench.sweep.run_jobs`)."""
+    p.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                   help=with_default("where the sweep's jobs run: the address of a running dask scheduler "
+                                     "(tcp://host:8786), 'serial' for this process, or none for a dask "
+                                     "LocalCluster of worker processes on this machine", "a LocalCluster"))
+    p.add_argument("--workers", type=int, default=None,
+                   help=with_default("worker processes of the LocalCluster", "the cores this process may use"))
+
+
+def sweep_options(args) -> dict:
+    """``run_jobs`` keyword arguments from :func:`add_sweep_options`' options, checked."""
+    if args.workers is not None and args.workers < 1:
+        raise CliError(f"--workers must be at least 1, got {args.workers}")
+    return {"scheduler": args.scheduler, "workers": args.workers, "progress": progress_enabled()}
 
 
 def block_size(text: str) -> tuple[int, int]:

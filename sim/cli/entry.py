@@ -1,7 +1,7 @@
 """The ``vqtex`` command line (see ``docs/usage.md``): the parser and the entry point.
 
 One module per subcommand (``encode``, ``info``, ``decode``, ``simulate`` for ``sim``, ``render``,
-``demo``, ``export``, ``report``, ``bench``, ``experiments``, ``cache``), each with ``add_parser(sub)``; the
+``need``, ``prune``, ``demo``, ``export``, ``report``, ``bench``, ``experiments``, ``cache``), each with ``add_parser(sub)``; the
 helpers they share are in :mod:`vqtex.sim.cli.common`. This module imports the subcommands, never the
 other way round.
 

@@ -19,9 +19,13 @@ def add_need_source(p) -> None:
                                                  "all"))
     p.add_argument("--mode", choices=["point", "trilinear"], default="trilinear",
                    help=with_default("the sampling mode whose requests are analysed", "trilinear"))
+    p.add_argument("--requests", choices=["sparse", "fixed"], default="sparse",
+                   help=with_default("the request stream analysed: sparse (no zero-weight texels or repeats in a "
+                                     "footprint) or fixed (every pixel's whole footprint), as vqtex render issues "
+                                     "them", "sparse"))
 
 
-def scene_need(scene, ts, frames, mode="trilinear", cache=None, progress=True, per_frame=True):
+def scene_need(scene, ts, frames, mode="trilinear", cache=None, progress=True, per_frame=True, stream="sparse"):
     """The :class:`~vqtex.golden.need.Need` of ``frames`` of ``scene`` in ``ts`` (a progress bar)."""
     from vqtex.golden.fetch import check_requests
     from vqtex.golden.need import CacheSpec, NeedCounter, scene_streams
@@ -29,7 +33,7 @@ def scene_need(scene, ts, frames, mode="trilinear", cache=None, progress=True, p
     from .render import Progress
     counter = NeedCounter(ts, cache or CacheSpec(), per_frame)
     prog = Progress(len(frames), "analysing frames") if progress else None
-    for f, reqs in scene_streams(scene, ts, frames, mode):
+    for f, reqs in scene_streams(scene, ts, frames, mode, stream=stream):
         check_requests(ts, reqs[:, 0], reqs[:, 1], reqs[:, 2], reqs[:, 3])
         counter.add(f, reqs)
         if prog:
@@ -120,8 +124,9 @@ def cmd_need(args) -> int:
         ts = load_set(args.texture_set) if args.texture_set else encode_scene(scene, None)
         if ts.n_textures != len(scene.textures):
             raise CliError(f"{args.texture_set} holds {ts.n_textures} textures, the scene uses {len(scene.textures)}")
-        need = scene_need(scene, ts, frames, args.mode, cache)
-        report = {"scene": scene.name, "mode": args.mode, "frames": frames, **need.summary()}
+        need = scene_need(scene, ts, frames, args.mode, cache, stream=args.requests)
+        report = {"scene": scene.name, "mode": args.mode, "requests": args.requests, "frames": frames,
+                  **need.summary()}
         if folder:
             report["heatmaps"] = {"folder": args.heatmap, "files": write_heatmaps(outs, folder, ts, need)}
     text = need_text(scene.name, report)

@@ -9,7 +9,7 @@ import time
 from .common import CliError, Outputs, add_json, emit, load_set, with_default, write_bytes
 from .need import add_need_source, scene_need
 
-__all__ = ["add_parser", "cmd_prune", "prune_text"]
+__all__ = ["add_parser", "cmd_prune", "prune_text", "add_train_on"]
 
 
 def prune_text(r: dict) -> str:
@@ -42,22 +42,25 @@ def cmd_prune(args) -> int:
         out = outs.add(args.output, (".vqt",), "a texture set")
         scene = load_scene(args.scene)
         frames = parse_frames(args.frames, scene.frames)
-        extra = {"scene": scene.name, "frames": frames, "mode": args.mode}
+        extra = {"scene": scene.name, "frames": frames, "mode": args.mode, "requests": args.requests}
         if args.file:
+            if args.train_on != "levels":
+                raise CliError("--train-on is for encoding (no SET.vqt): a set's codebooks are already trained")
             if args.compare:
                 raise CliError("--compare times a full encode against encoding for the frames: give no SET.vqt")
             ts = load_set(args.file)
             if ts.n_textures != len(scene.textures):
                 raise CliError(f"{args.file} holds {ts.n_textures} textures, the scene uses {len(scene.textures)}")
             t0 = time.perf_counter()
-            pruned = prune(ts, scene_need(scene, ts, frames, args.mode, per_frame=False))
+            pruned = prune(ts, scene_need(scene, ts, frames, args.mode, per_frame=False, stream=args.requests))
             extra["prune_seconds"] = round(time.perf_counter() - t0, 3)
             before = ts
         else:
             images = [img for img, _ in scene.load_textures()]
             prog = Progress(1, "encoding for the frames")
             t0 = time.perf_counter()
-            pruned, need = encode_needed(scene, frames, args.mode, images)
+            pruned, need = encode_needed(scene, frames, args.mode, images, train=args.train_on, stream=args.requests)
+            extra["train_on"] = args.train_on
             extra["encode_seconds"] = round(time.perf_counter() - t0, 3)
             prog.step()
             prog.done()
@@ -88,5 +91,13 @@ def add_parser(sub) -> None:
     p.add_argument("--compare", action="store_true",
                    help="without SET.vqt: also encode everything, to report the bytes before and the time saved "
                         "(default: no full encode; 'before' is the encode of the touched levels)")
+    add_train_on(p)
     add_json(p)
     p.set_defaults(func=cmd_prune)
+
+
+def add_train_on(p) -> None:
+    """``--train-on``: what encoding for the frames trains the codebooks on."""
+    p.add_argument("--train-on", choices=["levels", "blocks"], default="levels",
+                   help=with_default("encoding for the frames: train the codebooks on every block of the touched "
+                                     "level groups, or on the touched blocks only", "levels"))

@@ -17,7 +17,8 @@ import numpy as np
 from .common import (IMAGE_SUFFIXES, CliError, Outputs, add_backend, add_hardware_options, add_json, emit, load_set,
                      progress_enabled, warn, warn_slow, with_default, write_json)
 
-__all__ = ["add_parser", "cmd_render", "render_scene", "render_to_files", "encode_scene", "parse_frames", "Progress"]
+__all__ = ["add_parser", "cmd_render", "render_scene", "render_to_files", "encode_scene", "parse_frames", "parse_fovea",
+           "Progress"]
 
 
 class Progress:
@@ -87,10 +88,17 @@ def _frame_path(pattern: str, frame: int, many: bool) -> str:
 
 
 def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall=0.0, seed=0,
-                 one_port=False, reference=True, images=None, progress=None, cycle_model=False):
+                 one_port=False, reference=True, images=None, progress=None, cycle_model=False,
+                 stream="sparse", fovea=None, compare_fixed=False):
     """Render ``frames`` of ``scene`` from TextureSet ``ts``; yields one dict per frame with the frame,
     the golden frame when the backend is RTL (for comparison), cycle results and the reference MSE.
-    With the golden backend and ``cycle_model``, the cycles come from the exact cycle model (no RTL)."""
+    With the golden backend and ``cycle_model``, the cycles come from the exact cycle model (no RTL).
+    ``stream`` is the sampler's request stream (``sparse`` or ``fixed``: the same frames); with a
+    ``fovea`` (:class:`~vqtex.golden.render.fovea.Fovea`) the frame is foveated and ``"fovea"`` holds
+    :func:`vqtex.sim.reports.foveation.compare_regions` against the unbiased frame. ``compare_fixed``
+    also runs the fixed stream through the backend (the cycle model for ``golden``, which then
+    reports the sparse stream's cycles too): ``"fixed"`` holds its requests, cycles and whether its
+    frame is identical."""
     from vqtex.golden.fetch import check_requests, fetch
     from vqtex.golden.render.frame import frame_requests
     from vqtex.golden.render.metrics import frame_mse
@@ -106,17 +114,18 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
     for f in frames:
         out = {"frame": f}
         t0 = time.perf_counter()
-        reqs, sampler = frame_requests(scene, f, src, mode)
+        reqs, sampler = frame_requests(scene, f, src, mode, stream=stream, fovea=fovea)
         if pruned:                                      # a pruned set refuses what it does not hold
             check_requests(ts, reqs[:, 0], reqs[:, 1], reqs[:, 2], reqs[:, 3])
         golden_texels = fetch(ts, reqs[:, 0], reqs[:, 1], reqs[:, 2], reqs[:, 3])
         golden_frame = sampler.resolve(golden_texels)
         out["golden_seconds"] = time.perf_counter() - t0
         out["requests"] = int(len(reqs))
+        out["skipped"] = sampler.skipped
         out["request_stream"] = reqs                    # for the need analysis of --report
         if backend == "golden":
             out["image"] = golden_frame
-            if cycle_model and len(reqs):
+            if (cycle_model or compare_fixed) and len(reqs):
                 from vqtex.sim.backends import simulate
                 out["sim"] = simulate(ts, reqs, backend="golden", stall=stall, seed=seed, one_port=one_port)
                 out["rtl_seconds"] = 0.0
@@ -134,6 +143,21 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
             ref = sampler.resolve(ref_src.fetch(reqs[:, 0], reqs[:, 1], reqs[:, 2], reqs[:, 3]))
             out["mse"] = frame_mse(out["image"], ref)
             out["reference"] = ref
+        if compare_fixed:
+            from vqtex.sim.backends import simulate
+            freqs, fsampler = frame_requests(scene, f, src, mode, stream="fixed", fovea=fovea)
+            fres = simulate(ts, freqs, backend=backend, stall=stall, seed=seed, one_port=one_port) if len(freqs) else None
+            fimg = fsampler.resolve(fres.responses) if fres is not None else out["image"]
+            out["fixed"] = {"requests": int(len(freqs)), "cycles": int(fres.cycles) if fres is not None else 0,
+                            "identical": bool(np.array_equal(fimg, out["image"]))}
+        if fovea is not None:
+            from vqtex.sim.reports.foveation import compare_regions
+            ureqs, usampler = frame_requests(scene, f, src, mode, stream=stream)
+            if pruned:
+                check_requests(ts, ureqs[:, 0], ureqs[:, 1], ureqs[:, 2], ureqs[:, 3])
+            uframe = usampler.resolve(fetch(ts, ureqs[:, 0], ureqs[:, 1], ureqs[:, 2], ureqs[:, 3]))
+            out["fovea"] = compare_regions(ts, fovea, (reqs, sampler, golden_frame), (ureqs, usampler, uframe), f,
+                                           backend=backend, stall=stall, seed=seed, one_port=one_port)
         if progress:
             progress.step()
         yield out
@@ -222,6 +246,13 @@ class _NeedReport:
 
 def _frame_report(r: dict) -> dict:
     d = {"frame": r["frame"], "requests": r["requests"], "golden_seconds": round(r["golden_seconds"], 4)}
+    if "skipped" in r:
+        k = r["skipped"]
+        d.update(requests_fixed=k.fixed, skipped_zero_weight=k.zero_weight, skipped_repeats=k.repeats)
+    if "fovea" in r:
+        d["fovea"] = r["fovea"]
+    if "fixed" in r:
+        d["fixed_stream"] = r["fixed"]
     if "mse" in r:
         d["mse"] = round(float(r["mse"]), 4)
     if "sim" in r and r["sim"] is not None:
@@ -241,6 +272,9 @@ def cmd_render(args) -> int:
         report_path = outs.add(args.report, (".json",), "the report") if args.report else None
         scene = load_scene(args.scene)
         frames = parse_frames(args.frames, scene.frames)
+        fovea = parse_fovea(args, scene)
+        if args.compare_fixed and args.requests == "fixed":
+            raise CliError("--compare-fixed compares the sparse stream with the fixed one: it needs --requests sparse")
         frame_paths = {f: _frame_path(args.output, f, len(frames) > 1) for f in frames}
         for path in frame_paths.values():
             outs.add(path)
@@ -250,9 +284,14 @@ def cmd_render(args) -> int:
         images = [img for img, _ in scene.load_textures()]
         if args.encode_needed and args.texture_set:
             raise CliError("--encode-needed encodes the scene's textures: it does not go with --texture-set")
+        if args.train_on != "levels" and not args.encode_needed:
+            raise CliError("--train-on goes with --encode-needed")
+        if args.encode_needed and (args.requests != "sparse" or args.compare_fixed or fovea is not None):
+            raise CliError("--encode-needed encodes what the sparse, unbiased stream needs: it does not go with "
+                           "--requests fixed, --compare-fixed or --fovea")
         if args.encode_needed:
             from vqtex.golden.prune import encode_needed
-            ts = encode_needed(scene, frames, args.mode, images)[0]
+            ts = encode_needed(scene, frames, args.mode, images, train=args.train_on)[0]
         else:
             ts = load_set(args.texture_set) if args.texture_set else encode_scene(scene, images)
         if ts.n_textures != len(scene.textures):
@@ -262,27 +301,79 @@ def cmd_render(args) -> int:
             on_frame = need.on_frame
         per_frame, mismatches = render_to_files(
             scene, ts, frames, frame_paths.get, images, outs=outs, on_frame=on_frame,
-            mode=args.mode, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port)
+            mode=args.mode, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port,
+            stream=args.requests, fovea=fovea, compare_fixed=args.compare_fixed)
         report = {
             "scene": scene.name, "mode": args.mode, "backend": args.backend, "frames": per_frame,
             "overall_rate": round(ts.rates()["overall"], 4),
             "mean_mse": round(float(np.mean([f["mse"] for f in per_frame])), 4),
+            "request_stream": args.requests,
+            "requests_per_frame": round(float(np.mean([f["requests"] for f in per_frame])), 1),
+            "fixed_requests_per_frame": round(float(np.mean([f["requests_fixed"] for f in per_frame])), 1),
         }
         if args.backend != "golden":
             report["identical_to_golden"] = not mismatches
             report["cycles_per_frame"] = round(float(np.mean([f["cycles"] for f in per_frame])), 1)
+        stream_mismatches = []
+        if args.compare_fixed:
+            report["cycles_per_frame"] = round(float(np.mean([f.get("cycles", 0) for f in per_frame])), 1)
+            report["fixed_cycles_per_frame"] = round(float(np.mean([f["fixed_stream"]["cycles"] for f in per_frame])), 1)
+            stream_mismatches = [f["frame"] for f in per_frame if not f["fixed_stream"]["identical"]]
+            report["identical_to_fixed_stream"] = not stream_mismatches
+        if fovea is not None:
+            from vqtex.sim.reports.foveation import summarize
+            report["fovea"] = dict(fovea.as_dict(), **summarize([f["fovea"] for f in per_frame]))
         if report_path:
             report["need"] = need.counter.result().summary(per_frame=False)
             write_json(outs.path(report_path), report)
     text = [f"{scene.name}: {len(frames)} frame(s), {args.mode}, backend {args.backend}, "
             f"overall compression {report['overall_rate']:.2f}:1, mean frame MSE {report['mean_mse']:.3f}"]
+    text.append(_requests_line(report))
     if args.backend != "golden":
         text.append(f"RTL frames identical to golden: {'yes' if not mismatches else 'NO, frames ' + str(mismatches)}; "
                     f"{report['cycles_per_frame']:.0f} cycles per frame")
+    if args.compare_fixed:
+        text.append(f"fixed stream: {report['fixed_requests_per_frame']:,.0f} requests and "
+                    f"{report['fixed_cycles_per_frame']:,.0f} cycles per frame; sparse: "
+                    f"{report['requests_per_frame']:,.0f} and {report['cycles_per_frame']:,.0f} "
+                    f"({'cycle model' if args.backend == 'golden' else args.backend}); frames identical: "
+                    f"{'yes' if not stream_mismatches else 'NO, frames ' + str(stream_mismatches)}")
+    if fovea is not None:
+        from vqtex.sim.reports.foveation import summary_lines
+        text += summary_lines(report["fovea"])
     emit(report, args.json, "\n".join(text))
     if mismatches:
         raise CliError(f"RTL frames {mismatches} differ from the golden frames")
+    if stream_mismatches:
+        raise CliError(f"frames {stream_mismatches} of the fixed stream differ from the sparse stream's")
     return 0
+
+
+def _requests_line(report: dict) -> str:
+    n, fixed = report["requests_per_frame"], report["fixed_requests_per_frame"]
+    saved = f", {100 * (1 - n / fixed):.1f}% fewer than the fixed stream's {fixed:,.0f}" if fixed and n != fixed else ""
+    return f"{report['request_stream']} request stream: {n:,.0f} requests per frame{saved}"
+
+
+def parse_fovea(args, scene):
+    """``--fovea X,Y`` with ``--fovea-radius`` (default a quarter of the frame's smaller side) and
+    ``--fovea-falloff`` as a :class:`~vqtex.golden.render.fovea.Fovea`, or None; a CliError when
+    they are malformed, given without ``--fovea`` or with point sampling (no level to bias)."""
+    from vqtex.golden.render.fovea import Fovea, parse_gaze
+    if args.fovea is None:
+        for opt in ("fovea_radius", "fovea_falloff"):
+            if getattr(args, opt) is not None:
+                raise CliError(f"--{opt.replace('_', '-')} needs --fovea X,Y")
+        return None
+    if args.mode != "trilinear":
+        raise CliError("--fovea biases the level of detail: it needs --mode trilinear")
+    try:
+        x, y = parse_gaze(args.fovea)
+        radius = min(scene.width, scene.height) / 4 if args.fovea_radius is None else args.fovea_radius
+        falloff = 1.0 if args.fovea_falloff is None else args.fovea_falloff
+        return Fovea(x, y, float(radius), float(falloff))
+    except ValueError as e:
+        raise CliError(f"--fovea: {e}") from None
 
 
 def add_parser(sub) -> None:
@@ -295,12 +386,34 @@ def add_parser(sub) -> None:
     r.add_argument("--mode", choices=["point", "trilinear"], default="trilinear",
                    help=with_default("point sampling of level 0, or trilinear mipmapping", "trilinear"))
     add_backend(r, ["golden", "pysim", "cxxrtl", "verilator"], "golden")
+    r.add_argument("--requests", choices=["sparse", "fixed"], default="sparse",
+                   help=with_default("request stream: sparse leaves out texels of zero filter weight and repeats "
+                                     "of a texel in one pixel's footprint; fixed issues every pixel's whole "
+                                     "footprint (8 per pixel in trilinear). The frames are identical "
+                                     "(docs/skipping.md)", "sparse"))
+    r.add_argument("--compare-fixed", action="store_true",
+                   help="also run the fixed stream through the backend (the exact cycle model for golden) and "
+                        "report its requests and cycles beside the sparse stream's; its frames must be identical "
+                        "(default off)")
+    r.add_argument("--fovea", metavar="X,Y",
+                   help=with_default("foveate: bias the level of detail up with the distance from this gaze "
+                                     "point (pixels from the top-left corner; --fovea=-X,Y when X is negative), 0 inside --fovea-radius; the report "
+                                     "compares fovea and periphery with the unbiased frame (docs/skipping.md)",
+                                     "no foveation"))
+    r.add_argument("--fovea-radius", type=float, metavar="R",
+                   help=with_default("radius of the fovea in pixels: inside it frames are unchanged",
+                                     "a quarter of the frame's smaller side"))
+    r.add_argument("--fovea-falloff", type=float, metavar="F",
+                   help=with_default("levels of bias per radius of distance beyond the fovea's edge", 1.0))
     r.add_argument("--texture-set", metavar="FILE.vqt",
                    help=with_default("use this texture set instead of encoding the scene's textures",
                                      "encode them with the scene's settings"))
     r.add_argument("--encode-needed", action="store_true",
                    help="encode only what the rendered frames need (their levels; codebooks trained on those, "
                         "then pruned: golden.prune.encode_needed; default: encode everything)")
+    r.add_argument("--train-on", choices=["levels", "blocks"], default="levels",
+                   help=with_default("with --encode-needed: train the codebooks on every block of the touched level "
+                                     "groups, or on the touched blocks only", "levels"))
     add_hardware_options(r)
     r.add_argument("--report", metavar="REPORT.json", help=with_default("also write the JSON report here", "none"))
     r.add_argument("--reference", metavar="REF.png",

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from vqtex.golden.format import MAX_LEVELS, unpack_indices
-from vqtex.golden.need import CacheSpec, analyse, cache_hits, scene_level_shapes, scene_streams
+from vqtex.golden.need import CacheSpec, analyse, cache_hits, distinct_requests, scene_level_shapes, scene_streams
 from vqtex.golden.render.scene import build_texture_set, parse_scene
 
 #: Three textures: a 12-bit map (straddling indices) with raw small levels, a yuv411 texture of 2x2
@@ -191,3 +191,11 @@ def test_a_frame_without_requests_touches_nothing(small):
     assert s["levels"]["touched"] == 0 and s["codewords"]["used"] == 0 and s["memory_touched"]["index_words"] == 0
     assert s["per_frame"] == [dict(frame=7, requests=0, index_words=0, codebook_entries=0, raw_words=0, blocks=0,
                                    straddling_reads=0, buffer_hits=0, cache_hits=0)]
+
+
+def test_distinct_requests_is_the_union(small):
+    _, ts, streams = small
+    got = distinct_requests(r for _, r in streams)
+    assert [tuple(r) for r in got.tolist()] == sorted({tuple(r) for _, s in streams for r in s.tolist()},
+                                                      key=lambda r: (r[0], r[1], r[3], r[2]))
+    assert distinct_requests([]).shape == (0, 4)

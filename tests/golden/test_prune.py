@@ -6,7 +6,7 @@ import pytest
 
 from vqtex.golden.fetch import RequestError, check_requests, fetch
 from vqtex.golden.format import FormatError, TextureSet
-from vqtex.golden.need import analyse, scene_streams
+from vqtex.golden.need import analyse, distinct_requests, scene_streams
 from vqtex.golden.prune import encode_needed, prune, pruned_bytes, touched_levels
 from vqtex.golden.render.frame import render_frame
 from vqtex.golden.render.pyramid import VQSource
@@ -81,15 +81,23 @@ def test_requests_outside_the_need_are_refused(pruned):
 
 def test_pruning_again_for_the_same_frames_changes_nothing(pruned):
     name, scene, ts, frames, need, p = pruned
-    again = prune(p, analyse(p, scene_streams(scene, p, frames)))
+    need_p = analyse(p, scene_streams(scene, p, frames))
+    again = prune(p, need_p)
     assert again == p
+    s = need_p.summary(per_frame=False)                   # the pruned set: everything stored is touched
+    for key in ("textures", "levels", "level_groups"):
+        assert s[key]["stored"] == s[key]["touched"], key
+    assert s["codewords"]["stored"] == s["codewords"]["used"]
+    texels = distinct_requests(r for _, r in scene_streams(scene, ts, frames))       # what encode_needed uses
+    assert prune(ts, analyse(ts, [texels], per_frame=False)) == p
 
 
-def test_encode_needed_stores_only_touched_levels():
+@pytest.mark.parametrize("train", ["levels", "blocks"])
+def test_encode_needed_stores_only_touched_levels(train):
     scene = small_scene("town")
     frames = [0]
     keep = touched_levels(scene, frames)
-    p, need = encode_needed(scene, frames)
+    p, need = encode_needed(scene, frames, train=train)
     for t, info in enumerate(p.textures):
         stored = [L for L in range(info.levels) if L not in info.absent_levels]
         assert stored == keep[t]
@@ -103,3 +111,16 @@ def test_combining_block_pruned_sets_is_refused(pruned):
     p = pruned[-1]
     with pytest.raises(FormatError, match="combine, then prune"):
         TextureSet.combine([p, p])
+
+
+def test_train_texels_trains_on_their_blocks_only():
+    from vqtex.golden.encode import encode
+    from vqtex.golden.fetch import decode
+    rng = np.random.default_rng(5)
+    img = rng.integers(0, 256, (64, 64, 3)).astype(np.uint8)
+    everything = encode([img], codebook_size=4, block=(4, 4))
+    one = encode([img], codebook_size=4, block=(4, 4), train_texels=[np.array([[0, 5, 6]])])   # block (1, 1)
+    got = decode(one, 0, 0)[4:8, 4:8, :3].astype(int)
+    assert np.abs(got - img[4:8, 4:8]).max() <= 1          # the one block trained on is (nearly) exact
+    assert not np.array_equal(one.codebook, everything.codebook)
+    assert decode(one, 0, 0).shape == (64, 64, 4)          # every block still has an index

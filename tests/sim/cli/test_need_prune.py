@@ -125,3 +125,18 @@ def test_render_encode_needed_and_prune_without_a_set(topspin_set, tmp_path, cap
     code, out, err = run(capsys, "prune", folder / "full.vqt", "--scene", scene_file, "--compare", "-o",
                          tmp_path / "x.vqt")
     assert code == 2 and err.count("\n") == 1 and not (tmp_path / "x.vqt").exists()
+
+
+def test_need_of_the_fixed_and_sparse_streams(topspin_set, capsys):
+    scene_file, ts, folder = topspin_set
+    reps = {}
+    for stream in ("sparse", "fixed"):
+        code, out, err = run(capsys, "need", scene_file, "--frames", "2", "--texture-set", folder / "full.vqt",
+                             "--requests", stream, "--json")
+        assert code == 0, err
+        reps[stream] = json.loads(out)
+    scene = load_scene(scene_file)
+    fixed = analyse(ts, scene_streams(scene, ts, [2], stream="fixed")).summary()
+    assert reps["fixed"]["totals"] == fixed["totals"]
+    assert reps["sparse"]["totals"]["requests"] < reps["fixed"]["totals"]["requests"]
+    assert reps["sparse"]["levels"]["touched"] <= reps["fixed"]["levels"]["touched"]
