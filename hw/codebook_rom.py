@@ -211,12 +211,6 @@ class CodebookROM(wiring.Component):
                 lcw.eq(Mux(log2bw > 0, log2bw - 1, 0)),
                 ct.eq(((self.y >> 1) << lcw) | (self.x >> 1)),
             ]
-        if yuv422:
-            # yuv422: U and V are the low bytes of the row's left and right texels, at u_off + 2x
-            # and v_off + 2x (``x`` is the row: PowerVR2 offsets come transposed)
-            ct_pair = Signal(6)
-            m.d.comb += ct_pair.eq(Mux(color_in == _YUV422, self.x << 1, ct) if _YUV in codes else self.x << 1)
-            ct = ct_pair
         per_texel = {code: _BYTES_PER_TEXEL.get(code, 1) for code in codes}
         times = {3: (t << 1) + t, 4: t << 2, 2: t << 1, 1: t}
         if len(set(per_texel.values())) <= 1:
@@ -232,6 +226,12 @@ class CodebookROM(wiring.Component):
                             m.d.comb += tbt.eq(times[tb])
                 with m.Default():
                     m.d.comb += tbt.eq(times[default])
+        if yuv422:
+            # yuv422: U and V are the low bytes of the row's left and right texels, at u_off + 2x
+            # and v_off + 2x (``x`` is the row: PowerVR2 offsets come transposed)
+            ct_pair = Signal(6)
+            m.d.comb += ct_pair.eq(Mux(color_in == _YUV422, self.x << 1, ct) if _YUV in codes else self.x << 1)
+            ct = ct_pair
         nwords = -(-(nbytes + 3) // 4) + 1     # 4-byte words of the padded entry (see stage 3)
         addr_bits = (4 * nwords - 1).bit_length()
         # The fields that ride beside the memories, one register per stage (assigned in one piece:
@@ -304,7 +304,7 @@ class CodebookROM(wiring.Component):
         # unconditional. The colour matrix is told the paper's codes only.
         branches = []
         if feat.raw:
-            branches.append((~compressed, raw_word, _RGBA))
+            branches.append((~compressed, raw_word, None))      # the default colour out: rgba
         if feat.compressed and _YUV in codes:
             branches.append((color == _YUV, Cat(texel[:8], u, v, texel[24:]), None))
         if feat.compressed and yuv422:
