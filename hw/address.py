@@ -41,6 +41,12 @@ class BlockAddress(wiring.Component):
         Width of a raw memory address.
     twiddle : bool
         Elaborate the PowerVR2 twiddled path (default False: the paper's shifter only).
+    linear : bool
+        With ``twiddle``: some level has the paper's row-major map (default): ``layout`` selects
+        between the two; False: every level that reads ``k``, ``x``, ``y`` is twiddled (``layout``
+        is ignored, no multiplexer).
+    raw : bool
+        The set has raw levels (default): compute ``raw_addr`` (an adder); else leave it 0.
 
     Members
     -------
@@ -63,10 +69,11 @@ class BlockAddress(wiring.Component):
     x, y : Out(3)
         Offset inside the block.
     raw_addr : Out(raw_bits)
-        Raw memory word of texel (i, j).
+        Raw memory word of texel (i, j) (0 when ``raw`` is false).
     """
 
-    def __init__(self, *, base_bits: int, k_bits: int, raw_bits: int, twiddle: bool = False):
+    def __init__(self, *, base_bits: int, k_bits: int, raw_bits: int, twiddle: bool = False,
+                 raw: bool = True, linear: bool = True):
         for name, v in (("base_bits", base_bits), ("k_bits", k_bits), ("raw_bits", raw_bits)):
             if not isinstance(v, int) or v < 1:
                 raise TypeError(f"{name} must be a positive integer, not {v!r}")
@@ -74,6 +81,8 @@ class BlockAddress(wiring.Component):
             raise ValueError(f"k_bits {k_bits} exceeds {2 * COORD_BITS}")
         self._k_bits = k_bits
         self._twiddle = bool(twiddle)
+        self._linear = bool(linear) or not self._twiddle
+        self._raw = bool(raw)
         twiddle_ports = {"layout": In(1), "log2h": In(4)} if self._twiddle else {}
         super().__init__({
             **twiddle_ports,
@@ -116,8 +125,9 @@ class BlockAddress(wiring.Component):
                 self.k.eq(k_out[:self._k_bits]),
                 self.x.eq(x_out),
                 self.y.eq(y_out),
-                self.raw_addr.eq(self.base + (self.j << self.log2w) + self.i),
             ]
+            if self._raw:
+                m.d.sync += self.raw_addr.eq(self.base + (self.j << self.log2w) + self.i)
         return m
 
     def _twiddled(self, m, bx, by, k, x, y):
@@ -141,4 +151,6 @@ class BlockAddress(wiring.Component):
         morton = Cat(*(Cat(sy[n], sx[n]) for n in range(COORD_BITS)))
         k_tw = Signal(2 * COORD_BITS)
         m.d.comb += k_tw.eq((square << (lm << 1)) | morton)
+        if not self._linear:                # every compressed level twiddled: no multiplexer
+            return k_tw, y, x
         return (Mux(self.layout, k_tw, k), Mux(self.layout, y, x), Mux(self.layout, x, y))

@@ -18,9 +18,13 @@ from .banked_rom import BANK_DEPTH
 from .codebook_rom import CodebookROM
 from .color_matrix import ColorMatrix
 from .descriptor import descriptor_widths
+from .features import Features
 from .pipeline import LinkLayout, RGBALayout, addr_bits
 
 __all__ = ["BackEnd"]
+
+#: The codebook ROM's inputs from the side fields, in the order they are connected.
+_ROM_INPUTS = ("cb_base", "raw_addr", "compressed", "x", "y", "log2bw", "color", "texel_off", "u_off", "v_off")
 
 
 class BackEnd(wiring.Component):
@@ -37,6 +41,9 @@ class BackEnd(wiring.Component):
         Codebook memory, raw memory, colour matrix.
     bank_depth
         As for :class:`hw.texel_fetch.TexelFetch`.
+    features : hw.features.Features, optional
+        What to build (default the full back end): the codebook and raw memories and selects, the
+        colour formats and the colour matrix's products.
 
     Members
     -------
@@ -46,33 +53,35 @@ class BackEnd(wiring.Component):
         The colour shown on the output (r, g, b, a).
     """
 
-    def __init__(self, texture_set: TextureSet, *, bank_depth: int = BANK_DEPTH):
+    def __init__(self, texture_set: TextureSet, *, bank_depth: int = BANK_DEPTH,
+                 features: Features | None = None):
         self._ts = texture_set
         self._bank_depth = bank_depth
+        self._features = features if features is not None else Features.full(texture_set)
         super().__init__({
-            "link": In(LinkLayout(texture_set)),
+            "link": In(LinkLayout(texture_set, self._features)),
             "rgba": Out(RGBALayout),
         })
 
     def elaborate(self, platform):
         m = Module()
         ts = self._ts
+        feat = self._features
         widths = descriptor_widths(ts)
         link = self.link
-        side = link.side
         m.submodules.codebook_rom = rom = CodebookROM(
             ts.codebook, ts.raw_words, cb_bits=widths["cb_base"], raw_bits=addr_bits(len(ts.raw_words)),
-            off_bits=widths["texel_off"], bank_depth=self._bank_depth, color_bits=widths["color"])
-        m.submodules.color_matrix = cm = ColorMatrix(ts.matrix)
+            off_bits=widths["texel_off"], bank_depth=self._bank_depth, features=feat,
+            color_bits=widths["color"])
+        m.submodules.color_matrix = cm = ColorMatrix(
+            ts.matrix, colors=sorted(feat.output_codes) if feat.specialised else None)
 
-        # Stages 8-11: codebook ROM (and raw memory).
-        m.d.comb += [
-            rom.index.eq(link.index), rom.cb_base.eq(side.cb_base), rom.raw_addr.eq(side.raw_addr),
-            rom.compressed.eq(side.compressed), rom.x.eq(side.x), rom.y.eq(side.y),
-            rom.log2bw.eq(side.log2bw), rom.color.eq(side.color),
-            rom.texel_off.eq(side.texel_off), rom.u_off.eq(side.u_off), rom.v_off.eq(side.v_off),
-            rom.en.eq(link.advance),
-        ]
+        # Stages 8-11: codebook ROM (and raw memory). The side fields a specialised unit does not
+        # carry are constants the ROM knows from the features, or fields it does not use.
+        carried = {name for name, _ in link.side.shape()}
+        m.d.comb += rom.index.eq(link.index)
+        m.d.comb += [getattr(rom, name).eq(getattr(link.side, name)) for name in _ROM_INPUTS if name in carried]
+        m.d.comb += rom.en.eq(link.advance)
         # Stages 12-14: colour matrix.
         m.d.comb += [
             cm.samples.eq(rom.samples), cm.color.eq(rom.color_out), cm.en.eq(link.advance),

@@ -18,6 +18,7 @@ from amaranth.lib.wiring import In, Out
 from vqtex.golden.format import COLOR_CODES
 
 from .banked_rom import BANK_DEPTH, BankedROM, pick
+from .features import Features
 from .registers import enabled_register
 
 __all__ = ["CodebookROM", "SamplesLayout", "LATENCY", "expand_texel"]
@@ -30,6 +31,8 @@ SamplesLayout = data.ArrayLayout(unsigned(8), 4)
 
 _RGB, _RGBA, _YUV = (COLOR_CODES[c] for c in ("rgb", "rgba", "yuv411"))
 _ARGB1555, _RGB565, _ARGB4444, _YUV422 = (COLOR_CODES[c] for c in ("argb1555", "rgb565", "argb4444", "yuv422"))
+#: Bytes per texel of each colour format (1 for intensity and yuv411's Y; PowerVR2's are 16-bit).
+_BYTES_PER_TEXEL = {_RGB: 3, _RGBA: 4, _ARGB1555: 2, _RGB565: 2, _ARGB4444: 2, _YUV422: 2}
 
 
 def _widen(field: Value) -> Value:
@@ -39,15 +42,22 @@ def _widen(field: Value) -> Value:
     return Cat(field, field)[2 * n - 8:] if n < 8 else field
 
 
-def expand_texel(texel: Value, color: Value) -> Value:
+def expand_texel(texel: Value, color: Value, codes=None) -> Value:
     """The 16-bit PowerVR2 texel as R, G, B, A bytes (combinational; twin of
     :func:`golden.fetch.expand_texels`): argb1555 (A = bit 15 replicated), rgb565 (A = 255),
-    argb4444."""
+    argb4444. ``codes``: the colour codes that can arrive (default all three; one needs no
+    multiplexer)."""
     t = texel
-    argb1555 = Cat(_widen(t[10:15]), _widen(t[5:10]), _widen(t[0:5]), t[15].replicate(8))
-    rgb565 = Cat(_widen(t[11:16]), _widen(t[5:11]), _widen(t[0:5]), C(255, 8))
-    argb4444 = Cat(_widen(t[8:12]), _widen(t[4:8]), _widen(t[0:4]), _widen(t[12:16]))
-    return Mux(color == _ARGB1555, argb1555, Mux(color == _RGB565, rgb565, argb4444))
+    formats = {
+        _ARGB1555: Cat(_widen(t[10:15]), _widen(t[5:10]), _widen(t[0:5]), t[15].replicate(8)),
+        _RGB565: Cat(_widen(t[11:16]), _widen(t[5:11]), _widen(t[0:5]), C(255, 8)),
+        _ARGB4444: Cat(_widen(t[8:12]), _widen(t[4:8]), _widen(t[0:4]), _widen(t[12:16])),
+    }
+    present = [c for c in formats if codes is None or c in codes]
+    out = formats[present[-1]]
+    for code in reversed(present[:-1]):
+        out = Mux(color == code, formats[code], out)
+    return out
 
 
 def _entry_ints(codebook: np.ndarray) -> list:
@@ -62,7 +72,11 @@ class CodebookROM(wiring.Component):
     ``tb`` = 3, 4, 1, 1 bytes per texel for rgb, rgba, intensity, yuv411 (a byte past the entry
     reads the entry's last byte, as the golden model clamps); for yuv411, samples 1 and 2 are the
     bytes at ``u_off + ct`` and ``v_off + ct`` with ``ct = ((y >> 1) << max(log2bw - 1, 0)) | (x >> 1)``.
-    A raw level's samples are the raw word's bytes and its ``color_out`` is rgba. Four stages:
+    A raw level's samples are the raw word's bytes and its ``color_out`` is rgba. PowerVR2's
+    formats (a set with PowerVR2 textures): 16-bit texels (``tb`` = 2); argb1555, rgb565, argb4444
+    expanded here to R, G, B, A (:func:`expand_texel`, ``color_out`` rgba); yuv422 as (Y, U, V) with
+    Y the texel's high byte and U, V the low bytes of the row's left and right texels at
+    ``u_off + 2x``, ``v_off + 2x`` (``color_out`` yuv411: through the colour matrix). Four stages:
 
     1. *read*: the codebook memory at ``cb_base + index`` and the raw memory at ``raw_addr``; the
        byte addresses ``start``, ``u_off + ct``, ``v_off + ct`` (``tb * t`` as shifts and an add),
@@ -85,11 +99,20 @@ class CodebookROM(wiring.Component):
         Widths of the codebook base, the raw address and the plane offsets.
     bank_depth : int
         Entries per block RAM bank of each memory (:class:`hw.banked_rom.BankedROM`).
+    features : hw.features.Features, optional
+        What the texture set needs (default: everything, the full ROM). Specialised: no codebook
+        memory without compressed levels, no raw memory or raw select without raw levels, the
+        texel select only for the colour formats present (``tb * t`` without a multiplexer for one
+        bytes-per-texel), U and V only with yuv411, and every descriptor field in
+        ``features.constants`` a constant (its input ignored; ``texel_off`` = 0 needs no adder,
+        ``cb_base`` = 0 none either). PowerVR2's paths only for its formats in ``features.colors``.
+    color_bits : int
+        Width of the colour code: 2 (the paper's formats) or 3 (a set with PowerVR2 textures).
 
     Members
     -------
-    index : In(16)
-        The block's index.
+    index : In(features.index_bits)
+        The block's index (16 bits in the full ROM).
     cb_base : In(cb_bits)
         Entry of codeword 0 of the texture's codebook.
     raw_addr : In(raw_bits)
@@ -100,7 +123,7 @@ class CodebookROM(wiring.Component):
         Offset inside the block.
     log2bw : In(2)
         log2 of the block width at this level.
-    color : In(2)
+    color : In(color_bits)
         Colour format code.
     texel_off, u_off, v_off : In(off_bits)
         Byte offsets of this sub-level's planes in the entry.
@@ -113,7 +136,7 @@ class CodebookROM(wiring.Component):
     """
 
     def __init__(self, codebook, raw_words, *, cb_bits: int, raw_bits: int, off_bits: int,
-                 bank_depth: int = BANK_DEPTH, color_bits: int = 2):
+                 bank_depth: int = BANK_DEPTH, features: Features | None = None, color_bits: int = 2):
         codebook = np.asarray(codebook, dtype=np.uint8)
         if codebook.ndim != 2:
             raise ValueError("codebook memory must be a 2-D uint8 array")
@@ -123,9 +146,11 @@ class CodebookROM(wiring.Component):
         self._bank_depth = bank_depth
         if color_bits not in (2, 3):
             raise ValueError(f"color_bits must be 2 (the paper's formats) or 3 (with PowerVR2's), not {color_bits!r}")
-        self._pvr2 = color_bits == 3
+        self._features = features if features is not None else Features.full(pvr2=color_bits == 3)
+        if color_bits == 2 and max(self._features.color_codes, default=0) > 3:
+            raise ValueError("PowerVR2 colour formats need color_bits=3")
         super().__init__({
-            "index": In(16),
+            "index": In(self._features.index_bits),
             "cb_base": In(cb_bits),
             "raw_addr": In(raw_bits),
             "compressed": In(1),
@@ -145,15 +170,32 @@ class CodebookROM(wiring.Component):
     def latency(self) -> int:
         return LATENCY
 
+    def _input(self, name: str):
+        """The input ``name``, or its constant when the features make it one (a descriptor field
+        with one value in every row that reads it)."""
+        port = getattr(self, name)
+        if name in self._features.constants:
+            return C(self._features.constants[name], len(port))
+        return port
+
     def elaborate(self, platform):
         m = Module()
+        feat = self._features
         nbytes = self._entry_bytes
-        m.submodules.codebook = codebook = BankedROM(self._entries, width=nbytes * 8, bank_depth=self._bank_depth)
-        m.submodules.raw = raw = BankedROM(self._raw, width=32, bank_depth=self._bank_depth)
-        m.d.comb += [
-            codebook.addr.eq(self.cb_base + self.index), codebook.en.eq(self.en),
-            raw.addr.eq(self.raw_addr), raw.en.eq(self.en),
-        ]
+        cb_base, log2bw, color_in = self._input("cb_base"), self._input("log2bw"), self._input("color")
+        texel_off, u_off, v_off = self._input("texel_off"), self._input("u_off"), self._input("v_off")
+        compressed_in = self._input("compressed")
+        yuv = feat.matrix                   # U and V selects (yuv411 or yuv422 levels present)
+        codes = feat.color_codes
+        yuv422 = _YUV422 in codes
+        expand = {c for c in codes if _BYTES_PER_TEXEL.get(c) == 2 and c != _YUV422}
+        if feat.compressed:
+            m.submodules.codebook = codebook = BankedROM(self._entries, width=nbytes * 8, bank_depth=self._bank_depth)
+            m.d.comb += [codebook.addr.eq(self.index if _is_zero(cb_base) else cb_base + self.index),
+                         codebook.en.eq(self.en)]
+        if feat.raw:
+            m.submodules.raw = raw = BankedROM(self._raw, width=32, bank_depth=self._bank_depth)
+            m.d.comb += [raw.addr.eq(self.raw_addr), raw.en.eq(self.en)]
 
         def reg(value, name):
             return enabled_register(m, self.en, value, name)
@@ -163,49 +205,67 @@ class CodebookROM(wiring.Component):
         tbt = Signal(8)                     # tb * t
         lcw = Signal(2)
         ct = Signal(6)
-        m.d.comb += [
-            t.eq((self.y << self.log2bw) | self.x),
-            lcw.eq(Mux(self.log2bw > 0, self.log2bw - 1, 0)),
-            ct.eq(((self.y >> 1) << lcw) | (self.x >> 1)),
-        ]
-        with m.Switch(self.color):
-            with m.Case(_RGB):
-                m.d.comb += tbt.eq((t << 1) + t)
-            with m.Case(_RGBA):
-                m.d.comb += tbt.eq(t << 2)
-            if self._pvr2:
-                with m.Case(_ARGB1555, _RGB565, _ARGB4444, _YUV422):
-                    m.d.comb += tbt.eq(t << 1)          # 16-bit texels
-            with m.Default():
-                m.d.comb += tbt.eq(t)
-        if self._pvr2:
+        m.d.comb += t.eq((self.y << log2bw) | self.x)
+        if _YUV in codes:
+            m.d.comb += [
+                lcw.eq(Mux(log2bw > 0, log2bw - 1, 0)),
+                ct.eq(((self.y >> 1) << lcw) | (self.x >> 1)),
+            ]
+        per_texel = {code: _BYTES_PER_TEXEL.get(code, 1) for code in codes}
+        times = {3: (t << 1) + t, 4: t << 2, 2: t << 1, 1: t}
+        if len(set(per_texel.values())) <= 1:
+            m.d.comb += tbt.eq(times[next(iter(per_texel.values()), 1)])
+        else:
+            groups = {tb: [c for c in sorted(per_texel) if per_texel[c] == tb] for tb in (3, 4, 2, 1)}
+            groups = {tb: cs for tb, cs in groups.items() if cs}
+            default = 1 if 1 in groups else list(groups)[-1]
+            with m.Switch(color_in):
+                for tb, cs in groups.items():
+                    if tb != default:
+                        with m.Case(*cs):
+                            m.d.comb += tbt.eq(times[tb])
+                with m.Default():
+                    m.d.comb += tbt.eq(times[default])
+        if yuv422:
             # yuv422: U and V are the low bytes of the row's left and right texels, at u_off + 2x
             # and v_off + 2x (``x`` is the row: PowerVR2 offsets come transposed)
             ct_pair = Signal(6)
-            m.d.comb += ct_pair.eq(Mux(self.color == _YUV422, self.x << 1, ct))
+            m.d.comb += ct_pair.eq(Mux(color_in == _YUV422, self.x << 1, ct) if _YUV in codes else self.x << 1)
             ct = ct_pair
         nwords = -(-(nbytes + 3) // 4) + 1     # 4-byte words of the padded entry (see stage 3)
         addr_bits = (4 * nwords - 1).bit_length()
         # The fields that ride beside the memories, one register per stage (assigned in one piece:
-        # one register update per stage in a simulator instead of five).
-        cbits = len(self.color)
-        carried = data.StructLayout({"start": addr_bits, "ustart": addr_bits, "vstart": addr_bits,
-                                     "compressed": 1, "color": cbits})
+        # one register update per stage in a simulator instead of five). Constants ride nowhere.
+        ride = {"start": addr_bits}
+        if yuv:
+            ride.update(ustart=addr_bits, vstart=addr_bits)
+        if feat.variable("compressed"):
+            ride["compressed"] = 1
+        if feat.variable("color"):
+            ride["color"] = len(self.color)
+        carried = data.StructLayout(ride)
+        values = {"start": (tbt if _is_zero(texel_off) else texel_off + tbt)[:addr_bits],
+                  "ustart": (u_off + ct)[:addr_bits], "vstart": (v_off + ct)[:addr_bits],
+                  "compressed": compressed_in, "color": color_in}
         f1 = Signal(carried, name="fields_read")
         with m.If(self.en):
-            m.d.sync += f1.eq(Cat((self.texel_off + tbt)[:addr_bits], (self.u_off + ct)[:addr_bits],
-                                  (self.v_off + ct)[:addr_bits], self.compressed, self.color))
+            m.d.sync += f1.eq(Cat(*(values[name] for name in ride)))
 
         # Stage 2: the banks' data registers (in BankedROM); the fields follow.
         f2 = reg(f1, "fields_data")
-        start, ustart, vstart = f2.start, f2.ustart, f2.vstart
+
+        def field(view, name):
+            return getattr(view, name) if name in ride else values[name]
+
+        start = f2.start
+        ustart, vstart = (f2.ustart, f2.vstart) if yuv else (None, None)
 
         # Stage 3: per codebook bank, the 4-byte words holding the texel (two: a 64-bit window) and
         # U and V, each picked from a list of words by the word number (a multiplexer of whole
         # words; no shifter). The entry is padded with three copies of its last byte, so that every
         # byte address up to last + 3 reads what the golden model's clamp reads, then with zeros.
         windows, u_words, v_words = [], [], []
-        for k in range(codebook.banks):
+        for k in range(codebook.banks if feat.compressed else 0):
             entry = codebook.data[k]
             last = entry[(nbytes - 1) * 8:]
             padded = Cat(entry, last, last, last)
@@ -213,54 +273,71 @@ class CodebookROM(wiring.Component):
                      for n in range(nwords - 1)] + [C(0, 32)]
             windows.append(reg(pick([Cat(words[n], words[n + 1]) for n in range(nwords - 1)], start[2:]),
                                f"window{k}"))
-            u_words.append(reg(pick(words, ustart[2:]), f"u_word{k}"))
-            v_words.append(reg(pick(words, vstart[2:]), f"v_word{k}"))
-        bank = reg(codebook.bank, "bank_window")
-        raw_word = reg(raw.word, "raw_window")
-        f3 = reg(Cat(start[:2], ustart[:2], vstart[:2], f2.compressed, f2.color), "fields_window")
-        start, ustart, vstart, compressed, color = f3[0:2], f3[2:4], f3[4:6], f3[6], f3[7:7 + cbits]
+            if yuv:
+                u_words.append(reg(pick(words, ustart[2:]), f"u_word{k}"))
+                v_words.append(reg(pick(words, vstart[2:]), f"v_word{k}"))
+        bank = reg(codebook.bank, "bank_window") if feat.compressed else None
+        raw_word = reg(raw.word, "raw_window") if feat.raw else None
+        low = {"start": start[:2]}
+        if yuv:
+            low.update(ustart=ustart[:2], vstart=vstart[:2])
+        low.update({name: getattr(f2, name) for name in ("compressed", "color") if name in ride})
+        f3 = reg(Cat(*low.values()), "fields_window")
+        f3 = data.StructLayout({name: len(v) for name, v in low.items()})(f3)
+        compressed = field(f3, "compressed")
+        color = field(f3, "color")
 
         # Stage 4: the bank's words, then the bytes.
-        window = pick(windows, bank)
-        texel = Signal(32)
-        u = Signal(8)
-        v = Signal(8)
-        m.d.comb += [
-            texel.eq(window.bit_select(start << 3, 32)),
-            u.eq(pick(u_words, bank).bit_select(ustart << 3, 8)),
-            v.eq(pick(v_words, bank).bit_select(vstart << 3, 8)),
-        ]
         out = Signal(32)
-        if not self._pvr2:                  # the paper's formats only
-            with m.If(~compressed):
-                m.d.comb += out.eq(raw_word)
-            with m.Elif(color == _YUV):
-                m.d.comb += out.eq(Cat(texel[:8], u, v, texel[24:]))
-            with m.Else():
-                m.d.comb += out.eq(texel)
-            with m.If(self.en):
-                m.d.sync += [
-                    self.samples.as_value().eq(out),
-                    self.color_out.eq(Mux(compressed, color, _RGBA)),
+        if feat.compressed:
+            window = pick(windows, bank)
+            texel = Signal(32)
+            m.d.comb += texel.eq(window.bit_select(f3.start << 3, 32))
+            if yuv:
+                u = Signal(8)
+                v = Signal(8)
+                m.d.comb += [
+                    u.eq(pick(u_words, bank).bit_select(f3.ustart << 3, 8)),
+                    v.eq(pick(v_words, bank).bit_select(f3.vstart << 3, 8)),
                 ]
-            return m
-        # With PowerVR2 formats: 16-bit texels expanded here (then rgba to the colour matrix); yuv422
-        # as (Y, U, V) with Y the texel's high byte (then yuv411's code: through the matrix).
-        color_out = Signal(2)               # what the colour matrix is told: the paper's codes only
-        m.d.comb += color_out.eq(Mux(compressed, color[:2], _RGBA))
-        with m.If(~compressed):
-            m.d.comb += out.eq(raw_word)
-        with m.Elif(color == _YUV):
-            m.d.comb += out.eq(Cat(texel[:8], u, v, texel[24:]))
-        with m.Elif(color == _YUV422):
-            m.d.comb += [out.eq(Cat(texel[8:16], u, v, texel[24:])), color_out.eq(_YUV)]
-        with m.Elif(color[2]):
-            m.d.comb += [out.eq(expand_texel(texel[:16], color)), color_out.eq(_RGBA)]
-        with m.Else():
-            m.d.comb += out.eq(texel)
+        # (condition, samples, colour out or None for the level's own), first match; the last
+        # unconditional. The colour matrix is told the paper's codes only.
+        branches = []
+        if feat.raw:
+            branches.append((~compressed, raw_word, None))      # the default colour out: rgba
+        if feat.compressed and _YUV in codes:
+            branches.append((color == _YUV, Cat(texel[:8], u, v, texel[24:]), None))
+        if feat.compressed and yuv422:
+            branches.append((color == _YUV422, Cat(texel[8:16], u, v, texel[24:]), _YUV))
+        if feat.compressed and expand:
+            # codes 4-6 (yuv422, 7, is matched above): bit 2 of the code
+            branches.append((color[2], expand_texel(texel[:16], color, expand), _RGBA))
+        if feat.compressed and codes & {_RGB, _RGBA, COLOR_CODES["intensity"]}:
+            branches.append((None, texel, None))
+        pvr2 = len(self.color) > 2
+        if pvr2:
+            color_out = Signal(2)           # what the colour matrix is told
+            m.d.comb += color_out.eq(Mux(compressed, color[:2], _RGBA))
+        else:                               # the paper's formats: the level's own code, as it was
+            color_out = Mux(compressed, color, _RGBA)
+        if len(branches) == 1:
+            m.d.comb += out.eq(branches[0][1])
+        else:
+            for n, (cond, value, cout) in enumerate(branches):
+                with (m.If(cond) if n == 0 else m.Elif(cond) if n < len(branches) - 1 else m.Else()):
+                    m.d.comb += out.eq(value)
+                    if pvr2 and cout is not None:
+                        m.d.comb += color_out.eq(cout)
+        if pvr2 and len(branches) == 1 and branches[0][2] is not None:
+            m.d.comb += color_out.eq(branches[0][2])
         with m.If(self.en):
             m.d.sync += [
                 self.samples.as_value().eq(out),
                 self.color_out.eq(color_out),
             ]
         return m
+
+
+def _is_zero(value) -> bool:
+    """``value`` is the constant 0 (a field the features made constant)."""
+    return isinstance(value, Const) and value.value == 0

@@ -41,10 +41,17 @@ class ColorMatrix(wiring.Component):
 
     Latency 3 (every stage advances when ``en`` is high). Throughput: one texel per cycle.
 
+    The products exist only for non-zero coefficients; a coefficient +-2^n (+-1 included) is a
+    shift (and a negation), not a multiplier. Given ``colors`` (the colour codes that can arrive),
+    the output multiplexer has only their cases, and without yuv411 there is no offset, product or
+    sum at all: the three stages are plain registers of the samples (the latency stays 3).
+
     Arguments
     ---------
     matrix : golden.color.ColorMatrix
         Coefficients, offsets, fractional bits and rounding.
+    colors : iterable of int, optional
+        Colour codes of the samples that can arrive (default: all four).
 
     Members
     -------
@@ -63,10 +70,14 @@ class ColorMatrix(wiring.Component):
         If ``matrix`` is not a :class:`golden.color.ColorMatrix`.
     """
 
-    def __init__(self, matrix: ColorMatrixSpec):
+    def __init__(self, matrix: ColorMatrixSpec, *, colors=None):
         if not isinstance(matrix, ColorMatrixSpec):
             raise TypeError(f"matrix must be a golden.color.ColorMatrix, not {type(matrix).__name__}")
         self._matrix = matrix
+        self._all = colors is None          # the full unit: every format, all nine products
+        self._colors = frozenset(range(4)) if colors is None else frozenset(int(c) for c in colors)
+        if not self._colors or not self._colors <= set(range(4)):
+            raise ValueError(f"colour codes {sorted(self._colors)} must be a non-empty subset of 0..3")
         super().__init__({
             "samples": In(SamplesLayout),
             "color": In(2),
@@ -86,13 +97,20 @@ class ColorMatrix(wiring.Component):
         m = Module()
         mat = self._matrix
         pbits, sbits, F = mat.product_bits, mat.sum_bits, mat.frac_bits
+        colors = self._colors
+        matrix = _YUV in colors
+        one = len(colors) == 1              # one format: no multiplexer, no format carried
+        # Input k is offset iff it feeds a product (some coefficient of its column is non-zero).
+        used = [matrix and (self._all or any(mat.coeffs[c][k] for c in range(3))) for k in range(3)]
 
         # Stage 1: offsets, registered (the multipliers' operands come straight from flip-flops).
         x = [Signal(signed(9), name=f"x{k}") for k in range(3)]
         # The samples and their format ride beside, one register per stage (one update each).
-        carried_r = Signal(len(self.samples.as_value()) + 2, name="carried_r")
+        carried_r = Signal(len(self.samples.as_value()) + (0 if one else 2), name="carried_r")
         with m.If(self.en):
             for k in range(3):
+                if not used[k]:
+                    continue
                 sample, off = self.samples[k], mat.offsets[k]
                 if off == 0:
                     m.d.sync += x[k].eq(sample)
@@ -100,25 +118,40 @@ class ColorMatrix(wiring.Component):
                     m.d.sync += x[k].eq(Cat(sample[:7], ~sample[7]).as_signed())
                 else:
                     m.d.sync += x[k].eq(sample - off)
-            m.d.sync += carried_r.eq(Cat(self.samples, self.color))
+            m.d.sync += carried_r.eq(Cat(self.samples, self.color if not one else C(0, 0)))
 
-        # Stage 2: constant multiplications.
+        # Stage 2: constant multiplications (the full unit: all nine, the synthesis tool folds the
+        # constants; specialised: only the non-zero ones, powers of two as shifts).
         prod = [[Signal(signed(pbits), name=f"p_{'rgb'[c]}{'yuv'[k]}") for k in range(3)] for c in range(3)]
         carried_p = Signal.like(carried_r, name="carried_p")
         with m.If(self.en):
             for c in range(3):
                 for k in range(3):
-                    m.d.sync += prod[c][k].eq(x[k] * C(mat.coeffs[c][k], signed(19)))
+                    coeff = mat.coeffs[c][k]
+                    if not matrix or (coeff == 0 and not self._all):
+                        continue                # no product
+                    if not self._all and abs(coeff) & (abs(coeff) - 1) == 0:   # +-2^n: a shift
+                        power = x[k] << (abs(coeff).bit_length() - 1)
+                        m.d.sync += prod[c][k].eq(power if coeff > 0 else -power)
+                    else:
+                        m.d.sync += prod[c][k].eq(x[k] * C(coeff, signed(19)))
             m.d.sync += carried_p.eq(carried_r)
-        samples_p, color_p = SamplesLayout(carried_p[:-2]), carried_p[-2:]
+        samples_p = SamplesLayout(carried_p[:32])
+        color_p = carried_p[32:] if not one else C(next(iter(colors)), 2)
 
         # Stage 3: sum + bias, shift, clamp; or bypass.
         acc = [Signal(signed(sbits), name=f"sum_{'rgb'[c]}") for c in range(3)]
         shifted = [Signal(signed(max(sbits, 10)), name=f"shifted_{'rgb'[c]}") for c in range(3)]
         conv = [Signal(8, name=f"conv_{'rgb'[c]}") for c in range(3)]
         for c in range(3):
+            if not matrix:
+                break
+            terms = [prod[c][k] for k in range(3) if self._all or mat.coeffs[c][k]]
+            total = terms[0] if terms else C(0, 1)
+            for term in terms[1:]:
+                total = total + term
             m.d.comb += [
-                acc[c].eq(prod[c][0] + prod[c][1] + prod[c][2] + mat.bias),
+                acc[c].eq(total + mat.bias),
                 shifted[c].eq(acc[c] >> F),
             ]
             # Clamp by bit tests (no comparator): negative is the sign bit, above 255 is any bit
@@ -138,15 +171,18 @@ class ColorMatrix(wiring.Component):
 
         s = samples_p
         out = Signal(SamplesLayout)
-        with m.Switch(color_p):
-            with m.Case(_YUV):
-                m.d.comb += out.eq(Cat(conv[0], conv[1], conv[2], C(255, 8)))
-            with m.Case(_I8):
-                m.d.comb += out.eq(Cat(s[0], s[0], s[0], C(255, 8)))
-            with m.Case(_RGB):
-                m.d.comb += out.eq(Cat(s[0], s[1], s[2], C(255, 8)))
-            with m.Default():
-                m.d.comb += out.eq(s)
+        expand = {_YUV: Cat(conv[0], conv[1], conv[2], C(255, 8)), _I8: Cat(s[0], s[0], s[0], C(255, 8)),
+                  _RGB: Cat(s[0], s[1], s[2], C(255, 8)), _RGBA: s.as_value()}
+        present = [code for code in (_YUV, _I8, _RGB, _RGBA) if code in colors]
+        if one:
+            m.d.comb += out.eq(expand[present[0]])
+        else:
+            with m.Switch(color_p):
+                for code in present[:-1]:
+                    with m.Case(code):
+                        m.d.comb += out.eq(expand[code])
+                with m.Default():
+                    m.d.comb += out.eq(expand[present[-1]])
         with m.If(self.en):
             m.d.sync += self.rgba.eq(out)
         return m

@@ -7,12 +7,15 @@ Twin of :func:`golden.fetch.lookup_descriptor`. The table is a ROM holding
 
 from __future__ import annotations
 
+import numpy as np
 from amaranth import *
 from amaranth.lib import data, memory, wiring
 from amaranth.lib.wiring import In, Out
 from amaranth.utils import bits_for
 
 from vqtex.golden.format import DESCRIPTOR_FIELDS, MAX_LEVELS, TextureSet, log2
+
+from .features import Features, Fields, pvr2_set
 
 __all__ = ["DescriptorLayout", "DescriptorTable", "descriptor_widths", "texture_bits", "LEVEL_BITS"]
 
@@ -32,11 +35,11 @@ def descriptor_widths(ts: TextureSet) -> dict:
     codebook memory, the plane offsets for a byte of the widest entry. ``color`` is 2 bits (the
     paper's four formats) unless the set holds a PowerVR2 texture (codes 4-7: 3 bits), and
     ``layout`` is 1 bit only then (else 0 bits): a set of the paper's textures elaborates exactly
-    the paper's unit, and these widths are what the stages test to elaborate the PowerVR2 paths.
+    the paper's unit (:func:`hw.features.pvr2_set`; :class:`hw.features.Features` says which
+    PowerVR2 paths the stages elaborate).
     """
     base_bits = bits_for(max(len(ts.index_words), len(ts.raw_words)))
-    valid = ts.descriptors["valid"] != 0
-    pvr2 = bool((ts.descriptors["layout"][valid] != 0).any() or (ts.descriptors["color"][valid] > 3).any())
+    pvr2 = pvr2_set(ts)
     return {
         "valid": 1,
         "compressed": 1,
@@ -57,19 +60,23 @@ def descriptor_widths(ts: TextureSet) -> dict:
 
 
 class DescriptorLayout(data.StructLayout):
-    """One descriptor row, the fields of :data:`golden.format.DESCRIPTOR_FIELDS` in that order.
+    """One descriptor row, the fields of :data:`golden.format.DESCRIPTOR_FIELDS` in that order (or
+    only ``fields``, in that order: the columns a specialised table stores).
 
     Arguments
     ---------
     widths : dict
         Field name -> width, as returned by :func:`descriptor_widths`.
+    fields : sequence of str, optional
+        The fields held (default all).
     """
 
-    def __init__(self, widths: dict):
-        missing = set(DESCRIPTOR_FIELDS) - set(widths)
+    def __init__(self, widths: dict, fields=None):
+        fields = tuple(DESCRIPTOR_FIELDS) if fields is None else tuple(fields)
+        missing = set(fields) - set(widths)
         if missing:
             raise ValueError(f"descriptor widths lack {sorted(missing)}")
-        super().__init__({name: unsigned(widths[name]) for name in DESCRIPTOR_FIELDS})
+        super().__init__({name: unsigned(widths[name]) for name in DESCRIPTOR_FIELDS if name in fields})
 
 
 class DescriptorTable(wiring.Component):
@@ -79,10 +86,18 @@ class DescriptorTable(wiring.Component):
     ``en`` is high appears on ``row`` in the next cycle and stays there while ``en`` is low).
     Throughput: one lookup per cycle.
 
+    Specialised (``features`` of a set, :class:`hw.features.Features`): the table stores only the
+    fields the unit reads that differ between rows (``features.stored_fields``), decodes only
+    ``features.level_bits`` bits of the level and ``features.texture_bits`` of the texture, and is
+    no memory at all when every field is a constant; :meth:`fields` gives every field, a constant
+    or a column of ``row``.
+
     Arguments
     ---------
     ts : TextureSet
         The texture set whose descriptors the ROM holds.
+    features : Features, optional
+        Default ``Features.full(ts)``: every field, ``texture * 16 + level``.
 
     Members
     -------
@@ -93,13 +108,14 @@ class DescriptorTable(wiring.Component):
     en : In(1)
         Read enable (the pipeline's advance).
     row : Out(DescriptorLayout)
-        The descriptor row, registered.
+        The descriptor row (the stored fields), registered.
     """
 
-    def __init__(self, ts: TextureSet):
+    def __init__(self, ts: TextureSet, *, features: Features | None = None):
         self._ts = ts
+        self._features = features if features is not None else Features.full(ts)
         self._widths = descriptor_widths(ts)
-        self._layout = DescriptorLayout(self._widths)
+        self._layout = DescriptorLayout(self._widths, self._features.stored_fields)
         super().__init__({
             "texture": In(texture_bits(ts)),
             "level": In(LEVEL_BITS),
@@ -115,12 +131,24 @@ class DescriptorTable(wiring.Component):
     def widths(self) -> dict:
         return dict(self._widths)
 
+    def fields(self, view=None) -> Fields:
+        """Every field the unit reads, from ``view`` (default ``row``; a register of it is a view of
+        the same layout): the stored ones as its fields, the constant ones as constants."""
+        return Fields(self.row if view is None else view, self._features.constants, self._widths)
+
     def elaborate(self, platform):
         m = Module()
-        rows = self._ts.descriptors.reshape(-1)
-        init = [{name: int(row[name]) for name in DESCRIPTOR_FIELDS} for row in rows]
-        depth = 1 << (texture_bits(self._ts) + LEVEL_BITS)       # every address decodes
-        init += [{name: 0 for name in DESCRIPTOR_FIELDS}] * (depth - len(init))
+        names = [name for name, _ in self._layout]
+        if not names:                       # every field a constant: nothing to store
+            return m
+        lb, tb = self._features.level_bits, self._features.texture_bits
+        rows = self._ts.descriptors[:, :1 << lb]
+        if rows.shape[1] < 1 << lb:         # the full table: 16 rows per texture
+            pad = np.zeros((rows.shape[0], (1 << lb) - rows.shape[1]), rows.dtype)
+            rows = np.concatenate([rows, pad], axis=1)
+        init = [{name: int(row[name]) for name in names} for row in rows.reshape(-1)]
+        depth = 1 << (tb + lb)                                  # every address decodes
+        init += [{name: 0 for name in names}] * (depth - len(init))
         # A set with PowerVR2 textures keeps the table in LUTs (as Yosys does for most paper sets):
         # its twiddle adds logic after the read, and a block RAM's clock-to-output (4.3 ns on the
         # ECP5-8) left too little of the cycle for it (89 MHz, docs/pvr2.md).
@@ -128,7 +156,7 @@ class DescriptorTable(wiring.Component):
         m.submodules.table = table = memory.Memory(shape=self._layout, depth=depth, init=init, attrs=attrs)
         port = table.read_port(domain="sync")
         m.d.comb += [
-            port.addr.eq(Cat(self.level, self.texture)),
+            port.addr.eq(Cat(self.level[:lb], self.texture[:tb])),
             port.en.eq(self.en),
             self.row.eq(port.data),
         ]

@@ -18,6 +18,7 @@ from . import index_reader
 from .address import BlockAddress
 from .banked_rom import BANK_DEPTH
 from .descriptor import DescriptorTable, descriptor_widths, texture_bits
+from .features import Features
 from .index_reader import IndexReader
 from .registers import enabled_register
 from .pipeline import STAGES, UPSTREAM_STAGES, REGISTERS, LinkLayout, RequestLayout, SideLayout, addr_bits, pack
@@ -33,6 +34,12 @@ def k_bits(ts: TextureSet) -> int:
         return 1
     span = (d["log2w"].astype(int) - d["log2bw"] + d["log2h"] - d["log2bh"])[comp]
     return max(1, int(span.max()))
+
+
+class _NoIndex:
+    """The index reader of a unit whose levels are all raw: nothing (no hold, no straddle, index 0)."""
+    hold = straddle = C(0, 1)
+    index = C(0, 1)
 
 
 class FrontEnd(wiring.Component):
@@ -54,6 +61,10 @@ class FrontEnd(wiring.Component):
         Descriptor table and index memory (and the widths of the side fields).
     one_port, tag_width, bank_depth
         As for :class:`hw.texel_fetch.TexelFetch`.
+    features : hw.features.Features, optional
+        What to build (default the full front end): the descriptor table's columns, the index
+        reader's widths and straddle path (none without compressed levels), the raw address, the
+        side fields carried.
 
     Members
     -------
@@ -75,11 +86,12 @@ class FrontEnd(wiring.Component):
     """
 
     def __init__(self, texture_set: TextureSet, *, one_port: bool = False, tag_width: int = 8,
-                 bank_depth: int = BANK_DEPTH):
+                 bank_depth: int = BANK_DEPTH, features: Features | None = None):
         self._ts = texture_set
         self._one_port = bool(one_port)
         self._tag_width = tag_width
         self._bank_depth = bank_depth
+        self._features = features if features is not None else Features.full(texture_set)
         super().__init__({
             "i": In(stream.Signature(RequestLayout(texture_bits(texture_set), tag_width))),
             "o_valid": Out(1),
@@ -89,22 +101,27 @@ class FrontEnd(wiring.Component):
             "stall_output": Out(1),
             "valid": Out(len(REGISTERS)),
             "o_tag": Out(tag_width),
-            "link": Out(LinkLayout(texture_set)),
+            "link": Out(LinkLayout(texture_set, self._features)),
         })
 
     def elaborate(self, platform):
         m = Module()
         ts = self._ts
+        feat = self._features
         widths = descriptor_widths(ts)
         kb = k_bits(ts)
 
-        m.submodules.descriptor = desc = DescriptorTable(ts)
+        m.submodules.descriptor = desc = DescriptorTable(ts, features=feat)
         m.submodules.address = addr = BlockAddress(
-            base_bits=widths["base"], k_bits=kb, raw_bits=addr_bits(len(ts.raw_words)),
-            twiddle=widths["layout"] > 0)
-        m.submodules.index_reader = idx = IndexReader(
-            ts.index_words, word_bits=ts.word_bits, k_bits=kb, base_bits=widths["base"],
-            one_port=self._one_port, bank_depth=self._bank_depth)
+            base_bits=widths["base"], k_bits=kb, raw_bits=addr_bits(len(ts.raw_words)), raw=feat.raw,
+            twiddle=feat.twiddled, linear=0 in feat.layouts)
+        if feat.compressed:
+            m.submodules.index_reader = idx = IndexReader(
+                ts.index_words, word_bits=ts.word_bits, k_bits=kb, base_bits=widths["base"],
+                one_port=self._one_port, bank_depth=self._bank_depth,
+                widths=feat.index_widths if feat.specialised else None, straddle=feat.straddle)
+        else:                               # every level raw: no index reader, the index is 0
+            idx = _NoIndex()
 
         # -- pipeline control, all in one place ---------------------------------------------------
         # The stages' valid bits, one register (a shift register: bit n is stage STAGES[n]).
@@ -143,7 +160,7 @@ class FrontEnd(wiring.Component):
             desc.level.eq(self.i.p.level),
             desc.en.eq(upstream),
         ]
-        row = desc.row
+        row = desc.fields()
         i1 = carry(self.i.p.i, upstream, "i_descriptor")
         j1 = carry(self.i.p.j, upstream, "j_descriptor")
 
@@ -154,19 +171,20 @@ class FrontEnd(wiring.Component):
             addr.base.eq(row.base),
             addr.en.eq(upstream),
         ]
-        if addr.twiddle:                    # a set with PowerVR2 textures: the twiddled layout
+        if addr.twiddle:                    # a level with a PowerVR2 twiddled map
             m.d.comb += [addr.layout.eq(row.layout), addr.log2h.eq(row.log2h)]
-        d2 = carry(row, upstream, "row_address")
+        d2 = desc.fields(carry(desc.row, upstream, "row_address"))
 
         # Stages 3-7: index reader (stage 3 moves on upstream: the reader gates it with its hold).
-        m.d.comb += [
-            idx.valid.eq(valid[1] & d2.compressed),
-            idx.k.eq(addr.k),
-            idx.b.eq(d2.index_bits),
-            idx.base.eq(d2.base),
-            idx.en.eq(advance),
-        ]
-        side = Signal(SideLayout(ts))
+        if feat.compressed:
+            m.d.comb += [
+                idx.valid.eq(valid[1] & d2.compressed),
+                idx.k.eq(addr.k),
+                idx.b.eq(d2.index_bits),
+                idx.base.eq(d2.base),
+                idx.en.eq(advance),
+            ]
+        side = Signal(SideLayout(ts, feat))
         m.d.comb += side.eq(pack(side.shape(), {
             "compressed": d2.compressed, "cb_base": d2.cb_base, "raw_addr": addr.raw_addr,
             "x": addr.x, "y": addr.y, "log2bw": d2.log2bw, "color": d2.color,

@@ -9,6 +9,13 @@ words ``w`` and ``w + 1`` always live in different banks, so both arrive in the 
 straddling index costs nothing (the paper's "specialized addressing logic"). With ``one_port`` the
 memory is a single bank and a straddling index takes one extra cycle. Either memory is a
 :class:`hw.banked_rom.BankedROM` (512-word block RAM banks, each read registered).
+
+Specialised to the index widths ``widths`` a set holds (:class:`hw.features.Features`): ``k * b``
+is shifts and adds for one to three widths (a multiplier for more), the index is as wide as the
+widest, the mask exists only for several widths, the extract selects among the bit offsets an
+index can start at (multiples of the greatest power of two dividing every width), and with
+``straddle=False`` (no index crosses a word) the memory is one bank read at ``w`` and the pair is
+one word. The latency stays 5: a stage with less to do is still a register.
 """
 
 from __future__ import annotations
@@ -18,7 +25,7 @@ from amaranth import *
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from .banked_rom import BANK_DEPTH, BankedROM
+from .banked_rom import BANK_DEPTH, BankedROM, pick
 from .registers import enabled_register
 
 __all__ = ["IndexReader", "INDEX_BITS", "LATENCY"]
@@ -63,6 +70,13 @@ class IndexReader(wiring.Component):
         One bank; a straddling index costs one extra cycle.
     bank_depth : int
         Words per block RAM bank of each memory (:class:`hw.banked_rom.BankedROM`).
+    widths : sequence of int, optional
+        The index widths ``b`` the reader must serve (default: every width 1..16, the full reader:
+        a multiplier, a 16-bit index, the mask and a bit-granular shift). Given, the reader is
+        specialised to them (``b`` is ignored when there is one).
+    straddle : bool
+        Some index can cross a word boundary (default). False: one bank, no word pair, ``hold`` and
+        ``straddle`` constant 0.
 
     Members
     -------
@@ -82,24 +96,30 @@ class IndexReader(wiring.Component):
         ``valid`` and ``off + b > W``).
     hold : Out(1)
         Combinational, one-port only (else 0): stage 1 spends this cycle on the first of two reads.
-    index : Out(16)
-        The index, registered (latency 5).
+    index : Out(index_bits)
+        The index, registered (latency 5): 16 bits, or the widest of ``widths``.
 
     Raises
     ------
     ValueError
-        If ``word_bits`` is not 16, 32 or 64.
+        If ``word_bits`` is not 16, 32 or 64, or a width is outside 1..16.
     """
 
     def __init__(self, words, *, word_bits: int, k_bits: int, base_bits: int, one_port: bool = False,
-                 bank_depth: int = BANK_DEPTH):
+                 bank_depth: int = BANK_DEPTH, widths=None, straddle: bool = True):
         if word_bits not in (16, 32, 64):
             raise ValueError(f"index word width {word_bits} is not 16, 32 or 64")
+        if widths is not None:
+            widths = tuple(sorted({int(b) for b in widths}))
+            if not widths or widths[0] < 1 or widths[-1] > INDEX_BITS:
+                raise ValueError(f"index widths {widths} must be in 1..{INDEX_BITS}")
         self._words = [int(w) for w in np.asarray(words).astype(np.uint64).tolist()] or [0]
         self._word_bits = word_bits
         self._k_bits = k_bits
         self._one_port = bool(one_port)
         self._bank_depth = bank_depth
+        self._widths = widths
+        self._straddle = bool(straddle)
         super().__init__({
             "valid": In(1),
             "k": In(k_bits),
@@ -108,7 +128,7 @@ class IndexReader(wiring.Component):
             "en": In(1),
             "straddle": Out(1),
             "hold": Out(1),
-            "index": Out(INDEX_BITS),
+            "index": Out(INDEX_BITS if widths is None else widths[-1]),
         })
 
     @property
@@ -119,7 +139,13 @@ class IndexReader(wiring.Component):
     def one_port(self) -> bool:
         return self._one_port
 
+    @property
+    def specialised(self) -> bool:
+        return self._widths is not None
+
     def elaborate(self, platform):
+        if self._widths is not None:
+            return self._elaborate_specialised()
         m = Module()
         W = self._word_bits
         log2W = W.bit_length() - 1
@@ -186,4 +212,112 @@ class IndexReader(wiring.Component):
         m.d.comb += mask.eq(~(C((1 << INDEX_BITS) - 1, INDEX_BITS) << b4)[:INDEX_BITS])
         with m.If(self.en):
             m.d.sync += self.index.eq((Cat(lo, hi) >> off4)[:INDEX_BITS] & mask)
+        return m
+
+    def _elaborate_specialised(self):
+        """The reader for the widths ``self._widths`` (see the class docstring): the same five
+        registers, the same memory organisation when indices straddle (even/odd banks, or one
+        bank and ``hold`` with ``one_port``), one bank when none does."""
+        m = Module()
+        W = self._word_bits
+        log2W = W.bit_length() - 1
+        widths = self._widths
+        ib = widths[-1]                                 # index bits: the widest present
+        several = len(widths) > 1
+        g = 0
+        for b in widths:
+            g = np.gcd(g, b)
+        unit = int(g & -g)                              # every index starts at a multiple of this
+        log2u = unit.bit_length() - 1
+        straddle = self._straddle
+
+        # Stage 1: the bit address k*b: for each width, shifts and adds of k (a width's set bits),
+        # selected by b; a multiplier beyond three widths.
+        def times(b):
+            terms = [self.k << n for n in range(5) if b >> n & 1]
+            out = terms[0]
+            for t in terms[1:]:
+                out = out + t
+            return out
+
+        bit = Signal(self._k_bits + ib.bit_length(), name="bit")
+        bw_bits = len(self.b) if several else 0
+        fields1 = Signal(len(self.base) + bw_bits + 1, name="fields_bit")
+        base1, b1, valid1 = fields1[:len(self.base)], fields1[len(self.base):-1], fields1[-1]
+        with m.If(self.en & ~self.hold):
+            m.d.sync += fields1.eq(Cat(self.base, self.b if several else C(0, 0), self.valid))
+            if len(widths) > 3:
+                m.d.sync += bit.eq(self.k * self.b)
+            elif several:
+                with m.Switch(self.b):
+                    for b in widths[:-1]:
+                        with m.Case(b):
+                            m.d.sync += bit.eq(times(b))
+                    with m.Default():
+                        m.d.sync += bit.eq(times(widths[-1]))
+            else:
+                m.d.sync += bit.eq(times(widths[0]))
+        b1 = b1 if several else C(widths[0], 5)
+
+        # Stage 2: word and offset (in units); the memory read.
+        w = Signal(max(len(self.base), len(bit) - log2W) + 1)
+        off = Signal(max(1, log2W - log2u))               # the offset in units of ``unit`` bits
+        m.d.comb += [w.eq(base1 + (bit >> log2W)), off.eq(bit[log2u:log2W])]
+        if straddle:
+            m.d.comb += self.straddle.eq(valid1 & ((off << log2u) + b1 > W))
+
+        def reg(value, name):
+            return enabled_register(m, self.en, value, name)
+
+        lo = Signal(W, name="lo")           # stage 4: word[w]
+        hi = Signal(W, name="hi") if straddle else C(0, 0)     # stage 4: word[w + 1]
+        if straddle and not self._one_port:
+            m.submodules.even_bank = even = BankedROM(self._words[0::2] or [0], width=W, bank_depth=self._bank_depth)
+            m.submodules.odd_bank = odd = BankedROM(self._words[1::2] or [0], width=W, bank_depth=self._bank_depth)
+            m.d.comb += [
+                even.addr.eq((w + 1) >> 1), even.en.eq(self.en),
+                odd.addr.eq(w >> 1), odd.en.eq(self.en),
+            ]
+            fields3 = reg(reg(Cat(off, b1[:bw_bits], w[0]), "fields_word"), "fields_data")
+            parity = fields3[-1]
+            with m.If(self.en):
+                m.d.sync += [
+                    lo.eq(Mux(parity, odd.word, even.word)),
+                    hi.eq(Mux(parity, even.word, odd.word)),
+                ]
+        elif straddle:
+            m.submodules.memory = mem = BankedROM(self._words, width=W, bank_depth=self._bank_depth)
+            second = Signal()
+            m.d.comb += [
+                self.hold.eq(self.straddle & ~second),
+                mem.addr.eq(w + second),
+                mem.en.eq(self.en),
+            ]
+            with m.If(self.en):
+                m.d.sync += second.eq(self.hold)
+            fields3 = reg(reg(Cat(off, b1[:bw_bits], self.straddle), "fields_word"), "fields_data")
+            straddled = fields3[-1]
+            with m.If(self.en):
+                m.d.sync += [hi.eq(mem.word), lo.eq(Mux(straddled, hi, mem.word))]
+        else:                               # no index crosses a word: one bank, one word
+            m.submodules.memory = mem = BankedROM(self._words, width=W, bank_depth=self._bank_depth)
+            m.d.comb += [mem.addr.eq(w), mem.en.eq(self.en)]
+            fields3 = Cat(reg(reg(Cat(off, b1[:bw_bits]), "fields_word"), "fields_data"), C(0, 1))
+            with m.If(self.en):
+                m.d.sync += lo.eq(mem.word)
+
+        # Stage 5: the index at offset ``off`` units of the word (pair): a select of whole units,
+        # masked to b bits when there are several widths.
+        fields4 = reg(fields3[:-1], "fields_pair")
+        off4, b4 = fields4[:len(off)], fields4[len(off):]
+        data = Cat(lo, hi)
+        starts = range(0, W, unit)
+        choices = [Cat(data[s:s + ib], C(0, max(0, s + ib - len(data)))) for s in starts]
+        value = pick(choices, off4) if len(choices) > 1 else choices[0]
+        if several:
+            mask = Signal(ib)
+            m.d.comb += mask.eq(~(C((1 << ib) - 1, ib) << b4)[:ib])
+            value = value & mask
+        with m.If(self.en):
+            m.d.sync += self.index.eq(value)
         return m

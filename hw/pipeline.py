@@ -25,9 +25,11 @@ from . import codebook_rom, color_matrix, index_reader
 from .address import COORD_BITS
 from .banked_rom import addr_bits  # noqa: F401 (the pipeline's address widths; re-exported)
 from .descriptor import LEVEL_BITS, descriptor_widths
+from .features import Features
 
 __all__ = ["STAGES", "LATENCY", "UPSTREAM_STAGES", "REGISTERS", "FRONT_STAGES", "RequestLayout",
-           "ResponseLayout", "RGBALayout", "SideLayout", "LinkLayout", "pack", "addr_bits"]
+           "ResponseLayout", "RGBALayout", "SideLayout", "LinkLayout", "pack", "addr_bits", "side_fields",
+           "SIDE_DESCRIPTOR_FIELDS"]
 
 #: Pipeline registers in order, one per cycle of latency; bit ``k`` of ``TexelFetch.valid`` is the
 #: valid bit of ``STAGES[k]``.
@@ -93,24 +95,46 @@ class ResponseLayout(data.StructLayout):
 RGBALayout = data.StructLayout({"r": unsigned(8), "g": unsigned(8), "b": unsigned(8), "a": unsigned(8)})
 
 
+#: The side fields that are descriptor fields (the rest come from the block address shifter).
+SIDE_DESCRIPTOR_FIELDS = ("compressed", "cb_base", "log2bw", "color", "texel_off", "u_off", "v_off")
+
+
+def side_fields(ts, features: Features | None = None) -> dict:
+    """The side fields a unit carries (name -> width): all of them in the full unit; in a
+    specialised one, not the constant descriptor fields, ``raw_addr`` only with raw levels, ``x``
+    and ``y`` only with compressed levels, the U and V plane offsets only with yuv411 or yuv422."""
+    w = descriptor_widths(ts)
+    fields = {
+        "compressed": 1, "cb_base": w["cb_base"], "raw_addr": addr_bits(len(ts.raw_words)),
+        "x": 3, "y": 3, "log2bw": 2, "color": w["color"],
+        "texel_off": w["texel_off"], "u_off": w["u_off"], "v_off": w["v_off"],
+    }
+    if features is None or not features.specialised:
+        return fields
+    drop = {name for name in SIDE_DESCRIPTOR_FIELDS if not features.variable(name)}
+    if not features.raw:
+        drop.add("raw_addr")
+    if not features.compressed:
+        drop |= {"x", "y"}
+    return {name: width for name, width in fields.items() if name not in drop}
+
+
 class SideLayout(data.StructLayout):
     """The fields the codebook ROM needs beside the index, carried through the index reader's
     stages: the descriptor's codebook base, format and plane offsets, and the block address
-    shifter's offset in the block and raw address.
+    shifter's offset in the block and raw address (:func:`side_fields`: a specialised unit carries
+    only the ones that vary).
 
     Arguments
     ---------
     ts : TextureSet
         Sets the widths (``hw.descriptor.descriptor_widths``, the raw memory's address).
+    features : Features, optional
+        Default: the full unit's fields.
     """
 
-    def __init__(self, ts):
-        w = descriptor_widths(ts)
-        super().__init__({
-            "compressed": 1, "cb_base": w["cb_base"], "raw_addr": addr_bits(len(ts.raw_words)),
-            "x": 3, "y": 3, "log2bw": 2, "color": w["color"],
-            "texel_off": w["texel_off"], "u_off": w["u_off"], "v_off": w["v_off"],
-        })
+    def __init__(self, ts, features: Features | None = None):
+        super().__init__(side_fields(ts, features))
 
 
 class LinkLayout(data.StructLayout):
@@ -127,11 +151,14 @@ class LinkLayout(data.StructLayout):
     Arguments
     ---------
     ts : TextureSet
+    features : Features, optional
+        Default: the full unit (a 16-bit index and every side field).
     """
 
-    def __init__(self, ts):
+    def __init__(self, ts, features: Features | None = None):
+        index = index_reader.INDEX_BITS if features is None or not features.specialised else features.index_bits
         super().__init__({
-            "advance": 1, "skid_valid": 1, "index": index_reader.INDEX_BITS, "side": SideLayout(ts),
+            "advance": 1, "skid_valid": 1, "index": index, "side": SideLayout(ts, features),
         })
 
 

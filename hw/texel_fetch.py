@@ -31,6 +31,7 @@ from vqtex.golden.format import TextureSet
 from .back_end import BackEnd
 from .banked_rom import BANK_DEPTH
 from .descriptor import texture_bits
+from .features import Features
 from .front_end import FrontEnd
 from .pipeline import (FRONT_STAGES, LATENCY, REGISTERS, STAGES, UPSTREAM_STAGES, RequestLayout,
                        ResponseLayout, pack)
@@ -74,6 +75,13 @@ class TexelFetch(wiring.Component):
     bank_depth : int
         Words per block RAM bank of the index, codebook and raw memories (a power of two; default
         512, one ECP5 DP16KD; see :class:`hw.banked_rom.BankedROM`).
+    specialise : bool
+        Build only what the texture set needs (default; :class:`hw.features.Features`: no colour
+        matrix without yuv411, no multipliers where shifts do, no raw path without raw levels, no
+        odd index bank when no index straddles, constant descriptor fields as constants). False:
+        the full unit, every path present (what any texture set with memories of these shapes
+        needs). Both are bit-exact against the golden model on valid requests, with the same
+        latency, throughput and cycle counts.
 
     Members
     -------
@@ -105,7 +113,7 @@ class TexelFetch(wiring.Component):
     """
 
     def __init__(self, texture_set: TextureSet, *, one_port: bool = False, tag_width: int = 8,
-                 bank_depth: int = BANK_DEPTH):
+                 bank_depth: int = BANK_DEPTH, specialise: bool = True):
         if not isinstance(texture_set, TextureSet):
             raise TypeError(f"texture_set must be a TextureSet, not {type(texture_set).__name__}")
         if not isinstance(tag_width, int) or tag_width < 0:
@@ -117,6 +125,7 @@ class TexelFetch(wiring.Component):
         self._one_port = bool(one_port)
         self._tag_width = tag_width
         self._bank_depth = bank_depth
+        self._features = Features.for_set(texture_set, bool(specialise))
         self._texture_bits = texture_bits(texture_set)
         members = {
             "i": In(stream.Signature(RequestLayout(self._texture_bits, tag_width))),
@@ -153,11 +162,20 @@ class TexelFetch(wiring.Component):
     def texture_bits(self) -> int:
         return self._texture_bits
 
+    @property
+    def specialised(self) -> bool:
+        return self._features.specialised
+
+    @property
+    def features(self) -> Features:
+        """What the unit was built with (:class:`hw.features.Features`)."""
+        return self._features
+
     def elaborate(self, platform):
         m = Module()
         m.submodules.front = front = FrontEnd(self._ts, one_port=self._one_port, tag_width=self._tag_width,
-                                              bank_depth=self._bank_depth)
-        m.submodules.back = back = BackEnd(self._ts, bank_depth=self._bank_depth)
+                                              bank_depth=self._bank_depth, features=self._features)
+        m.submodules.back = back = BackEnd(self._ts, bank_depth=self._bank_depth, features=self._features)
         wiring.connect(m, wiring.flipped(self.i), front.i)          # the request stream, forwarded
         m.d.comb += [
             self.o.valid.eq(front.o_valid), front.o_ready.eq(self.o.ready),

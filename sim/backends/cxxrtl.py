@@ -96,8 +96,17 @@ _SLICE = re.compile(r"\b([A-Za-z_]\w*(?:\.curr|\.next)?)\.slice<(\d+(?:,\d+)?)>\
 def _fast_slices(src: str) -> str:
     """Every rvalue ``x.slice<stop, start>()`` of a named value (a wire's ``curr``/``next``, a local)
     as ``vq_slice<stop, start>(x)`` (vq_ops.h): the same bits, without CXXRTL's copy and shift of
-    the whole operand (the 504-bit codebook registers are sliced a dozen times a cycle)."""
-    return _SLICE.sub(lambda m: f"vq_slice<{m.group(2)}>({m.group(1)})", src)
+    the whole operand (the 504-bit codebook registers are sliced a dozen times a cycle).
+
+    Only right of a statement's ``=``: CXXRTL assigns to a concatenation of slices
+    (``x.slice<14>().concat(x.slice<1,0>()) = ...``, as it writes a constant-masked field of a
+    specialised unit), and a ``vq_slice`` there would assign to a copy."""
+    def line(text):
+        at = text.find(" = ")
+        if at < 0:
+            return _SLICE.sub(lambda m: f"vq_slice<{m.group(2)}>({m.group(1)})", text)
+        return text[:at] + _SLICE.sub(lambda m: f"vq_slice<{m.group(2)}>({m.group(1)})", text[at:])
+    return "\n".join(line(text) for text in src.split("\n"))
 
 
 _SHIFT = re.compile(r"\b(shl_uu|shr_uu|shift_uu)<")
@@ -320,14 +329,16 @@ class Build:
     steps: dict = field(default_factory=dict)      # step -> seconds (elaborate, yosys, compile)
 
 
-def build_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8, cxxflags=None, compile: bool = True) -> Build:
+def build_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8, cxxflags=None, compile: bool = True,
+                 specialise: bool = True) -> Build:
     """The CXXRTL library for this design (built or taken from the cache). With ``compile=False``
     nothing is compiled: the result names the library the build would produce (``cached`` tells
-    whether it exists)."""
+    whether it exists). ``specialise`` is part of both keys: the quick key names it, and the
+    library's key hashes the generated C++, which holds a specialised unit's constants."""
     cxx = find_cxx()
     flags = list(cxxflags or CXXFLAGS)
     t0 = time.perf_counter()
-    info = design_info(ts, one_port=one_port, tag_width=tag_width)
+    info = design_info(ts, one_port=one_port, tag_width=tag_width, specialise=specialise)
     steps = {"elaborate": time.perf_counter() - t0}
     drivers = driver_sources("driver.cc", "batch.h", "vq_ops.h")
     this = b""
@@ -335,7 +346,7 @@ def build_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8, cxxflags=Non
         with open(os.path.abspath(mod), "rb") as f:
             this += f.read()
     quick = digest("cxxrtl-quick", source_stamp(), this, one_port, tag_width, texture_set_digest(ts), flags,
-                   tool_version(cxx), *drivers)
+                   tool_version(cxx), *drivers, *(() if specialise else ("full unit",)))
     key = index_get("cxxrtl", quick)
     if key and os.path.isfile(os.path.join(os_cache("cxxrtl"), key, "libvq.so")):
         return Build(os.path.join(os_cache("cxxrtl"), key, "libvq.so"), 0.0, True, info, key, steps)
@@ -527,18 +538,18 @@ def run_batch(lib: BatchLibrary, info: DesignInfo, requests, *, stall: float = 0
 _libs: dict = {}
 
 
-def open_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8):
+def open_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True):
     """(BatchLibrary with the memories of ``ts`` loaded, DesignInfo, Build)."""
-    b = build_cxxrtl(ts, one_port=one_port, tag_width=tag_width)
+    b = build_cxxrtl(ts, one_port=one_port, tag_width=tag_width, specialise=specialise)
     lib = BatchLibrary(b.library)
     lib.load_memories(b.info.memories)
     return lib, b.info, b
 
 
 def run(ts, requests, *, stall: float = 0.0, seed: int = 0, one_port: bool = False,
-        tag_width: int = 8):
+        tag_width: int = 8, specialise: bool = True):
     """``sim.backends.interface.simulate(..., backend="cxxrtl")``: the backend entry point."""
-    lib, info, _ = open_cxxrtl(ts, one_port=one_port, tag_width=tag_width)
+    lib, info, _ = open_cxxrtl(ts, one_port=one_port, tag_width=tag_width, specialise=specialise)
     try:
         return run_batch(lib, info, requests, stall=stall, seed=seed)
     finally:

@@ -57,12 +57,13 @@ class TexelFetchTop(wiring.Component):
     texture_set : TextureSet
     one_port : bool
     tag_width : int
+    specialise : bool
         As for :class:`hw.texel_fetch.TexelFetch`.
     """
 
-    def __init__(self, texture_set, *, one_port: bool = False, tag_width: int = 8):
+    def __init__(self, texture_set, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True):
         from vqtex.hw.texel_fetch import TexelFetch
-        self._fetch = TexelFetch(texture_set, one_port=one_port, tag_width=tag_width)
+        self._fetch = TexelFetch(texture_set, one_port=one_port, tag_width=tag_width, specialise=specialise)
         members = {"i_valid": In(1), "i_ready": Out(1)}
         members.update({f"i_{n}": In(w) for n, w in request_ports(self._fetch).items()})
         members.update({"o_valid": Out(1), "o_ready": In(1)})
@@ -142,12 +143,12 @@ def _fields(layout) -> dict:
     return {name: (f.offset, f.width) for name, f in layout}
 
 
-def design_info(ts, *, one_port: bool = False, tag_width: int = 8) -> DesignInfo:
+def design_info(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True) -> DesignInfo:
     """Elaborate ``TexelFetch(ts)`` and collect ports, payload layouts, stages and memory images."""
     from vqtex.hw.memories import elaborate, memories
     from vqtex.hw.texel_fetch import REGISTERS, TexelFetch
 
-    top = TexelFetch(ts, one_port=one_port, tag_width=tag_width)
+    top = TexelFetch(ts, one_port=one_port, tag_width=tag_width, specialise=specialise)
     ports = port_map(top)
     frag = elaborate(top)
     images = [MemoryImage(" ".join(mem.path), mem.width, mem.depth, mem.words) for mem in memories(frag)]

@@ -9,7 +9,9 @@ Backends
     Amaranth's simulator running ``hw.texel_fetch.TexelFetch`` (:mod:`sim.backends.pysim`).
 other names (``cxxrtl``, ``verilator``, ...)
     The module ``vqtex.sim.backends.<name>`` providing ``run(ts, requests, *, stall, seed, one_port)``
-    that returns a :class:`SimResult`.
+    that returns a :class:`SimResult` (and ``specialise``, the unit's own option: the RTL backends
+    build the specialised unit unless ``specialise=False``, the full one; the golden backend's
+    answers are the same for both).
 
 Every backend presents the requests back to back from cycle 0 (``i.valid`` high while requests
 remain), drives ``o.ready`` from :func:`sim.streams.ready_pattern` ``(seed, stall, ...)`` and counts
@@ -90,8 +92,9 @@ def _golden(ts: TextureSet, req: np.ndarray, *, stall: float, seed: int, one_por
 
 
 def simulate(ts: TextureSet, requests, *, backend: str = "golden", stall: float = 0.0, seed: int = 0,
-             one_port: bool = False) -> SimResult:
-    """Run ``requests`` ((N, 4) int: texture, level, i, j) through ``backend``.
+             one_port: bool = False, specialise: bool = True) -> SimResult:
+    """Run ``requests`` ((N, 4) int: texture, level, i, j) through ``backend`` (an RTL backend
+    simulates ``TexelFetch(ts, specialise=specialise)``: the specialised unit by default).
 
     Raises
     ------
@@ -114,4 +117,5 @@ def simulate(ts: TextureSet, requests, *, backend: str = "golden", stall: float 
         if e.name == f"vqtex.sim.backends.{backend}":
             raise ValueError(f"unknown simulation backend {backend!r}") from None
         raise
-    return module.run(ts, req, stall=stall, seed=seed, one_port=one_port)
+    unit = {} if specialise else {"specialise": False}     # (a backend without the option: default)
+    return module.run(ts, req, stall=stall, seed=seed, one_port=one_port, **unit)

@@ -44,9 +44,10 @@ def _pack_requests(dut: TexelFetch, req: np.ndarray) -> list:
 
 
 def run(ts: TextureSet, requests: np.ndarray, *, stall: float = 0.0, seed: int = 0,
-        one_port: bool = False, vcd: str | None = None, bank_depth: int | None = None) -> SimResult:
-    """Simulate ``requests`` ((N, 4) int) on ``TexelFetch(ts, one_port=one_port)`` (with
-    ``bank_depth``, if given: small banks put the bank select to work on small texture sets).
+        one_port: bool = False, vcd: str | None = None, bank_depth: int | None = None,
+        specialise: bool = True) -> SimResult:
+    """Simulate ``requests`` ((N, 4) int) on ``TexelFetch(ts, one_port=one_port, specialise=specialise)``
+    (with ``bank_depth``, if given: small banks put the bank select to work on small texture sets).
 
     Raises
     ------
@@ -60,7 +61,7 @@ def run(ts: TextureSet, requests: np.ndarray, *, stall: float = 0.0, seed: int =
                          stall_cycles={"output_backpressure": 0, "one_port_straddle": 0}, straddles=0,
                          occupancy=None)
     unit = {} if bank_depth is None else {"bank_depth": bank_depth}
-    dut = TexelFetch(ts, one_port=one_port, tag_width=TAG_WIDTH, **unit)
+    dut = TexelFetch(ts, one_port=one_port, tag_width=TAG_WIDTH, specialise=specialise, **unit)
     packed = _pack_requests(dut, req)
     rlayout = dut.o.payload.shape()
     fields = {name: rlayout[name].offset for name in ("r", "g", "b", "a", "tag")}

@@ -83,25 +83,25 @@ def _runtime(verilator: str, cxx: str, inc: str) -> str:
     return os.path.dirname(path)
 
 
-def build_verilator(ts, *, one_port: bool = False, tag_width: int = 8) -> Build:
+def build_verilator(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True) -> Build:
     """The Verilator library of the exported Verilog for ``ts`` (built or from the cache)."""
     from .verilog import export_verilog
     verilator = find_tool("verilator")
     cxx = find_tool("g++")
     t0 = time.perf_counter()
-    info = design_info(ts, one_port=one_port, tag_width=tag_width)
+    info = design_info(ts, one_port=one_port, tag_width=tag_width, specialise=specialise)
     steps = {"elaborate": time.perf_counter() - t0}
     drivers = driver_sources("verilator_driver.cc", "batch.h")
     flags = VERILATOR_FLAGS + CXXFLAGS + [MAKE_OPT]
     quick = digest("verilator-quick", source_stamp(), one_port, tag_width, texture_set_digest(ts), flags,
-                   tool_version(verilator), tool_version(cxx), *drivers)
+                   tool_version(verilator), tool_version(cxx), *drivers, *(() if specialise else ("full unit",)))
     key = index_get("verilator", quick)
     from .toolchain import cache_dir
     root = os.path.join(cache_dir(), "verilator")
     if key and os.path.isfile(os.path.join(root, key, "libvq.so")):
         return Build(os.path.join(root, key, "libvq.so"), 0.0, True, info, key, steps)
     t1 = time.perf_counter()
-    verilog = export_verilog(ts, one_port=one_port, tag_width=tag_width)
+    verilog = export_verilog(ts, one_port=one_port, tag_width=tag_width, specialise=specialise)
     header = ports_header(info, None)
     steps["export"] = time.perf_counter() - t1
     key = digest("verilator", verilog, header, *drivers, flags, tool_version(verilator), tool_version(cxx))
@@ -135,17 +135,18 @@ def build_verilator(ts, *, one_port: bool = False, tag_width: int = 8) -> Build:
     return Build(lib, 0.0 if cached else time.perf_counter() - t0, cached, info, key, steps)
 
 
-def open_verilator(ts, *, one_port: bool = False, tag_width: int = 8):
-    b = build_verilator(ts, one_port=one_port, tag_width=tag_width)
+def open_verilator(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True):
+    b = build_verilator(ts, one_port=one_port, tag_width=tag_width, specialise=specialise)
     lib = BatchLibrary(b.library)
     if lib.runtime_memories:
         lib.load_memories(b.info.memories)
     return lib, b.info, b
 
 
-def run(ts, requests, *, stall: float = 0.0, seed: int = 0, one_port: bool = False, tag_width: int = 8):
+def run(ts, requests, *, stall: float = 0.0, seed: int = 0, one_port: bool = False, tag_width: int = 8,
+        specialise: bool = True):
     """``sim.backends.interface.simulate(..., backend="verilator")``: the backend entry point."""
-    lib, info, _ = open_verilator(ts, one_port=one_port, tag_width=tag_width)
+    lib, info, _ = open_verilator(ts, one_port=one_port, tag_width=tag_width, specialise=specialise)
     try:
         return run_batch(lib, info, np.asarray(requests), stall=stall, seed=seed)
     finally:

@@ -32,7 +32,7 @@ import tempfile
 import threading
 
 __all__ = ["CliError", "Parser", "block_size", "BACKEND_HELP", "add_json", "add_texture_set", "add_backend",
-           "add_hardware_options", "add_tag_width", "emit", "warn", "warn_slow", "progress_enabled", "progress_line",
+           "add_hardware_options", "add_unit", "add_tag_width", "emit", "warn", "warn_slow", "progress_enabled", "progress_line",
            "Outputs", "check_folder", "IMAGE_SUFFIXES", "write_bytes", "write_json", "load_set", "is_dt", "with_default",
            "file_mode", "add_sweep_options", "sweep_options", "PYSIM_CYCLES_PER_SECOND", "SLOW_SECONDS", "STAGING_PREFIX"]
 
@@ -101,6 +101,20 @@ def add_hardware_options(p, *, stall: bool = True) -> None:
                                          "low in a cycle", 0.0))
         p.add_argument("--stall-seed", "--seed", dest="seed", type=int, default=0,
                        help=with_default("seed of the --stall pattern (--seed is the old spelling)", 0))
+
+
+#: ``--unit`` choices: the texel-fetch unit specialised to the texture set, or the full one.
+UNITS = ("specialised", "full")
+
+
+def add_unit(p, *, both: bool = False) -> None:
+    """``--unit``: which texel-fetch unit the RTL is (``hw.features``); with ``both``, also both side
+    by side."""
+    p.add_argument("--unit", choices=UNITS + (("both",) if both else ()), default="specialised",
+                   help=with_default("the RTL unit: specialised (only what the texture set needs: "
+                                     "bit-exact and smaller) or full (every path, any set of these memory "
+                                     "shapes)" + ("; both: the two side by side" if both else ""),
+                                     "specialised"))
 
 
 def add_tag_width(p) -> None:

@@ -17,7 +17,8 @@ import re
 import subprocess
 import tempfile
 
-from .common import Outputs, add_hardware_options, add_json, add_tag_width, add_texture_set, emit, load_set, with_default
+from .common import (Outputs, add_hardware_options, add_json, add_tag_width, add_texture_set, add_unit, emit, load_set,
+                     with_default)
 
 __all__ = ["add_parser", "cmd_export", "lint_verilog", "waiver_path", "LINT_WAIVERS", "ExportError"]
 
@@ -85,9 +86,9 @@ def cmd_export(args) -> int:
     if args.filter_lanes is not None:
         from vqtex.hw.filter import LATENCY as latency
     report = {"output": args.output, "lint_waivers": waiver_path(args.output), "module": args.name, "bytes": len(text.encode()),
-              "one_port": bool(args.one_port), "dialect": args.dialect, "tag_width": args.tag_width, "latency": latency,
-              "ports": ports, "lint": "clean" if args.lint else "not run",
-              "unit": "texel fetch" if args.filter_lanes is None else f"texture filter, {args.filter_lanes} lane(s)"}
+              "one_port": bool(args.one_port), "unit": args.unit, "dialect": args.dialect, "tag_width": args.tag_width,
+              "latency": latency, "ports": ports, "lint": "clean" if args.lint else "not run",
+              "top": "texel fetch" if args.filter_lanes is None else f"texture filter, {args.filter_lanes} lane(s)"}
     emit(report, args.json, f"wrote {args.output} (module {args.name}, {len(ports)} ports, "
                              f"latency {latency}, {len(text.encode())} bytes"
                              f"{', lint clean' if args.lint else ''}) and its Verilator lint waivers "
@@ -106,12 +107,14 @@ def _export(args, out):
         raise ExportError(f"{args.file}: {e}") from None
     ports = {}
     if args.filter_lanes is not None:
+        if args.unit != "specialised":
+            raise ExportError("--filter-lanes builds specialised texel-fetch lanes; --unit applies to the texel-fetch unit alone")
         from vqtex.sim.backends.filter_verilator import export_filter_verilog
         text, top = export_filter_verilog(ts, lanes=args.filter_lanes, tag_width=args.tag_width, name=args.name)
         ports.update({n: len(getattr(top, n)) for n in top.signature.members})
     else:
         text = export_verilog(ts, one_port=args.one_port, tag_width=args.tag_width, name=args.name,
-                              dialect=args.dialect, ports=ports)
+                              dialect=args.dialect, ports=ports, specialise=args.unit == "specialised")
     if args.lint:
         with tempfile.TemporaryDirectory() as tmp:
             path = os.path.join(tmp, os.path.basename(out))
@@ -128,6 +131,7 @@ def add_parser(sub) -> None:
     add_texture_set(e)
     e.add_argument("-o", "--output", required=True, help="Verilog file to write (.v or .sv)")
     add_hardware_options(e, stall=False)
+    add_unit(e)
     add_tag_width(e)
     e.add_argument("--name", default=None,
                    help=with_default("top module name", "texel_fetch, or texture_filter with --filter-lanes"))

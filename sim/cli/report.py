@@ -1,4 +1,4 @@
-"""``vqtex report area (FILE.vqt | FILE.dt | --builtin four|tiny|pvr2) [--one-port] [--json] ...`` and
+"""``vqtex report area (FILE.vqt | FILE.dt | --builtin NAME) [--unit specialised|full|both] [--one-port] [--json] ...`` and
 ``vqtex report cycles FILE.vqt REQUESTS [--plot P.png] [--backend B] [--stall P] ...``.
 
 ``cycles`` simulates a request trace as ``vqtex sim`` does and reports where the cycles went,
@@ -13,9 +13,10 @@ the PyPI packages of the ``synth`` extra; without them the command fails with on
 
 from __future__ import annotations
 
+import os
 import time
 
-from .common import (Outputs, add_hardware_options, add_json, add_tag_width, check_folder, emit, load_set,
+from .common import (Outputs, add_hardware_options, add_json, add_tag_width, add_unit, check_folder, emit, load_set,
                      progress_line, with_default)
 from .simulate import add_trace_arguments, plot_output, run_trace
 
@@ -34,6 +35,10 @@ BUILTINS = {
     "tiny": ("tiny_texture_set", "two 32x32 mipmapped textures (rgb 8-bit, yuv411 12-bit), K=16"),
     "pvr2": ("pvr2_texture_set", "Dreamcast PowerVR2: four bundled images, 128x128 mipmapped, 2x2 K=256 8-bit "
                                  "twiddled, rgb565, argb1555, yuv422, argb4444 (docs/pvr2.md)"),
+    "rgb8": ("rgb8_texture_set", "brick_red and road, 128x128 mipmapped, rgb 4x4 K=256 8-bit, one codebook "
+                                 "(textures 0 and 1 of four)"),
+    "topspin": ("topspin_texture_set", "the topspin scene's textures, encoded as vqtex render encodes them"),
+    "town": ("town_texture_set", "the town scene's textures, encoded as vqtex render encodes them"),
 }
 
 
@@ -68,13 +73,24 @@ def cmd_report_area(args) -> int:
         ts = getattr(synth, BUILTINS[args.builtin][0])()
         t_set = round(time.perf_counter() - t0, 2)
         name = f"builtin {args.builtin}"
-    rep = synth.area_report(ts, one_port=args.one_port, tag_width=args.tag_width, place=not args.no_pnr,
-                            freq=args.freq, seed=args.seed, workdir=args.keep, timeout=args.timeout,
-                            name=name, progress=lambda m: progress_line(f"report area: {m}"),
-                            filter_lanes=args.filter_lanes)
-    if t_set is not None:
-        rep["seconds"] = {"encode": t_set, **rep["seconds"]}
-    emit(rep, args.json, synth.area_text(rep))
+    if args.filter_lanes is not None and args.unit != "specialised":
+        raise CliError("--filter-lanes builds specialised texel-fetch lanes; --unit applies to the texel-fetch unit alone")
+    units = ["full", "specialised"] if args.unit == "both" else [args.unit]
+    reps = {}
+    for unit in units:
+        workdir = os.path.join(args.keep, unit) if args.keep and len(units) > 1 else args.keep
+        reps[unit] = synth.area_report(
+            ts, one_port=args.one_port, tag_width=args.tag_width, place=not args.no_pnr, freq=args.freq,
+            seed=args.seed, workdir=workdir, timeout=args.timeout, name=name, specialise=unit == "specialised",
+            progress=lambda m, u=unit: progress_line(f"report area: {u + ' unit: ' if len(units) > 1 else ''}{m}"),
+            filter_lanes=args.filter_lanes)
+        if t_set is not None:
+            reps[unit]["seconds"] = {"encode": t_set, **reps[unit]["seconds"]}
+    if len(units) == 1:
+        emit(reps[units[0]], args.json, synth.area_text(reps[units[0]]))
+    else:
+        comparison = synth.compare_units(reps)
+        emit(comparison, args.json, synth.compare_text(comparison))
     return 0
 
 
@@ -110,6 +126,7 @@ def add_parser(sub) -> None:
     a.add_argument("--filter-lanes", type=int, choices=[1, 2, 4, 8], default=None,
                    help=with_default("synthesize the texture filter (hw.filter: footprint, this many texel-fetch "
                                      "lanes, blend) instead of the texel-fetch unit", "the texel-fetch unit"))
+    add_unit(a, both=True)
     add_tag_width(a)
     a.add_argument("--freq", type=float, default=150.0, help=with_default("clock constraint in MHz", 150))
     a.add_argument("--placer-seed", "--seed", dest="seed", type=int, default=1,

@@ -7,8 +7,8 @@ import os
 
 import numpy as np
 
-from .common import (CliError, Outputs, add_backend, add_hardware_options, add_json, add_texture_set, emit,
-                     load_set, warn_slow, with_default, write_bytes)
+from .common import (CliError, Outputs, add_backend, add_hardware_options, add_json, add_texture_set, add_unit,
+                     emit, load_set, warn_slow, with_default, write_bytes)
 
 __all__ = ["add_parser", "cmd_sim", "read_requests", "run_trace", "plot_output", "add_trace_arguments"]
 
@@ -49,8 +49,10 @@ def run_trace(args):
     req = read_requests(args.requests)
     check_requests(ts, req[:, 0], req[:, 1], req[:, 2], req[:, 3])
     warn_slow(args.backend, len(req))
-    res = simulate(ts, req, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port)
-    return res, cycle_report(res, backend=args.backend, one_port=args.one_port, stall=args.stall)
+    res = simulate(ts, req, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port,
+                   specialise=args.unit == "specialised")
+    return res, cycle_report(res, backend=args.backend, one_port=args.one_port, stall=args.stall,
+                             extra={"unit": args.unit})
 
 
 def cmd_sim(args) -> int:
@@ -75,6 +77,7 @@ def add_trace_arguments(s) -> None:
                    help=".npy (N, 4) integer array or CSV (header line allowed): texture, level, i, j")
     add_backend(s, ["golden", "pysim", "cxxrtl", "verilator"], "golden")
     add_hardware_options(s)
+    add_unit(s)
 
 
 def add_parser(sub) -> None:

@@ -48,7 +48,9 @@ __all__ = [
     "SynthError", "INSTALL_HINT", "DEVICE", "Harness", "four_texture_set", "tiny_texture_set", "pvr2_texture_set",
     "design_rtlil", "yosys_script", "run_yosys", "parse_yosys_stat", "run_nextpnr",
     "parse_nextpnr_report", "parse_nextpnr_log", "parse_memory_mapping", "count_memory_blocks", "stage_of",
-    "signal_of", "design_memories", "area_report", "area_text", "tools_available",
+    "signal_of", "design_memories", "area_report", "area_text", "tools_available", "scene_texture_set",
+    "rgb8_texture_set",
+    "compare_units", "compare_text",
 ]
 
 INSTALL_HINT = "pip install '.[synth]'"
@@ -136,6 +138,33 @@ def pvr2_texture_set(size: int = 128, seed: int = 0):
     return TextureSet.combine(sets)
 
 
+def rgb8_texture_set(size: int = 128, seed: int = 0):
+    """An rgb-only set with 8-bit indices: textures 0 and 1 of :func:`four_texture_set` (brick_red and
+    road, ``size`` x ``size``, mipmapped, rgb 4x4, one shared codebook of K=256), alone. What the
+    specialised unit of such a set drops: the colour matrix, every multiplier, the odd index bank."""
+    return _bundled_encode(["brick_red", "road"], size, block=(4, 4), codebook_size=256, color="rgb",
+                           index_bits=8, mipmaps=True, seed=seed)
+
+
+def _bundled_encode(names, size, **kw):
+    import numpy as np
+
+    from vqtex.golden.encode import encode
+    from vqtex.golden.render.imageio import read_image
+    from vqtex.golden.render.scene import DATA_DIR as here
+    images = []
+    for name in names:
+        a = read_image(os.path.join(here, name + ".png"))
+        h, w = a.shape[:2]
+        if (h, w) != (size, size):
+            if h % size or w % size or h != w:
+                raise ValueError(f"{name}.png is {w}x{h}: cannot box-filter it to {size}x{size}")
+            f = h // size
+            a = a.reshape(size, f, size, f, -1).mean(axis=(1, 3)).round().astype(np.uint8)
+        images.append(a)
+    return encode(images, names=names, **kw)
+
+
 def tiny_texture_set(seed: int = 0):
     """A small set for tests: two mipmapped 32x32 textures (rgb 4x4 K=16 8-bit indices, yuv411 4x4
     K=16 12-bit indices), generated in code."""
@@ -152,6 +181,25 @@ def tiny_texture_set(seed: int = 0):
     return TextureSet.combine([s1, s2])
 
 
+def scene_texture_set(name: str):
+    """A built-in scene's texture set (``topspin``, ``town``), encoded with the scene's settings
+    (what ``vqtex render NAME`` encodes; 10-30 s)."""
+    from vqtex.golden.render.scene import build_texture_set, load_scene
+    return build_texture_set(load_scene(name))
+
+
+def topspin_texture_set():
+    """The ``topspin`` scene's set: wood (rgb 4x4), marble (yuv411 4x4), top (rgb 2x2), K=256,
+    8-bit indices, mipmapped."""
+    return scene_texture_set("topspin")
+
+
+def town_texture_set():
+    """The ``town`` scene's set: 22 textures in five groups (rgb 8- and 12-bit, intensity, rgba
+    2x2), mipmapped."""
+    return scene_texture_set("town")
+
+
 # ---------------------------------------------------------------------------------------------
 # the design
 
@@ -160,9 +208,11 @@ class Harness(wiring.Component):
     as :class:`sim.backends.filter.FilterTop`) with a flip-flop on every port (see the module
     docstring). The unit is the submodule ``unit``; the harness has the same ports."""
 
-    def __init__(self, texture_set, *, one_port: bool = False, tag_width: int = 8, unit=None):
+    def __init__(self, texture_set, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True,
+                 unit=None):
         from vqtex.sim.backends.design import TexelFetchTop
-        self.unit = unit if unit is not None else TexelFetchTop(texture_set, one_port=one_port, tag_width=tag_width)
+        self.unit = unit if unit is not None else TexelFetchTop(texture_set, one_port=one_port, tag_width=tag_width,
+                                                                specialise=specialise)
         super().__init__({name: (In if m.flow == In else Out)(m.shape)
                           for name, m in self.unit.signature.members.items()})
 
@@ -182,11 +232,11 @@ class Harness(wiring.Component):
         return m
 
 
-def design_rtlil(ts, *, one_port: bool = False, tag_width: int = 8) -> str:
+def design_rtlil(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True) -> str:
     """RTLIL of :class:`Harness` for ``ts`` (top module ``vqtex_harness``, unit ``vqtex_harness.unit``)."""
     from amaranth.back import rtlil
-    return rtlil.convert(Harness(ts, one_port=one_port, tag_width=tag_width), name=HARNESS_NAME,
-                         emit_src=False)
+    return rtlil.convert(Harness(ts, one_port=one_port, tag_width=tag_width, specialise=specialise),
+                         name=HARNESS_NAME, emit_src=False)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -501,10 +551,12 @@ def stage_of(name: str) -> str:
 
 def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool = True, freq: float = 150.0,
                 seed: int = 1, workdir: str | None = None, timeout: float | None = None,
-                name: str | None = None, progress=None, filter_lanes: int | None = None) -> dict:
+                name: str | None = None, progress=None, specialise: bool = True,
+                filter_lanes: int | None = None) -> dict:
     """Synthesize (and unless ``place`` is false, place and route) the unit holding ``ts``: the
-    texel-fetch unit, or with ``filter_lanes`` the texture filter (``hw.filter.TextureFilter``)
-    with that many lanes (``unit`` in the report says which).
+    specialised texel-fetch unit (:class:`hw.features.Features`), or with ``specialise=False`` the
+    full one; or with ``filter_lanes`` the texture filter (``hw.filter.TextureFilter``) with that many
+    (specialised) lanes (``top`` in the report says which).
 
     ``progress(message)``, when given, is called as each long step starts (elaboration, synthesis,
     place and route).
@@ -526,11 +578,17 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
     if filter_lanes is not None:
         from vqtex.sim.backends.filter import FilterTop
         unit = FilterTop(ts, lanes=filter_lanes, tag_width=tag_width)
-    harness = Harness(ts, one_port=one_port, tag_width=tag_width, unit=unit)
+    harness = Harness(ts, one_port=one_port, tag_width=tag_width, specialise=specialise, unit=unit)
     from amaranth.back import rtlil
     il = rtlil.convert(harness, name=HARNESS_NAME, emit_src=False)
     t_rtlil = time.perf_counter() - t0
-    shapes = design_memories(ts, one_port=one_port, tag_width=tag_width, filter_lanes=filter_lanes)
+    shapes = design_memories(ts, one_port=one_port, tag_width=tag_width, specialise=specialise,
+                             filter_lanes=filter_lanes)
+    if filter_lanes is None:
+        features = harness.unit.fetch.features
+    else:                               # the filter's lanes are specialised texel-fetch units
+        from vqtex.hw.features import Features
+        features = Features.of(ts)
 
     def go(folder):
         progress("synthesis (Yosys), typically 10-40 s")
@@ -539,9 +597,11 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
         top = syn["stat"].get(HARNESS_NAME) or {}
         rep = {
             "design": name or "texture set",
-            "unit": "texel fetch" if filter_lanes is None else f"texture filter, {filter_lanes} lane(s)",
+            "top": "texel fetch" if filter_lanes is None else f"texture filter, {filter_lanes} lane(s)",
             "device": f"{DEVICE['device']}-{DEVICE['speed']} {DEVICE['package']}",
             "index_reader": "one-port" if one_port else "two-bank",
+            "unit": "specialised" if features.specialised else "full",
+            "features": features.to_dict(),
             "tag_width": tag_width,
             "latency": LATENCY,
             "textures": ts.n_textures,
@@ -572,7 +632,8 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
         return go(folder)
 
 
-def design_memories(ts, *, one_port: bool = False, tag_width: int = 8, filter_lanes: int | None = None) -> dict:
+def design_memories(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True,
+                    filter_lanes: int | None = None) -> dict:
     """Every memory of ``TexelFetch(ts)`` -> ``(depth, width)``, named as Yosys names it inside the
     unit (``fetch.back.codebook_rom.codebook.bank0``, ``fetch.front.descriptor.table``): the banks of
     :class:`hw.banked_rom.BankedROM` are memories of their own. With ``filter_lanes``, those of
@@ -583,7 +644,7 @@ def design_memories(ts, *, one_port: bool = False, tag_width: int = 8, filter_la
         top, prefix = TextureFilter(ts, lanes=filter_lanes, tag_width=tag_width), "filter"
     else:
         from vqtex.hw.texel_fetch import TexelFetch
-        top, prefix = TexelFetch(ts, one_port=one_port, tag_width=tag_width), "fetch"
+        top, prefix = TexelFetch(ts, one_port=one_port, tag_width=tag_width, specialise=specialise), "fetch"
     return {".".join((prefix,) + mem.path): (mem.depth, mem.width) for mem in memories(elaborate(top))}
 
 
@@ -602,7 +663,8 @@ def _memory_shapes(shapes: dict, mapped: dict) -> dict:
 def area_text(rep: dict) -> str:
     u = rep["utilisation"]
     lines = [
-        f"{rep['design']}: {rep.get('unit', 'texel fetch')}, {rep['textures']} texture(s), {rep['index_reader']} index reader, "
+        f"{rep['design']}: {rep.get('top', 'texel fetch')}, {rep['textures']} texture(s), {rep.get('unit', 'full')} unit, "
+        f"{rep['index_reader']} index reader, "
         f"tag width {rep['tag_width']}, latency {rep.get('latency', '?')}, on {rep['device']}",
         f"  LUT4 {u.get('luts', 0)}  FF {u.get('ffs', 0)}  DP16KD {u.get('brams', 0)}  "
         f"MULT18X18D {u.get('dsps', 0)}  CCU2C {u.get('carry', 0)}  DPR16X4 {u.get('dist_ram', 0)}  "
@@ -629,3 +691,62 @@ def area_text(rep: dict) -> str:
     s = rep["seconds"]
     lines.append("  time: " + ", ".join(f"{k.replace('_', ' ')} {v:.1f} s" for k, v in s.items()))
     return "\n".join(lines)
+
+
+# ---------------------------------------------------------------------------------------------
+# the full and the specialised unit side by side
+
+#: The rows of the side-by-side table: (label, function of a report).
+COMPARE_ROWS = (
+    ("LUT4", lambda r: r["utilisation"].get("luts")),
+    ("flip-flops", lambda r: r["utilisation"].get("ffs")),
+    ("DP16KD", lambda r: r["utilisation"].get("brams")),
+    ("MULT18X18D", lambda r: r["utilisation"].get("dsps")),
+    ("CCU2C", lambda r: r["utilisation"].get("carry")),
+    ("PFUMX+L6MUX21", lambda r: r["utilisation"].get("wide_mux")),
+    ("Fmax MHz", lambda r: (r.get("timing") or {}).get("fmax_mhz")),
+)
+
+
+def compare_units(reports: dict) -> dict:
+    """Reports of the same set by unit (``{"full": rep, "specialised": rep}``) -> ``{"units":
+    reports, "table": {row: {unit: value, "change_pct": specialised vs full}}}``."""
+    table = {}
+    for label, get in COMPARE_ROWS:
+        row = {unit: get(rep) for unit, rep in reports.items()}
+        full, spec = row.get("full"), row.get("specialised")
+        if full and spec is not None:
+            row["change_pct"] = round(100.0 * (spec - full) / full, 1)
+        table[label] = row
+    return {"units": reports, "table": table}
+
+
+def compare_text(comparison: dict) -> str:
+    """The side-by-side table of :func:`compare_units`, then each unit's own report."""
+    units = list(comparison["units"])
+    first = comparison["units"][units[0]]
+    lines = [f"{first['design']}: {first['textures']} texture(s), {first['index_reader']} index reader, "
+             f"latency {first.get('latency', '?')}, on {first['device']}",
+             f"  {'':<16}" + "".join(f"{u:>13}" for u in units) + f"{'change':>10}"]
+    for label, row in comparison["table"].items():
+        cells = "".join(f"{('-' if row[u] is None else format(row[u], 'g')):>13}" for u in units)
+        change = f"{row['change_pct']:+.1f}%" if "change_pct" in row else ""
+        lines.append(f"  {label:<16}{cells}{change:>10}")
+    for u in units:
+        feats = comparison["units"][u].get("features")
+        if feats:
+            lines.append(f"  {u}: " + _features_line(feats))
+    for u in units:
+        lines.append("")
+        lines.append(area_text(comparison["units"][u]))
+    return "\n".join(lines)
+
+
+def _features_line(f: dict) -> str:
+    if not f.get("specialised"):
+        return "every path, every descriptor field"
+    parts = ["/".join(f["colors"]) or "raw only", "b=" + ",".join(map(str, f["index_widths"])),
+             "straddling" if f["straddle"] else "no straddles", "raw levels" if f["raw"] else "no raw levels",
+             "colour matrix" if f["color_matrix"] else "no colour matrix", f"k*b by {f['k_times_b']}",
+             f"{len(f['descriptor_columns'])} descriptor columns"]
+    return ", ".join(parts)

@@ -174,14 +174,19 @@ def test_golden_fetch_of_small_sets_equals_pvr_decode():
 
 
 def test_paper_rtl_holds_no_pvr2_logic():
-    """A paper set's RTLIL has the layout field at width 0 only and none of the PowerVR2 signals; a
-    PowerVR2 set's has them (main's RTLIL for paper sets differs only by those zero-width wires,
+    """A paper set's full unit's RTLIL has the layout field at width 0 only and none of the PowerVR2
+    signals; its specialised unit has no layout field at all; a PowerVR2 set's units, full and
+    specialised, have them (main's RTLIL for paper sets differs only by those zero-width wires,
     docs/pvr2.md)."""
     from vqtex.sim.reports.synth import design_rtlil
-    paper = design_rtlil(support.texture_sets()["rgb12"])
+    paper = design_rtlil(support.texture_sets()["rgb12"], specialise=False)
     layout = [ln.strip() for ln in paper.splitlines() if "layout" in ln]
     assert layout and all(ln.startswith(("wire width 0", "connect")) and ("{  }" in ln or "wire width 0" in ln)
                           for ln in layout), layout[:4]
-    pvr2 = design_rtlil(SMALL["rectangles_and_mip8"])
-    for name in ("k_tw", "ct_pair", "square"):
-        assert f"\\{name}" not in paper and f"\\{name}" in pvr2, name
+    paper_specialised = design_rtlil(support.texture_sets()["rgb12"])
+    assert "layout" not in paper_specialised
+    for specialise in (False, True):
+        pvr2 = design_rtlil(SMALL["rectangles_and_mip8"], specialise=specialise)
+        for name in ("k_tw", "ct_pair", "square"):
+            assert f"\\{name}" not in paper and f"\\{name}" not in paper_specialised, name
+            assert f"\\{name}" in pvr2, (name, specialise)
