@@ -20,7 +20,7 @@ from vqtex.golden.format import TextureSet
 from vqtex.hw.texel_fetch import LATENCY, REGISTERS
 from vqtex.sim.backends import simulate
 
-__all__ = ["REPO", "need", "shared_cache_dir", "image", "CONFIGS", "texture_set", "combined_set", "texture_sets",
+__all__ = ["REPO", "need", "need_synth_tools", "run_cli", "assert_one_error", "shared_cache_dir", "image", "CONFIGS", "texture_set", "combined_set", "texture_sets",
            "levels", "random_requests", "random_dt", "adversarial_requests", "back_to_back_requests", "straddle_offsets",
            "assert_same", "compare_with_golden", "stream_put", "stream_get", "run_lockstep", "JFIF_BT601"]
 
@@ -35,6 +35,35 @@ def need(*tools):
         if os.environ.get("VQTEX_REQUIRE_TOOLS") == "1":
             pytest.fail(msg + " and VQTEX_REQUIRE_TOOLS=1")
         pytest.skip(msg)
+
+
+def need_synth_tools():
+    """Skip (or, with VQTEX_REQUIRE_TOOLS set, fail) unless Yosys and nextpnr-ecp5 (the ``synth``
+    extra) are installed."""
+    from vqtex.sim.reports import synth
+    missing = [name for name, ok in synth.tools_available().items() if not ok]
+    if missing:
+        msg = f"{', '.join(missing)} not installed (pip install '.[synth]')"
+        if os.environ.get("VQTEX_REQUIRE_TOOLS"):
+            pytest.fail(msg)
+        pytest.skip(msg)
+
+
+def run_cli(capsys, *argv):
+    """``vqtex ARGV`` in this process: (exit status, stdout, stderr) of that call alone."""
+    from vqtex.sim.cli import main
+    capsys.readouterr()
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def assert_one_error(capsys, argv, pattern):
+    """``vqtex ARGV`` ends with exit status 2, nothing on stdout and one ``vqtex: error:`` line on
+    stderr containing ``pattern``."""
+    code, out, err = run_cli(capsys, *argv)
+    assert code == 2 and out == "", (argv, out)
+    assert err.count("\n") == 1 and err.startswith("vqtex: error: ") and pattern in err, (argv, err)
 
 
 def shared_cache_dir():

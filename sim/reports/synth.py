@@ -50,7 +50,7 @@ __all__ = [
     "parse_nextpnr_report", "parse_nextpnr_log", "parse_memory_mapping", "count_memory_blocks", "stage_of",
     "signal_of", "design_memories", "area_report", "area_text", "tools_available", "scene_texture_set",
     "rgb8_texture_set",
-    "compare_units", "compare_text",
+    "compare_units", "compare_text", "bundled_image",
 ]
 
 INSTALL_HINT = "pip install '.[synth]'"
@@ -71,6 +71,24 @@ class SynthError(OSError):
 # ---------------------------------------------------------------------------------------------
 # texture sets
 
+
+def bundled_image(name: str, size: int):
+    """The bundled ``name``.png (golden/data) box-filtered to ``size`` x ``size`` (a square image
+    whose side is a multiple of ``size``)."""
+    import numpy as np
+
+    from vqtex.golden.render.imageio import read_image
+    from vqtex.golden.render.scene import DATA_DIR
+
+    a = read_image(os.path.join(DATA_DIR, name + ".png"))
+    h, w = a.shape[:2]
+    if (h, w) != (size, size):
+        if h % size or w % size or h != w:
+            raise ValueError(f"{name}.png is {w}x{h}: cannot box-filter it to {size}x{size}")
+        f = h // size
+        a = a.reshape(size, f, size, f, -1).mean(axis=(1, 3)).round().astype(np.uint8)
+    return a
+
 def four_texture_set(size: int = 128, seed: int = 0):
     """The issue's benchmark set: four mipmapped ``size`` x ``size`` textures from the bundled images.
 
@@ -87,22 +105,11 @@ def four_texture_set(size: int = 128, seed: int = 0):
     of 63 bytes, about 2.5k index words, raw words for the levels below 32x32. Deterministic (GLA
     with ``seed``); takes a few seconds.
     """
-    import numpy as np
-
     from vqtex.golden.encode import encode
     from vqtex.golden.format import TextureSet
-    from vqtex.golden.render.imageio import read_image
-    from vqtex.golden.render.scene import DATA_DIR as here
 
     def img(name):
-        a = read_image(os.path.join(here, name + ".png"))
-        h, w = a.shape[:2]
-        if (h, w) != (size, size):
-            if h % size or w % size or h != w:
-                raise ValueError(f"{name}.png is {w}x{h}: cannot box-filter it to {size}x{size}")
-            f = h // size
-            a = a.reshape(size, f, size, f, -1).mean(axis=(1, 3)).round().astype(np.uint8)
-        return a
+        return bundled_image(name, size)
 
     rgb8 = encode([img("brick_red"), img("road")], block=(4, 4), codebook_size=256, color="rgb",
                   index_bits=8, mipmaps=True, seed=seed, names=["brick_red", "road"])
@@ -118,22 +125,12 @@ def pvr2_texture_set(size: int = 128, seed: int = 0):
     images encoded by :func:`golden.pvr_encode.encode_pvr2`, one per PowerVR2 colour format, each with
     its 256-entry codebook of 2x2 16-bit texels: brick_red rgb565, road argb1555, chelsea yuv422,
     hubble argb4444 (1024 codebook entries of 8 bytes, twiddled 8-bit index maps per level)."""
-    import numpy as np
-
     from vqtex.golden.format import TextureSet
     from vqtex.golden.pvr_encode import encode_pvr2
-    from vqtex.golden.render.imageio import read_image
-    from vqtex.golden.render.scene import DATA_DIR as here
 
     sets = []
     for name, color in (("brick_red", "rgb565"), ("road", "argb1555"), ("chelsea", "yuv422"), ("hubble", "argb4444")):
-        a = read_image(os.path.join(here, name + ".png"))
-        h, w = a.shape[:2]
-        if (h, w) != (size, size):
-            if h % size or w % size or h != w:
-                raise ValueError(f"{name}.png is {w}x{h}: cannot box-filter it to {size}x{size}")
-            f = h // size
-            a = a.reshape(size, f, size, f, -1).mean(axis=(1, 3)).round().astype(np.uint8)
+        a = bundled_image(name, size)
         sets.append(encode_pvr2(a, color, codebook_size=256, mipmaps=True, seed=seed, name=name)[0])
     return TextureSet.combine(sets)
 
@@ -147,22 +144,8 @@ def rgb8_texture_set(size: int = 128, seed: int = 0):
 
 
 def _bundled_encode(names, size, **kw):
-    import numpy as np
-
     from vqtex.golden.encode import encode
-    from vqtex.golden.render.imageio import read_image
-    from vqtex.golden.render.scene import DATA_DIR as here
-    images = []
-    for name in names:
-        a = read_image(os.path.join(here, name + ".png"))
-        h, w = a.shape[:2]
-        if (h, w) != (size, size):
-            if h % size or w % size or h != w:
-                raise ValueError(f"{name}.png is {w}x{h}: cannot box-filter it to {size}x{size}")
-            f = h // size
-            a = a.reshape(size, f, size, f, -1).mean(axis=(1, 3)).round().astype(np.uint8)
-        images.append(a)
-    return encode(images, names=names, **kw)
+    return encode([bundled_image(name, size) for name in names], names=names, **kw)
 
 
 def tiny_texture_set(seed: int = 0):

@@ -11,19 +11,7 @@ from tests.sim.cli.test_render import TINY
 from vqtex.golden.render.imageio import write_image
 from vqtex.sim.backends import toolchain
 from vqtex.sim.cli import main
-
-
-def _run(capsys, *argv):
-    capsys.readouterr()
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def _one_error(capsys, argv, pattern):
-    code, out, err = _run(capsys, *argv)
-    assert code == 2 and out == "", (argv, out)
-    assert err.count("\n") == 1 and err.startswith("vqtex: error: ") and pattern in err, (argv, err)
+from tests.support import run_cli as _run, assert_one_error as _one_error
 
 
 def _warnings(err):

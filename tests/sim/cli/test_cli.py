@@ -11,6 +11,7 @@ from vqtex.golden.fetch import decode
 from vqtex.golden.format import TextureSet
 from vqtex.golden.render.imageio import read_image, write_image
 from vqtex.sim.cli import main
+from tests.support import run_cli as _run
 
 
 @pytest.fixture
@@ -24,12 +25,6 @@ def images(tmp_path):
         write_image(p, np.clip(img, 0, 255).astype(np.uint8))
         paths.append(str(p))
     return paths
-
-
-def _run(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def test_encode_info_decode(tmp_path, images, capsys):

@@ -13,24 +13,11 @@ from tests.support import need, shared_cache_dir
 from vqtex.golden import pvr, pvr_set
 from vqtex.golden.format import TextureSet
 from vqtex.golden.render.imageio import read_image
-from vqtex.sim.cli import main
+from tests.support import run_cli as _run, assert_one_error as _one_error
 
 DATA = Path(__file__).resolve().parents[2] / "data" / "pvrtex" / "generated"
 YUV_MIP = DATA / "crate_yuv422_c_m.dt"
 ARGB = DATA / "crate_argb1555_c_64.dt"
-
-
-def _run(capsys, *argv):
-    capsys.readouterr()
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def _one_error(capsys, argv, pattern):
-    code, out, err = _run(capsys, *argv)
-    assert code == 2 and out == "", (argv, out)
-    assert err.count("\n") == 1 and err.startswith("vqtex: error: ") and pattern in err, (argv, err)
 
 
 @pytest.fixture(autouse=True)

@@ -16,13 +16,7 @@ from vqtex.golden.render import render_frame
 from vqtex.golden.render.imageio import read_image, write_image
 from vqtex.golden.render.scene import load_scene
 from vqtex.sim.cli import main
-
-
-def _run(capsys, *argv):
-    capsys.readouterr()
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
+from tests.support import run_cli as _run
 
 
 def _psnr(a, b):

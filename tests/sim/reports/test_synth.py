@@ -8,27 +8,11 @@ first run ever compiles them, about 2 minutes more).
 """
 
 import json
-import os
 
 import pytest
 
 from vqtex.sim.reports import synth
-from vqtex.sim.cli import main
-
-
-def _need_tools():
-    missing = [name for name, ok in synth.tools_available().items() if not ok]
-    if missing:
-        msg = f"{', '.join(missing)} not installed (pip install '.[synth]')"
-        if os.environ.get("VQTEX_REQUIRE_TOOLS"):
-            pytest.fail(msg)
-        pytest.skip(msg)
-
-
-def _run(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
+from tests.support import need_synth_tools as _need_tools, run_cli as _run
 
 
 # ---------------------------------------------------------------------------------------------

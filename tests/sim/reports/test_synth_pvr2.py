@@ -2,29 +2,8 @@
 placed-and-routed figures of --builtin pvr2 are in docs/pvr2.md)."""
 
 import json
-import os
 
-import pytest
-
-from tests.support import random_dt
-from vqtex.sim.cli import main
-from vqtex.sim.reports import synth
-
-
-def _need_tools():
-    missing = [name for name, ok in synth.tools_available().items() if not ok]
-    if missing:
-        msg = f"{', '.join(missing)} not installed (pip install '.[synth]')"
-        if os.environ.get("VQTEX_REQUIRE_TOOLS"):
-            pytest.fail(msg)
-        pytest.skip(msg)
-
-
-def _run(capsys, *argv):
-    capsys.readouterr()
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
+from tests.support import need_synth_tools as _need_tools, random_dt, run_cli as _run
 
 
 def test_report_area_of_a_dt_no_pnr(tmp_path, capsys):
