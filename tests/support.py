@@ -6,6 +6,7 @@ Test modules import it as ``from tests.support import ...``.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import os
 import shutil
@@ -20,7 +21,7 @@ from vqtex.golden.format import TextureSet
 from vqtex.hw.texel_fetch import LATENCY, REGISTERS
 from vqtex.sim.backends import simulate
 
-__all__ = ["REPO", "need", "need_synth_tools", "run_cli", "assert_one_error", "shared_cache_dir", "image", "CONFIGS", "texture_set", "combined_set", "texture_sets",
+__all__ = ["REPO", "need", "shared_cache", "need_synth_tools", "run_cli", "assert_one_error", "shared_cache_dir", "image", "CONFIGS", "texture_set", "combined_set", "texture_sets",
            "levels", "random_requests", "random_dt", "adversarial_requests", "back_to_back_requests", "straddle_offsets",
            "assert_same", "compare_with_golden", "stream_put", "stream_get", "run_lockstep", "JFIF_BT601"]
 
@@ -47,6 +48,21 @@ def need_synth_tools():
         if os.environ.get("VQTEX_REQUIRE_TOOLS"):
             pytest.fail(msg)
         pytest.skip(msg)
+
+
+@contextlib.contextmanager
+def shared_cache():
+    """``$VQTEX_CACHE`` set to :func:`shared_cache_dir` inside the block (the builds of every test
+    run shared), restored after. Test modules use it as an autouse fixture: ``with shared_cache(): yield``."""
+    old = os.environ.get("VQTEX_CACHE")
+    os.environ["VQTEX_CACHE"] = shared_cache_dir()
+    try:
+        yield
+    finally:
+        if old is None:
+            os.environ.pop("VQTEX_CACHE", None)
+        else:
+            os.environ["VQTEX_CACHE"] = old
 
 
 def run_cli(capsys, *argv):

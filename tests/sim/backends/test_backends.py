@@ -1,26 +1,21 @@
 """Every simulation backend (golden cycle model, pysim, cxxrtl, verilator) returns the same responses,
 cycle counts, stall counts, straddle counts and occupancy on the same request streams."""
 
-import os
 
 import numpy as np
 import pytest
 
-from tests.support import assert_same, back_to_back_requests, need, random_requests, shared_cache_dir, texture_sets
+from tests.support import (assert_same, back_to_back_requests, need, random_requests, shared_cache, shared_cache_dir,
+                           texture_sets)
 from vqtex.sim.backends import cxxrtl as cb
 from vqtex.sim.backends import design
 from vqtex.sim.backends.interface import simulate
 
 
 @pytest.fixture(scope="module", autouse=True)
-def cache(tmp_path_factory):
-    old = os.environ.get("VQTEX_CACHE")
-    os.environ["VQTEX_CACHE"] = shared_cache_dir()
-    yield
-    if old is None:
-        os.environ.pop("VQTEX_CACHE", None)
-    else:
-        os.environ["VQTEX_CACHE"] = old
+def cache():
+    with shared_cache():
+        yield
 
 
 @pytest.fixture(scope="module")

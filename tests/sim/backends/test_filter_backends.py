@@ -2,13 +2,12 @@
 hard cases with random backpressure, the same cycles and stalls as pysim; the exported Verilog under
 Verilator the same as CXXRTL."""
 
-import os
 
 import numpy as np
 import pytest
 
 from tests.hw.test_hw_filter import edge_pixels, filter_set
-from tests.support import need, shared_cache_dir
+from tests.support import need, shared_cache
 from vqtex.golden import filter as spec
 from vqtex.hw.filter import LATENCY
 from vqtex.hw.filter.footprint import level_table
@@ -17,13 +16,8 @@ from vqtex.sim.backends.filter import golden_colors, simulate_filter
 
 @pytest.fixture(scope="module", autouse=True)
 def cache():
-    old = os.environ.get("VQTEX_CACHE")
-    os.environ["VQTEX_CACHE"] = shared_cache_dir()
-    yield
-    if old is None:
-        os.environ.pop("VQTEX_CACHE", None)
-    else:
-        os.environ["VQTEX_CACHE"] = old
+    with shared_cache():
+        yield
 
 
 def _pixels(n, seed):

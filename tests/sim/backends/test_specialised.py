@@ -3,26 +3,20 @@ against golden on the compiled CXXRTL backend with random backpressure, the full
 build cache keeping the two apart, and the exported Verilog of the most specialised units under
 Icarus Verilog."""
 
-import os
 
 import numpy as np
 import pytest
 
 from tests.hw.test_hw_specialise import CASES
-from tests.support import assert_same, back_to_back_requests, need, random_requests, shared_cache_dir
+from tests.support import assert_same, back_to_back_requests, need, random_requests, shared_cache
 from vqtex.golden.fetch import fetch
 from vqtex.sim.backends.interface import simulate
 
 
 @pytest.fixture(scope="module", autouse=True)
 def cache():
-    old = os.environ.get("VQTEX_CACHE")
-    os.environ["VQTEX_CACHE"] = shared_cache_dir()
-    yield
-    if old is None:
-        os.environ.pop("VQTEX_CACHE", None)
-    else:
-        os.environ["VQTEX_CACHE"] = old
+    with shared_cache():
+        yield
 
 
 def _requests(ts, seed):

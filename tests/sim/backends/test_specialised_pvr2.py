@@ -3,7 +3,6 @@ against golden with random backpressure; what Features says each needs (the twid
 expansion, yuv422's pairs, the layout multiplexer only with both layouts); the paper's units without
 any of it."""
 
-import os
 
 import numpy as np
 import pytest
@@ -11,7 +10,7 @@ from amaranth.back import rtlil
 
 from tests import support
 from tests.hw.test_hw_pvr2 import SMALL
-from tests.support import assert_same, back_to_back_requests, need, random_requests, shared_cache_dir
+from tests.support import assert_same, back_to_back_requests, need, random_requests, shared_cache
 from vqtex.golden import pvr, pvr_set
 from vqtex.golden.fetch import fetch
 from vqtex.golden.format import COLORS, PVR2_COLORS
@@ -22,13 +21,8 @@ from vqtex.sim.backends.interface import simulate
 
 @pytest.fixture(scope="module", autouse=True)
 def cache():
-    old = os.environ.get("VQTEX_CACHE")
-    os.environ["VQTEX_CACHE"] = shared_cache_dir()
-    yield
-    if old is None:
-        os.environ.pop("VQTEX_CACHE", None)
-    else:
-        os.environ["VQTEX_CACHE"] = old
+    with shared_cache():
+        yield
 
 
 def _dt(*args, seed):

@@ -2,13 +2,12 @@
 for pixel, in point, bilinear and trilinear mode (with mirror addressing), on pysim and CXXRTL."""
 
 import json
-import os
 
 import numpy as np
 import pytest
 
 from tests.sim.cli.test_render import TINY
-from tests.support import need, shared_cache_dir
+from tests.support import need, shared_cache
 from vqtex.golden.render.imageio import read_image
 from vqtex.sim.cli import main
 
@@ -26,13 +25,8 @@ def scene_file(tmp_path):
 
 @pytest.fixture
 def cache():
-    old = os.environ.get("VQTEX_CACHE")
-    os.environ["VQTEX_CACHE"] = shared_cache_dir()
-    yield
-    if old is None:
-        os.environ.pop("VQTEX_CACHE", None)
-    else:
-        os.environ["VQTEX_CACHE"] = old
+    with shared_cache():
+        yield
 
 
 def _render(tmp_path, scene_file, capsys, mode, *extra):
