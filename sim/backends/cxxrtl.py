@@ -43,7 +43,7 @@ from .toolchain import (ToolchainError, cached_build, digest, find_cxx, index_ge
 
 __all__ = ["cxxrtl_sources", "cxxrtl_program", "write_cxxrtl", "blank_memories",
            "rewrite", "build_cxxrtl", "driver_sources", "source_stamp", "texture_set_digest", "BatchLibrary",
-           "run_batch", "run", "CXXFLAGS", "ready_pattern", "DRIVER_DIR"]
+           "run_batch", "run_checked", "run", "CXXFLAGS", "ready_pattern", "DRIVER_DIR"]
 
 DRIVER_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "drivers")
 #: Compiler flags of the CXXRTL library (see docs/simulation.md for the build time / speed trade).
@@ -499,33 +499,43 @@ def batch_layout(info: DesignInfo) -> np.ndarray:
     return np.array([v for f in fields for v in f], np.uint32)
 
 
+def run_checked(lib: BatchLibrary, payload, layout, *, n: int, transfers: int, latency: int, worst: int,
+                stall: float, seed: int, tag_width: int, what: str = "response") -> tuple:
+    """``lib.run`` of ``n`` payloads, checked: always ready (``stall`` 0, at most ``worst`` cycles) or
+    under the seeded ready pattern of ``stall``, made long enough for ``transfers`` output transfers
+    and doubled until the run finishes in it; a run that does not finish, or a ``what`` whose tag is
+    not its index, is a ToolchainError. Returns (RGBA uint8 (n, 4), counters)."""
+    from vqtex.sim.streams import pattern_length
+    if stall <= 0:
+        rc, rgba, counters = lib.run(payload, layout, None, worst)
+    else:
+        length = pattern_length(transfers, stall, 2 * latency)
+        while True:
+            rc, rgba, counters = lib.run(payload, layout, ready_pattern(seed, stall, length), length)
+            if rc != 1:
+                break
+            length *= 2
+    if rc != 0:
+        raise ToolchainError(f"{os.path.basename(lib.path)}: the simulation did not finish (code {rc}, "
+                             f"{int(counters[C_RESPONSES])} of {n} {what}s)")
+    if counters[C_BAD_TAG]:
+        bad = int(counters[C_BAD_TAG]) - 1
+        raise ToolchainError(f"{what} {bad} carries tag {int(counters[C_BAD_TAG_VALUE])}, expected "
+                             f"{bad & ((1 << tag_width) - 1)}")
+    return rgba, counters
+
+
 def run_batch(lib: BatchLibrary, info: DesignInfo, requests, *, stall: float = 0.0, seed: int = 0):
     """Run a request stream on a loaded library; returns a ``sim.backends.interface.SimResult``."""
-    from vqtex.sim.streams import pattern_length
     requests = np.asarray(requests, dtype=np.int64).reshape(-1, 4)
     n = len(requests)
     if n == 0:
         return SimResult(responses=np.zeros((0, 4), np.uint8), cycles=0, requests=0, latency=info.latency,
                            stall_cycles={"output_backpressure": 0, "one_port_straddle": 0}, straddles=0,
                            occupancy=None)
-    layout = batch_layout(info)
-    worst = 2 * n + info.latency + 16           # one-port: at most two cycles per request
-    if stall <= 0:
-        rc, rgba, counters = lib.run(requests, layout, None, worst + 16)
-    else:
-        length = pattern_length(n, stall, 2 * info.latency)
-        while True:
-            rc, rgba, counters = lib.run(requests, layout, ready_pattern(seed, stall, length), length)
-            if rc != 1:
-                break
-            length *= 2
-    if rc != 0:
-        raise ToolchainError(f"{os.path.basename(lib.path)}: the simulation did not finish (code {rc}, "
-                             f"{int(counters[C_RESPONSES])} of {n} responses)")
-    if counters[C_BAD_TAG]:
-        bad = int(counters[C_BAD_TAG]) - 1
-        raise ToolchainError(f"response {bad} carries tag {int(counters[C_BAD_TAG_VALUE])}, expected "
-                             f"{bad & ((1 << info.tag_width) - 1)}")
+    worst = 2 * n + info.latency + 32           # one-port: at most two cycles per request
+    rgba, counters = run_checked(lib, requests, batch_layout(info), n=n, transfers=n, latency=info.latency,
+                                 worst=worst, stall=stall, seed=seed, tag_width=info.tag_width)
     cycles = int(counters[C_CYCLES])
     occ = {st: float(counters[C_OCCUPANCY + k]) / cycles for k, st in enumerate(info.stages)} if cycles else None
     return SimResult(

@@ -22,9 +22,9 @@ import numpy as np
 
 from vqtex.golden import filter as spec
 
-from .cxxrtl import (C_BAD_TAG, C_BAD_TAG_VALUE, C_CYCLES, C_RESPONSES, C_STALL_OUTPUT, C_STRADDLES, CXXFLAGS,
-                     DRIVER_DIR, BatchLibrary, blank_memories, cxxrtl_include_dir, driver_sources, os_cache,
-                     rewrite, source_stamp, texture_set_digest, write_cxxrtl)
+from .cxxrtl import (C_CYCLES, C_STALL_OUTPUT, C_STRADDLES, CXXFLAGS, DRIVER_DIR, BatchLibrary, blank_memories,
+                     cxxrtl_include_dir, driver_sources, os_cache, rewrite, run_checked, source_stamp,
+                     texture_set_digest, write_cxxrtl)
 from .design import MemoryImage, port_map
 from .filter import FIELDS, FilterResult, texel_slots
 from .toolchain import ToolchainError, cached_build, digest, find_cxx, index_get, index_put, run_tool, tool_version
@@ -135,9 +135,6 @@ def open_filter(ts, *, lanes: int = 1, frac: int | None = None):
 
 def run_filter_batch(lib: BatchLibrary, b: FilterBuild, pixels: dict, *, stall: float = 0.0, seed: int = 0):
     """Run checked pixels (:func:`sim.backends.filter.check_pixels`) on a loaded filter library."""
-    from vqtex.sim.streams import pattern_length
-
-    from .cxxrtl import ready_pattern
     top = b.top
     n = len(pixels["texture"])
     lanes = top.lanes
@@ -151,23 +148,9 @@ def run_filter_batch(lib: BatchLibrary, b: FilterBuild, pixels: dict, *, stall: 
     layout = np.zeros(12, np.uint32)
     layout[10:12] = (rl["tag"].offset, TAG_WIDTH)
     groups = int(texel_slots(pixels["mode"], lanes) // lanes)
-    worst = groups + top.latency + 64
-    if stall <= 0:
-        rc, rgba, counters = lib.run(words, layout, None, worst)
-    else:
-        length = pattern_length(groups, stall, 2 * top.latency)
-        while True:
-            rc, rgba, counters = lib.run(words, layout, ready_pattern(seed, stall, length), length)
-            if rc != 1:
-                break
-            length *= 2
-    if rc != 0:
-        raise ToolchainError(f"{os.path.basename(lib.path)}: the filter simulation did not finish (code {rc}, "
-                             f"{int(counters[C_RESPONSES])} of {n} colours)")
-    if counters[C_BAD_TAG]:
-        bad = int(counters[C_BAD_TAG]) - 1
-        raise ToolchainError(f"colour {bad} carries tag {int(counters[C_BAD_TAG_VALUE])}, expected "
-                             f"{bad & ((1 << TAG_WIDTH) - 1)}")
+    rgba, counters = run_checked(lib, words, layout, n=n, transfers=groups, latency=top.latency,
+                                 worst=groups + top.latency + 64, stall=stall, seed=seed, tag_width=TAG_WIDTH,
+                                 what="colour")
     return FilterResult(rgba, int(counters[C_CYCLES]), n, texel_slots(pixels["mode"], lanes), lanes, top.latency,
                         {"output_backpressure": int(counters[C_STALL_OUTPUT]),
                          "input_wait": int(counters[C_STRADDLES])})
