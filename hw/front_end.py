@@ -19,7 +19,7 @@ from .address import BlockAddress
 from .banked_rom import BANK_DEPTH
 from .descriptor import DescriptorTable, descriptor_widths, texture_bits
 from .features import Features
-from .index_reader import IndexReader
+from .index_reader import IndexReader, IndexRequestLayout
 from .registers import enabled_register
 from .pipeline import STAGES, UPSTREAM_STAGES, REGISTERS, LinkLayout, RequestLayout, SideLayout, addr_bits, pack
 
@@ -40,6 +40,15 @@ class _NoIndex:
     """The index reader of a unit whose levels are all raw: nothing (no hold, no straddle, index 0)."""
     hold = straddle = C(0, 1)
     index = C(0, 1)
+
+
+class _OutsideIndex:
+    """The index reader outside the unit (``index_port``): its index comes in on ``index_response``;
+    no hold (the outside reader has both word banks), straddles are the outside reader's to count."""
+    hold = straddle = C(0, 1)
+
+    def __init__(self, index):
+        self.index = index
 
 
 class FrontEnd(wiring.Component):
@@ -65,6 +74,10 @@ class FrontEnd(wiring.Component):
         What to build (default the full front end): the descriptor table's columns, the index
         reader's widths and straddle path (none without compressed levels), the raw address, the
         side fields carried.
+    index_port : bool
+        The index reader is outside the unit (a filter's lanes share banked readers,
+        :mod:`hw.filter.index_banks`): the unit sends ``index_request`` and receives the index on
+        ``index_response`` ``index_reader.LATENCY`` advancing cycles later; no ``one_port``.
 
     Members
     -------
@@ -83,12 +96,17 @@ class FrontEnd(wiring.Component):
         last stage's (the tags never enter the back end).
     link : Out(LinkLayout)
         To the back end: ``advance``, ``skid_valid``, the index and its side fields.
+    index_request : Out(hw.index_reader.IndexRequestLayout), index_response : In(index_bits)
+        Only with ``index_port``: the index read the unit needs (stage 3's inputs) and its answer.
     """
 
     def __init__(self, texture_set: TextureSet, *, one_port: bool = False, tag_width: int = 8,
-                 bank_depth: int = BANK_DEPTH, features: Features | None = None):
+                 bank_depth: int = BANK_DEPTH, features: Features | None = None, index_port: bool = False):
+        if index_port and one_port:
+            raise ValueError("an index reader outside the unit has both word banks: no one_port")
         self._ts = texture_set
         self._one_port = bool(one_port)
+        self._index_port = bool(index_port)
         self._tag_width = tag_width
         self._bank_depth = bank_depth
         self._features = features if features is not None else Features.full(texture_set)
@@ -102,7 +120,14 @@ class FrontEnd(wiring.Component):
             "valid": Out(len(REGISTERS)),
             "o_tag": Out(tag_width),
             "link": Out(LinkLayout(texture_set, self._features)),
+            **self._index_members(),
         })
+
+    def _index_members(self) -> dict:
+        if not self._index_port:
+            return {}
+        return {"index_request": Out(IndexRequestLayout(k_bits(self._ts), descriptor_widths(self._ts)["base"])),
+                "index_response": In(self._features.index_bits)}
 
     def elaborate(self, platform):
         m = Module()
@@ -115,7 +140,9 @@ class FrontEnd(wiring.Component):
         m.submodules.address = addr = BlockAddress(
             base_bits=widths["base"], k_bits=kb, raw_bits=addr_bits(len(ts.raw_words)), raw=feat.raw,
             twiddle=feat.twiddled, linear=0 in feat.layouts)
-        if feat.compressed:
+        if feat.compressed and self._index_port:
+            idx = _OutsideIndex(self.index_response)
+        elif feat.compressed:
             m.submodules.index_reader = idx = IndexReader(
                 ts.index_words, word_bits=ts.word_bits, k_bits=kb, base_bits=widths["base"],
                 one_port=self._one_port, bank_depth=self._bank_depth,
@@ -176,7 +203,19 @@ class FrontEnd(wiring.Component):
         d2 = desc.fields(carry(desc.row, upstream, "row_address"))
 
         # Stages 3-7: index reader (stage 3 moves on upstream: the reader gates it with its hold).
-        if feat.compressed:
+        if feat.compressed and self._index_port:
+            m.d.comb += [
+                self.index_request.valid.eq(valid[1] & d2.compressed),
+                self.index_request.k.eq(addr.k),
+                self.index_request.b.eq(d2.index_bits),
+                self.index_request.base.eq(d2.base),
+                self.index_request.en.eq(advance),
+                self.index_request.gw.eq(d2.log2w - d2.log2bw),
+                self.index_request.twiddled.eq(d2.layout if feat.twiddled else 0),
+            ]
+            if feat.twiddled:
+                m.d.comb += self.index_request.gh.eq(d2.log2h - d2.log2bh)
+        elif feat.compressed:
             m.d.comb += [
                 idx.valid.eq(valid[1] & d2.compressed),
                 idx.k.eq(addr.k),

@@ -22,18 +22,33 @@ from __future__ import annotations
 
 import numpy as np
 from amaranth import *
-from amaranth.lib import wiring
+from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
 from .banked_rom import BANK_DEPTH, BankedROM, pick
 from .registers import enabled_register
 
-__all__ = ["IndexReader", "INDEX_BITS", "LATENCY"]
+__all__ = ["IndexReader", "IndexRequestLayout", "INDEX_BITS", "LATENCY"]
 
 #: Width of an index (b is 1..16).
 INDEX_BITS = 16
 #: Cycles from the block number to the index.
 LATENCY = 5
+
+
+class IndexRequestLayout(data.StructLayout):
+    """What a unit whose index reader is outside it (``TexelFetch(index_port=True)``, the lanes of
+    :class:`hw.filter.texture_filter.TextureFilter`) asks of the reader each cycle: the reader's
+    inputs (``valid``, ``k``, ``b``, ``base``, ``en``, as for :class:`IndexReader`) and the level's
+    block grid, ``gw = log2w - log2bw``, ``gh = log2h - log2bh`` (``gh`` only for twiddled levels,
+    else 0) and ``twiddled``, which a reader banked by block parity needs
+    (:func:`golden.index_banks.bank_address`). The index comes back ``LATENCY`` advancing cycles later."""
+
+    def __init__(self, k_bits: int, base_bits: int):
+        super().__init__({
+            "valid": 1, "k": k_bits, "b": 5, "base": base_bits, "en": 1,
+            "gw": 4, "gh": 4, "twiddled": 1,
+        })
 
 
 class IndexReader(wiring.Component):

@@ -30,9 +30,10 @@ from vqtex.golden.format import TextureSet
 
 from .back_end import BackEnd
 from .banked_rom import BANK_DEPTH
-from .descriptor import texture_bits
+from .descriptor import descriptor_widths, texture_bits
 from .features import Features
-from .front_end import FrontEnd
+from .front_end import FrontEnd, k_bits
+from .index_reader import IndexRequestLayout
 from .pipeline import (FRONT_STAGES, LATENCY, REGISTERS, STAGES, UPSTREAM_STAGES, RequestLayout,
                        ResponseLayout, pack)
 
@@ -82,6 +83,10 @@ class TexelFetch(wiring.Component):
         the full unit, every path present (what any texture set with memories of these shapes
         needs). Both are bit-exact against the golden model on valid requests, with the same
         latency, throughput and cycle counts.
+    index_port : bool
+        The index reader is outside the unit (the lanes of a texture filter share index memories
+        banked by block parity, :mod:`hw.filter.index_banks`): members ``index_request`` and
+        ``index_response`` (see :class:`hw.front_end.FrontEnd`); ignored when every level is raw.
 
     Members
     -------
@@ -113,7 +118,7 @@ class TexelFetch(wiring.Component):
     """
 
     def __init__(self, texture_set: TextureSet, *, one_port: bool = False, tag_width: int = 8,
-                 bank_depth: int = BANK_DEPTH, specialise: bool = True):
+                 bank_depth: int = BANK_DEPTH, specialise: bool = True, index_port: bool = False):
         if not isinstance(texture_set, TextureSet):
             raise TypeError(f"texture_set must be a TextureSet, not {type(texture_set).__name__}")
         if not isinstance(tag_width, int) or tag_width < 0:
@@ -122,10 +127,13 @@ class TexelFetch(wiring.Component):
             raise ValueError(f"bank_depth must be a power of two, not {bank_depth!r}")
         texture_set.validate()
         self._ts = texture_set
+        if index_port and one_port:
+            raise ValueError("an index reader outside the unit has both word banks: no one_port")
         self._one_port = bool(one_port)
         self._tag_width = tag_width
         self._bank_depth = bank_depth
         self._features = Features.for_set(texture_set, bool(specialise))
+        self._index_port = bool(index_port) and self._features.compressed
         self._texture_bits = texture_bits(texture_set)
         members = {
             "i": In(stream.Signature(RequestLayout(self._texture_bits, tag_width))),
@@ -135,6 +143,10 @@ class TexelFetch(wiring.Component):
             "stall_output": Out(1),
         }
         members["valid"] = Out(len(REGISTERS))
+        if self._index_port:
+            members["index_request"] = Out(IndexRequestLayout(k_bits(texture_set),
+                                                              descriptor_widths(texture_set)["base"]))
+            members["index_response"] = In(self._features.index_bits)
         super().__init__(members)
 
     @property
@@ -174,7 +186,10 @@ class TexelFetch(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         m.submodules.front = front = FrontEnd(self._ts, one_port=self._one_port, tag_width=self._tag_width,
-                                              bank_depth=self._bank_depth, features=self._features)
+                                              bank_depth=self._bank_depth, features=self._features,
+                                              index_port=self._index_port)
+        if self._index_port:
+            m.d.comb += [self.index_request.eq(front.index_request), front.index_response.eq(self.index_response)]
         m.submodules.back = back = BackEnd(self._ts, bank_depth=self._bank_depth, features=self._features)
         wiring.connect(m, wiring.flipped(self.i), front.i)          # the request stream, forwarded
         m.d.comb += [

@@ -14,6 +14,7 @@ import shutil
 import numpy as np
 import pytest
 
+from vqtex.golden import pvr, pvr_set
 from vqtex.golden.color import DREAMCAST_YUV422, JFIF_BT601
 from vqtex.golden.encode import encode
 from vqtex.golden.fetch import block_address, fetch, lookup_descriptor, random_requests, straddles
@@ -354,3 +355,21 @@ def random_dt(width: int, height: int, fmt: int, n: int, seed: int) -> bytes:
     size = 32 + len(body)
     return (b"DcTx" + size.to_bytes(4, "little") + bytes([0, 0, n - 1, 0]) + width.to_bytes(2, "little")
             + height.to_bytes(2, "little") + control.to_bytes(4, "little") + bytes(12) + body)
+
+
+PVRTEX_DATA = os.path.join(os.path.dirname(os.path.abspath(__file__)), "data", "pvrtex")
+
+
+@functools.lru_cache(maxsize=None)
+def pvr2_small_sets() -> dict:
+    """Tiny PowerVR2 sets for pysim: rectangles both ways, an 8x8 mip chain down to 1x1 in yuv422
+    (whose 1x1 level is rgb565) and argb4444, small codebooks, one 128x128 pvrtex mip chain."""
+    parts = [pvr_set.from_dt(pvr.parse_dt(random_dt(*a, seed=n), decode=False))
+             for n, a in enumerate([(16, 8, 3, 17), (8, 32, 0, 256), (16, 16, 2, 5)])]
+    mip = bytearray(random_dt(8, 8, 3, 200, seed=9))
+    extra = np.random.default_rng(9).integers(56, 256, 6).astype(np.uint8).tobytes()   # 1x1, 2x2, 4x4 maps
+    mip = bytes(mip[:32]) + bytes(mip[32:32 + 1600]) + extra + bytes(mip[32 + 1600:])
+    mip = mip[:4] + len(mip).to_bytes(4, "little") + mip[8:19] + bytes([mip[19] | 0x80]) + mip[20:]
+    parts.append(pvr_set.from_dt(pvr.parse_dt(mip, decode=False)))
+    crate = os.path.join(PVRTEX_DATA, "generated", "crate_argb4444_c_64_m.dt")
+    return {"rectangles_and_mip8": TextureSet.combine(parts), "crate_argb4444_c_64_m": pvr_set.import_dt([crate])}

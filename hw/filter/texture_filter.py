@@ -8,8 +8,13 @@ mode, addressing, tag) goes in; the filtered RGBA8888 colour comes out with its 
 * the *sequencer* issues them to the ``lanes`` texel-fetch lanes, ``lanes`` slots per cycle, in
   ``ceil(used / lanes)`` groups (a point pixel is 1 slot, bilinear 4, trilinear 8); a slot's weight
   and the pixel's ``first``/``last`` marks and tag ride through the lane as its request tag;
-* each lane is the paper's unit, :class:`hw.texel_fetch.TexelFetch`, unchanged, with its own copy of
-  the memories (the lanes run in lock step: same ``valid``, same ``ready``);
+* each lane is the paper's unit, :class:`hw.texel_fetch.TexelFetch` (the lanes run in lock step:
+  same ``valid``, same ``ready``). With ``index_banks="parity"`` (the default) the lanes share one
+  index memory banked by block parity (:mod:`hw.filter.index_banks`: 2 banks for 2 lanes, 4 per set
+  of 4 lanes; each lane is built with ``index_port`` and its descriptor table holds the banks' base
+  words); each lane keeps its own codebook and raw memory (a DP16KD's two ports are 18 bits wide
+  each, so reading a 512-deep codebook through both costs as many block RAMs as a second copy:
+  docs/filter.md). With ``index_banks="lane"`` every lane has its own copy of every memory;
 * :class:`hw.filter.blend.Blend` weighs each group and accumulates the pixel's colour (the twin of
   :func:`golden.filter.blend`).
 
@@ -32,22 +37,29 @@ from amaranth.lib.wiring import In, Out
 
 from vqtex.golden import filter as spec
 from vqtex.golden.format import TextureSet
+from vqtex.golden.index_banks import banked_index, lane_banks
 
 from ..banked_rom import BANK_DEPTH, pick
-from ..descriptor import texture_bits
+from ..descriptor import descriptor_widths, texture_bits
+from ..features import Features
+from ..front_end import k_bits
 from ..pipeline import LATENCY as FETCH_LATENCY
 from ..pipeline import ResponseLayout
 from ..texel_fetch import TexelFetch
 from . import blend, footprint
 from .blend import Blend
+from .index_banks import IndexBanks
 from .footprint import WEIGHT_WIDTH, FilterRequestLayout, Footprint, TexelSlotLayout, level_table
 
-__all__ = ["TextureFilter", "LATENCY", "LANES"]
+__all__ = ["TextureFilter", "LATENCY", "LANES", "INDEX_BANKS"]
 
 #: Cycles from accepting a request to its colour on the output (a one-group pixel, no stalls).
 LATENCY = footprint.LATENCY + FETCH_LATENCY + blend.LATENCY
 #: Lane counts the filter can be built with (they divide the eight slots of a footprint).
 LANES = (1, 2, 4, 8)
+#: How the lanes hold the index memory: ``parity`` one memory banked by block parity, shared;
+#: ``lane`` a copy per lane.
+INDEX_BANKS = ("parity", "lane")
 
 
 class TextureFilter(wiring.Component):
@@ -65,6 +77,10 @@ class TextureFilter(wiring.Component):
         set's largest level 0; at least that).
     bank_depth : int
         As for :class:`hw.texel_fetch.TexelFetch`.
+    index_banks : str
+        ``"parity"`` (default): the lanes share the index memory, banked by block parity
+        (``golden.index_banks.lane_banks(lanes)`` banks per set of lanes; one lane: its own reader);
+        ``"lane"``: each lane has its own index memory. Same pixels, cycles and latency.
 
     Members
     -------
@@ -78,6 +94,9 @@ class TextureFilter(wiring.Component):
     busy : Out(1)
         ``i.valid & ~i.ready``: a request waits (the lanes are on an earlier pixel's groups, or
         backpressure reached the input).
+    bank_conflict : Out(1)
+        Two lanes of a set needed different blocks of one index bank in an advancing cycle (never on
+        the footprint's groups; 0 without banks).
 
     Raises
     ------
@@ -86,13 +105,15 @@ class TextureFilter(wiring.Component):
     """
 
     def __new__(cls, texture_set: TextureSet, *, lanes: int = 1, tag_width: int = 8, frac: int | None = None,
-                **kwargs):
+                index_banks: str = "parity", **kwargs):
         # Parameters are checked before the instance exists (a rejected one is never reported by
         # Amaranth as an elaboratable that was not used).
         if not isinstance(texture_set, TextureSet):
             raise TypeError(f"texture_set must be a TextureSet, not {type(texture_set).__name__}")
         if lanes not in LANES:
             raise ValueError(f"lanes must be one of {LANES}, not {lanes!r}")
+        if index_banks not in INDEX_BANKS:
+            raise ValueError(f"index_banks must be one of {INDEX_BANKS}, not {index_banks!r}")
         if not isinstance(tag_width, int) or tag_width < 0:
             raise TypeError(f"tag_width must be a non-negative integer, not {tag_width!r}")
         minimum = spec.coordinate_frac_bits(level_table(texture_set).max_log2)
@@ -101,7 +122,7 @@ class TextureFilter(wiring.Component):
         return super().__new__(cls)
 
     def __init__(self, texture_set: TextureSet, *, lanes: int = 1, tag_width: int = 8, frac: int | None = None,
-                 bank_depth: int = BANK_DEPTH):
+                 bank_depth: int = BANK_DEPTH, index_banks: str = "parity"):
         self._ts = texture_set
         self._table = level_table(texture_set)
         minimum = spec.coordinate_frac_bits(self._table.max_log2)
@@ -110,12 +131,17 @@ class TextureFilter(wiring.Component):
         self._tag_width = tag_width
         self._bank_depth = bank_depth
         self._texture_bits = texture_bits(texture_set)
+        self._features = Features.of(texture_set)
+        # one lane reads its own memory; so does a set without compressed levels
+        self._banks = lane_banks(lanes) if index_banks == "parity" and self._features.compressed else 1
+        self._index_banks = index_banks
         super().__init__({
             "i": In(stream.Signature(FilterRequestLayout(self._texture_bits, spec.coordinate_bits(self._frac),
                                                          tag_width))),
             "o": Out(stream.Signature(ResponseLayout(tag_width))),
             "stall_output": Out(1),
             "busy": Out(1),
+            "bank_conflict": Out(1),
         })
 
     @property
@@ -125,6 +151,16 @@ class TextureFilter(wiring.Component):
     @property
     def lanes(self) -> int:
         return self._lanes
+
+    @property
+    def index_banks(self) -> str:
+        """``"parity"`` or ``"lane"``, as built."""
+        return self._index_banks
+
+    @property
+    def banks(self) -> int:
+        """Index banks per set of lanes: 1 (each lane reads its own memory), 2 or 4."""
+        return self._banks
 
     @property
     def frac(self) -> int:
@@ -144,10 +180,26 @@ class TextureFilter(wiring.Component):
                                                 tag_width=tw)
         m.submodules.blend = bl = Blend(lanes, tw)
         fetch = []
+        banked = self._banks > 1
+        banked_image = banked_index(self._ts, self._banks) if banked else None
+        lane_set = banked_image.view(self._ts) if banked else self._ts
         for k in range(lanes):
-            f = TexelFetch(self._ts, tag_width=lane_tag, bank_depth=self._bank_depth)
+            f = TexelFetch(lane_set, tag_width=lane_tag, bank_depth=self._bank_depth, index_port=banked)
             m.submodules[f"lane{k}"] = f
             fetch.append(f)
+        conflicts = []
+        if banked:                      # sets of ``banks`` lanes, each with its banks
+            feat = self._features
+            for s in range(lanes // self._banks):
+                ib = IndexBanks(banked_image, k_bits=k_bits(self._ts),
+                                base_bits=descriptor_widths(lane_set)["base"], widths=feat.index_widths,
+                                straddle=feat.straddle, twiddle=feat.twiddled, bank_depth=self._bank_depth)
+                m.submodules[f"index_banks{s}"] = ib
+                for n in range(self._banks):
+                    f = fetch[s * self._banks + n]
+                    m.d.comb += [ib.requests[n].eq(f.index_request), f.index_response.eq(ib.index[n])]
+                conflicts.append(ib.conflict)
+        m.d.comb += self.bank_conflict.eq(Cat(*conflicts).any() if conflicts else 0)
         wiring.connect(m, wiring.flipped(self.i), fp.i)
         wiring.connect(m, bl.o, wiring.flipped(self.o))
         m.d.comb += [

@@ -66,7 +66,9 @@ class FilterResult:
         ``{"output_backpressure": cycles with o.valid & ~o.ready, "input_wait": cycles with
         i.valid & ~i.ready (the lanes busy with an earlier pixel's groups, or backpressure)}``.
     bank_conflicts : int
-        Cycles lost to two lanes wanting one memory bank: 0 (each lane holds its own memories).
+        Advancing cycles in which two lanes of a set needed different blocks of one index bank (the
+        filter's ``bank_conflict`` strobe; 0 by construction, the count is the check; 0 without
+        banks).
     """
     colors: np.ndarray
     cycles: int
@@ -132,18 +134,23 @@ def golden_colors(ts: TextureSet, pixels: dict, frac: int) -> np.ndarray:
 
 
 def simulate_filter(ts: TextureSet, pixels: dict, *, backend: str = "golden", lanes: int = 1,
-                    frac: int | None = None, stall: float = 0.0, seed: int = 0) -> FilterResult:
+                    frac: int | None = None, stall: float = 0.0, seed: int = 0,
+                    index_banks: str = "parity") -> FilterResult:
     """Filter ``pixels`` on ``backend`` (see the module docstring); ``frac`` defaults to the
-    filter's (``golden.filter.coordinate_frac_bits`` of the set's largest level 0).
+    filter's (``golden.filter.coordinate_frac_bits`` of the set's largest level 0); ``index_banks``
+    as for :class:`hw.filter.TextureFilter` (the golden backend counts the conflicts the banks would
+    have, :func:`golden.index_banks.conflicts`).
 
     Raises
     ------
     ValueError
         Bad pixels, stall probability, lane count or backend name.
     """
-    from vqtex.hw.filter import LANES, LATENCY
+    from vqtex.hw.filter import INDEX_BANKS, LANES, LATENCY
     if lanes not in LANES:
         raise ValueError(f"lanes must be one of {LANES}, not {lanes!r}")
+    if index_banks not in INDEX_BANKS:
+        raise ValueError(f"index_banks must be one of {INDEX_BANKS}, not {index_banks!r}")
     stall = float(stall)
     if not 0.0 <= stall < 1.0:
         raise ValueError(f"stall probability {stall} must be in [0, 1)")
@@ -154,11 +161,22 @@ def simulate_filter(ts: TextureSet, pixels: dict, *, backend: str = "golden", la
     if backend == "golden":
         colors = golden_colors(ts, p, frac)
         return FilterResult(colors, 0, len(colors), int(texel_slots(p["mode"], lanes)), lanes, LATENCY,
-                            {"output_backpressure": 0, "input_wait": 0})
+                            {"output_backpressure": 0, "input_wait": 0},
+                            golden_conflicts(ts, p, frac, lanes) if index_banks == "parity" else 0)
     if backend not in FILTER_BACKENDS:
         raise ValueError(f"unknown filter backend {backend!r} (known: {', '.join(FILTER_BACKENDS)})")
     module = importlib.import_module(f"vqtex.sim.backends.filter_{backend}")
-    return module.run(ts, p, lanes=lanes, frac=frac, stall=stall, seed=seed)
+    return module.run(ts, p, lanes=lanes, frac=frac, stall=stall, seed=seed, index_banks=index_banks)
+
+
+def golden_conflicts(ts: TextureSet, pixels: dict, frac: int, lanes: int) -> int:
+    """Groups of ``lanes`` texel slots in which two lanes of a set would need different blocks of one
+    index bank (:func:`golden.index_banks.conflicts` of the pixels' footprints)."""
+    from vqtex.golden.index_banks import conflicts
+    table = spec.LevelTable([ts.level_shapes(t) for t in range(ts.n_textures)])
+    level, i, j, _ = spec.footprint(table, pixels["texture"], pixels["s"], pixels["t"], pixels["lod"],
+                                    pixels["mode"], pixels["address_s"], pixels["address_t"], frac)
+    return conflicts(ts, pixels["texture"], level, i, j, lanes)
 
 
 def texel_slots(mode: np.ndarray, lanes: int) -> int:
@@ -175,18 +193,20 @@ class FilterTop(wiring.Component):
     Arguments
     ---------
     texture_set : TextureSet
-    lanes, tag_width, frac
+    lanes, tag_width, frac, index_banks
         As for :class:`hw.filter.TextureFilter`.
     """
 
-    def __init__(self, texture_set, *, lanes: int = 1, tag_width: int = 8, frac: int | None = None):
+    def __init__(self, texture_set, *, lanes: int = 1, tag_width: int = 8, frac: int | None = None,
+                 index_banks: str = "parity"):
         from vqtex.hw.filter import TextureFilter
-        self._filter = TextureFilter(texture_set, lanes=lanes, tag_width=tag_width, frac=frac)
+        self._filter = TextureFilter(texture_set, lanes=lanes, tag_width=tag_width, frac=frac,
+                                     index_banks=index_banks)
         f = self._filter
         super().__init__({
             "i_valid": In(1), "i_ready": Out(1), "i_payload": In(len(f.i.p.as_value())),
             "o_valid": Out(1), "o_ready": In(1), "o_payload": Out(len(f.o.p.as_value())),
-            "stall_output": Out(1), "busy": Out(1),
+            "stall_output": Out(1), "busy": Out(1), "bank_conflict": Out(1),
         })
 
     @property
@@ -203,6 +223,6 @@ class FilterTop(wiring.Component):
         m.d.comb += [
             f.i.valid.eq(self.i_valid), self.i_ready.eq(f.i.ready), f.i.p.eq(self.i_payload),
             self.o_valid.eq(f.o.valid), f.o.ready.eq(self.o_ready), self.o_payload.eq(f.o.p),
-            self.stall_output.eq(f.stall_output), self.busy.eq(f.busy),
+            self.stall_output.eq(f.stall_output), self.busy.eq(f.busy), self.bank_conflict.eq(f.bank_conflict),
         ]
         return m

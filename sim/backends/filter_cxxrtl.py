@@ -22,7 +22,7 @@ import numpy as np
 
 from vqtex.golden import filter as spec
 
-from .cxxrtl import (C_CYCLES, C_STALL_OUTPUT, C_STRADDLES, CXXFLAGS, DRIVER_DIR, BatchLibrary, blank_memories,
+from .cxxrtl import (C_CYCLES, C_STALL_ONE_PORT, C_STALL_OUTPUT, C_STRADDLES, CXXFLAGS, DRIVER_DIR, BatchLibrary, blank_memories,
                      cxxrtl_include_dir, driver_sources, os_cache, rewrite, run_checked, source_stamp,
                      texture_set_digest, write_cxxrtl)
 from .design import MemoryImage, port_map
@@ -34,8 +34,9 @@ __all__ = ["run", "build_filter", "open_filter", "pack_payload_words", "TAG_WIDT
 #: Tag width of the compiled filter: pixel n carries tag ``n mod 2**TAG_WIDTH``.
 TAG_WIDTH = 16
 #: The filter's strobes and the batch.h counter slots that sum them (``busy``, a request waiting,
-#: goes to the straddle slot, which the filter has no other use for).
-STROBES = {"stall_output": "VQ_C_STALL_OUTPUT", "busy": "VQ_C_STRADDLES"}
+#: goes to the straddle slot and ``bank_conflict`` to the one-port slot, which the filter has no
+#: other use for).
+STROBES = {"stall_output": "VQ_C_STALL_OUTPUT", "busy": "VQ_C_STRADDLES", "bank_conflict": "VQ_C_STALL_ONE_PORT"}
 _WORDS = 4
 
 
@@ -66,13 +67,15 @@ class FilterBuild:
         self.library, self.top, self.memories, self.cached, self.seconds = library, top, memories, cached, seconds
 
 
-def build_filter(ts, *, lanes: int = 1, frac: int | None = None, tag_width: int = TAG_WIDTH) -> FilterBuild:
-    """The CXXRTL library of ``TextureFilter(ts, lanes=lanes, frac=frac)`` (built or from the cache)."""
+def build_filter(ts, *, lanes: int = 1, frac: int | None = None, tag_width: int = TAG_WIDTH,
+                 index_banks: str = "parity") -> FilterBuild:
+    """The CXXRTL library of ``TextureFilter(ts, lanes=lanes, frac=frac, index_banks=index_banks)``
+    (built or from the cache)."""
     from vqtex.hw.filter import TextureFilter
     from vqtex.hw.memories import elaborate, memories
     cxx = find_cxx()
     t0 = time.perf_counter()
-    top = TextureFilter(ts, lanes=lanes, tag_width=tag_width, frac=frac)
+    top = TextureFilter(ts, lanes=lanes, tag_width=tag_width, frac=frac, index_banks=index_banks)
     frag = elaborate(top)
     images = [MemoryImage(" ".join(m.path), m.width, m.depth, m.words) for m in memories(frag)]
     drivers = driver_sources("filter_driver.cc", "batch.h", "vq_ops.h")
@@ -81,7 +84,7 @@ def build_filter(ts, *, lanes: int = 1, frac: int | None = None, tag_width: int 
     for mod in (__file__, cxxrtl.__file__, cxxrtl_inplace.__file__):
         with open(os.path.abspath(mod), "rb") as f:
             this += f.read()
-    quick = digest("filter-cxxrtl-quick", source_stamp(), this, lanes, top.frac, tag_width, texture_set_digest(ts),
+    quick = digest("filter-cxxrtl-quick", source_stamp(), this, lanes, index_banks, top.frac, tag_width, texture_set_digest(ts),
                    CXXFLAGS, tool_version(cxx), *drivers)
     key = index_get("filter-cxxrtl", quick)
     root = os_cache("filter-cxxrtl")
@@ -125,9 +128,9 @@ def pack_payload_words(layout, pixels: dict, tag_width: int) -> np.ndarray:
     return words.view(np.int64)
 
 
-def open_filter(ts, *, lanes: int = 1, frac: int | None = None):
+def open_filter(ts, *, lanes: int = 1, frac: int | None = None, index_banks: str = "parity"):
     """(BatchLibrary with the filter's memories loaded, FilterBuild)."""
-    b = build_filter(ts, lanes=lanes, frac=frac)
+    b = build_filter(ts, lanes=lanes, frac=frac, index_banks=index_banks)
     lib = BatchLibrary(b.library)
     lib.load_memories(b.memories)
     return lib, b
@@ -153,14 +156,15 @@ def run_filter_batch(lib: BatchLibrary, b: FilterBuild, pixels: dict, *, stall: 
                                  what="colour")
     return FilterResult(rgba, int(counters[C_CYCLES]), n, texel_slots(pixels["mode"], lanes), lanes, top.latency,
                         {"output_backpressure": int(counters[C_STALL_OUTPUT]),
-                         "input_wait": int(counters[C_STRADDLES])})
+                         "input_wait": int(counters[C_STRADDLES])}, int(counters[C_STALL_ONE_PORT]))
 
 
-def run(ts, pixels: dict, *, lanes: int = 1, frac: int | None = None, stall: float = 0.0, seed: int = 0) -> FilterResult:
+def run(ts, pixels: dict, *, lanes: int = 1, frac: int | None = None, stall: float = 0.0, seed: int = 0,
+        index_banks: str = "parity") -> FilterResult:
     """``sim.backends.filter.simulate_filter(..., backend="cxxrtl")``: the backend entry point."""
     if frac is None:
         frac = spec.coordinate_frac_bits(spec.LevelTable([ts.level_shapes(t) for t in range(ts.n_textures)]).max_log2)
-    lib, b = open_filter(ts, lanes=lanes, frac=frac)
+    lib, b = open_filter(ts, lanes=lanes, frac=frac, index_banks=index_banks)
     try:
         return run_filter_batch(lib, b, pixels, stall=stall, seed=seed)
     finally:

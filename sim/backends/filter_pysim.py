@@ -43,7 +43,7 @@ def pack_pixels(layout, pixels: dict, tag_width: int) -> list:
 
 
 def run(ts, pixels: dict, *, lanes: int = 1, frac: int | None = None, stall: float = 0.0, seed: int = 0,
-        bank_depth: int | None = None, vcd: str | None = None) -> FilterResult:
+        bank_depth: int | None = None, vcd: str | None = None, index_banks: str = "parity") -> FilterResult:
     """Filter ``pixels`` (checked int64 arrays, :func:`sim.backends.filter.check_pixels`) on
     ``TextureFilter(ts, lanes=lanes, frac=frac)``.
 
@@ -54,14 +54,14 @@ def run(ts, pixels: dict, *, lanes: int = 1, frac: int | None = None, stall: flo
     """
     n = len(pixels["texture"])
     unit = {} if bank_depth is None else {"bank_depth": bank_depth}
-    dut = TextureFilter(ts, lanes=lanes, tag_width=TAG_WIDTH, frac=frac, **unit)
+    dut = TextureFilter(ts, lanes=lanes, tag_width=TAG_WIDTH, frac=frac, index_banks=index_banks, **unit)
     stalls = {"output_backpressure": 0, "input_wait": 0}
     if n == 0:
         return FilterResult(np.zeros((0, 4), np.uint8), 0, 0, 0, lanes, dut.latency, stalls)
     packed = pack_pixels(dut.i.p.shape(), pixels, TAG_WIDTH)
     rl = dut.o.p.shape()
     offs = {c: rl[c].offset for c in ("r", "g", "b", "a", "tag")}
-    watched = Cat(dut.i.ready, dut.o.valid, dut.o.p.as_value())
+    watched = Cat(dut.i.ready, dut.o.valid, dut.bank_conflict, dut.o.p.as_value())
     observe = Signal(len(watched), name="observe")
     top = Module()
     top.submodules.filter = dut
@@ -75,7 +75,7 @@ def run(ts, pixels: dict, *, lanes: int = 1, frac: int | None = None, stall: flo
         n_in = n_out = cycle = 0
         shown = -1
         last_ready = None
-        backpressure = waits = 0
+        backpressure = waits = conflicts = 0
         while n_out < n:
             if n_in != shown:
                 if n_in < n:
@@ -93,7 +93,7 @@ def run(ts, pixels: dict, *, lanes: int = 1, frac: int | None = None, stall: flo
             v = ctx.get(observe)
             if v & 2:
                 if r:
-                    p = v >> 2
+                    p = v >> 3
                     tag = (p >> offs["tag"]) & mask
                     if tag != n_out & mask:
                         raise SimulationError(f"cycle {cycle}: colour tag {tag}, expected {n_out & mask} "
@@ -102,6 +102,7 @@ def run(ts, pixels: dict, *, lanes: int = 1, frac: int | None = None, stall: flo
                     n_out += 1
                 else:
                     backpressure += 1
+            conflicts += (v >> 2) & 1
             if n_in < n:
                 if v & 1:
                     n_in += 1
@@ -109,7 +110,7 @@ def run(ts, pixels: dict, *, lanes: int = 1, frac: int | None = None, stall: flo
                     waits += 1
             cycle += 1
             await ctx.tick()
-        stats.update(cycles=cycle, backpressure=backpressure, waits=waits)
+        stats.update(cycles=cycle, backpressure=backpressure, waits=waits, conflicts=conflicts)
 
     sim = Simulator(top)
     sim.add_clock(1e-6)
@@ -121,4 +122,5 @@ def run(ts, pixels: dict, *, lanes: int = 1, frac: int | None = None, stall: flo
     else:
         sim.run()
     return FilterResult(out, stats["cycles"], n, texel_slots(pixels["mode"], lanes), lanes, dut.latency,
-                        {"output_backpressure": stats["backpressure"], "input_wait": stats["waits"]})
+                        {"output_backpressure": stats["backpressure"], "input_wait": stats["waits"]},
+                        stats["conflicts"])

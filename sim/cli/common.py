@@ -117,6 +117,13 @@ def add_unit(p, *, both: bool = False) -> None:
                                      "specialised"))
 
 
+def add_index_banks(p) -> None:
+    """``--index-banks``: how the texture filter's lanes hold the index memory."""
+    p.add_argument("--index-banks", choices=["parity", "lane"], default="parity",
+                   help=with_default("the texture filter's index memory: one memory banked by block parity, "
+                                     "shared by the lanes, or a copy per lane (docs/filter.md)", "parity"))
+
+
 def add_tag_width(p) -> None:
     p.add_argument("--tag-width", type=int, default=8,
                    help=with_default("bits of the request tag carried to the response, 0..16", 8))

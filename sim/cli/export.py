@@ -17,7 +17,7 @@ import re
 import subprocess
 import tempfile
 
-from .common import (Outputs, add_hardware_options, add_json, add_tag_width, add_texture_set, add_unit, emit, load_set,
+from .common import (Outputs, add_hardware_options, add_index_banks, add_json, add_tag_width, add_texture_set, add_unit, emit, load_set,
                      with_default)
 
 __all__ = ["add_parser", "cmd_export", "lint_verilog", "waiver_path", "LINT_WAIVERS", "ExportError"]
@@ -89,6 +89,8 @@ def cmd_export(args) -> int:
               "one_port": bool(args.one_port), "unit": args.unit, "dialect": args.dialect, "tag_width": args.tag_width,
               "latency": latency, "ports": ports, "lint": "clean" if args.lint else "not run",
               "top": "texel fetch" if args.filter_lanes is None else f"texture filter, {args.filter_lanes} lane(s)"}
+    if args.filter_lanes is not None:
+        report["index_banks"] = args.index_banks
     emit(report, args.json, f"wrote {args.output} (module {args.name}, {len(ports)} ports, "
                              f"latency {latency}, {len(text.encode())} bytes"
                              f"{', lint clean' if args.lint else ''}) and its Verilator lint waivers "
@@ -110,7 +112,8 @@ def _export(args, out):
         if args.unit != "specialised":
             raise ExportError("--filter-lanes builds specialised texel-fetch lanes; --unit applies to the texel-fetch unit alone")
         from vqtex.sim.backends.filter_verilator import export_filter_verilog
-        text, top = export_filter_verilog(ts, lanes=args.filter_lanes, tag_width=args.tag_width, name=args.name)
+        text, top = export_filter_verilog(ts, lanes=args.filter_lanes, tag_width=args.tag_width, name=args.name,
+                                          index_banks=args.index_banks)
         ports.update({n: len(getattr(top, n)) for n in top.signature.members})
     else:
         text = export_verilog(ts, one_port=args.one_port, tag_width=args.tag_width, name=args.name,
@@ -138,6 +141,7 @@ def add_parser(sub) -> None:
     e.add_argument("--filter-lanes", type=int, choices=[1, 2, 4, 8], default=None,
                    help=with_default("export the texture filter (hw.filter, docs/filter.md) with this many "
                                      "texel-fetch lanes instead of the texel-fetch unit", "the texel-fetch unit"))
+    add_index_banks(e)
     e.add_argument("--dialect", choices=["sv", "v2005"], default="sv",
                    help=with_default("sv: always_comb/always_ff (X-free in Icarus -g2012); v2005: plain Verilog", "sv"))
     e.add_argument("--lint", action="store_true",

@@ -14,7 +14,7 @@ import time
 
 import numpy as np
 
-from .common import (IMAGE_SUFFIXES, CliError, Outputs, add_backend, add_hardware_options, add_json, emit, load_set,
+from .common import (IMAGE_SUFFIXES, CliError, Outputs, add_backend, add_hardware_options, add_index_banks, add_json, emit, load_set,
                      progress_enabled, warn, warn_slow, with_default, write_json)
 
 __all__ = ["add_parser", "cmd_render", "render_scene", "render_to_files", "encode_scene", "parse_frames", "parse_fovea",
@@ -89,7 +89,8 @@ def _frame_path(pattern: str, frame: int, many: bool) -> str:
 
 def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall=0.0, seed=0,
                  one_port=False, reference=True, images=None, progress=None, cycle_model=False,
-                 stream="sparse", fovea=None, compare_fixed=False, filter_in_rtl=False, lanes=4):
+                 stream="sparse", fovea=None, compare_fixed=False, filter_in_rtl=False, lanes=4,
+                 index_banks="parity"):
     """Render ``frames`` of ``scene`` from TextureSet ``ts``; yields one dict per frame with the frame,
     the golden frame when the backend is RTL (for comparison), cycle results and the reference MSE.
     With the golden backend and ``cycle_model``, the cycles come from the exact cycle model (no RTL).
@@ -137,7 +138,8 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
             if f == frames[0]:
                 warn_slow(backend, int(len(pixels["mode"]) * 8 // lanes * len(frames)))
             t0 = time.perf_counter()
-            res = simulate_filter(ts, pixels, backend=backend, lanes=lanes, frac=sampler.frac, stall=stall, seed=seed)
+            res = simulate_filter(ts, pixels, backend=backend, lanes=lanes, frac=sampler.frac, stall=stall, seed=seed,
+                                  index_banks=index_banks)
             out["rtl_seconds"] = time.perf_counter() - t0
             out["image"] = sampler.place(res.colors)
             out["identical_to_golden"] = bool(np.array_equal(out["image"], golden_frame))
@@ -340,7 +342,7 @@ def cmd_render(args) -> int:
             scene, ts, frames, frame_paths.get, images, outs=outs, on_frame=on_frame,
             mode=args.mode, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port,
             stream=args.requests, fovea=fovea, compare_fixed=args.compare_fixed,
-            filter_in_rtl=args.filter_in_rtl, lanes=args.lanes)
+            filter_in_rtl=args.filter_in_rtl, lanes=args.lanes, index_banks=args.index_banks)
         report = {
             "scene": scene.name, "mode": args.mode, "backend": args.backend, "frames": per_frame,
             "overall_rate": round(ts.rates()["overall"], 4),
@@ -352,6 +354,7 @@ def cmd_render(args) -> int:
         if args.filter_in_rtl:
             report["filter_in_rtl"] = True
             report["lanes"] = args.lanes
+            report["index_banks"] = args.index_banks
         if args.backend != "golden" or args.filter_in_rtl:
             report["identical_to_golden"] = not mismatches
             report["cycles_per_frame"] = round(float(np.mean([f["cycles"] for f in per_frame])), 1)
@@ -379,7 +382,8 @@ def cmd_render(args) -> int:
                     f"to golden: {'yes' if not mismatches else 'NO, frames ' + str(mismatches)}; "
                     f"{report['cycles_per_frame']:.0f} cycles per frame, {report['pixels_per_clock']:.3f} pixels "
                     f"per clock; stall cycles: " + ", ".join(f"{k} {v}" for k, v in stalls.items())
-                    + "; bank conflicts: 0")
+                    + f"; index memory {'banked by block parity' if args.index_banks == 'parity' else 'per lane'}, "
+                    f"bank conflicts: {sum(f['bank_conflicts'] for f in per_frame)}")
     elif args.backend != "golden":
         text.append(f"RTL frames identical to golden: {'yes' if not mismatches else 'NO, frames ' + str(mismatches)}; "
                     f"{report['cycles_per_frame']:.0f} cycles per frame")
@@ -472,6 +476,7 @@ def add_parser(sub) -> None:
                         "out) instead of the texel-fetch unit with the filtering in numpy (default: off)")
     r.add_argument("--lanes", type=int, choices=[1, 2, 4, 8], default=4,
                    help=with_default("texel-fetch lanes of the RTL filter (--filter-in-rtl): texels per clock", 4))
+    add_index_banks(r)
     r.add_argument("--report", metavar="REPORT.json", help=with_default("also write the JSON report here", "none"))
     r.add_argument("--reference", metavar="REF.png",
                    help=with_default("also write the frame rendered from the uncompressed textures "

@@ -16,7 +16,7 @@ from __future__ import annotations
 import os
 import time
 
-from .common import (Outputs, add_hardware_options, add_json, add_tag_width, add_unit, check_folder, emit, load_set,
+from .common import (Outputs, add_hardware_options, add_index_banks, add_json, add_tag_width, add_unit, check_folder, emit, load_set,
                      progress_line, with_default)
 from .simulate import add_trace_arguments, plot_output, run_trace
 
@@ -83,7 +83,7 @@ def cmd_report_area(args) -> int:
             ts, one_port=args.one_port, tag_width=args.tag_width, place=not args.no_pnr, freq=args.freq,
             seed=args.seed, workdir=workdir, timeout=args.timeout, name=name, specialise=unit == "specialised",
             progress=lambda m, u=unit: progress_line(f"report area: {u + ' unit: ' if len(units) > 1 else ''}{m}"),
-            filter_lanes=args.filter_lanes)
+            filter_lanes=args.filter_lanes, index_banks=args.index_banks)
         if t_set is not None:
             reps[unit]["seconds"] = {"encode": t_set, **reps[unit]["seconds"]}
     if len(units) == 1:
@@ -126,6 +126,7 @@ def add_parser(sub) -> None:
     a.add_argument("--filter-lanes", type=int, choices=[1, 2, 4, 8], default=None,
                    help=with_default("synthesize the texture filter (hw.filter: footprint, this many texel-fetch "
                                      "lanes, blend) instead of the texel-fetch unit", "the texel-fetch unit"))
+    add_index_banks(a)
     add_unit(a, both=True)
     add_tag_width(a)
     a.add_argument("--freq", type=float, default=150.0, help=with_default("clock constraint in MHz", 150))

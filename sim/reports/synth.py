@@ -535,11 +535,12 @@ def stage_of(name: str) -> str:
 def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool = True, freq: float = 150.0,
                 seed: int = 1, workdir: str | None = None, timeout: float | None = None,
                 name: str | None = None, progress=None, specialise: bool = True,
-                filter_lanes: int | None = None) -> dict:
+                filter_lanes: int | None = None, index_banks: str = "parity") -> dict:
     """Synthesize (and unless ``place`` is false, place and route) the unit holding ``ts``: the
     specialised texel-fetch unit (:class:`hw.features.Features`), or with ``specialise=False`` the
     full one; or with ``filter_lanes`` the texture filter (``hw.filter.TextureFilter``) with that many
-    (specialised) lanes (``top`` in the report says which).
+    (specialised) lanes (``top`` in the report says which) and ``index_banks`` (``parity``: one index
+    memory banked by block parity, or ``lane``: a copy per lane).
 
     ``progress(message)``, when given, is called as each long step starts (elaboration, synthesis,
     place and route).
@@ -560,13 +561,13 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
     unit = None
     if filter_lanes is not None:
         from vqtex.sim.backends.filter import FilterTop
-        unit = FilterTop(ts, lanes=filter_lanes, tag_width=tag_width)
+        unit = FilterTop(ts, lanes=filter_lanes, tag_width=tag_width, index_banks=index_banks)
     harness = Harness(ts, one_port=one_port, tag_width=tag_width, specialise=specialise, unit=unit)
     from amaranth.back import rtlil
     il = rtlil.convert(harness, name=HARNESS_NAME, emit_src=False)
     t_rtlil = time.perf_counter() - t0
     shapes = design_memories(ts, one_port=one_port, tag_width=tag_width, specialise=specialise,
-                             filter_lanes=filter_lanes)
+                             filter_lanes=filter_lanes, index_banks=index_banks)
     if filter_lanes is None:
         features = harness.unit.fetch.features
     else:                               # the filter's lanes are specialised texel-fetch units
@@ -580,7 +581,9 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
         top = syn["stat"].get(HARNESS_NAME) or {}
         rep = {
             "design": name or "texture set",
-            "top": "texel fetch" if filter_lanes is None else f"texture filter, {filter_lanes} lane(s)",
+            "top": ("texel fetch" if filter_lanes is None else
+                    f"texture filter, {filter_lanes} lane(s), index memory "
+                    + ("banked by block parity" if index_banks == "parity" else "per lane")),
             "device": f"{DEVICE['device']}-{DEVICE['speed']} {DEVICE['package']}",
             "index_reader": "one-port" if one_port else "two-bank",
             "unit": "specialised" if features.specialised else "full",
@@ -616,7 +619,7 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
 
 
 def design_memories(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True,
-                    filter_lanes: int | None = None) -> dict:
+                    filter_lanes: int | None = None, index_banks: str = "parity") -> dict:
     """Every memory of ``TexelFetch(ts)`` -> ``(depth, width)``, named as Yosys names it inside the
     unit (``fetch.back.codebook_rom.codebook.bank0``, ``fetch.front.descriptor.table``): the banks of
     :class:`hw.banked_rom.BankedROM` are memories of their own. With ``filter_lanes``, those of
@@ -624,7 +627,7 @@ def design_memories(ts, *, one_port: bool = False, tag_width: int = 8, specialis
     from vqtex.hw.memories import elaborate, memories
     if filter_lanes is not None:
         from vqtex.hw.filter import TextureFilter
-        top, prefix = TextureFilter(ts, lanes=filter_lanes, tag_width=tag_width), "filter"
+        top, prefix = TextureFilter(ts, lanes=filter_lanes, tag_width=tag_width, index_banks=index_banks), "filter"
     else:
         from vqtex.hw.texel_fetch import TexelFetch
         top, prefix = TexelFetch(ts, one_port=one_port, tag_width=tag_width, specialise=specialise), "fetch"

@@ -23,21 +23,7 @@ DATA = Path(__file__).resolve().parent.parent / "data" / "pvrtex"
 GENERATED = sorted((DATA / "generated").glob("*.dt"))
 
 
-def _small_sets():
-    """Tiny PowerVR2 sets for pysim: rectangles both ways, an 8x8 mip chain down to 1x1 in yuv422
-    (whose 1x1 level is rgb565) and argb4444, small codebooks, one 128x128 pvrtex mip chain."""
-    parts = [pvr_set.from_dt(pvr.parse_dt(support.random_dt(*a, seed=n), decode=False))
-             for n, a in enumerate([(16, 8, 3, 17), (8, 32, 0, 256), (16, 16, 2, 5)])]
-    mip = bytearray(support.random_dt(8, 8, 3, 200, seed=9))
-    extra = np.random.default_rng(9).integers(56, 256, 6).astype(np.uint8).tobytes()   # 1x1, 2x2, 4x4 maps
-    mip = bytes(mip[:32]) + bytes(mip[32:32 + 1600]) + extra + bytes(mip[32 + 1600:])
-    mip = mip[:4] + len(mip).to_bytes(4, "little") + mip[8:19] + bytes([mip[19] | 0x80]) + mip[20:]
-    parts.append(pvr_set.from_dt(pvr.parse_dt(mip, decode=False)))
-    return {"rectangles_and_mip8": pvr_set.TextureSet.combine(parts),
-            "crate_argb4444_c_64_m": pvr_set.import_dt([DATA / "generated" / "crate_argb4444_c_64_m.dt"])}
-
-
-SMALL = _small_sets()
+SMALL = support.pvr2_small_sets()
 
 
 @pytest.mark.parametrize("name", sorted(SMALL))

@@ -61,6 +61,17 @@ def test_cxxrtl_filter_frames_identical_to_golden(tmp_path, scene_file, capsys, 
     assert rep["pixels_per_clock"] > 0
 
 
+def test_cxxrtl_filter_with_an_index_memory_per_lane(tmp_path, scene_file, capsys, cache):
+    """--index-banks lane: every lane its own index memory; the same frames and cycles as the banked one."""
+    need("g++")
+    banked = _render(tmp_path, scene_file, capsys, "bilinear", "--backend", "cxxrtl", "--lanes", "2")
+    per_lane = _render(tmp_path, scene_file, capsys, "bilinear", "--backend", "cxxrtl", "--lanes", "2",
+                       "--index-banks", "lane")
+    assert banked["index_banks"] == "parity" and per_lane["index_banks"] == "lane"
+    assert [f["cycles"] for f in banked["frames"]] == [f["cycles"] for f in per_lane["frames"]]
+    assert all(f["bank_conflicts"] == 0 for f in banked["frames"] + per_lane["frames"])
+
+
 def test_filter_in_rtl_refuses_what_it_cannot_do(tmp_path, scene_file, capsys):
     for extra in (["--backend", "pysim", "--one-port"], ["--backend", "nosuch"], ["--compare-fixed"],
                   ["--encode-needed"]):
@@ -89,19 +100,23 @@ def test_filter_in_rtl_samples_the_foveated_lod(tmp_path, scene_file, capsys, st
     assert not np.array_equal(rtl, read_image(tmp_path / "u_0001.png"))
 
 
-def test_export_filter_verilog_lint_clean(tmp_path, capsys):
-    """vqtex export --filter-lanes: the filter's SystemVerilog, Verilator lint clean with the export's
-    waivers; its ports are the whole payloads."""
+@pytest.mark.parametrize("lanes,banks", [("1", "parity"), ("4", "parity")])
+def test_export_filter_verilog_lint_clean(tmp_path, capsys, lanes, banks):
+    """vqtex export --filter-lanes: the filter's SystemVerilog (one lane; four lanes sharing the
+    banked index memory), Verilator lint clean with the export's waivers; its ports are the whole
+    payloads and the strobes."""
     need("verilator")
     from tests.hw.test_hw_filter import filter_set
     vqt = tmp_path / "set.vqt"
     filter_set().save(str(vqt))
     out = tmp_path / "tf.sv"
-    assert main(["export", str(vqt), "-o", str(out), "--filter-lanes", "1", "--lint", "--json"]) == 0
+    assert main(["export", str(vqt), "-o", str(out), "--filter-lanes", lanes, "--index-banks", banks, "--lint",
+                 "--json"]) == 0
     rep = json.loads(capsys.readouterr().out)
     assert rep["module"] == "texture_filter" and rep["latency"] == 23 and rep["lint"] == "clean"
+    assert rep["index_banks"] == banks
     assert set(rep["ports"]) == {"i_valid", "i_ready", "i_payload", "o_valid", "o_ready", "o_payload",
-                                 "stall_output", "busy"}
+                                 "stall_output", "busy", "bank_conflict"}
     assert "module texture_filter" in out.read_text()
     assert main(["export", str(vqt), "-o", str(tmp_path / "x.v"), "--filter-lanes", "1", "--one-port"]) == 2
     assert not (tmp_path / "x.v").exists()

@@ -272,13 +272,23 @@ def test_filter_harness_and_memories():
     from amaranth.back import rtlil
     il = rtlil.convert(harness, name=synth.HARNESS_NAME, emit_src=False)
     assert "vqtex_harness.unit" in il
-    mems = synth.design_memories(ts, filter_lanes=2)
     unit = synth.design_memories(ts)
-    # each lane holds the texel-fetch unit's memories, under filter.laneK instead of fetch
+    # index_banks="lane": each lane holds the texel-fetch unit's memories, under filter.laneK
+    mems = synth.design_memories(ts, filter_lanes=2, index_banks="lane")
     for k in range(2):
         assert {n.replace(f"filter.lane{k}.", "fetch."): v for n, v in mems.items()
                 if n.startswith(f"filter.lane{k}.")} == unit
     assert len(mems) == 2 * len(unit)
+    # banked (the default): the lanes hold no index memory; two banks hold half the map each
+    mems = synth.design_memories(ts, filter_lanes=2)
+    index = {n: v for n, v in unit.items() if ".index_reader." in n}
+    assert index and not any(".index_reader." in n for n in mems)
+    for k in range(2):
+        assert {n.replace(f"filter.lane{k}.", "fetch."): v for n, v in mems.items()
+                if n.startswith(f"filter.lane{k}.")} == {n: v for n, v in unit.items() if n not in index}
+    banks = {n: v for n, v in mems.items() if n.startswith("filter.index_banks0.")}
+    assert {n.split(".")[2] for n in banks} == {"bank0", "bank1"}
+    assert sum(d for d, _ in banks.values()) <= sum(d for d, _ in index.values()) + 4
 
 
 def test_filter_lanes_refuses_one_port(capsys):
