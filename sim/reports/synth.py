@@ -46,7 +46,7 @@ from amaranth.lib.wiring import In, Out
 
 __all__ = [
     "SynthError", "INSTALL_HINT", "DEVICE", "Harness", "four_texture_set", "tiny_texture_set", "pvr2_texture_set",
-    "design_rtlil", "yosys_script", "run_yosys", "parse_yosys_stat", "run_nextpnr",
+    "design_rtlil", "yosys_script", "run_yosys", "run_yowasp", "parse_yosys_stat", "run_nextpnr",
     "parse_nextpnr_report", "parse_nextpnr_log", "parse_memory_mapping", "count_memory_blocks", "stage_of",
     "signal_of", "design_memories", "area_report", "area_text", "tools_available", "scene_texture_set",
     "rgb8_texture_set",
@@ -263,6 +263,12 @@ def _run(tool: str, args: list, cwd: str, log: str, timeout: float | None) -> tu
         first = (errs or out.strip().splitlines()[-1:] or ["(no output)"])[0].strip()
         raise SynthError(f"{name} failed (exit {res.returncode}): {first[:300]}")
     return out, dt
+
+
+def run_yowasp(tool: str, args: list, cwd: str, log: str, timeout: float | None = None) -> tuple[str, float]:
+    """Run ``tool`` (``"yosys"`` or ``"nextpnr"``, the YoWASP builds) with ``args`` in ``cwd``, its
+    output kept in ``log``: (output, seconds); one-line SynthError on failure or timeout."""
+    return _run(tool, args, cwd, log, timeout)
 
 
 def yosys_script(*, keep_unit: bool = True, abc9: bool = True) -> str:

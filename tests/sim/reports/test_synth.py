@@ -294,3 +294,12 @@ def test_filter_harness_and_memories():
 def test_filter_lanes_refuses_one_port(capsys):
     code, out, err = _run(capsys, "report", "area", "--builtin", "tiny", "--filter-lanes", "4", "--one-port")
     assert code == 2 and out == "" and err.count("\n") == 1 and "--one-port" in err
+
+
+def test_rom_ports_two_reads_of_a_512_deep_rom_cost_a_second_copy():
+    """The fact the filter's per-lane codebooks rest on (docs/filter.md): on ECP5 a 512-deep ROM read
+    through two ports takes twice the DP16KDs of one port; a 1024-deep one takes none more."""
+    _need_tools()
+    from vqtex.sim.reports.rom_ports import rom_cost
+    assert rom_cost(512, 36, 1)["DP16KD"] == 1 and rom_cost(512, 36, 2)["DP16KD"] == 2
+    assert rom_cost(1024, 36, 1)["DP16KD"] == rom_cost(1024, 36, 2)["DP16KD"] == 2
