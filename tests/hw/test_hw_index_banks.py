@@ -22,8 +22,13 @@ from vqtex.hw.memories import elaborate, memories
 from vqtex.sim.backends.filter import golden_colors, simulate_filter
 
 
-def paper_and_pvr2() -> TextureSet:
-    return TextureSet.combine([support.texture_sets()["rgb12"], support.pvr2_small_sets()["rectangles_and_mip8"]])
+def paper_and_pvr2(n: int, seed: int):
+    """(set, frac, pixels): the paper's rgb12 set and tiny PowerVR2 rectangles and mip chain, and ``n``
+    edge-case pixels (tests.hw.test_hw_filter.edge_pixels)."""
+    ts = TextureSet.combine([support.texture_sets()["rgb12"], support.pvr2_small_sets()["rectangles_and_mip8"]])
+    table = level_table(ts)
+    frac = spec.coordinate_frac_bits(table.max_log2)
+    return ts, frac, edge_pixels(table, frac, n, seed)
 
 
 class _Map(wiring.Component):
@@ -94,20 +99,14 @@ def test_conflict_strobe_negative_control():
 
 @pytest.mark.parametrize("lanes", [2, 4, 8])
 def test_banked_filter_on_pvr2_and_paper_textures_pysim(lanes):
-    ts = paper_and_pvr2()
-    table = level_table(ts)
-    frac = spec.coordinate_frac_bits(table.max_log2)
-    px = edge_pixels(table, frac, 50, 40 + lanes)
+    ts, frac, px = paper_and_pvr2(50, 40 + lanes)
     res = simulate_filter(ts, px, backend="pysim", lanes=lanes, stall=0.2, seed=lanes)
     assert (res.colors == golden_colors(ts, px, frac)).all()
     assert res.bank_conflicts == 0
 
 
 def test_banked_and_per_lane_memories_give_the_same_pixels_and_cycles():
-    ts = paper_and_pvr2()
-    table = level_table(ts)
-    frac = spec.coordinate_frac_bits(table.max_log2)
-    px = edge_pixels(table, frac, 40, 7)
+    ts, frac, px = paper_and_pvr2(40, 7)
     a = simulate_filter(ts, px, backend="pysim", lanes=4, index_banks="parity", stall=0.3, seed=1)
     b = simulate_filter(ts, px, backend="pysim", lanes=4, index_banks="lane", stall=0.3, seed=1)
     assert (a.colors == b.colors).all() and a.cycles == b.cycles and a.stall_cycles == b.stall_cycles
@@ -137,10 +136,7 @@ def test_who_holds_the_index_memory(lanes, index_banks, readers):
 def test_banked_filter_on_the_compiled_backend(lanes):
     support.need("g++")
     with support.shared_cache():
-        ts = paper_and_pvr2()
-        table = level_table(ts)
-        frac = spec.coordinate_frac_bits(table.max_log2)
-        px = edge_pixels(table, frac, 20000, 50 + lanes)
+        ts, frac, px = paper_and_pvr2(20000, 50 + lanes)
         res = simulate_filter(ts, px, backend="cxxrtl", lanes=lanes, stall=0.25, seed=lanes)
         assert (res.colors == golden_colors(ts, px, frac)).all()
         assert res.bank_conflicts == 0 and res.stall_cycles["output_backpressure"] > 0
