@@ -5,9 +5,10 @@ pixel's slots, which arrive in *groups* of ``lanes`` texels (one group per cycle
 group or several in a row, marked ``first`` and ``last``). Four stages:
 
 1. *group*: the lanes' texels and weights, registered (nothing but wires behind the lanes' outputs).
-2. *weigh*: per lane and channel ``w_k texel_k`` (25x8-bit products), registered with ``first``,
+2. *weigh*: per lane and channel ``w_k texel_k`` as two partial products, ``w_k[0:17] texel_k`` and
+   ``w_k[17:25] texel_k`` (each one MULT18X18D, no adder behind it), registered with ``first``,
    ``last`` and the tag.
-3. *sum*: per channel the group's ``sum_k w_k texel_k``, registered.
+3. *sum*: per channel the group's ``sum_k (lo_k + (hi_k << 17))``, registered.
 4. *accumulate*: ``acc = (0 if first else acc) + sum``; on the ``last`` group the rounded colour
    ``(acc + 2^23) >> 24`` is the output register (the stream's payload).
 
@@ -33,6 +34,8 @@ __all__ = ["Blend", "GroupLayout", "LATENCY"]
 #: Cycles from a pixel's last group to its colour.
 LATENCY = 4
 _ACC = 32
+#: The weight's bits in the low partial product (an unsigned 17-bit operand of an 18x18 multiplier).
+_LOW = 17
 
 
 class GroupLayout(data.StructLayout):
@@ -83,7 +86,9 @@ class Blend(wiring.Component):
         g = Signal.like(self.i.p, name="group")
         # Stage 2: weigh (the products, registered: each multiplier between registers).
         p_valid = Signal()
-        prod = [[Signal(_ACC + 1, name=f"product{k}_{'rgba'[c]}") for c in range(4)] for k in range(lanes)]
+        lo = [[Signal(_LOW + 8, name=f"product{k}_{'rgba'[c]}_lo") for c in range(4)] for k in range(lanes)]
+        hi = [[Signal(WEIGHT_WIDTH - _LOW + 8, name=f"product{k}_{'rgba'[c]}_hi") for c in range(4)]
+              for k in range(lanes)]
         p_first, p_last = Signal(), Signal()
         p_tag = Signal(self._tag_width)
         # Stage 3: sum (the lanes' products added, registered).
@@ -108,13 +113,14 @@ class Blend(wiring.Component):
             m.d.sync += [p_valid.eq(g_valid), p_first.eq(g.first), p_last.eq(g.last), p_tag.eq(g.tag)]
             for k in range(lanes):
                 for c in range(4):
-                    m.d.sync += prod[k][c].eq(g.weight[k] * g.rgba[k][8 * c:8 * c + 8])
+                    texel = g.rgba[k][8 * c:8 * c + 8]
+                    m.d.sync += [lo[k][c].eq(g.weight[k][:_LOW] * texel), hi[k][c].eq(g.weight[k][_LOW:] * texel)]
         with m.If(load_w):
             m.d.sync += [w_valid.eq(p_valid), w_first.eq(p_first), w_last.eq(p_last), w_tag.eq(p_tag)]
             for c in range(4):
-                total = prod[0][c]
+                total = lo[0][c] + (hi[0][c] << _LOW)
                 for k in range(1, lanes):
-                    total = total + prod[k][c]
+                    total = total + lo[k][c] + (hi[k][c] << _LOW)
                 m.d.sync += w_sum[c].eq(total)
 
         # Stage 4: accumulate, round, output register.
