@@ -41,7 +41,7 @@ def ALLOC_BOUND(size: int) -> int:
 def seed_files() -> list:
     """Small valid .vqt files covering the formats: rgb mipmapped 8-bit, yuv411 12-bit, rgba,
     intensity on 16-bit words with TSVQ, a raw-only set, the first three combined, and the first
-    pruned to a few texels of two levels (``golden.prune``)."""
+    pruned to a few texels of two levels (``golden.need.prune``)."""
     from vqtex.golden.encode import encode
     from vqtex.golden.format import TextureSet
     rng = np.random.default_rng(0)
@@ -59,8 +59,8 @@ def seed_files() -> list:
         encode([img(8, 8, 3)], codebook_size=4, mipmaps=True),
     ]
     sets.append(TextureSet.combine(sets[:3]))
-    from vqtex.golden.need import analyse
-    from vqtex.golden.prune import prune
+    from vqtex.golden.need.analysis import analyse
+    from vqtex.golden.need.prune import prune
     reqs = np.array([[0, 1, 0, 0], [0, 1, 9, 30], [0, 4, 3, 2]])   # pruned: absent levels, block presence bits
     sets.append(prune(sets[0], analyse(sets[0], [reqs])))
     return [s.to_bytes() for s in sets]

@@ -3,9 +3,9 @@
 
 For each scene, over all its frames (topspin 50, town 60), side by side in one run:
 
-* the need analysis (``golden.need``) of the full encode: textures, levels, level groups, blocks,
+* the need analysis (``golden.need.analysis``) of the full encode: textures, levels, level groups, blocks,
   codewords touched against stored, distinct memory words, block-buffer and cache hits, and its time;
-* ``golden.prune.prune`` of the full set: what is stored before and after, memory and file bytes,
+* ``golden.need.prune.prune`` of the full set: what is stored before and after, memory and file bytes,
   and that every 10th frame renders identically from the pruned set;
 * the full encode (``build_texture_set``) against ``encode_needed`` (the frames' distinct requests
   from rasterising them, encode of the touched levels, need analysis and prune), each best of
@@ -37,8 +37,8 @@ def _best(fn, repeat):
 
 
 def scene_bench(name: str, repeat: int = 2, check_step: int = 10) -> dict:
-    from vqtex.golden.need import analyse, scene_level_shapes, scene_streams
-    from vqtex.golden.prune import encode_needed, prune, prune_report, touched_levels, touched_texels
+    from vqtex.golden.need.analysis import analyse, scene_level_shapes, scene_streams
+    from vqtex.golden.need.prune import encode_needed, prune, prune_report, touched_levels, touched_texels
     from vqtex.golden.render.frame import render_frame
     from vqtex.golden.render.metrics import frame_mse
     from vqtex.golden.render.pyramid import VQSource

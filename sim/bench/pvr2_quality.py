@@ -1,10 +1,10 @@
 """Quality of our PowerVR2 encoder against pvrtex's, on pvrtex's own test image.
 
 For every ``crate_FORMAT_c[_64][_m].dt`` that pvrtex wrote (tests/data/pvrtex/generated), encode
-``crate.png`` with :func:`vqtex.golden.pvr_encode.encode_pvr2` at the same format, codebook size
+``crate.png`` with :func:`vqtex.golden.pvr2.pvr_encode.encode_pvr2` at the same format, codebook size
 and mip setting, and report the PSNR (R, G, B, level 0) of both against the original: pvrtex's
 from its own preview image (the top-left ``128x128``: level 0), ours from our ``.dt`` decoded by
-:func:`vqtex.golden.pvr.parse_dt`; with our encode time (wall clock, one process, default BLAS
+:func:`vqtex.golden.pvr2.pvr.parse_dt`; with our encode time (wall clock, one process, default BLAS
 threads). pvrtex's encode time is not measured (its binary is not part of this project).
 
     python -m vqtex.sim.bench.pvr2_quality [--data tests/data/pvrtex] [--json]
@@ -34,8 +34,8 @@ def _psnr(a, b) -> float:
 def run(data: str = DEFAULT_DATA, seed: int = 0, formats=FORMATS, variants=VARIANTS) -> list:
     """One row per (format, variant): ``{"format", "codebook", "mipmaps", "pvrtex_db", "ours_db",
     "gain_db", "ours_seconds"}``. ``variants``: (pvrtex file tag, codebook size, mipmapped)."""
-    from vqtex.golden.pvr import parse_dt
-    from vqtex.golden.pvr_encode import encode_pvr2
+    from vqtex.golden.pvr2.pvr import parse_dt
+    from vqtex.golden.pvr2.pvr_encode import encode_pvr2
     from vqtex.golden.render.imageio import read_image
     src = read_image(os.path.join(data, "crate.png"))
     h, w = src.shape[:2]

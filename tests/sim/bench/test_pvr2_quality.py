@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vqtex.golden import pvr
+from vqtex.golden.pvr2 import pvr
 from vqtex.golden.render.imageio import read_image
 from vqtex.sim.bench import pvr2_quality
 

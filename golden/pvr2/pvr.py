@@ -55,7 +55,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .color import DREAMCAST_YUV422
+from ..color import DREAMCAST_YUV422
 
 __all__ = [
     "PvrError", "DtHeader", "PvrTexture", "FORMAT_NAMES", "ARGB1555", "RGB565", "ARGB4444", "YUV422",

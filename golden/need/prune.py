@@ -1,7 +1,7 @@
-"""Pruned texture sets: only what some frames need (``golden.need``), with texture ids, level numbers
+"""Pruned texture sets: only what some frames need (``golden.need.analysis``), with texture ids, level numbers
 and every answered texel unchanged.
 
-``prune(ts, need)`` returns a new :class:`~.format.TextureSet` that
+``prune(ts, need)`` returns a new :class:`~vqtex.golden.format.TextureSet` that
 
 * keeps every texture (ids are stable) and every level's number and size, but stores only the levels
   the frames touched: the others are listed in the texture's ``absent_levels`` and their descriptor
@@ -15,7 +15,7 @@ and every answered texel unchanged.
   number, so it keeps every block's slot), storing in it the new index of each block touched from any
   of the group's stored levels and 0 for the others; ``present_blocks`` marks, per stored compressed
   level, the blocks that level's requests touched: a request for any other block of the level is
-  refused by :func:`~.fetch.check_requests` instead of being answered from a codeword it no longer has;
+  refused by :func:`~vqtex.golden.fetch.check_requests` instead of being answered from a codeword it no longer has;
 * keeps the raw levels that were touched, whole.
 
 So the pruned set answers every request of the frames it was pruned for exactly as ``ts`` does, and
@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .format import (CodebookInfo, TextureInfo, TextureSet, default_index_bits, pack_indices, unpack_indices)
+from ..format import (CodebookInfo, TextureInfo, TextureSet, default_index_bits, pack_indices, unpack_indices)
 
 __all__ = ["prune", "pruned_bytes", "stored_counts", "prune_report", "touched_texels", "touched_levels",
            "encode_needed", "TRAIN_ON"]
@@ -40,7 +40,7 @@ def _group_rows(d, t: int, top: int, levels: int, keep: np.ndarray) -> list[int]
 
 
 def prune(ts: TextureSet, need) -> TextureSet:
-    """``ts`` pruned to what ``need`` (a :class:`golden.need.Need` of ``ts``) touched; see the module
+    """``ts`` pruned to what ``need`` (a :class:`golden.need.analysis.Need` of ``ts``) touched; see the module
     docstring. The result is validated like a loaded file."""
     if need.ts is not ts:
         raise ValueError("the need analysis is of another texture set")
@@ -176,16 +176,16 @@ def prune_report(before: TextureSet, after: TextureSet, **extra) -> dict:
 
 def touched_texels(scene, frames, mode: str = "trilinear", **options) -> np.ndarray:
     """The distinct requests (M, 4) of ``frames`` of ``scene``, found before anything is encoded (the
-    requests depend only on the level shapes, :func:`golden.need.scene_level_shapes`); ``options``
-    are the request stream's (``stream``, ``fovea``: :func:`golden.need.scene_streams`)."""
-    from .need import distinct_requests, scene_level_shapes, scene_streams
+    requests depend only on the level shapes, :func:`golden.need.analysis.scene_level_shapes`); ``options``
+    are the request stream's (``stream``, ``fovea``: :func:`golden.need.analysis.scene_streams`)."""
+    from .analysis import distinct_requests, scene_level_shapes, scene_streams
     return distinct_requests(r for _, r in scene_streams(scene, scene_level_shapes(scene), frames, mode, **options))
 
 
 def touched_levels(scene, frames=None, mode: str = "trilinear", texels=None) -> list[list[int]]:
     """Per scene texture, the levels ``frames`` request (or the distinct requests ``texels`` of
     :func:`touched_texels` hold)."""
-    from .constants import MAX_LEVELS
+    from ..constants import MAX_LEVELS
     if texels is None:
         texels = touched_texels(scene, frames, mode)
     seen = np.zeros((len(scene.textures), MAX_LEVELS), bool)
@@ -203,15 +203,15 @@ def encode_needed(scene, frames, mode: str = "trilinear", images=None, cache=Non
     """Encode only what ``frames`` of ``scene`` need: the levels they touch, the codebooks trained on
     the blocks of the touched level groups (``train="levels"``) or on the touched blocks only
     (``train="blocks"``), then :func:`prune` to the codewords and blocks they touch. ``options``
-    choose the request stream (:func:`touched_texels`; default the sparse stream ``vqtex render`` issues). Returns (pruned set, the :class:`golden.need.Need` of the encoded set over
+    choose the request stream (:func:`touched_texels`; default the sparse stream ``vqtex render`` issues). Returns (pruned set, the :class:`golden.need.analysis.Need` of the encoded set over
     the frames' distinct requests: its counts are distinct texels per block, not requests).
 
     The frames are rasterised once (:func:`touched_texels`). The frames rendered from the result
     differ from those of the full encode wherever the codebooks differ (they were trained on fewer
     blocks: all of them visible in these frames); they are identical to the frames of the encoded
     set before pruning."""
-    from .need import CacheSpec, analyse
-    from .render.scene import build_texture_set
+    from .analysis import CacheSpec, analyse
+    from ..render.scene import build_texture_set
     if train not in TRAIN_ON:
         raise ValueError(f"train must be one of {TRAIN_ON}, not {train!r}")
     texels = touched_texels(scene, frames, mode, **options)

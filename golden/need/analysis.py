@@ -1,11 +1,11 @@
 """Need analysis: what a scene's request streams touch in a texture set, vectorised.
 
-From a :class:`~.format.TextureSet` and the request streams of some frames (each an (N, 4) int64
+From a :class:`~vqtex.golden.format.TextureSet` and the request streams of some frames (each an (N, 4) int64
 array of (texture, level, i, j), as ``golden.render``'s sampler issues them), :func:`analyse`
 reports
 
 * which **textures**, **levels**, **level groups** and **blocks** are touched. A block of a compressed
-  level is a block of its level group's index map (block ``k`` of :func:`~.fetch.block_address`:
+  level is a block of its level group's index map (block ``k`` of :func:`~vqtex.golden.fetch.block_address`:
   levels ``n, n+1, n+2`` of a group share one block grid); a "block" of a raw level is one texel
   (one raw word). Counts of requests per block are kept per (texture, level): :meth:`Need.blocks`.
 * which **codewords** the touched blocks use, per codebook (the indices the touched blocks' maps hold);
@@ -23,7 +23,7 @@ two most recently used blocks are the block of the previous access and the block
 equal accesses before it (consecutive runs differ), so an access hits when its block equals one of
 those two. One way is a direct-mapped cache (hit when the previous access of the set was the block).
 
-Requests must be valid for ``ts`` (:func:`~.fetch.check_requests`).
+Requests must be valid for ``ts`` (:func:`~vqtex.golden.fetch.check_requests`).
 
 Public API::
 
@@ -44,9 +44,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .constants import COLORS, MAX_LEVELS
-from .fetch import block_address, read_index, straddles
-from .format import TextureSet
+from ..constants import COLORS, MAX_LEVELS
+from ..fetch import block_address, read_index, straddles
+from ..format import TextureSet
 
 __all__ = ["CacheSpec", "FrameNeed", "Need", "RequestBlocks", "analyse", "request_blocks", "buffer_hits",
            "cache_hits", "scene_streams", "scene_level_shapes", "row_grids", "NeedCounter", "heat_image",
@@ -488,7 +488,7 @@ def scene_streams(scene, source, frames, mode: str = "trilinear", **options):
     """Yield (frame, requests (N, 4) int64) of ``frames`` of ``scene``; ``source`` is a TextureSet,
     any texture source with ``level_shapes``, or the list of level shapes per texture; ``options``
     are ``golden.render.frame.frame_requests``'s (``stream="sparse"`` or ``"fixed"``, ``fovea``)."""
-    from .render.frame import frame_requests
+    from ..render.frame import frame_requests
     for f in frames:
         reqs, _ = frame_requests(scene, f, source, mode, **options)
         yield f, reqs

@@ -2,9 +2,9 @@
 
 Contract: :func:`encode_pvr2` takes a uint8 image (sides powers of two, 8..1024; square when
 mipmapped) and returns a one-texture :class:`golden.format.TextureSet` in the PowerVR2 layout
-(:mod:`golden.pvr_set`): one codebook of ``k`` entries of four 16-bit texels (``k <= 256``; with
+(:mod:`golden.pvr2.pvr_set`): one codebook of ``k`` entries of four 16-bit texels (``k <= 256``; with
 ``k < 256`` the ``.dt`` names them ``256-k .. 255``), one twiddled index map per mip level;
-:func:`golden.pvr_set.to_dt` writes it as pvrtex does, and :func:`golden.pvr.parse_dt` reads it back
+:func:`golden.pvr2.pvr_set.to_dt` writes it as pvrtex does, and :func:`golden.pvr2.pvr.parse_dt` reads it back
 to the same texels. Deterministic for a seed.
 
 How it is built (docs/pvr2.md):
@@ -30,10 +30,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .codebook import gla, nearest
-from .color import DREAMCAST_YUV422
-from .constants import PVR2_COLORS
-from .mipmap import build_pyramid, to_rgba
+from ..codebook import gla, nearest
+from ..color import DREAMCAST_YUV422
+from ..constants import PVR2_COLORS
+from ..mipmap import build_pyramid, to_rgba
 from .pvr import PvrError, decode_texels, decode_yuv422_blocks, parse_dt
 from .pvr_set import dt_bytes, from_dt, stream_order
 

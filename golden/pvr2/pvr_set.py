@@ -31,9 +31,9 @@ import os
 
 import numpy as np
 
-from .color import DREAMCAST_YUV422
-from .constants import COLOR_CODES, DESCRIPTOR_DTYPE, LAYOUT_CODES, MAX_LEVELS, PVR2_COLORS, FormatError
-from .format import (PVR2_ONE_BY_ONE_TEXEL_OFF, CodebookInfo, TextureInfo, TextureSet, entry_layout, log2,
+from ..color import DREAMCAST_YUV422
+from ..constants import COLOR_CODES, DESCRIPTOR_DTYPE, LAYOUT_CODES, MAX_LEVELS, PVR2_COLORS, FormatError
+from ..format import (PVR2_ONE_BY_ONE_TEXEL_OFF, CodebookInfo, TextureInfo, TextureSet, entry_layout, log2,
                      pack_indices, unpack_indices)
 from .pvr import HEADER_BYTES, MAGIC, PvrError, PvrTexture, read_dt, twiddle_indices
 
@@ -60,7 +60,7 @@ def stream_order(raster: np.ndarray) -> np.ndarray:
 
 def from_dt(tex: PvrTexture, name: str = "dt") -> TextureSet:
     """A one-texture set in the PowerVR2 layout holding the parsed ``.dt`` ``tex`` (indices already
-    rebased to ``0 .. N-1`` by :func:`golden.pvr.parse_dt`). The colour matrix is DREAMCAST_YUV422."""
+    rebased to ``0 .. N-1`` by :func:`golden.pvr2.pvr.parse_dt`). The colour matrix is DREAMCAST_YUV422."""
     hdr = tex.header
     color = PVR2_COLORS[hdr.pixel_format]
     n = hdr.codebook_entries
@@ -122,7 +122,7 @@ def dt_control(width: int, height: int, color: str, mipmapped: bool) -> int:
 def to_dt(ts: TextureSet, tex: int = 0) -> bytes:
     """Texture ``tex`` of ``ts`` (PowerVR2 layout) as the bytes of a ``.dt`` file in pvrtex's layout:
     header, codebook, index maps smallest level first (bytes ``256 - N + index``), zero padding to a
-    multiple of 32 bytes (as pvrtex pads its mip chains). :func:`golden.pvr.parse_dt` reads it back to the same texels.
+    multiple of 32 bytes (as pvrtex pads its mip chains). :func:`golden.pvr2.pvr.parse_dt` reads it back to the same texels.
 
     Raises:
         FormatError: the texture is not in the PowerVR2 layout or not what a ``.dt`` can hold.
