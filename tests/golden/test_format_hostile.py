@@ -13,7 +13,7 @@ import pytest
 
 from vqtex.golden.fetch import decode
 from vqtex.golden.format import FormatError, TextureSet
-from vqtex.sim.bench.fuzz import ALLOC_BOUND, join_vqt, mutate_vqt, run_mutations, seed_files, split_vqt, try_file
+from vqtex.sim.bench.robustness.fuzz import ALLOC_BOUND, join_vqt, mutate_vqt, run_mutations, seed_files, split_vqt, try_file
 
 FILES = seed_files()
 

@@ -14,7 +14,7 @@ from vqtex.golden.fetch import block_address, decode, fetch, random_requests, tw
 from vqtex.golden.format import COLOR_CODES, DESCRIPTOR_FIELDS, FormatError, TextureSet
 from vqtex.golden.render.imageio import read_image
 from tests.support import random_dt
-from vqtex.sim.bench.fuzz import join_vqt, mutate_vqt, split_vqt, try_file
+from vqtex.sim.bench.robustness.fuzz import join_vqt, mutate_vqt, split_vqt, try_file
 
 DATA = Path(__file__).resolve().parent.parent / "data" / "pvrtex"
 GENERATED = sorted((DATA / "generated").glob("*.dt"))

@@ -58,7 +58,7 @@ def load_check(n: int = 10_000_000, *, stall: float = 0.3, one_port: bool = Fals
     Raises ``AssertionError`` naming the first difference if the two runs disagree (or a run fails).
     """
     from vqtex.golden.fetch import random_requests
-    from .simulation import default_unit
+    from ..simulators.simulation import default_unit
 
     with tempfile.TemporaryDirectory(dir=folder) as tmp:
         set_path = os.path.join(tmp, "unit.vqt")

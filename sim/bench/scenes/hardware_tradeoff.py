@@ -165,7 +165,7 @@ class _Units:
 def sweep(frame_step: int = 10, backend: str = "cxxrtl", sweep: dict | None = None, **select) -> list[dict]:
     """Every point (:func:`jobs`, narrowed by ``select``: scenes, samplings, index_bits, colors, stream), run
     with :func:`sim.bench.sweep.run_jobs` (``sweep``: its keyword arguments; default serial)."""
-    from .sweep import run_jobs
+    from ..sweep import run_jobs
     return run_jobs(point, jobs(frame_step, backend, **select), **(sweep or {"scheduler": "serial", "progress": False}))
 
 

@@ -7,7 +7,7 @@ from its own preview image (the top-left ``128x128``: level 0), ours from our ``
 :func:`vqtex.golden.pvr2.pvr.parse_dt`; with our encode time (wall clock, one process, default BLAS
 threads). pvrtex's encode time is not measured (its binary is not part of this project).
 
-    python -m vqtex.sim.bench.pvr2_quality [--data tests/data/pvrtex] [--json]
+    python -m vqtex.sim.bench.encoding.pvr2_quality [--data tests/data/pvrtex] [--json]
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ __all__ = ["run", "main"]
 
 FORMATS = ("rgb565", "argb1555", "argb4444", "yuv422")
 VARIANTS = (("c", 256, False), ("c_64", 64, False), ("c_m", 256, True), ("c_64_m", 64, True))
-DEFAULT_DATA = os.path.join(os.path.dirname(__file__), "..", "..", "tests", "data", "pvrtex")
+DEFAULT_DATA = os.path.join(os.path.dirname(__file__), "..", "..", "..", "tests", "data", "pvrtex")
 
 
 def _psnr(a, b) -> float:
@@ -54,7 +54,7 @@ def run(data: str = DEFAULT_DATA, seed: int = 0, formats=FORMATS, variants=VARIA
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m vqtex.sim.bench.pvr2_quality", description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(prog="python -m vqtex.sim.bench.encoding.pvr2_quality", description=__doc__.splitlines()[0])
     p.add_argument("--data", default=DEFAULT_DATA, help="folder holding crate.png and generated/ (default tests/data/pvrtex)")
     p.add_argument("--seed", type=int, default=0, help="encoder seed (default 0)")
     p.add_argument("--format", dest="formats", action="append", choices=FORMATS,

@@ -1,4 +1,4 @@
-"""sim/bench/pvr2_quality.py: the quality table against pvrtex (one row here; the whole table is in
+"""sim/bench/encoding/pvr2_quality.py: the quality table against pvrtex (one row here; the whole table is in
 docs/pvr2.md)."""
 
 import json
@@ -8,9 +8,9 @@ import numpy as np
 
 from vqtex.golden.pvr2 import pvr
 from vqtex.golden.render.imageio import read_image
-from vqtex.sim.bench import pvr2_quality
+from vqtex.sim.bench.encoding import pvr2_quality
 
-DATA = Path(__file__).resolve().parents[2] / "data" / "pvrtex"
+DATA = Path(__file__).resolve().parents[3] / "data" / "pvrtex"
 
 
 def test_one_row_against_the_dt_itself(capsys):

@@ -3,7 +3,7 @@
 import json
 
 from vqtex.hw.texel_fetch import LATENCY
-from vqtex.sim.bench import simulation as bench_sim
+from vqtex.sim.bench.simulators import simulation as bench_sim
 
 from tests.support import need
 

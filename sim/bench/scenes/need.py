@@ -1,5 +1,5 @@
 """What the built-in scenes need, what pruning saves, and what encoding for the frames costs:
-``python -m vqtex.sim.bench.need [--json] [--repeat N] [--scenes topspin,town]``.
+``python -m vqtex.sim.bench.scenes.need [--json] [--repeat N] [--scenes topspin,town]``.
 
 For each scene, over all its frames (topspin 50, town 60), side by side in one run:
 

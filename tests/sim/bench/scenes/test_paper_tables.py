@@ -7,10 +7,10 @@ import json
 
 import pytest
 
-from tests.sim.bench.tiny_scenes import TINY_TOPSPIN, TINY_TOWN, tiny_scene
+from tests.sim.bench.scenes.tiny_scenes import TINY_TOPSPIN, TINY_TOWN, tiny_scene
 from vqtex.golden.render.scene import DATA_DIR, PAPER_SCENES, load_scene
-from vqtex.sim.bench import experiments, paper_configs
-from vqtex.sim.bench.paper_configs import Codebook
+from vqtex.sim.bench.scenes import experiments, paper_configs
+from vqtex.sim.bench.scenes.paper_configs import Codebook
 from vqtex.sim.cli import main
 
 BYTES = {"rgb": 3, "yuv411": 3, "intensity": 1, "rgba": 4}

@@ -8,7 +8,7 @@ import math
 
 import pytest
 
-from vqtex.sim.bench import encoder as eb
+from vqtex.sim.bench.encoding import encoder as eb
 
 
 def test_tiny_run_reports_every_field(capsys):

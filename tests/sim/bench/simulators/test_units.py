@@ -1,4 +1,4 @@
-"""sim/bench/units.py: both units measured on the same requests, and their answers compared."""
+"""sim/bench/simulators/units.py: both units measured on the same requests, and their answers compared."""
 
 import os
 
@@ -9,7 +9,7 @@ from tests.support import need, shared_cache_dir
 def test_unit_speeds_shape(monkeypatch):
     need("g++")
     monkeypatch.setenv("VQTEX_CACHE", shared_cache_dir())
-    from vqtex.sim.bench.units import unit_speeds
+    from vqtex.sim.bench.simulators.units import unit_speeds
     rep = unit_speeds(CASES["three_widths"][0](), requests=3000, runs=1)
     assert set(rep) == {1, 2}
     for row in rep.values():

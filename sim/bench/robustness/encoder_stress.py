@@ -326,7 +326,7 @@ def encoded_with_threads(name: str, threads: int, seed: int = 0) -> str:
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
     for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         env[var] = str(threads)
-    code = ("import hashlib,sys;from vqtex.sim.bench.encoder_stress import encode_bytes;"
+    code = ("import hashlib,sys;from vqtex.sim.bench.robustness.encoder_stress import encode_bytes;"
             f"print(hashlib.sha256(encode_bytes({name!r}, {seed})).hexdigest())")
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
                          check=True, timeout=600)

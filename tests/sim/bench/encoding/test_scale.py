@@ -1,9 +1,9 @@
-"""``sim/bench/scale.py``: the texture it encodes and the shape of its report (the figures
+"""``sim/bench/encoding/scale.py``: the texture it encodes and the shape of its report (the figures
 themselves are measured, never asserted)."""
 
 import numpy as np
 
-from vqtex.sim.bench import scale
+from vqtex.sim.bench.encoding import scale
 
 
 def test_texture_is_seeded_and_covers_the_size():

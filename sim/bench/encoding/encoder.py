@@ -24,7 +24,7 @@ minimum wall time over ``repeats`` runs (the same count for both; case 3 runs on
 because KMeans takes minutes there).
 
 Run: ``vqtex bench encode [--json]``.  For whole-process timings, ``python -m
-vqtex.sim.bench.encoder --only gla|kmeans --case 1 --image hubble_deep_field`` runs one method once
+vqtex.sim.bench.encoding.encoder --only gla|kmeans --case 1 --image hubble_deep_field`` runs one method once
 (both import the same modules) and prints its PSNR; ``--only load`` does everything but the fit
 (the fixed cost to subtract).
 """

@@ -14,7 +14,7 @@ figure ~ texels^p through the two points (1 = linear), for CPU time and peak mem
 measured and beyond the base process (None where a figure is not above the base).  The figures are measured and
 printed, never asserted (they depend on the machine and its load).
 
-Run: ``python -m vqtex.sim.bench.scale [--sizes 1024,2048,4096] [--block 4x4] [-k 256]
+Run: ``python -m vqtex.sim.bench.encoding.scale [--sizes 1024,2048,4096] [--block 4x4] [-k 256]
 [--color rgb] [--seed 0]``; prints JSON.  docs/stability.md holds the latest figures.
 """
 
@@ -30,7 +30,7 @@ import numpy as np
 
 from vqtex.golden.render.imageio import read_image, write_image
 from vqtex.golden.render.scene import DATA_DIR
-from .load import run_command
+from ..robustness.load import run_command
 
 __all__ = ["texture", "encode_once", "measure", "main"]
 
@@ -98,7 +98,7 @@ def measure(sizes=(1024, 2048, 4096), *, block: str = "4x4", k: int = 256, color
 
 
 def main(argv=None) -> None:
-    p = argparse.ArgumentParser(prog="python -m vqtex.sim.bench.scale", description=__doc__.split("\n")[0])
+    p = argparse.ArgumentParser(prog="python -m vqtex.sim.bench.encoding.scale", description=__doc__.split("\n")[0])
     p.add_argument("--sizes", default="1024,2048,4096",
                    help="texture sides, comma-separated (default: %(default)s)")
     p.add_argument("--block", default="4x4", help="block WxH (default: %(default)s)")

@@ -2,7 +2,7 @@
 (issue: stability under load). Each run is the command a user runs, in its own process."""
 
 from tests.support import need
-from vqtex.sim.bench.load import load_check
+from vqtex.sim.bench.robustness.load import load_check
 from vqtex.sim.reports.synth import four_texture_set
 
 

@@ -8,7 +8,7 @@ import math
 
 import pytest
 
-from vqtex.sim.bench import tradeoff as t
+from vqtex.sim.bench.encoding import tradeoff as t
 from vqtex.sim.cli import main
 
 

@@ -7,10 +7,10 @@ import json
 import numpy as np
 import pytest
 
-from tests.sim.bench.tiny_scenes import TINY_TOWN, tiny_scene
+from tests.sim.bench.scenes.tiny_scenes import TINY_TOWN, tiny_scene
 from tests.support import need
 from vqtex.hw.texel_fetch import LATENCY
-from vqtex.sim.bench import hardware_tradeoff as ht
+from vqtex.sim.bench.scenes import hardware_tradeoff as ht
 from vqtex.sim.cli import main
 
 FIELDS = {"scene", "sampling", "index_bits", "codebook_size", "color", "frames", "stream", "mse", "psnr", "requests_per_frame",

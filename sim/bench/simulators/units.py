@@ -1,5 +1,5 @@
 """CXXRTL speed of the specialised and the full texel-fetch unit, side by side
-(``python -m vqtex.sim.bench.units SET.vqt ... [--requests N] [--runs R]``).
+(``python -m vqtex.sim.bench.simulators.units SET.vqt ... [--requests N] [--runs R]``).
 
 For each texture set: both libraries (:func:`vqtex.sim.backends.cxxrtl.open_cxxrtl`, built or from
 the cache), the same random requests (every texture and level, :func:`golden.fetch.random_requests`)
@@ -50,7 +50,7 @@ def unit_speeds(ts, *, requests: int = 2_000_000, runs: int = 3, stall: float = 
 
 
 def main(argv=None) -> None:
-    p = argparse.ArgumentParser(prog="python -m vqtex.sim.bench.units", description=__doc__.split("\n")[0])
+    p = argparse.ArgumentParser(prog="python -m vqtex.sim.bench.simulators.units", description=__doc__.split("\n")[0])
     p.add_argument("sets", nargs="+", metavar="SET.vqt", help="texture sets to measure")
     p.add_argument("--requests", type=int, default=2_000_000, help="requests per run (default 2000000)")
     p.add_argument("--runs", type=int, default=3, help="alternated runs per unit and thread count (default 3)")
