@@ -146,7 +146,7 @@ def _check(images, block, codebook_size, color, index_bits, encoder, mip_trainin
     if color not in COLORS or color in PVR2_COLORS:
         paper = [c for c in COLORS if c not in PVR2_COLORS]
         raise EncodeError(f"colour format {color!r} is not one of {', '.join(paper)}"
-                          + (" (PowerVR2 formats: golden.pvr_encode, vqtex encode --layout pvr2)" if color in PVR2_COLORS else ""))
+                          + (" (PowerVR2 formats: golden.pvr2.pvr_encode, vqtex encode --layout pvr2)" if color in PVR2_COLORS else ""))
     bw, bh = block
     if not (is_pow2(bw) and is_pow2(bh) and bw <= 8 and bh <= 8):
         raise EncodeError(f"block {bw}x{bh}: width and height must be powers of two from 1 to 8")
@@ -207,11 +207,11 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
     keep_levels : per image, the level numbers to store (None: all levels of every image). The others
         are absent (``TextureInfo.absent_levels``, as in a pruned set): a level group none of whose
         levels is kept is neither trained on nor stored, so the codebook is trained on the blocks of
-        the kept level groups only (``golden.prune.encode_needed``).
+        the kept level groups only (``golden.need.prune.encode_needed``).
     train_texels : per image, None or an (N, 3) integer array of texels (level, i, j): the codebook
         is trained only on the blocks of compressed levels these texels fall in (every level group's
         blocks for an image given None); indices are still chosen for every block of every stored
-        group. ``golden.prune.encode_needed(..., train="blocks")``.
+        group. ``golden.need.prune.encode_needed(..., train="blocks")``.
     max_iter, tol : GLA's stop rule: stop when the distortion's relative decrease falls to ``tol``
         (``D_{m-1} - D_m <= tol * D_m``) or after ``max_iter`` iterations (``golden.codebook.gla``).
 

@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from .format import COLOR_CODES, COLORS, LAYOUT_CODES, MAX_LEVELS, PVR2_COLORS, TextureSet, unpack_indices
-from .pvr import decode_texels, decode_yuv422_blocks, twiddle_indices
+from .pvr2.pvr import decode_texels, decode_yuv422_blocks, twiddle_indices
 
 __all__ = ["fetch", "decode", "random_requests", "lookup_descriptor", "block_address", "read_index", "read_codeword",
            "convert_color", "straddles", "twiddled_block", "expand_texels", "RequestError", "check_requests"]
@@ -33,7 +33,7 @@ class RequestError(ValueError):
 
 def check_requests(ts: TextureSet, tex, level, i, j) -> None:
     """Raise :class:`RequestError` (one line) unless every request is inside its level, and, in a
-    pruned set (``golden.prune``), its level and block are stored."""
+    pruned set (``golden.need.prune``), its level and block are stored."""
     tex, level, i, j = (np.asarray(a, dtype=np.int64) for a in (tex, level, i, j))
     bad = (tex < 0) | (tex >= ts.n_textures) | (level < 0) | (level >= MAX_LEVELS)
     if bad.any():
@@ -114,7 +114,7 @@ def twiddled_block(bx, by, log2gw, log2gh) -> np.ndarray:
     ``bx`` interleave (``by`` bit n -> bit 2n, ``bx`` bit n -> bit 2n+1); the squares follow one
     another along the longer side: ``k = ((bx | by) >> log2m) << 2 log2m | morton(bx mod m, by mod m)``
     (one of ``bx >> log2m``, ``by >> log2m`` is 0). Twin of :class:`hw.address.BlockAddress`'s
-    twiddle; agrees with :func:`golden.pvr.twiddle_indices`."""
+    twiddle; agrees with :func:`golden.pvr2.pvr.twiddle_indices`."""
     bx = np.asarray(bx, dtype=np.int64)
     by = np.asarray(by, dtype=np.int64)
     lm = np.minimum(np.asarray(log2gw, dtype=np.int64), np.asarray(log2gh, dtype=np.int64))
@@ -203,7 +203,7 @@ def read_codeword(ts: TextureSet, d: np.ndarray, index, x, y) -> np.ndarray:
 def expand_texels(texels, color: str) -> np.ndarray:
     """16-bit PowerVR2 texels (argb1555, rgb565, argb4444) -> ``(N, 4)`` RGBA uint8, each field
     widened to 8 bits by bit replication (rgb565: alpha 255). Twin of the codebook ROM's expansion;
-    the same arithmetic as :func:`golden.pvr.decode_texels`."""
+    the same arithmetic as :func:`golden.pvr2.pvr.decode_texels`."""
     return decode_texels(texels, PVR2_COLORS.index(color))
 
 
@@ -251,7 +251,7 @@ def decode(ts: TextureSet, tex: int, level: int = 0) -> np.ndarray:
 
     An independent path from :func:`fetch` (whole index maps unpacked, whole codewords tiled), so
     that "fetch over every texel equals decode" checks the per-texel address arithmetic. In a pruned
-    set (``golden.prune``) a level it does not store raises :class:`RequestError` and the texels of
+    set (``golden.need.prune``) a level it does not store raises :class:`RequestError` and the texels of
     blocks it does not store are (0, 0, 0, 0).
     """
     d = ts.descriptor(tex, level)
@@ -303,7 +303,7 @@ def decode(ts: TextureSet, tex: int, level: int = 0) -> np.ndarray:
 
 
 def _decode_pvr2(ts: TextureSet, d: dict, idx: np.ndarray, nbx: int, nby: int) -> np.ndarray:
-    """A PowerVR2 level decoded whole, as :mod:`golden.pvr` decodes a ``.dt``: the twiddled index
+    """A PowerVR2 level decoded whole, as :mod:`golden.pvr2.pvr` decodes a ``.dt``: the twiddled index
     map gathered into raster order, every block's 16-bit texels decoded at once (yuv422 pairs through
     the set's colour matrix), the blocks tiled column by column."""
     grid = idx[twiddle_indices(nbx, nby)]                        # (nby, nbx) entries, raster order

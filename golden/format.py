@@ -18,7 +18,7 @@ the chip". The contract (see ``docs/format.md`` for the hardware engineer's vers
   :data:`DESCRIPTOR_FIELDS`.
 * **The PowerVR2 layout** (descriptor ``layout`` 1, colours argb1555 / rgb565 / argb4444 / yuv422):
   Dreamcast VQ textures; 8-bit indices in twiddled (Morton) order, one index map per mip level,
-  codebook entries of four 16-bit texels listed column by column. See :mod:`golden.pvr_set` and
+  codebook entries of four 16-bit texels listed column by column. See :mod:`golden.pvr2.pvr_set` and
   ``docs/pvr2.md``.
 
 A fetch of texel (i, j) of a level (``i`` is the column, ``j`` the row, both inside the level) is
@@ -167,7 +167,7 @@ class TextureInfo(_Record):
     index_bits: int
     mipmapped: bool
     params: dict = field(default_factory=dict)
-    #: Levels a pruned set does not store (``golden.prune``): their descriptor rows are not valid but
+    #: Levels a pruned set does not store (``golden.need.prune``): their descriptor rows are not valid but
     #: keep the level's size, so level numbers and shapes (and a scene's requests) stay as they were.
     absent_levels: list = field(default_factory=list)
 
@@ -205,7 +205,7 @@ PVR2_ONE_BY_ONE_TEXEL_OFF = 6
 
 def _check_pvr2_level(row, info, cb, level: int, where: str) -> None:
     """A compressed level of a PowerVR2 texture (twiddled layout) must be what
-    :mod:`golden.pvr_set` writes: 8-bit indices into one 2x2 codebook of 16-bit texels, sub-level 0
+    :mod:`golden.pvr2.pvr_set` writes: 8-bit indices into one 2x2 codebook of 16-bit texels, sub-level 0
     (every level has its own index map); a 1x1 level reads texel 3 of its block (a 1x1 block at byte
     offset 6), and in yuv422 that lone texel is rgb565. Raises FormatError."""
     if tuple(info.block) != (2, 2) or info.index_bits != 8 or cb is None or cb.nsub != 1:
@@ -248,7 +248,7 @@ class TextureSet:
     textures, codebooks : metadata lists
     matrix : ColorMatrix used for yuv411 textures
     present_blocks : ndarray uint8 or None
-        Only in a pruned set (``golden.prune``): for every stored compressed level, in texture then
+        Only in a pruned set (``golden.need.prune``): for every stored compressed level, in texture then
         level order, one bit per block of the level's index map (bit ``k % 8`` of byte ``k // 8`` of
         the level's share, each share a whole number of bytes), 1 where block ``k`` is stored. A
         block whose bit is 0 has lost its codeword: requests for it are refused

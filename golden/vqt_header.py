@@ -14,7 +14,7 @@ or raises :class:`~.format.FormatError` with one line. Contract:
 - Each array is described by a dtype from a fixed list for that array (no structured, object or
   comma dtypes), a shape of the right rank, and an offset and byte count that lie inside the
   ``body_size`` bytes that follow the header: the caller allocates at most what the file holds.
-- A pruned set (``golden.prune``) may also hold, per texture, ``absent_levels`` (distinct increasing
+- A pruned set (``golden.need.prune``) may also hold, per texture, ``absent_levels`` (distinct increasing
   level numbers below its level count, at least one) and the array ``present_blocks`` (bytes).
 """
 
@@ -41,7 +41,7 @@ ARRAY_DTYPES = {
     "descriptors": (("descriptor",), 2),
     "present_blocks": (("|u1",), 1),
 }
-#: Arrays only a pruned set holds (``golden.prune``); every other array is in every file.
+#: Arrays only a pruned set holds (``golden.need.prune``); every other array is in every file.
 OPTIONAL_ARRAYS = ("present_blocks",)
 _TEXTURE_KEYS = {"name", "width", "height", "levels", "color", "block", "codebook", "index_bits", "mipmapped", "params"}
 _CODEBOOK_KEYS = {"color", "block", "nsub", "size", "base"}

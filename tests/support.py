@@ -14,7 +14,7 @@ import shutil
 import numpy as np
 import pytest
 
-from vqtex.golden import pvr, pvr_set
+from vqtex.golden.pvr2 import pvr, pvr_set
 from vqtex.golden.color import DREAMCAST_YUV422, JFIF_BT601
 from vqtex.golden.encode import encode
 from vqtex.golden.fetch import block_address, fetch, lookup_descriptor, random_requests, straddles
@@ -346,7 +346,7 @@ def run_lockstep(dut, inputs: dict, outputs: list, latency: int, *, en: str = "e
 
 
 def random_dt(width: int, height: int, fmt: int, n: int, seed: int) -> bytes:
-    """A Dreamcast VQ ``.dt`` made byte by byte (not by golden.pvr_set): a random codebook of ``n``
+    """A Dreamcast VQ ``.dt`` made byte by byte (not by golden.pvr2.pvr_set): a random codebook of ``n``
     entries of pixel format ``fmt``, random index bytes ``256-n .. 255``, not mipmapped."""
     rng = np.random.default_rng(seed)
     body = rng.integers(0, 1 << 16, (n, 4)).astype("<u2").tobytes()

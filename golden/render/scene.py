@@ -336,7 +336,7 @@ class Scene:
             except (TypeError, ValueError) as e:
                 raise SceneError(f"{self.path}: texture '{spec.name}': generator failed: {e}") from None
         elif spec.dt:                    # the .dt's own level 0 is its uncompressed reference
-            from ..pvr import PvrError, read_dt
+            from ..pvr2.pvr import PvrError, read_dt
             try:
                 return read_dt(spec.file).levels[0]
             except PvrError as e:
@@ -572,7 +572,7 @@ def parse_scene(text: str, path: str | os.PathLike = "<scene>") -> Scene:
                 ctx.fail(w, "'params' only applies to generated textures")
             file = _find_file(ctx, w, _str(ctx, w, "file", t["file"]), scene_dir)
             if file.suffix.lower() == ".dt":      # a Dreamcast VQ texture, used as it is compressed
-                from ..pvr import PvrError, read_dt
+                from ..pvr2.pvr import PvrError, read_dt
                 try:
                     dt_header = read_dt(file, decode=False).header
                 except PvrError as e:
@@ -721,7 +721,7 @@ def load_scene(name_or_path: str | os.PathLike) -> Scene:
 def build_texture_set(scene: Scene, images=None, keep_levels=None, train_texels=None):
     """Encode a scene's textures into one compressed TextureSet; texture k is scene texture k.
     ``keep_levels`` (per scene texture, the level numbers to store; None: all) encodes only those
-    (``golden.encode.encode``'s ``keep_levels``; ``golden.prune.encode_needed``); ``train_texels``
+    (``golden.encode.encode``'s ``keep_levels``; ``golden.need.prune.encode_needed``); ``train_texels``
     (per scene texture, None or (N, 3) level, i, j) trains the codebooks on those texels' blocks only.
 
     One ``golden.encode.encode`` call per group (its textures share a codebook), then
@@ -736,8 +736,8 @@ def build_texture_set(scene: Scene, images=None, keep_levels=None, train_texels=
     for g in dict.fromkeys(scene.groups):
         members = [t for t in scene.textures if t.group == g]
         if members[0].dt:                            # already compressed: imported as it is
-            from ..pvr import PvrError
-            from ..pvr_set import import_dt
+            from ..pvr2.pvr import PvrError
+            from ..pvr2.pvr_set import import_dt
             try:
                 sets.append(import_dt([members[0].file]))
             except PvrError as e:

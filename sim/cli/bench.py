@@ -24,14 +24,14 @@ from .common import CliError, add_json, add_sweep_options, block_size, sweep_opt
 __all__ = ["add_parser"]
 
 BENCHES = {
-    "encode": "vqtex.sim.bench.encoder",
-    "mip": "vqtex.sim.bench.mipmaps",
-    "sim": "vqtex.sim.bench.simulation",
-    "render": "vqtex.sim.bench.render",
-    "skip": "vqtex.sim.bench.skip",
-    "stability": "vqtex.sim.bench.stability",
+    "encode": "vqtex.sim.bench.encoding.encoder",
+    "mip": "vqtex.sim.bench.encoding.mipmaps",
+    "sim": "vqtex.sim.bench.simulators.simulation",
+    "render": "vqtex.sim.bench.scenes.render",
+    "skip": "vqtex.sim.bench.scenes.skip",
+    "stability": "vqtex.sim.bench.robustness.stability",
     "codecs": "vqtex.sim.bench.codecs",
-    "tradeoff": "vqtex.sim.bench.tradeoff",
+    "tradeoff": "vqtex.sim.bench.encoding.tradeoff",
 }
 
 #: The extra that installs what a bench needs (default ``bench``).
@@ -72,7 +72,7 @@ def _options(args) -> dict:
         if "quick" not in inspect.signature(importlib.import_module(BENCHES[args.what]).run).parameters:
             raise CliError(f"bench {args.what} has no --quick")
         return {"quick": True}
-    from vqtex.sim.bench import tradeoff
+    from vqtex.sim.bench.encoding import tradeoff
     grid = dict(tradeoff.QUICK if args.quick else tradeoff.FULL)
     if args.images:
         names = tuple(args.images.split(","))

@@ -362,8 +362,8 @@ def load_set(path: str):
     one."""
     from vqtex.golden.format import FormatError, TextureSet
     if is_dt(path):
-        from vqtex.golden.pvr import PvrError
-        from vqtex.golden.pvr_set import import_dt
+        from vqtex.golden.pvr2.pvr import PvrError
+        from vqtex.golden.pvr2.pvr_set import import_dt
         try:
             return import_dt([path])
         except PvrError as e:

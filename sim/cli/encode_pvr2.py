@@ -1,5 +1,5 @@
 """``vqtex encode --layout pvr2``: images -> Dreamcast PowerVR2 VQ textures (``.dt`` as pvrtex writes
-it, or a ``.vqt`` set in the PowerVR2 layout). The encoder is :func:`vqtex.golden.pvr_encode.encode_pvr2`
+it, or a ``.vqt`` set in the PowerVR2 layout). The encoder is :func:`vqtex.golden.pvr2.pvr_encode.encode_pvr2`
 (docs/pvr2.md); this module checks the options that apply and writes the output."""
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ def encode_pvr2_files(args, images, out_path: str):
 
     Raises CliError for an option the PowerVR2 layout does not take."""
     from vqtex.golden.format import TextureSet
-    from vqtex.golden.pvr_encode import PvrEncodeError, encode_pvr2
+    from vqtex.golden.pvr2.pvr_encode import PvrEncodeError, encode_pvr2
     color = args.color or PVR2_COLORS[0]
     if color not in PVR2_COLORS:
         raise CliError(f"--layout pvr2 takes --color {', '.join(PVR2_COLORS)}, not {color}")

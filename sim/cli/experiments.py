@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import json
 
-from vqtex.sim.bench import experiments, hardware_tradeoff
+from vqtex.sim.bench.scenes import experiments, hardware_tradeoff
 
 from .common import CliError, Outputs, add_json, add_sweep_options, sweep_options, with_default
 from .render import parse_frames

@@ -15,8 +15,8 @@ __all__ = ["add_parser", "cmd_import"]
 
 def cmd_import(args) -> int:
     from vqtex.golden.format import FormatError
-    from vqtex.golden.pvr import PvrError
-    from vqtex.golden.pvr_set import import_dt
+    from vqtex.golden.pvr2.pvr import PvrError
+    from vqtex.golden.pvr2.pvr_set import import_dt
     with Outputs() as outs:
         out = outs.add(args.output, (".vqt",), "a texture set")
         try:

@@ -1,5 +1,5 @@
 """``vqtex need SCENE [--frames A:B] [--json] [--heatmap DIR]``: what a scene's frames touch in its
-texture set (``golden.need``): textures, levels, level groups, blocks, codewords, formats, distinct
+texture set (``golden.need.analysis``): textures, levels, level groups, blocks, codewords, formats, distinct
 memory words per frame, block-buffer and block-cache hits, and heat maps of the blocks touched."""
 
 from __future__ import annotations
@@ -26,9 +26,9 @@ def add_need_source(p) -> None:
 
 
 def scene_need(scene, ts, frames, mode="trilinear", cache=None, progress=True, per_frame=True, stream="sparse"):
-    """The :class:`~vqtex.golden.need.Need` of ``frames`` of ``scene`` in ``ts`` (a progress bar)."""
+    """The :class:`~vqtex.golden.need.analysis.Need` of ``frames`` of ``scene`` in ``ts`` (a progress bar)."""
     from vqtex.golden.fetch import check_requests
-    from vqtex.golden.need import CacheSpec, NeedCounter, scene_streams
+    from vqtex.golden.need.analysis import CacheSpec, NeedCounter, scene_streams
 
     from .render import Progress
     counter = NeedCounter(ts, cache or CacheSpec(), per_frame)
@@ -98,7 +98,7 @@ def heatmap_names(ts, need) -> dict:
 
 def write_heatmaps(outs, folder: str, ts, need) -> list[str]:
     """One PNG per stored (texture, level) of the blocks touched, into the registered ``folder``."""
-    from vqtex.golden.need import heat_image
+    from vqtex.golden.need.analysis import heat_image
     from vqtex.golden.render.imageio import write_image
     written = []
     for (t, L), name in heatmap_names(ts, need).items():
@@ -109,7 +109,7 @@ def write_heatmaps(outs, folder: str, ts, need) -> list[str]:
 
 
 def cmd_need(args) -> int:
-    from vqtex.golden.need import CacheSpec
+    from vqtex.golden.need.analysis import CacheSpec
     from vqtex.golden.render.scene import load_scene
 
     from .render import encode_scene, parse_frames

@@ -1,6 +1,6 @@
 """``vqtex prune [SET.vqt] --scene SCENE --frames A:B -o OUT.vqt``: a texture set holding only what
-some frames of a scene need (``golden.prune``), with its bytes before and after; without ``SET.vqt``,
-the scene's textures are encoded for those frames only (``golden.prune.encode_needed``)."""
+some frames of a scene need (``golden.need.prune``), with its bytes before and after; without ``SET.vqt``,
+the scene's textures are encoded for those frames only (``golden.need.prune.encode_needed``)."""
 
 from __future__ import annotations
 
@@ -34,7 +34,7 @@ def prune_text(r: dict) -> str:
 
 
 def cmd_prune(args) -> int:
-    from vqtex.golden.prune import encode_needed, prune, prune_report
+    from vqtex.golden.need.prune import encode_needed, prune, prune_report
     from vqtex.golden.render.scene import build_texture_set, load_scene
 
     from .render import Progress, parse_frames

@@ -253,11 +253,11 @@ def _extra_outputs(args, outs, frames):
 
 
 class _NeedReport:
-    """``--report``'s need analysis (``golden.need``), fed each frame's requests as it is rendered;
+    """``--report``'s need analysis (``golden.need.analysis``), fed each frame's requests as it is rendered;
     each frame's report gets its figures under ``need``."""
 
     def __init__(self, ts, then=None):
-        from vqtex.golden.need import NeedCounter
+        from vqtex.golden.need.analysis import NeedCounter
         self.counter, self.then = NeedCounter(ts), then
 
     def on_frame(self, r):
@@ -326,7 +326,7 @@ def cmd_render(args) -> int:
             raise CliError("--encode-needed encodes what the sparse, unbiased stream needs: it does not go with "
                            "--requests fixed, --compare-fixed or --fovea")
         if args.encode_needed:
-            from vqtex.golden.prune import encode_needed
+            from vqtex.golden.need.prune import encode_needed
             ts = encode_needed(scene, frames, args.mode, images, train=args.train_on)[0]
         else:
             ts = load_set(args.texture_set) if args.texture_set else encode_scene(scene, images)
@@ -466,7 +466,7 @@ def add_parser(sub) -> None:
                                      "encode them with the scene's settings"))
     r.add_argument("--encode-needed", action="store_true",
                    help="encode only what the rendered frames need (their levels; codebooks trained on those, "
-                        "then pruned: golden.prune.encode_needed; default: encode everything)")
+                        "then pruned: golden.need.prune.encode_needed; default: encode everything)")
     r.add_argument("--train-on", choices=["levels", "blocks"], default="levels",
                    help=with_default("with --encode-needed: train the codebooks on every block of the touched level "
                                      "groups, or on the touched blocks only", "levels"))

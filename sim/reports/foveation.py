@@ -8,7 +8,7 @@ other covered pixels. For each region and each render (``unbiased``, ``foveated`
 - ``pixels``, ``requests`` (the region's pixels' requests, in stream order);
 - ``cycles``: the texel-fetch unit's cycles for that sub-stream alone, on the given backend (the
   golden backend is the exact cycle model): requests + latency without backpressure;
-- from :mod:`vqtex.golden.need` on the sub-stream: ``blocks`` (distinct blocks: a compressed level
+- from :mod:`vqtex.golden.need.analysis` on the sub-stream: ``blocks`` (distinct blocks: a compressed level
   group's block, or a raw texel), ``index_words``, ``codebook_entries`` and ``raw_words`` (distinct
   words of each memory read) and their sum ``memory_words``;
 
@@ -33,7 +33,7 @@ REGIONS = ("fovea", "periphery")
 def region_figures(ts, reqs: np.ndarray, frame_no: int = 0, *, backend: str = "golden", stall: float = 0.0,
                    seed: int = 0, one_port: bool = False) -> dict:
     """Requests, cycles, distinct blocks and memory words of one request (sub-)stream."""
-    from vqtex.golden.need import NeedCounter
+    from vqtex.golden.need.analysis import NeedCounter
     from vqtex.sim.backends.interface import simulate
     reqs = np.asarray(reqs, np.int64).reshape(-1, 4)
     need = NeedCounter(ts).add(frame_no, reqs)

@@ -122,11 +122,11 @@ def four_texture_set(size: int = 128, seed: int = 0):
 
 def pvr2_texture_set(size: int = 128, seed: int = 0):
     """A Dreamcast PowerVR2 unit's set: four mipmapped ``size`` x ``size`` textures of the bundled
-    images encoded by :func:`golden.pvr_encode.encode_pvr2`, one per PowerVR2 colour format, each with
+    images encoded by :func:`golden.pvr2.pvr_encode.encode_pvr2`, one per PowerVR2 colour format, each with
     its 256-entry codebook of 2x2 16-bit texels: brick_red rgb565, road argb1555, chelsea yuv422,
     hubble argb4444 (1024 codebook entries of 8 bytes, twiddled 8-bit index maps per level)."""
     from vqtex.golden.format import TextureSet
-    from vqtex.golden.pvr_encode import encode_pvr2
+    from vqtex.golden.pvr2.pvr_encode import encode_pvr2
 
     sets = []
     for name, color in (("brick_red", "rgb565"), ("road", "argb1555"), ("chelsea", "yuv422"), ("hubble", "argb4444")):

@@ -1,7 +1,7 @@
 """Encoder arithmetic under adversarial training sets (issue 12): every block's stored index is the
 exact nearest stored codeword (ties to the lowest index), nothing non-finite, cell sums exact,
 the same bytes on one and two BLAS threads.  The cases and the exact checker live in
-:mod:`vqtex.sim.bench.encoder_stress` (``vqtex bench stability`` prints the same figures)."""
+:mod:`vqtex.sim.bench.robustness.encoder_stress` (``vqtex bench stability`` prints the same figures)."""
 
 import tracemalloc
 
@@ -12,7 +12,7 @@ from vqtex.golden import codebook as vq
 from vqtex.golden.codebook import fullsearch
 from vqtex.golden.encode import encode
 from vqtex.golden.format import pack_indices, unpack_indices
-from vqtex.sim.bench import encoder_stress as es
+from vqtex.sim.bench.robustness import encoder_stress as es
 
 ENCODER_CASES = [n for n, (_, opts, _) in es.CASES.items() if opts is not None]
 

@@ -13,7 +13,7 @@ import pytest
 
 from vqtex.golden.fetch import decode
 from vqtex.golden.format import FormatError, TextureSet
-from vqtex.sim.bench.fuzz import ALLOC_BOUND, join_vqt, mutate_vqt, run_mutations, seed_files, split_vqt, try_file
+from vqtex.sim.bench.robustness.fuzz import ALLOC_BOUND, join_vqt, mutate_vqt, run_mutations, seed_files, split_vqt, try_file
 
 FILES = seed_files()
 
@@ -110,13 +110,13 @@ def test_accepted_mutations_decode_to_their_sizes():
     assert seen > 30
 
 
-# -- pruned sets (golden.prune): absent levels and block presence bits --------------------------------
+# -- pruned sets (golden.need.prune): absent levels and block presence bits --------------------------------
 
 def _pruned_seed() -> bytes:
     """FILES[0] (64x64 rgb, mipmapped, 4x4 blocks) pruned to a few texels of level 1 (sub-level 1
     of the first group, whose top level 0 is then absent) and of raw level 4."""
-    from vqtex.golden.need import analyse
-    from vqtex.golden.prune import prune
+    from vqtex.golden.need.analysis import analyse
+    from vqtex.golden.need.prune import prune
     ts = TextureSet.from_bytes(FILES[0])
     reqs = np.array([[0, 1, 0, 0], [0, 1, 9, 30], [0, 4, 3, 2]])
     return prune(ts, analyse(ts, [reqs])).to_bytes()

@@ -1,4 +1,4 @@
-"""Need analysis (golden.need) against a brute-force count in plain Python over a small scene."""
+"""Need analysis (golden.need.analysis) against a brute-force count in plain Python over a small scene."""
 
 from collections import OrderedDict
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from vqtex.golden.format import MAX_LEVELS, unpack_indices
-from vqtex.golden.need import CacheSpec, analyse, cache_hits, distinct_requests, scene_level_shapes, scene_streams
+from vqtex.golden.need.analysis import CacheSpec, analyse, cache_hits, distinct_requests, scene_level_shapes, scene_streams
 from vqtex.golden.render.scene import build_texture_set, parse_scene
 
 #: Three textures: a 12-bit map (straddling indices) with raw small levels, a yuv411 texture of 2x2

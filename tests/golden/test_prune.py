@@ -1,4 +1,4 @@
-"""Pruned texture sets (golden.prune): the frames they were pruned for are identical, everything
+"""Pruned texture sets (golden.need.prune): the frames they were pruned for are identical, everything
 else is refused, and the container round-trips them."""
 
 import numpy as np
@@ -6,8 +6,8 @@ import pytest
 
 from vqtex.golden.fetch import RequestError, check_requests, fetch
 from vqtex.golden.format import FormatError, TextureSet
-from vqtex.golden.need import analyse, distinct_requests, scene_streams
-from vqtex.golden.prune import encode_needed, prune, pruned_bytes, touched_levels
+from vqtex.golden.need.analysis import analyse, distinct_requests, scene_streams
+from vqtex.golden.need.prune import encode_needed, prune, pruned_bytes, touched_levels
 from vqtex.golden.render.frame import render_frame
 from vqtex.golden.render.pyramid import VQSource
 from vqtex.golden.render.scene import build_texture_set, builtin_scene_path, parse_scene

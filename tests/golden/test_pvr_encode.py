@@ -1,4 +1,4 @@
-"""The PowerVR2 encoder (golden.pvr_encode): .dt files in pvrtex's layout that our decoder reads back
+"""The PowerVR2 encoder (golden.pvr2.pvr_encode): .dt files in pvrtex's layout that our decoder reads back
 bit for bit, at a PSNR above pvrtex's own on its test image (crate.png, tests/data/pvrtex)."""
 
 from pathlib import Path
@@ -6,9 +6,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vqtex.golden import pvr, pvr_set
+from vqtex.golden.pvr2 import pvr, pvr_set
 from vqtex.golden.fetch import decode
-from vqtex.golden.pvr_encode import PvrEncodeError, encode_pvr2, quantize_channel
+from vqtex.golden.pvr2.pvr_encode import PvrEncodeError, encode_pvr2, quantize_channel
 from vqtex.golden.render.imageio import read_image
 
 DATA = Path(__file__).resolve().parent.parent / "data" / "pvrtex"

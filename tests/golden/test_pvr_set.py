@@ -1,4 +1,4 @@
-"""The PowerVR2 layout as a mode of the texture set (golden.pvr_set, golden.fetch's twiddled path):
+"""The PowerVR2 layout as a mode of the texture set (golden.pvr2.pvr_set, golden.fetch's twiddled path):
 every texel of every level of every pvrtex file fetched from the imported set equals pvrtex's own
 preview; the set survives the .vqt container and a hostile copy of it; .dt files written back are
 pvrtex's bytes."""
@@ -8,13 +8,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vqtex.golden import pvr, pvr_set
+from vqtex.golden.pvr2 import pvr, pvr_set
 from vqtex.golden.color import DREAMCAST_YUV422
 from vqtex.golden.fetch import block_address, decode, fetch, random_requests, twiddled_block
 from vqtex.golden.format import COLOR_CODES, DESCRIPTOR_FIELDS, FormatError, TextureSet
 from vqtex.golden.render.imageio import read_image
 from tests.support import random_dt
-from vqtex.sim.bench.fuzz import join_vqt, mutate_vqt, split_vqt, try_file
+from vqtex.sim.bench.robustness.fuzz import join_vqt, mutate_vqt, split_vqt, try_file
 
 DATA = Path(__file__).resolve().parent.parent / "data" / "pvrtex"
 GENERATED = sorted((DATA / "generated").glob("*.dt"))

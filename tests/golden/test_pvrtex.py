@@ -1,4 +1,4 @@
-"""golden.pvr against pvrtex: our decode of pvrtex's VQ textures reproduces pvrtex's own previews bit
+"""golden.pvr2.pvr against pvrtex: our decode of pvrtex's VQ textures reproduces pvrtex's own previews bit
 for bit, which checks our reading of VQ data and golden.color.DREAMCAST_YUV422 against an independent
 implementation. Vectors: tests/data/pvrtex/ (see its README.md)."""
 
@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vqtex.golden import pvr
+from vqtex.golden.pvr2 import pvr
 from vqtex.golden.color import DREAMCAST_YUV422, ColorMatrix
 from vqtex.golden.render.imageio import read_image
 

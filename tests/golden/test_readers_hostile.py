@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vqtex.golden import pvr
+from vqtex.golden.pvr2 import pvr
 from vqtex.golden.fetch import RequestError
 from vqtex.golden.render.frame import load_requests, save_requests
 from vqtex.golden.requests import MAX_CSV_BYTES, read_request_file

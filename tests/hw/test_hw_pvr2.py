@@ -10,7 +10,7 @@ import pytest
 from amaranth.sim import Simulator
 
 from tests import support
-from vqtex.golden import pvr, pvr_set
+from vqtex.golden.pvr2 import pvr, pvr_set
 from vqtex.golden.fetch import block_address, expand_texels, fetch
 from vqtex.golden.format import COLOR_CODES, DESCRIPTOR_DTYPE, LAYOUT_CODES, PVR2_COLORS
 from vqtex.golden.render.imageio import read_image

@@ -136,7 +136,7 @@ def default_images(quick: bool = False) -> dict:
         return {f.removesuffix(".png"): np.ascontiguousarray(read_image(DATA_DIR / f)[..., :3])}
     if quick:
         return {k: v for f in QUICK_BUNDLED for k, v in bundled(f).items()}
-    from ..encoder import load_images
+    from ..encoding.encoder import load_images
     out = dict(zip(PHOTOS, load_images(PHOTOS)))
     for f in BUNDLED:
         out.update(bundled(f))

@@ -79,8 +79,8 @@ def test_pruned_small_town_specialised_on_cxxrtl():
     those frames' requests on the compiled backend exactly as golden answers the unpruned set."""
     need("g++")
     from tests.golden.test_prune import SMALL, small_scene
-    from vqtex.golden.need import analyse, scene_streams
-    from vqtex.golden.prune import prune
+    from vqtex.golden.need.analysis import analyse, scene_streams
+    from vqtex.golden.need.prune import prune
     from vqtex.golden.render.scene import build_texture_set
     from vqtex.hw.features import Features
     scene = small_scene("town")

@@ -11,7 +11,7 @@ from amaranth.back import rtlil
 from tests import support
 from tests.hw.test_hw_pvr2 import SMALL
 from tests.support import assert_same, back_to_back_requests, need, random_requests, shared_cache
-from vqtex.golden import pvr, pvr_set
+from vqtex.golden.pvr2 import pvr, pvr_set
 from vqtex.golden.fetch import fetch
 from vqtex.golden.format import COLORS, PVR2_COLORS
 from vqtex.hw.features import READ_BY, Features

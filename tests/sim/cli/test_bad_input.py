@@ -34,7 +34,7 @@ def test_experiments_frame_selection(capsys, monkeypatch):
     _one_error(capsys, ["experiments", "table5", "--frames", "::0"], "step must not be 0")
     _one_error(capsys, ["experiments", "table5", "--frames", "60:70"], "selects no frame")
     _one_error(capsys, ["experiments", "table3", "--frames", "0:5", "--frame-step", "2"], "not both")
-    from vqtex.sim.bench import experiments
+    from vqtex.sim.bench.scenes import experiments
     seen = {}
     for table in ("table3", "table4", "table5"):
         monkeypatch.setattr(experiments, table, lambda table=table, **kw: seen.setdefault(table, kw) and [])
@@ -51,7 +51,7 @@ def test_experiments_frame_selection(capsys, monkeypatch):
 
 def test_library_frame_step_checked():
     from vqtex.golden.render.scene import load_scene
-    from vqtex.sim.bench.experiments import table4
+    from vqtex.sim.bench.scenes.experiments import table4
     with pytest.raises(ValueError, match="at least 1"):
         table4(frame_step=0)
     assert load_scene("town").frames >= 1

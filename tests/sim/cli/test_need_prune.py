@@ -9,7 +9,7 @@ import pytest
 
 from vqtex.golden.fetch import fetch
 from vqtex.golden.format import TextureSet
-from vqtex.golden.need import analyse, scene_streams
+from vqtex.golden.need.analysis import analyse, scene_streams
 from vqtex.golden.render.imageio import read_image
 from vqtex.golden.render.scene import build_texture_set, builtin_scene_path, load_scene
 from vqtex.sim.cli import main

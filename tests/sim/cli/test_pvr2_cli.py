@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from tests.support import need, shared_cache_dir
-from vqtex.golden import pvr, pvr_set
+from vqtex.golden.pvr2 import pvr, pvr_set
 from vqtex.golden.format import TextureSet
 from vqtex.golden.render.imageio import read_image
 from tests.support import run_cli as _run, assert_one_error as _one_error

@@ -106,7 +106,7 @@ def test_bad_options_are_one_line(tmp_path, scene_file, capsys, extra, message):
 
 def test_bench_skip_on_a_small_scene(cache, capsys):
     need("g++")
-    from vqtex.sim.bench.skip import run
+    from vqtex.sim.bench.scenes.skip import run
     capsys.readouterr()
     rows = run(json_out=True, scenes=[parse_scene(TINY, "tiny.toml")])          # its two frames
     assert json.loads(capsys.readouterr().out) == {"skip": json.loads(json.dumps(rows))}
