@@ -123,13 +123,15 @@ def _migrate(u, wu, k, st: State, scr, frac, chunk=0):
         util[pool] = util_p[pool]
     rem = pool[np.argsort(util[pool], kind="stable")][:m]
     err = wu * d1
-    order = np.lexsort((np.arange(u.shape[0]), -err, a))
-    first = np.ones(order.size, dtype=bool)
-    first[1:] = a[order[1:]] != a[order[:-1]]
+    # each cell's member of largest error, ties to the lowest vector index (no sort of all N)
+    gmax = np.full(k, -np.inf)
+    np.maximum.at(gmax, a, err)
+    cand = np.flatnonzero(err == gmax[a])  # ascending: the first of each cell is the lowest
+    cells, first = np.unique(a[cand], return_index=True)
     far = np.full(k, -1, dtype=np.int64)
     gain = np.zeros(k)
-    far[a[order[first]]] = order[first]
-    gain[a[order[first]]] = err[order[first]]
+    far[cells] = cand[first]
+    gain[cells] = err[cand[first]]
     rec = np.argsort(-gain, kind="stable")
     rec = rec[~np.isin(rec, rem)][: rem.size]
     rem = rem[: rec.size]
