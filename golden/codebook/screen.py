@@ -8,8 +8,9 @@ codewords.  A screened score s~_j of x against c_j (centred: x', c'_j) approxima
 s_j = x'.c'_j - |c'_j|^2 / 2 (larger = nearer; distance = |x'|^2 - 2 s_j) with
 |s~_j - s_j| <= (d + 4) u (|x'| |c'_j| + |c'_j|^2 / 2) (1 + 1e-3), u = ``U32``; screened
 results are only ever used under that bound.  ``exact_d2`` is the exact float64 squared
-distance (the sum of squared differences) of each vector to one codeword; temporaries stay
-below ``MAX_TEMP_BYTES``.
+distance (the sum of squared differences) of each vector to one codeword, in chunks of
+``EXACT_ROWS`` rows on the worker threads (each row's sum does not depend on them); temporaries
+stay below ``MAX_TEMP_BYTES``.
 """
 from __future__ import annotations
 

@@ -79,6 +79,9 @@ def tsvq_build(u, wu, k, seed, criterion="distortion", batch=128, sample=2048, s
     sample), never on when it is computed, so splits are computed ahead in vectorised batches
     of up to ``batch`` high-error leaves without changing the tree (leaves of at most
     ``small_cell`` vectors, whose cost is all interpreter overhead; larger ones one by one).
+    A batch runs as consecutive groups of about ``_GROUP_ROWS`` rows on the worker threads
+    (:mod:`.workers`); the groups depend on the cells' sizes only, so the tree does not depend
+    on the thread count.
     Returns (TsvqTree, labels of the distinct vectors)."""
     if criterion not in ("distortion", "gain"):
         raise ValueError(f"unknown TSVQ split criterion {criterion!r}")
