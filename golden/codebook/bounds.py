@@ -89,10 +89,20 @@ def _half_gaps(c, scr, moved=None, old=None):
     col_min = np.full(k, np.inf)
     step = max(1, SCORE_BYTES // (4 * k))
 
+    full = rows.size == k
+
     def one_chunk(s0):  # rows [s0, e) of row_min; its column minima are returned (min is exact)
         e = min(rows.size, s0 + step)
         sc = xa[s0:e] @ ca
         r_cn = cn[rows[s0:e]]
+        if full:
+            # every row screened: no column minima needed, and the row minimum of the distances
+            # r_cn - 2 s is r_cn - 2 max(s) (monotone, exact), lowered by its bound once
+            sc[np.arange(e - s0), rows[s0:e]] = -np.inf  # not its own neighbour
+            q = r_cn - 2.0 * sc.max(axis=1).astype(np.float64)
+            q -= 2.0 * gam * (np.sqrt(r_cn) * rmax + 0.5 * rmax * rmax) + np.abs(q) * 1e-6
+            row_min[s0:e] = q
+            return None
         # squared distances, lowered by the screening error bound
         q = r_cn[:, None] - 2.0 * sc.astype(np.float64)
         q -= (2.0 * gam * (np.sqrt(r_cn) * rmax + 0.5 * rmax * rmax))[:, None] + np.abs(q) * 1e-6
@@ -101,9 +111,10 @@ def _half_gaps(c, scr, moved=None, old=None):
         return q.min(axis=0)
 
     for part in map_ordered(one_chunk, range(0, rows.size, step)):
-        np.minimum(col_min, part, out=col_min)
+        if part is not None:
+            np.minimum(col_min, part, out=col_min)
     out = np.empty(k)
-    if rows.size == k:
+    if full:
         out[:] = 0.5 * np.sqrt(np.maximum(row_min, 0.0))
         return out
     out[:] = np.minimum(old, 0.5 * np.sqrt(np.maximum(col_min, 0.0)))

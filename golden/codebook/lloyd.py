@@ -51,15 +51,22 @@ _COARSE_FACTOR = 1.5
 _COARSE_MIN = 8192  # smaller samples could miss rare colours altogether
 
 
-def _lloyd(u, wu, k, st: State, scr, tol, budget, chunk=0):
+def _lloyd(u, wu, k, st: State, scr, tol, budget, chunk=0, stats=None):
     """Lloyd iterations from state ``st``.  Stops by the LBG rule (relative decrease <= tol),
     at a fixed point, at distortion 0 or after ``budget`` iterations.
-    Returns (state, history, iterations, converged)."""
+    ``stats``: None, or the cell statistics ``(assignment, cnt, sums)`` a previous call returned
+    (brought up to ``st.a`` by :func:`update_centroids` instead of recomputed).
+    Returns (state, history, iterations, converged, stats)."""
     wsum = wu.sum()
     dist = float(wu @ st.d2) / wsum
     hist = []
     it, conv = 0, False
-    cnt, sums = centroids(u, wu, st.a, k)
+    if stats is None:
+        cnt, sums = centroids(u, wu, st.a, k)
+    else:
+        cnt, sums = stats[1].copy(), stats[2].copy()
+        update_centroids(u, wu, stats[0], st.a, cnt, sums)
+    ref = st.a  # the assignment cnt and sums describe
     while True:
         if dist == 0.0:
             conv = True
@@ -70,6 +77,7 @@ def _lloyd(u, wu, k, st: State, scr, tol, budget, chunk=0):
         a = st.a.copy()
         c_new = st.c.copy()
         repair_empty(u, wu, a, c_new, cnt, sums, k)
+        ref = a
         full = cnt > 0
         c_new[full] = sums[full] / cnt[full, None]
         if np.array_equal(c_new, st.c):  # fixed point: nothing can change any more
@@ -84,6 +92,7 @@ def _lloyd(u, wu, k, st: State, scr, tol, budget, chunk=0):
             conv = True
             break
         update_centroids(u, wu, a, st_new.a, cnt, sums)
+        ref = st_new.a
         st = st_new
         hist.append(new)
         if dist - new <= tol * new:
@@ -91,7 +100,7 @@ def _lloyd(u, wu, k, st: State, scr, tol, budget, chunk=0):
             dist = new
             break
         dist = new
-    return st, hist, it, conv
+    return st, hist, it, conv, (ref, cnt, sums)
 
 
 def _migrate(u, wu, k, st: State, scr, frac, chunk=0):
@@ -123,13 +132,15 @@ def _migrate(u, wu, k, st: State, scr, frac, chunk=0):
         util[pool] = util_p[pool]
     rem = pool[np.argsort(util[pool], kind="stable")][:m]
     err = wu * d1
-    order = np.lexsort((np.arange(u.shape[0]), -err, a))
-    first = np.ones(order.size, dtype=bool)
-    first[1:] = a[order[1:]] != a[order[:-1]]
+    # each cell's member of largest error, ties to the lowest vector index (no sort of all N)
+    gmax = np.full(k, -np.inf)
+    np.maximum.at(gmax, a, err)
+    cand = np.flatnonzero(err == gmax[a])  # ascending: the first of each cell is the lowest
+    cells, first = np.unique(a[cand], return_index=True)
     far = np.full(k, -1, dtype=np.int64)
     gain = np.zeros(k)
-    far[a[order[first]]] = order[first]
-    gain[a[order[first]]] = err[order[first]]
+    far[cells] = cand[first]
+    gain[cells] = err[cand[first]]
     rec = np.argsort(-gain, kind="stable")
     rec = rec[~np.isin(rec, rem)][: rem.size]
     rem = rem[: rec.size]
@@ -149,7 +160,7 @@ def _gla_core(u, wu, k, c0, max_iter, tol, migrate, frac=None, chunk=0):
     scr = Screen(u, wmean(u, wu))
     st = assign_full(u, np.array(c0, dtype=np.float64, copy=True), scr, chunk)
     hist = [float(wu @ st.d2) / wsum]
-    st, h, it, conv = _lloyd(u, wu, k, st, scr, tol, max_iter, chunk)
+    st, h, it, conv, stats = _lloyd(u, wu, k, st, scr, tol, max_iter, chunk)
     hist += h
     rounds = 0
     while conv and rounds < migrate and k >= 2 and it < max_iter and hist[-1] > 0:
@@ -157,7 +168,8 @@ def _gla_core(u, wu, k, c0, max_iter, tol, migrate, frac=None, chunk=0):
         trial = _migrate(u, wu, k, st, scr, frac, chunk)
         if trial is None:
             break
-        st_t, h, it_t, conv_t = _lloyd(u, wu, k, trial, scr, tol, max_iter - it, chunk)
+        st_t, h, it_t, conv_t, stats = _lloyd(u, wu, k, trial, scr, tol, max_iter - it, chunk,
+                                              stats)
         it += it_t
         d_t = float(wu @ st_t.d2) / wsum
         if not d_t < hist[-1]:

@@ -8,8 +8,9 @@ codewords.  A screened score s~_j of x against c_j (centred: x', c'_j) approxima
 s_j = x'.c'_j - |c'_j|^2 / 2 (larger = nearer; distance = |x'|^2 - 2 s_j) with
 |s~_j - s_j| <= (d + 4) u (|x'| |c'_j| + |c'_j|^2 / 2) (1 + 1e-3), u = ``U32``; screened
 results are only ever used under that bound.  ``exact_d2`` is the exact float64 squared
-distance (the sum of squared differences) of each vector to one codeword; temporaries stay
-below ``MAX_TEMP_BYTES``.
+distance (the sum of squared differences) of each vector to one codeword, in chunks of
+``EXACT_ROWS`` rows on the worker threads (each row's sum does not depend on them); temporaries
+stay below ``MAX_TEMP_BYTES``.
 """
 from __future__ import annotations
 
@@ -25,6 +26,8 @@ U32 = float(np.finfo(np.float32).eps) / 2.0  # unit roundoff of float32
 SCORE_BYTES = 1 << 21
 # Hard cap on any temporary (float64 pairs, chunks): well below the 1 GB budget.
 MAX_TEMP_BYTES = 1 << 27
+# Rows per chunk of ``exact_d2`` (chunks run on the worker threads).
+EXACT_ROWS = 4096
 
 
 class Screen:
@@ -149,10 +152,14 @@ def exact_d2(x: np.ndarray, c: np.ndarray, idx: np.ndarray, rows=None) -> np.nda
     when ``rows`` is given), chunked so that no temporary exceeds ``MAX_TEMP_BYTES``."""
     n, d = idx.shape[0], x.shape[1]
     out = np.empty(n, dtype=np.float64)
-    step = max(1, MAX_TEMP_BYTES // (8 * d * (1 if rows is None else 2)))
-    for s in range(0, n, step):
+    # chunks of EXACT_ROWS rows on the worker threads (each row's sum is independent of them)
+    step = max(1, min(EXACT_ROWS, MAX_TEMP_BYTES // (8 * d * (1 if rows is None else 2))))
+
+    def one(s):
         e = min(n, s + step)
         diff = np.take(c, idx[s:e], axis=0)  # one temporary, reused in place (much faster)
         np.subtract(x[s:e] if rows is None else np.take(x, rows[s:e], axis=0), diff, out=diff)
         np.einsum("ij,ij->i", diff, diff, out=out[s:e])
+
+    map_ordered(one, range(0, n, step))
     return out

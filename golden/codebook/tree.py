@@ -15,9 +15,12 @@ import numpy as np
 
 from .inputs import as_vectors, check_k, pad, prepare, wmean
 from .split import split_cell, split_cells
-from .workers import one_blas_thread
+from .workers import map_ordered, one_blas_thread
 
 __all__ = ["TsvqTree", "tsvq_build", "tsvq_tree", "tsvq"]
+
+_GROUP_ROWS = 2048  # rows per split_cells call on a worker thread (measured)
+_MAX_GROUPS = 8
 
 @dataclass
 class TsvqTree:
@@ -76,6 +79,9 @@ def tsvq_build(u, wu, k, seed, criterion="distortion", batch=128, sample=2048, s
     sample), never on when it is computed, so splits are computed ahead in vectorised batches
     of up to ``batch`` high-error leaves without changing the tree (leaves of at most
     ``small_cell`` vectors, whose cost is all interpreter overhead; larger ones one by one).
+    A batch runs as consecutive groups of about ``_GROUP_ROWS`` rows on the worker threads
+    (:mod:`.workers`); the groups depend on the cells' sizes only, so the tree does not depend
+    on the thread count.
     Returns (TsvqTree, labels of the distinct vectors)."""
     if criterion not in ("distortion", "gain"):
         raise ValueError(f"unknown TSVQ split criterion {criterion!r}")
@@ -103,9 +109,20 @@ def tsvq_build(u, wu, k, seed, criterion="distortion", batch=128, sample=2048, s
         small = [i for i in nids if end[i] - start[i] <= small_cell]
         if small:
             arr = np.array(small, dtype=np.int64)
-            res = split_cells(xs, ws, np.array(start)[arr], np.array(end)[arr],
-                               np.array([cent[i] for i in small]), v0[arr])
-            for i, r in zip(small, res):
+            st_, en_ = np.array(start)[arr], np.array(end)[arr]
+            cn_ = np.array([cent[i] for i in small])
+            # consecutive groups of about _GROUP_ROWS rows on the worker threads (the groups
+            # depend on the cells' sizes only, never on the thread count)
+            cum = np.cumsum(en_ - st_)
+            g = max(1, min(_MAX_GROUPS, int(cum[-1]) // _GROUP_ROWS))
+            cuts = np.searchsorted(cum, cum[-1] * np.arange(1, g) / g, side="right")
+            bounds = np.unique(np.concatenate([[0], cuts, [arr.size]]))
+            parts = map_ordered(
+                lambda q: split_cells(xs, ws, st_[bounds[q]:bounds[q + 1]],
+                                      en_[bounds[q]:bounds[q + 1]], cn_[bounds[q]:bounds[q + 1]],
+                                      v0[arr[bounds[q]:bounds[q + 1]]]),
+                range(bounds.size - 1))
+            for i, r in zip(small, [r for part in parts for r in part]):
                 rec[i] = r
         for i in nids:
             if rec.get(i, None) is None:

@@ -1,4 +1,5 @@
-"""The encoder's worker threads: the codeword screening runs its chunks on all the machine's cores.
+"""The encoder's worker threads: the codeword screening, the exact distances and the TSVQ's batches
+of small-cell splits run their chunks on all the machine's cores.
 
 Contract: :func:`map_ordered` ``(fn, items)`` returns ``[fn(i) for i in items]`` in order, running
 the calls on :func:`threads` worker threads (the calling thread and a shared
