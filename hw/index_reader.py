@@ -183,11 +183,39 @@ class IndexReader(wiring.Component):
             self.straddle.eq(valid1 & (off + b1 > W)),
         ]
 
+        lo, hi, fields3 = self._read_words(m, w, Cat(off, b1), straddle=True)
+
+        # Stage 5: {hi, lo} >> off, masked to b bits.
+        fields4 = enabled_register(m, self.en, fields3, "fields_pair")
+        off4, b4 = fields4[:log2W], fields4[log2W:]
+        mask = Signal(INDEX_BITS)
+        m.d.comb += mask.eq(~(C((1 << INDEX_BITS) - 1, INDEX_BITS) << b4)[:INDEX_BITS])
+        with m.If(self.en):
+            m.d.sync += self.index.eq((Cat(lo, hi) >> off4)[:INDEX_BITS] & mask)
+        return m
+
+    def _read_words(self, m, w, carried, *, straddle: bool):
+        """Stages 2-4, the memory organisation both readers share: the read of word ``w`` (and
+        ``w + 1`` with ``straddle``), and ``carried`` (the fields stage 5 needs) registered twice
+        beside it. Returns ``(lo, hi, fields)``: ``lo`` = word[w] and ``hi`` = word[w + 1]
+        registered in stage 4 (``hi`` a 0-bit constant without ``straddle``), ``fields`` the carried
+        value after stage 3. Two banks (even and odd words, read together); with ``one_port`` one
+        bank read twice for a straddling index (``hold`` high for the first); without ``straddle``
+        one bank, one word."""
+        W = self._word_bits
+
         def reg(value, name):
             return enabled_register(m, self.en, value, name)
 
-        lo = Signal(W, name="lo")           # stage 4: word[w]
-        hi = Signal(W, name="hi")           # stage 4: word[w + 1]
+        lo = Signal(W, name="lo")                       # stage 4: word[w]
+        if not straddle:                                # no index crosses a word: one bank, one word
+            m.submodules.memory = mem = BankedROM(self._words, width=W, bank_depth=self._bank_depth)
+            m.d.comb += [mem.addr.eq(w), mem.en.eq(self.en)]
+            fields3 = reg(reg(carried, "fields_word"), "fields_data")
+            with m.If(self.en):
+                m.d.sync += lo.eq(mem.word)
+            return lo, C(0, 0), fields3
+        hi = Signal(W, name="hi")                       # stage 4: word[w + 1]
         if not self._one_port:
             m.submodules.even_bank = even = BankedROM(self._words[0::2] or [0], width=W, bank_depth=self._bank_depth)
             m.submodules.odd_bank = odd = BankedROM(self._words[1::2] or [0], width=W, bank_depth=self._bank_depth)
@@ -195,7 +223,7 @@ class IndexReader(wiring.Component):
                 even.addr.eq((w + 1) >> 1), even.en.eq(self.en),
                 odd.addr.eq(w >> 1), odd.en.eq(self.en),
             ]
-            fields3 = reg(reg(Cat(off, b1, w[0]), "fields_word"), "fields_data")
+            fields3 = reg(reg(Cat(carried, w[0]), "fields_word"), "fields_data")
             parity = fields3[-1]
             # Stage 4: word[w] is in the odd bank when w is odd.
             with m.If(self.en):
@@ -213,21 +241,13 @@ class IndexReader(wiring.Component):
             ]
             with m.If(self.en):
                 m.d.sync += second.eq(self.hold)
-            fields3 = reg(reg(Cat(off, b1, self.straddle), "fields_word"), "fields_data")
+            fields3 = reg(reg(Cat(carried, self.straddle), "fields_word"), "fields_data")
             straddled = fields3[-1]
             # Stage 4: the first read (word w) went down the pipeline one item ahead, as the bubble;
             # ``hi`` still holds it when the straddler's second read (word w + 1) arrives.
             with m.If(self.en):
                 m.d.sync += [hi.eq(mem.word), lo.eq(Mux(straddled, hi, mem.word))]
-
-        # Stage 5: {hi, lo} >> off, masked to b bits.
-        fields4 = reg(fields3[:-1], "fields_pair")
-        off4, b4 = fields4[:log2W], fields4[log2W:]
-        mask = Signal(INDEX_BITS)
-        m.d.comb += mask.eq(~(C((1 << INDEX_BITS) - 1, INDEX_BITS) << b4)[:INDEX_BITS])
-        with m.If(self.en):
-            m.d.sync += self.index.eq((Cat(lo, hi) >> off4)[:INDEX_BITS] & mask)
-        return m
+        return lo, hi, fields3[:-1]
 
     def _elaborate_specialised(self):
         """The reader for the widths ``self._widths`` (see the class docstring): the same five
@@ -281,49 +301,11 @@ class IndexReader(wiring.Component):
         if straddle:
             m.d.comb += self.straddle.eq(valid1 & ((off << log2u) + b1 > W))
 
-        def reg(value, name):
-            return enabled_register(m, self.en, value, name)
-
-        lo = Signal(W, name="lo")           # stage 4: word[w]
-        hi = Signal(W, name="hi") if straddle else C(0, 0)     # stage 4: word[w + 1]
-        if straddle and not self._one_port:
-            m.submodules.even_bank = even = BankedROM(self._words[0::2] or [0], width=W, bank_depth=self._bank_depth)
-            m.submodules.odd_bank = odd = BankedROM(self._words[1::2] or [0], width=W, bank_depth=self._bank_depth)
-            m.d.comb += [
-                even.addr.eq((w + 1) >> 1), even.en.eq(self.en),
-                odd.addr.eq(w >> 1), odd.en.eq(self.en),
-            ]
-            fields3 = reg(reg(Cat(off, b1[:bw_bits], w[0]), "fields_word"), "fields_data")
-            parity = fields3[-1]
-            with m.If(self.en):
-                m.d.sync += [
-                    lo.eq(Mux(parity, odd.word, even.word)),
-                    hi.eq(Mux(parity, even.word, odd.word)),
-                ]
-        elif straddle:
-            m.submodules.memory = mem = BankedROM(self._words, width=W, bank_depth=self._bank_depth)
-            second = Signal()
-            m.d.comb += [
-                self.hold.eq(self.straddle & ~second),
-                mem.addr.eq(w + second),
-                mem.en.eq(self.en),
-            ]
-            with m.If(self.en):
-                m.d.sync += second.eq(self.hold)
-            fields3 = reg(reg(Cat(off, b1[:bw_bits], self.straddle), "fields_word"), "fields_data")
-            straddled = fields3[-1]
-            with m.If(self.en):
-                m.d.sync += [hi.eq(mem.word), lo.eq(Mux(straddled, hi, mem.word))]
-        else:                               # no index crosses a word: one bank, one word
-            m.submodules.memory = mem = BankedROM(self._words, width=W, bank_depth=self._bank_depth)
-            m.d.comb += [mem.addr.eq(w), mem.en.eq(self.en)]
-            fields3 = Cat(reg(reg(Cat(off, b1[:bw_bits]), "fields_word"), "fields_data"), C(0, 1))
-            with m.If(self.en):
-                m.d.sync += lo.eq(mem.word)
+        lo, hi, fields3 = self._read_words(m, w, Cat(off, b1[:bw_bits]), straddle=straddle)
 
         # Stage 5: the index at offset ``off`` units of the word (pair): a select of whole units,
         # masked to b bits when there are several widths.
-        fields4 = reg(fields3[:-1], "fields_pair")
+        fields4 = enabled_register(m, self.en, fields3, "fields_pair")
         off4, b4 = fields4[:len(off)], fields4[len(off):]
         data = Cat(lo, hi)
         starts = range(0, W, unit)
