@@ -12,11 +12,11 @@ from __future__ import annotations
 
 import os
 
-from .cxxrtl import DRIVER_DIR, BatchLibrary, driver_sources, source_stamp, texture_set_digest
+from .cxxrtl import BatchLibrary, driver_sources, source_stamp, texture_set_digest
 from .filter import FilterTop
 from .filter_cxxrtl import STROBES, TAG_WIDTH, FilterBuild, run_filter_batch
-from .toolchain import cache_dir, cached_build, digest, find_tool, index_get, index_put, run_tool, tool_version
-from .verilator import CXXFLAGS, MAKE_OPT, VERILATOR_FLAGS, verilator_include_dir, verilator_runtime
+from .toolchain import cache_dir, cached_build, digest, find_tool, index_get, index_put, tool_version
+from .verilator import CXXFLAGS, MAKE_OPT, VERILATOR_FLAGS, build_library, verilator_include_dir, verilator_runtime
 
 __all__ = ["run", "export_filter_verilog", "build_filter_verilator", "FILTER_TOP_NAME"]
 
@@ -65,7 +65,7 @@ def build_filter_verilator(ts, *, lanes: int = 1, frac: int | None = None, index
     """The Verilator library of the filter's Verilog for ``ts`` (built or from the cache)."""
     verilator = find_tool("verilator")
     cxx = find_tool("g++")
-    drivers = driver_sources("filter_verilator_driver.cc", "batch.h")
+    drivers = driver_sources("filter_verilator_driver.cc", "verilated_top.h", "batch.h")
     flags = VERILATOR_FLAGS + CXXFLAGS + [MAKE_OPT]
     with open(os.path.abspath(__file__), "rb") as f:
         this = f.read()
@@ -85,21 +85,9 @@ def build_filter_verilator(ts, *, lanes: int = 1, frac: int | None = None, index
     runtime = verilator_runtime(verilator, cxx, inc)
 
     def build(folder):
-        with open(os.path.join(folder, "top.v"), "w") as f:
-            f.write(verilog)
-        with open(os.path.join(folder, "ports.h"), "w") as f:
-            f.write(header)
-        jobs = str(max(1, min(4, os.cpu_count() or 1)))
-        run_tool([verilator, *VERILATOR_FLAGS, "--top-module", FILTER_TOP_NAME, "--Mdir", "obj",
-                  "-CFLAGS", " ".join(f for f in CXXFLAGS if not f.startswith("-O")),
-                  "-MAKEFLAGS", MAKE_OPT, "--build", "-j", jobs, "top.v"],
-                 folder, "Verilator", "build.log")
-        run_tool([cxx, *CXXFLAGS, "-shared", "-fvisibility=hidden", "-I", "obj", "-I", inc,
-                  "-I", os.path.join(inc, "vltstd"), "-I", DRIVER_DIR, "-I", folder,
-                  os.path.join(DRIVER_DIR, "filter_verilator_driver.cc"), "obj/Vtop__ALL.a",
-                  os.path.join(runtime, "verilated.o"), os.path.join(runtime, "verilated_threads.o"),
-                  "-pthread", "-o", "libvq.so"],
-                 folder, "C++ compilation of the Verilator filter model", "build.log")
+        build_library(folder, verilog, header, verilator=verilator, cxx=cxx, inc=inc, runtime=runtime,
+                      top_name=FILTER_TOP_NAME, driver="filter_verilator_driver.cc", what="the Verilator filter model")
+
     lib, _, cached = cached_build("filter-verilator", key, build, "libvq.so")
     index_put("filter-verilator", quick, key)
     return FilterBuild(lib, top.filter, [], cached, 0.0)

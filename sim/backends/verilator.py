@@ -22,7 +22,7 @@ from .cxxrtl import DRIVER_DIR, BatchLibrary, Build, driver_sources, run_batch, 
 from .design import STROBES, TOP_NAME, design_info
 from .toolchain import ToolchainError, cached_build, digest, find_tool, index_get, index_put, run_tool, tool_version
 
-__all__ = ["run", "build_verilator", "VERILATOR_FLAGS", "CXXFLAGS", "MAKE_OPT", "verilator_include_dir",
+__all__ = ["run", "build_verilator", "build_library", "VERILATOR_FLAGS", "CXXFLAGS", "MAKE_OPT", "verilator_include_dir",
            "verilator_runtime"]
 
 VERILATOR_FLAGS = ["--cc", "--prefix", "Vtop", "-O3", "--x-assign", "fast", "--x-initial", "fast",
@@ -66,11 +66,6 @@ def ports_header(info, fetch_top) -> str:
 def verilator_runtime(verilator: str, cxx: str, inc: str) -> str:
     """Folder holding Verilator's runtime objects (verilated.o, verilated_threads.o) for this
     Verilator and compiler, built once into the cache (shared by every Verilator model)."""
-    return _runtime(verilator, cxx, inc)
-
-
-def _runtime(verilator: str, cxx: str, inc: str) -> str:
-    """Folder holding verilated.o and verilated_threads.o for this Verilator and compiler."""
     key = digest("verilated-runtime", tool_version(verilator), tool_version(cxx), CXXFLAGS, inc)
 
     def build(folder):
@@ -83,6 +78,33 @@ def _runtime(verilator: str, cxx: str, inc: str) -> str:
     return os.path.dirname(path)
 
 
+def build_library(folder: str, verilog: str, header: str, *, verilator: str, cxx: str, inc: str, runtime: str,
+                  top_name: str, driver: str, what: str) -> dict:
+    """In ``folder``: write ``top.v`` and ``ports.h``, verilate ``top_name`` and link it with the
+    driver ``driver`` (drivers/) and Verilator's runtime into ``libvq.so`` (the texel-fetch unit's
+    and the texture filter's libraries, built the same way). Returns the seconds of each step,
+    ``{"verilate": s, "link": s}``."""
+    with open(os.path.join(folder, "top.v"), "w") as f:
+        f.write(verilog)
+    with open(os.path.join(folder, "ports.h"), "w") as f:
+        f.write(header)
+    jobs = str(max(1, min(4, os.cpu_count() or 1)))
+    t = time.perf_counter()
+    run_tool([verilator, *VERILATOR_FLAGS, "--top-module", top_name, "--Mdir", "obj",
+              "-CFLAGS", " ".join(f for f in CXXFLAGS if not f.startswith("-O")),
+              "-MAKEFLAGS", MAKE_OPT, "--build", "-j", jobs, "top.v"],
+             folder, "Verilator", "build.log")
+    t_verilate = time.perf_counter() - t
+    t = time.perf_counter()
+    run_tool([cxx, *CXXFLAGS, "-shared", "-fvisibility=hidden", "-I", "obj", "-I", inc,
+              "-I", os.path.join(inc, "vltstd"), "-I", DRIVER_DIR, "-I", folder,
+              os.path.join(DRIVER_DIR, driver), "obj/Vtop__ALL.a",
+              os.path.join(runtime, "verilated.o"), os.path.join(runtime, "verilated_threads.o"),
+              "-pthread", "-o", "libvq.so"],
+             folder, f"C++ compilation of {what}", "build.log")
+    return {"verilate": t_verilate, "link": time.perf_counter() - t}
+
+
 def build_verilator(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True) -> Build:
     """The Verilator library of the exported Verilog for ``ts`` (built or from the cache)."""
     from .verilog import export_verilog
@@ -91,7 +113,7 @@ def build_verilator(ts, *, one_port: bool = False, tag_width: int = 8, specialis
     t0 = time.perf_counter()
     info = design_info(ts, one_port=one_port, tag_width=tag_width, specialise=specialise)
     steps = {"elaborate": time.perf_counter() - t0}
-    drivers = driver_sources("verilator_driver.cc", "batch.h")
+    drivers = driver_sources("verilator_driver.cc", "verilated_top.h", "batch.h")
     flags = VERILATOR_FLAGS + CXXFLAGS + [MAKE_OPT]
     quick = digest("verilator-quick", source_stamp(), one_port, tag_width, texture_set_digest(ts), flags,
                    tool_version(verilator), tool_version(cxx), *drivers, *(() if specialise else ("full unit",)))
@@ -107,29 +129,12 @@ def build_verilator(ts, *, one_port: bool = False, tag_width: int = 8, specialis
     key = digest("verilator", verilog, header, *drivers, flags, tool_version(verilator), tool_version(cxx))
     inc = verilator_include_dir(verilator)
     t2 = time.perf_counter()
-    runtime = _runtime(verilator, cxx, inc)
+    runtime = verilator_runtime(verilator, cxx, inc)
     steps["runtime"] = time.perf_counter() - t2
 
     def build(folder):
-        with open(os.path.join(folder, "top.v"), "w") as f:
-            f.write(verilog)
-        with open(os.path.join(folder, "ports.h"), "w") as f:
-            f.write(header)
-        jobs = str(max(1, min(4, os.cpu_count() or 1)))
-        t = time.perf_counter()
-        run_tool([verilator, *VERILATOR_FLAGS, "--top-module", TOP_NAME, "--Mdir", "obj",
-                  "-CFLAGS", " ".join(f for f in CXXFLAGS if not f.startswith("-O")),
-                  "-MAKEFLAGS", MAKE_OPT, "--build", "-j", jobs, "top.v"],
-                 folder, "Verilator", "build.log")
-        steps["verilate"] = time.perf_counter() - t
-        t = time.perf_counter()
-        run_tool([cxx, *CXXFLAGS, "-shared", "-fvisibility=hidden", "-I", "obj", "-I", inc,
-                  "-I", os.path.join(inc, "vltstd"), "-I", DRIVER_DIR, "-I", folder,
-                  os.path.join(DRIVER_DIR, "verilator_driver.cc"), "obj/Vtop__ALL.a",
-                  os.path.join(runtime, "verilated.o"), os.path.join(runtime, "verilated_threads.o"),
-                  "-pthread", "-o", "libvq.so"],
-                 folder, "C++ compilation of the Verilator model", "build.log")
-        steps["link"] = time.perf_counter() - t
+        steps.update(build_library(folder, verilog, header, verilator=verilator, cxx=cxx, inc=inc, runtime=runtime,
+                                   top_name=TOP_NAME, driver="verilator_driver.cc", what="the Verilator model"))
     lib, secs, cached = cached_build("verilator", key, build, "libvq.so")
     index_put("verilator", quick, key)
     return Build(lib, 0.0 if cached else time.perf_counter() - t0, cached, info, key, steps)

@@ -6,31 +6,12 @@
 // As in filter_driver.cc, row k of ``requests`` is request k's whole i.payload in four 64-bit words
 // and batch.h's vq_run_state checks the response tags. Memory contents are compiled in (the initial
 // blocks of the Verilog): vq_load_memory reports "not supported".
-#include <memory>
-#include "Vtop.h"
-#include "verilated.h"
+#include "verilated_top.h"
 #include "ports.h"
 #include "batch.h"
 
-double sc_time_stamp() { return 0; }
-
 namespace {
-struct FilterSim {
-    std::unique_ptr<VerilatedContext> ctx;
-    std::unique_ptr<Vtop> top;
-    FilterSim() : ctx(new VerilatedContext) {
-        ctx->randReset(0);          // 2-state: anything uninitialised starts at 0
-        top.reset(new Vtop{ctx.get(), "top"});
-        top->clk = 0; top->rst = 0; top->i_valid = 0; top->o_ready = 0;
-        top->eval();
-    }
-    ~FilterSim() { top->final(); }
-    void reset() {
-        top->rst = 1; top->clk = 0; top->i_valid = 0; top->o_ready = 0; top->eval();
-        top->clk = 1; top->eval();
-        top->clk = 0; top->rst = 0; top->eval();
-    }
-};
+struct FilterSim : VerilatedTop {};
 
 template<bool AlwaysReady>
 static int vq_filter_run(FilterSim &s, uint64_t n, const int64_t *req, const uint32_t *layout,
@@ -49,16 +30,14 @@ static int vq_filter_run(FilterSim &s, uint64_t n, const int64_t *req, const uin
                    VQ_SET_PAYLOAD(top, words)
                }
                top->o_ready = o_ready;
-               top->clk = 0;
-               top->eval();
                vq_cycle_out r;
-               r.took = top->o_valid && o_ready;
-               r.out = (uint64_t)top->o_payload;
-               r.accepted = i_valid && top->i_ready;
-               VQ_STROBES(top, strobes)
-               occ.add(uint32_t(top->o_valid), occ_sums);
-               top->clk = 1;
-               top->eval();
+               s.cycle([&]() {
+                   r.took = top->o_valid && o_ready;
+                   r.out = (uint64_t)top->o_payload;
+                   r.accepted = i_valid && top->i_ready;
+                   VQ_STROBES(top, strobes)
+                   occ.add(uint32_t(top->o_valid), occ_sums);
+               });
                if (r.accepted)
                    next++;
                return r;
