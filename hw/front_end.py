@@ -23,7 +23,7 @@ from .index_reader import IndexReader, IndexRequestLayout
 from .registers import enabled_register
 from .pipeline import STAGES, UPSTREAM_STAGES, REGISTERS, LinkLayout, RequestLayout, SideLayout, addr_bits, pack
 
-__all__ = ["FrontEnd"]
+__all__ = ["FrontEnd", "index_port_members"]
 
 
 def k_bits(ts: TextureSet) -> int:
@@ -34,6 +34,13 @@ def k_bits(ts: TextureSet) -> int:
         return 1
     span = (d["log2w"].astype(int) - d["log2bw"] + d["log2h"] - d["log2bh"])[comp]
     return max(1, int(span.max()))
+
+
+def index_port_members(ts: TextureSet, features: Features) -> dict:
+    """The members of a unit whose index reader is outside it (``index_port``): ``index_request``
+    (:class:`hw.index_reader.IndexRequestLayout`) out, ``index_response`` (the index) in."""
+    return {"index_request": Out(IndexRequestLayout(k_bits(ts), descriptor_widths(ts)["base"])),
+            "index_response": In(features.index_bits)}
 
 
 class _NoIndex:
@@ -120,14 +127,8 @@ class FrontEnd(wiring.Component):
             "valid": Out(len(REGISTERS)),
             "o_tag": Out(tag_width),
             "link": Out(LinkLayout(texture_set, self._features)),
-            **self._index_members(),
+            **(index_port_members(texture_set, self._features) if self._index_port else {}),
         })
-
-    def _index_members(self) -> dict:
-        if not self._index_port:
-            return {}
-        return {"index_request": Out(IndexRequestLayout(k_bits(self._ts), descriptor_widths(self._ts)["base"])),
-                "index_response": In(self._features.index_bits)}
 
     def elaborate(self, platform):
         m = Module()

@@ -30,10 +30,9 @@ from vqtex.golden.format import TextureSet
 
 from .back_end import BackEnd
 from .banked_rom import BANK_DEPTH
-from .descriptor import descriptor_widths, texture_bits
+from .descriptor import texture_bits
 from .features import Features
-from .front_end import FrontEnd, k_bits
-from .index_reader import IndexRequestLayout
+from .front_end import FrontEnd, index_port_members
 from .pipeline import (FRONT_STAGES, LATENCY, REGISTERS, STAGES, UPSTREAM_STAGES, RequestLayout,
                        ResponseLayout, pack)
 
@@ -144,9 +143,7 @@ class TexelFetch(wiring.Component):
         }
         members["valid"] = Out(len(REGISTERS))
         if self._index_port:
-            members["index_request"] = Out(IndexRequestLayout(k_bits(texture_set),
-                                                              descriptor_widths(texture_set)["base"]))
-            members["index_response"] = In(self._features.index_bits)
+            members.update(index_port_members(texture_set, self._features))
         super().__init__(members)
 
     @property

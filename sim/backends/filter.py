@@ -203,10 +203,11 @@ class FilterTop(wiring.Component):
         self._filter = TextureFilter(texture_set, lanes=lanes, tag_width=tag_width, frac=frac,
                                      index_banks=index_banks)
         f = self._filter
+        self._strobes = [n for n in f.signature.members if n not in ("i", "o")]    # stall_output, busy, ...
         super().__init__({
             "i_valid": In(1), "i_ready": Out(1), "i_payload": In(len(f.i.p.as_value())),
             "o_valid": Out(1), "o_ready": In(1), "o_payload": Out(len(f.o.p.as_value())),
-            "stall_output": Out(1), "busy": Out(1), "bank_conflict": Out(1),
+            **{n: Out(len(getattr(f, n))) for n in self._strobes},
         })
 
     @property
@@ -223,6 +224,6 @@ class FilterTop(wiring.Component):
         m.d.comb += [
             f.i.valid.eq(self.i_valid), self.i_ready.eq(f.i.ready), f.i.p.eq(self.i_payload),
             self.o_valid.eq(f.o.valid), f.o.ready.eq(self.o_ready), self.o_payload.eq(f.o.p),
-            self.stall_output.eq(f.stall_output), self.busy.eq(f.busy), self.bank_conflict.eq(f.bank_conflict),
         ]
+        m.d.comb += [getattr(self, n).eq(getattr(f, n)) for n in self._strobes]
         return m
