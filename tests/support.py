@@ -21,6 +21,7 @@ from vqtex.golden.fetch import block_address, fetch, lookup_descriptor, random_r
 from vqtex.golden.format import TextureSet
 from vqtex.hw.texel_fetch import LATENCY, REGISTERS
 from vqtex.sim.backends import simulate
+from vqtex.sim.backends.toolchain import using_cache
 
 __all__ = ["REPO", "need", "shared_cache", "need_synth_tools", "run_cli", "assert_one_error", "shared_cache_dir", "image", "CONFIGS", "texture_set", "combined_set", "texture_sets",
            "levels", "random_requests", "random_dt", "adversarial_requests", "back_to_back_requests", "straddle_offsets",
@@ -55,15 +56,8 @@ def need_synth_tools():
 def shared_cache():
     """``$VQTEX_CACHE`` set to :func:`shared_cache_dir` inside the block (the builds of every test
     run shared), restored after. Test modules use it as an autouse fixture: ``with shared_cache(): yield``."""
-    old = os.environ.get("VQTEX_CACHE")
-    os.environ["VQTEX_CACHE"] = shared_cache_dir()
-    try:
+    with using_cache(shared_cache_dir()):
         yield
-    finally:
-        if old is None:
-            os.environ.pop("VQTEX_CACHE", None)
-        else:
-            os.environ["VQTEX_CACHE"] = old
 
 
 def run_cli(capsys, *argv):

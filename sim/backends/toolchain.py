@@ -20,6 +20,7 @@ line and exits with status 2.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -28,7 +29,7 @@ import subprocess
 import tempfile
 import time
 
-__all__ = ["ToolchainError", "find_tool", "find_cxx", "tool_version", "cache_dir", "digest", "cached_build",
+__all__ = ["ToolchainError", "find_tool", "find_cxx", "tool_version", "cache_dir", "using_cache", "digest", "cached_build",
            "index_get", "index_put", "INSTALL_HINT", "DEFAULT_MAX_MB", "cache_max_bytes", "cache_entries",
            "cache_info", "cache_clean", "evict_lru"]
 
@@ -95,6 +96,21 @@ def cache_dir() -> str:
     path = os.environ.get("VQTEX_CACHE") or os.path.join(os.path.expanduser("~"), ".cache", "vqtex")
     os.makedirs(path, exist_ok=True)
     return path
+
+
+@contextlib.contextmanager
+def using_cache(folder: str):
+    """``$VQTEX_CACHE`` set to ``folder`` inside the block (so :func:`cache_dir` is ``folder``), the
+    previous value (or its absence) restored after."""
+    old = os.environ.get("VQTEX_CACHE")
+    os.environ["VQTEX_CACHE"] = folder
+    try:
+        yield folder
+    finally:
+        if old is None:
+            os.environ.pop("VQTEX_CACHE", None)
+        else:
+            os.environ["VQTEX_CACHE"] = old
 
 
 def digest(*parts) -> str:

@@ -2,7 +2,6 @@
 TexelFetch, bit for bit against golden.fetch and pvrtex's own previews; the twiddling address
 shifter and the 16-bit texel expansion stage by stage; the paper's unit unchanged for paper sets."""
 
-import os
 from pathlib import Path
 
 import numpy as np
@@ -52,9 +51,7 @@ def test_every_texel_of_every_pvrtex_file_through_cxxrtl():
     """All twenty pvrtex files in one set, every texel of every level, random backpressure: the
     responses assembled into pvrtex's preview layout equal its preview images."""
     support.need("g++")
-    old = os.environ.get("VQTEX_CACHE")
-    os.environ["VQTEX_CACHE"] = support.shared_cache_dir()
-    try:
+    with support.shared_cache():
         ts = pvr_set.import_dt(GENERATED)
         rows = []
         for t in range(ts.n_textures):
@@ -74,11 +71,6 @@ def test_every_texel_of_every_pvrtex_file_through_cxxrtl():
             theirs = read_image(path.with_name(path.name[:-3] + ".preview.png"))
             assert np.array_equal(pvr.preview(levels), theirs), path.name
         assert at == len(req) == 12 * ((128 * 128 * 4 - 1) // 3) + 8 * 128 * 128   # 12 mip chains, 8 single levels
-    finally:
-        if old is None:
-            os.environ.pop("VQTEX_CACHE", None)
-        else:
-            os.environ["VQTEX_CACHE"] = old
 
 
 def test_paper_sets_elaborate_the_paper_unit():

@@ -17,7 +17,6 @@ Responses and cycle counts of every backend are checked against the golden model
 from __future__ import annotations
 
 import json
-import os
 import tempfile
 import time
 
@@ -55,7 +54,7 @@ def run(json_out: bool = False, *, n_compiled: int = 4_000_000, n_pysim: int = 3
         backends=("pysim", "cxxrtl", "verilator")) -> dict:
     """Run the benchmark, print a table (or one JSON object) and return the numbers."""
     from vqtex.sim.backends.interface import simulate
-    from vqtex.sim.backends.toolchain import ToolchainError
+    from vqtex.sim.backends.toolchain import ToolchainError, using_cache
 
     ts, t_set = _timed(default_unit)
     req = random_requests(ts, n_compiled)
@@ -80,10 +79,8 @@ def run(json_out: bool = False, *, n_compiled: int = 4_000_000, n_pysim: int = 3
         else:
             from vqtex.sim.backends.verilator import build_verilator as build, open_verilator as opener
             from vqtex.sim.backends.cxxrtl import run_batch
-        old = os.environ.get("VQTEX_CACHE")
         try:
-            with tempfile.TemporaryDirectory(prefix="vqtex-bench-") as cache:
-                os.environ["VQTEX_CACHE"] = cache
+            with tempfile.TemporaryDirectory(prefix="vqtex-bench-") as cache, using_cache(cache):
                 first, t_first = _timed(lambda: build(ts))
                 _, t_cached = _timed(lambda: build(ts))
                 (lib, info, _), t_open = _timed(lambda: opener(ts))
@@ -105,11 +102,6 @@ def run(json_out: bool = False, *, n_compiled: int = 4_000_000, n_pysim: int = 3
         except ToolchainError as e:
             rows[name] = {"error": str(e)}
             continue
-        finally:
-            if old is None:
-                os.environ.pop("VQTEX_CACHE", None)
-            else:
-                os.environ["VQTEX_CACHE"] = old
         rows[name] = {"cycles": res.cycles, "run_s": secs, "cycles_per_s": res.cycles / secs,
                       "cycles_per_s_in_library": res.cycles / lib_s if stall <= 0 else None,
                       "build_first_s": t_first, "build_cached_s": t_cached, "open_s": t_open,
