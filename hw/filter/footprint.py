@@ -171,7 +171,6 @@ class Footprint(wiring.Component):
         names = ("level", "shift", "coords", "bilinear", "weights")
         valid = [Signal(name=f"valid_{n}") for n in names]
         move = Signal(name="move")
-        load = [move] * len(names)
         m.d.comb += move.eq(~valid[-1] | self.o.ready)
         with m.If(move):
             m.d.sync += [valid[k].eq(self.i.valid if k == 0 else valid[k - 1]) for k in range(len(names))]
@@ -210,7 +209,7 @@ class Footprint(wiring.Component):
         lw0, lh0 = sizes(p.texture, l0)
         lw1, lh1 = sizes(p.texture, l1)
         lwp, lhp = sizes(p.texture, C(0, LEVEL_BITS))
-        with m.If(load[0]):
+        with m.If(move):
             m.d.sync += [
                 r1.texture.eq(p.texture), r1.s.eq(p.s), r1.t.eq(p.t), r1.mode.eq(p.mode),
                 r1.address_s.eq(p.address_s), r1.address_t.eq(p.address_t), r1.tag.eq(p.tag),
@@ -241,7 +240,7 @@ class Footprint(wiring.Component):
             ip = Signal(signed(len(c)), name=f"point_{'st'[axis]}")
             m.d.comb += [sh.eq(frac - lsz), ip.eq(c >> sh)]
             points.append(ip)
-        with m.If(load[1]):
+        with m.If(move):
             m.d.sync += [getattr(rs, f).eq(getattr(r1, f)) for f in
                          ("texture", "mode", "address_s", "address_t", "tag", "l0", "l1", "f",
                           "lw0", "lh0", "lw1", "lh1", "lwp", "lhp")]
@@ -271,7 +270,7 @@ class Footprint(wiring.Component):
         pts = []
         for axis, (lsz, mode) in enumerate(((r1.lwp, r1.address_s), (r1.lhp, r1.address_t))):
             pts.append(address(m, r1.p[axis].as_signed(), lsz, mode, f"ap_{'st'[axis]}"))
-        with m.If(load[2]):
+        with m.If(move):
             m.d.sync += [
                 r2.texture.eq(r1.texture), r2.mode.eq(r1.mode), r2.tag.eq(r1.tag), r2.l0.eq(r1.l0),
                 r2.l1.eq(r1.l1), r2.f.eq(r1.f), r2.ip.eq(pts[0]), r2.jp.eq(pts[1]),
@@ -294,7 +293,7 @@ class Footprint(wiring.Component):
         for k in range(2):
             gu, fu, gv, fv = (r2.fr[4 * k + n] for n in range(4))
             products += [gu * gv, fu * gv, gu * fv, fu * fv]
-        with m.If(load[3]):
+        with m.If(move):
             m.d.sync += [r3.texture.eq(r2.texture), r3.tag.eq(r2.tag),
                          r3.lw[0].eq(C(one, 9) - r2.f), r3.lw[1].eq(r2.f)]
             m.d.sync += [r3.bil[n].eq(products[n]) for n in range(spec.SLOTS)]
@@ -311,7 +310,7 @@ class Footprint(wiring.Component):
 
         # Stage 5: the weights, bilinear product times level weight (one multiplier each, registered).
         out = self.o.p
-        with m.If(load[4]):
+        with m.If(move):
             m.d.sync += [out.texture.eq(r3.texture), out.tag.eq(r3.tag), out.used.eq(r3.used)]
             for n in range(spec.SLOTS):
                 m.d.sync += [out.texels[n].eq(r3.slots[n]), out.weights[n].eq(r3.bil[n] * r3.lw[n // 4])]
