@@ -1,16 +1,18 @@
 """Splitting one TSVQ cell into two (the paper's principal-axis cut, then 2-means).
 
-Contract: ``split_cell`` and ``split_cells`` (many small cells at once, vectorised) return for
-a cell a split record ``(mask of the second child, c0, c1, sse0, sse1)`` (children's weighted
-centroids and total squared errors; a one-row child's centroid is that row exactly) or None
-when the cell cannot be cut.  A cell's split depends only on its rows and its start vector
-``v0`` (and the sample ``rng`` gives), never on other cells: deterministic for a seed.
+Contract: ``split_cell`` and ``split_padded`` (a group of cells at once, padded to one length,
+every pass over the rows one batched matmul) return for a cell a split record ``(mask of the
+second child, c0, c1, sse0, sse1)`` (children's weighted centroids and total squared errors; a
+one-row child's centroid is that row exactly) or None when the cell cannot be cut.  A cell's
+split depends only on its rows and its start vector ``v0`` (and the sample ``rng`` gives):
+deterministic for a seed.  ``split_padded`` computes what ``split_cell`` computes without a
+sample; the two differ only in the rounding of the sums (tests/golden/test_tsvq_batches.py).
 """
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["split_cell", "split_cells"]
+__all__ = ["split_cell", "split_padded"]
 
 def _child_stats(x, w, mask):
     """Split record: mask, the children's centroids and total squared errors (a one-row child's
@@ -97,58 +99,59 @@ def split_cell(x, w, m, v0, rng, n_power=3, n_lloyd=4, sample=2048):
     return _child_stats(x, w, mask)
 
 
-def split_cells(xs, ws, starts, ends, cents, v0, n_power=3, n_lloyd=4):
-    """:func:`split_cell` for many small cells at once (segment-vectorised over the concatenated
-    rows; no sampling).  Returns a list of split records, None where the batch could not cut a
-    cell (the caller then uses :func:`split_cell`)."""
-    b = starts.size
-    n = ends - starts
-    off = np.zeros(b + 1, dtype=np.int64)
-    off[1:] = np.cumsum(n)
-    st0 = off[:-1]
-    seg = np.repeat(np.arange(b), n)
-    idx = np.arange(off[-1]) - np.repeat(st0 - starts, n)
-    x, w = xs[idx], ws[idx]
-    xc = x - cents[seg]
+def split_padded(xs, ws, idx, n, cents, v0, n_power=3, n_lloyd=4):
+    """:func:`split_cell` for a group of cells at once (no sampling), padded to one length so
+    that every pass over the rows is one batched matmul (no per-row temporaries).
+
+    ``idx`` (b, L) int: row j < n[c] of cell c is ``xs[idx[c, j]]`` (entries j >= n[c] are
+    padding: any valid row, ignored); ``cents`` (b, d) the cells' centroids, ``v0`` (b, d)
+    their start vectors.  Returns one split record per cell (the mask over its n[c] rows in
+    ``idx`` order), None where the cell could not be cut (the caller then uses
+    :func:`split_cell`).  Each cell's result depends on its own rows only."""
+    b, L = idx.shape
+    valid = np.arange(L) < n[:, None]
+    xc = xs[idx]  # (b, L, d), a copy
+    xc -= cents[:, None, :]
+    xc[~valid] = 0.0
+    wv = np.where(valid, ws[idx], 0.0)
+
+    def proj(v):  # (b, d) -> (b, L): every row of each cell against its cell's vector
+        return np.matmul(v[:, None, :], xc.transpose(0, 2, 1))[:, 0]
+
+    def wsum(wr):  # (b, L) -> (b, d): weighted sum of each cell's rows
+        return np.matmul(wr[:, None, :], xc)[:, 0]
+
     v = v0.copy()
     for _ in range(n_power):
-        p = np.einsum("ij,ij->i", xc, v[seg])
-        vn = np.add.reduceat((w * p)[:, None] * xc, st0)
+        vn = wsum(wv * proj(v))
         nv = np.sqrt(np.einsum("ij,ij->i", vn, vn))
         good = nv > 0
         v[good] = vn[good] / nv[good, None]
-    p = np.einsum("ij,ij->i", xc, v[seg])
-    # 1-D 2-means optimum per segment over the sorted projections
-    o = np.lexsort((p, seg))
-    ps, wsr = p[o], w[o]
-    cw_all, cs_all = np.cumsum(wsr), np.cumsum(wsr * ps)
-    base_w = np.concatenate([[0.0], cw_all[off[1:-1] - 1]])
-    base_s = np.concatenate([[0.0], cs_all[off[1:-1] - 1]])
-    cw = cw_all - base_w[seg]
-    cs = cs_all - base_s[seg]
-    wt, stt = cw[off[1:] - 1], cs[off[1:] - 1]
-    last = np.zeros(off[-1], dtype=bool)
-    last[off[1:] - 1] = True
-    valid = ~last
-    valid[:-1] &= ps[1:] > ps[:-1]
+    p = proj(v)
+    # 1-D 2-means optimum per cell over its sorted projections (padding sorts last, weight 0)
+    o = np.argsort(np.where(valid, p, np.inf), axis=1, kind="stable")
+    ps = np.take_along_axis(p, o, axis=1)
+    wsr = np.take_along_axis(wv, o, axis=1)
+    cw = np.cumsum(wsr, axis=1)
+    cs = np.cumsum(wsr * ps, axis=1)
+    wt, stt = cw[:, -1:], cs[:, -1:]
+    cut = np.zeros((b, L), dtype=bool)  # a cut after sorted position j: j < n-1, distinct values
+    cut[:, :-1] = (np.arange(L - 1) < (n - 1)[:, None]) & (ps[:, 1:] > ps[:, :-1])
     with np.errstate(divide="ignore", invalid="ignore"):
-        score = np.where(valid, cs * cs / cw + (stt[seg] - cs) ** 2 / (wt[seg] - cw), -np.inf)
-    smax = np.maximum.reduceat(score, st0)
-    hit = np.flatnonzero(score == smax[seg])
-    _, first = np.unique(seg[hit], return_index=True)
-    j = hit[first]  # first maximiser of each segment (every segment has a hit)
-    okcut = np.isfinite(smax)
-    jn = np.minimum(j + 1, off[-1] - 1)
-    thr = np.where(okcut, 0.5 * (ps[j] + ps[jn]), np.inf)
-    mask = p > thr[seg]
-    wtot = np.add.reduceat(w, st0)
-    stot = np.add.reduceat(w[:, None] * xc, st0)
-    ones = np.ones(off[-1], dtype=np.int64)
+        score = np.where(cut, cs * cs / cw + (stt - cs) ** 2 / (wt - cw), -np.inf)
+    j = score.argmax(axis=1)  # the first maximiser
+    rows = np.arange(b)
+    okcut = np.isfinite(score[rows, j])
+    jn = np.minimum(j + 1, L - 1)
+    thr = np.where(okcut, 0.5 * (ps[rows, j] + ps[rows, jn]), np.inf)
+    mask = (p > thr[:, None]) & valid
+    wtot = wv.sum(axis=1)
+    stot = wsum(wv)
     for _ in range(n_lloyd):
-        w1 = np.where(mask, w, 0.0)
-        ww1 = np.add.reduceat(w1, st0)
-        s1 = np.add.reduceat(w1[:, None] * xc, st0)
-        n1 = np.add.reduceat(np.where(mask, ones, 0), st0)
+        w1 = np.where(mask, wv, 0.0)
+        ww1 = w1.sum(axis=1)
+        s1 = wsum(w1)
+        n1 = mask.sum(axis=1)
         live = (n1 > 0) & (n1 < n)
         with np.errstate(divide="ignore", invalid="ignore"):
             c1 = s1 / ww1[:, None]
@@ -157,41 +160,34 @@ def split_cells(xs, ws, starts, ends, cents, v0, n_power=3, n_lloyd=4):
         th = 0.5 * (np.einsum("ij,ij->i", c1, c1) - np.einsum("ij,ij->i", c0, c0))
         dv[~live] = 0.0
         th[~live] = 0.0
-        new = np.einsum("ij,ij->i", xc, dv[seg]) > th[seg]
-        nn1 = np.add.reduceat(np.where(new, ones, 0), st0)
-        upd = (live & (nn1 > 0) & (nn1 < n))[seg]
-        new = np.where(upd, new, mask)
+        new = (proj(dv) > th[:, None]) & valid
+        nn1 = new.sum(axis=1)
+        upd = live & (nn1 > 0) & (nn1 < n)
+        new = np.where(upd[:, None], new, mask)
         if np.array_equal(new, mask):
             break
         mask = new
     # children statistics (centred sums, then back to the original coordinates)
-    n1 = np.add.reduceat(np.where(mask, ones, 0), st0)
-    w1 = np.where(mask, w, 0.0)
-    w0 = w - w1
-    ww1, ww0 = np.add.reduceat(w1, st0), np.add.reduceat(w0, st0)
+    n1 = mask.sum(axis=1)
+    w1 = np.where(mask, wv, 0.0)
+    w0 = wv - w1
+    ww1, ww0 = w1.sum(axis=1), w0.sum(axis=1)
     ok = (n1 > 0) & (n1 < n)
     with np.errstate(divide="ignore", invalid="ignore"):
-        c1 = np.add.reduceat(w1[:, None] * xc, st0) / ww1[:, None]
-        c0 = np.add.reduceat(w0[:, None] * xc, st0) / ww0[:, None]
+        c1 = wsum(w1) / ww1[:, None]
+        c0 = wsum(w0) / ww0[:, None]
     # SSE = sum w |xc|^2 - W |c|^2 per side (centred at the parent: mild cancellation)
-    wxx = w * np.einsum("ij,ij->i", xc, xc)
-    sse1 = np.add.reduceat(np.where(mask, wxx, 0.0), st0) - ww1 * np.einsum("ij,ij->i", c1, c1)
-    sse0 = np.add.reduceat(np.where(mask, 0.0, wxx), st0) - ww0 * np.einsum("ij,ij->i", c0, c0)
-    sse1 = np.maximum(sse1, 0.0)
-    sse0 = np.maximum(sse0, 0.0)
+    wxx = wv * np.einsum("ijk,ijk->ij", xc, xc)
+    sse1 = np.maximum(np.where(mask, wxx, 0.0).sum(axis=1) - ww1 * np.einsum("ij,ij->i", c1, c1), 0.0)
+    sse0 = np.maximum(np.where(mask, 0.0, wxx).sum(axis=1) - ww0 * np.einsum("ij,ij->i", c0, c0), 0.0)
     c1 += cents
     c0 += cents
     # one-row children: the row itself, exactly
-    single1 = mask & (n1 == 1)[seg]
-    single0 = ~mask & (n - n1 == 1)[seg]
-    c1[seg[single1]] = x[single1]
-    c0[seg[single0]] = x[single0]
-    sse1[n1 == 1] = 0.0
-    sse0[n - n1 == 1] = 0.0
-    out = []
-    for i in range(b):  # one record per cell (bookkeeping only, no arithmetic per vector)
-        if ok[i]:
-            out.append((mask[st0[i]:off[i + 1]], c0[i], c1[i], float(sse0[i]), float(sse1[i])))
-        else:
-            out.append(None)
-    return out
+    one1 = ok & (n1 == 1)
+    one0 = ok & (n - n1 == 1)
+    c1[one1] = xs[idx[one1, mask[one1].argmax(axis=1)]]
+    c0[one0] = xs[idx[one0, (valid[one0] & ~mask[one0]).argmax(axis=1)]]
+    sse1[one1] = 0.0
+    sse0[one0] = 0.0
+    return [(mask[i, :n[i]], c0[i], c1[i], float(sse0[i]), float(sse1[i])) if ok[i] else None
+            for i in range(b)]  # one record per cell (bookkeeping only, no arithmetic per row)

@@ -14,13 +14,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from .inputs import as_vectors, check_k, pad, prepare, wmean
-from .split import split_cell, split_cells
+from .split import split_cell, split_padded
 from .workers import map_ordered, one_blas_thread
 
 __all__ = ["TsvqTree", "tsvq_build", "tsvq_tree", "tsvq"]
 
-_GROUP_ROWS = 2048  # rows per split_cells call on a worker thread (measured)
-_MAX_GROUPS = 8
+_GROUP_ROWS = 4096  # padded rows per split_padded call on a worker thread (measured)
 
 @dataclass
 class TsvqTree:
@@ -67,7 +66,7 @@ class TsvqTree:
 
 
 @one_blas_thread
-def tsvq_build(u, wu, k, seed, criterion="distortion", batch=128, sample=2048, small_cell=256):
+def tsvq_build(u, wu, k, seed, criterion="distortion", sample=2048):
     """Greedy TSVQ on distinct weighted vectors.
 
     criterion "distortion" (the paper's rule): split the leaf of largest total squared error.
@@ -76,70 +75,81 @@ def tsvq_build(u, wu, k, seed, criterion="distortion", batch=128, sample=2048, s
     error).  Ties go to the older leaf.  Stops at k leaves or when no leaf can be split.
 
     A leaf's split depends only on its vectors and its node number (seeded start vector and
-    sample), never on when it is computed, so splits are computed ahead in vectorised batches
-    of up to ``batch`` high-error leaves without changing the tree (leaves of at most
-    ``small_cell`` vectors, whose cost is all interpreter overhead; larger ones one by one).
-    A batch runs as consecutive groups of about ``_GROUP_ROWS`` rows on the worker threads
-    (:mod:`.workers`); the groups depend on the cells' sizes only, so the tree does not depend
-    on the thread count.
+    sample), never on when it is computed, so splits are computed ahead, in batches, without
+    changing the tree: when the greedy order reaches a leaf whose split is not known, the splits
+    of every leaf whose error is at least the (k-1)-th largest error of the nodes made so far are
+    computed at once (a child's error never exceeds its parent's, so a leaf below that can never
+    be split; with the "gain" rule the same batches are only a good guess).  Leaves of at most
+    ``sample`` vectors are split in padded groups of similar sizes (:func:`.split.split_padded`,
+    about ``_GROUP_ROWS`` padded rows a group), larger ones one by one on a sample; both run on
+    the worker threads (:mod:`.workers`), and the groups depend on the cells' sizes only, so
+    the tree does not depend on the thread count.
     Returns (TsvqTree, labels of the distinct vectors)."""
     if criterion not in ("distortion", "gain"):
         raise ValueError(f"unknown TSVQ split criterion {criterion!r}")
     m_, d = u.shape
     v0 = np.random.default_rng(seed).standard_normal((2 * k + 1, d))
-    order = np.arange(m_)
-    xs = u.copy()
-    ws = wu.copy()
-    cent, start, end, left, right, sse = [], [], [], [], [], []
+    cent, rows, left, right, sse = [], [], [], [], []
     rec = {}
     heap = []
 
-    def new_leaf(a, b, c, e):
+    def new_leaf(r, c, e):
         cid = len(cent)
         cent.append(c)
-        start.append(a)
-        end.append(b)
+        rows.append(r)
         left.append(-1)
         right.append(-1)
         sse.append(e)
-        if b - a > 1:  # rows are distinct: one row = constant leaf
+        if r.size > 1:  # rows are distinct: one row = constant leaf
             heapq.heappush(heap, (-e, cid, False))
 
-    def compute(nids):
-        small = [i for i in nids if end[i] - start[i] <= small_cell]
-        if small:
-            arr = np.array(small, dtype=np.int64)
-            st_, en_ = np.array(start)[arr], np.array(end)[arr]
-            cn_ = np.array([cent[i] for i in small])
-            # consecutive groups of about _GROUP_ROWS rows on the worker threads (the groups
-            # depend on the cells' sizes only, never on the thread count)
-            cum = np.cumsum(en_ - st_)
-            g = max(1, min(_MAX_GROUPS, int(cum[-1]) // _GROUP_ROWS))
-            cuts = np.searchsorted(cum, cum[-1] * np.arange(1, g) / g, side="right")
-            bounds = np.unique(np.concatenate([[0], cuts, [arr.size]]))
-            parts = map_ordered(
-                lambda q: split_cells(xs, ws, st_[bounds[q]:bounds[q + 1]],
-                                      en_[bounds[q]:bounds[q + 1]], cn_[bounds[q]:bounds[q + 1]],
-                                      v0[arr[bounds[q]:bounds[q + 1]]]),
-                range(bounds.size - 1))
-            for i, r in zip(small, [r for part in parts for r in part]):
-                rec[i] = r
-        for i in nids:
-            if rec.get(i, None) is None:
-                s, e = start[i], end[i]
-                rng = lambda i=i: np.random.default_rng([seed, i])  # noqa: E731
-                rec[i] = split_cell(xs[s:e], ws[s:e], cent[i], v0[i], rng, sample=sample)
+    def split_group(ids):
+        n = np.array([rows[i].size for i in ids])
+        idx = np.empty((n.size, int(n.max())), dtype=np.int64)
+        for q, i in enumerate(ids):  # padding repeats the cell's last row (weight 0 inside)
+            idx[q, : n[q]] = rows[i]
+            idx[q, n[q]:] = rows[i][-1]
+        return split_padded(u, wu, idx, n, np.array([cent[i] for i in ids]), v0[ids])
 
-    root_c = wmean(xs, ws) if m_ > 1 else xs[0].copy()
-    diff = xs - root_c
-    new_leaf(0, m_, root_c, float(ws @ np.einsum("ij,ij->i", diff, diff)))
+    def split_one(i):
+        rng = lambda: np.random.default_rng([seed, i])  # noqa: E731
+        return split_cell(u[rows[i]], wu[rows[i]], cent[i], v0[i], rng, sample=sample)
+
+    def compute(nids):
+        nids = np.array(nids, dtype=np.int64)
+        size = np.array([rows[i].size for i in nids])
+        order = np.argsort(size, kind="stable")
+        small, sz = nids[order], size[order]
+        small, sz = small[sz <= sample], sz[sz <= sample]
+        if small.size:
+            # groups of consecutive (by size) cells of at most _GROUP_ROWS padded rows
+            groups, g0 = [], 0
+            for g in range(1, small.size + 1):
+                if g == small.size or (g + 1 - g0) * sz[g] > _GROUP_ROWS:
+                    groups.append(small[g0:g])
+                    g0 = g
+            parts = map_ordered(split_group, groups)
+            for i, r in zip(small.tolist(), [r for part in parts for r in part]):
+                rec[i] = r
+        rest = [i for i in nids.tolist() if rec.get(i) is None]
+        for i, r in zip(rest, map_ordered(split_one, rest)):
+            rec[i] = r
+
+    def threshold():
+        """The (k-1)-th largest error of the nodes made so far (-inf while there are fewer)."""
+        if len(sse) < k - 1:
+            return -np.inf
+        return float(np.partition(np.array(sse), len(sse) - (k - 1))[len(sse) - (k - 1)])
+
+    root_c = wmean(u, wu) if m_ > 1 else u[0].copy()
+    diff = u - root_c
+    new_leaf(np.arange(m_), root_c, float(wu @ np.einsum("ij,ij->i", diff, diff)))
     n_leaves = 1
     while n_leaves < k and heap:
         key, nid, exact = heapq.heappop(heap)
         if nid not in rec:
-            want = max(1, min(batch, k - n_leaves))
-            top = [e[1] for e in heapq.nsmallest(2 * want, heap) if e[1] not in rec]
-            compute([nid] + top[: want - 1])
+            t = threshold()
+            compute([nid] + [e[1] for e in heap if e[1] not in rec and -e[0] >= t])
         r = rec.pop(nid)
         if r is None:
             continue
@@ -148,16 +158,10 @@ def tsvq_build(u, wu, k, seed, criterion="distortion", batch=128, sample=2048, s
             rec[nid] = r
             continue
         mask, c0, c1, e0, e1 = r
-        s, e = start[nid], end[nid]
-        perm = np.concatenate([np.flatnonzero(~mask), np.flatnonzero(mask)])
-        xs[s:e] = xs[s:e][perm]
-        ws[s:e] = ws[s:e][perm]
-        order[s:e] = order[s:e][perm]
-        mid = s + int(np.count_nonzero(~mask))
         left[nid] = len(cent)
         right[nid] = len(cent) + 1
-        new_leaf(s, mid, c0, e0)
-        new_leaf(mid, e, c1, e1)
+        new_leaf(rows[nid][~mask], c0, e0)
+        new_leaf(rows[nid][mask], c1, e1)
         n_leaves += 1
     left = np.array(left, dtype=np.int64)
     right = np.array(right, dtype=np.int64)
@@ -174,13 +178,11 @@ def tsvq_build(u, wu, k, seed, criterion="distortion", batch=128, sample=2048, s
         else:
             stack.append(right[nid])
             stack.append(left[nid])
-    leaf_nodes = np.array(leaf_nodes, dtype=np.int64)
     codebook = pad(cent[leaf_nodes], k)
-    # members of each leaf -> codeword index (the leaves' slices tile [0, M) left to right)
-    sizes = np.array(end)[leaf_nodes] - np.array(start)[leaf_nodes]
-    lab_sorted = np.repeat(np.arange(leaf_nodes.size), sizes)
+    # members of each leaf -> codeword index
     labels = np.empty(m_, dtype=np.int64)
-    labels[order] = lab_sorted
+    labels[np.concatenate([rows[i] for i in leaf_nodes])] = np.repeat(
+        np.arange(len(leaf_nodes)), [rows[i].size for i in leaf_nodes])
     return TsvqTree(cent, left, right, leaf, codebook), labels
 
 
