@@ -66,21 +66,31 @@ def assign_full(u, c, scr, chunk=0):
 _ROW_COST = 200
 
 
-def _half_gaps(c, scr, moved=None, old=None):
+# Bound of |T_ij - D_ij| / rmax^2 for the float32 distances T_ij = fl(fl(cn_i) - 2 s~_ij) of two
+# codewords (D_ij exact, rmax the largest centred codeword norm): twice the screened score's error,
+# 2 (d + 4) u (|c_i| |c_j| + |c_j|^2 / 2) (1 + 1e-3) <= 3 (d + 4) u rmax^2 (1 + 1e-3), plus the
+# rounding of cn_i and of the sum, at most 5 u rmax^2 (1 + 1e-6).
+def _subset_err(d):
+    return 3.0 * (d + 4) * U32 * (1 + 1e-3) + 5.1 * U32
+
+
+def _half_gaps(c, scr, moved=None, old=None, cols=None):
     """Lower bounds of s_j = half the distance from codeword j to its nearest other codeword
     (Elkan's bound), from float32 screening lowered by its error bound.
 
     With ``moved`` (indices of the codewords that changed) and ``old`` (the bounds before the
     change) only the rows of the moved codewords are screened: a codeword that did not move is
     at least as far from every unmoved codeword as before, so its new bound is the smaller of
-    its old bound and half its distance to the nearest moved codeword."""
+    its old bound and half its distance to the nearest moved codeword.  ``cols``: the result of
+    ``scr.codebook(c)`` when the caller has it."""
     k = c.shape[0]
     if k < 2:
         return np.full(k, np.inf)
     rows = np.arange(k) if moved is None or old is None or 2 * moved.size > k else moved
     cc = c - scr.shift
-    ca, rmax = scr.codebook(c)
+    ca, rmax = scr.codebook(c) if cols is None else cols
     cn = np.einsum("ij,ij->i", cc, cc)
+    cn32 = cn.astype(np.float32)
     xa = np.empty((rows.size, scr.d + 1), dtype=np.float32)
     xa[:, : scr.d] = cc[rows]
     xa[:, scr.d] = 1.0
@@ -103,12 +113,13 @@ def _half_gaps(c, scr, moved=None, old=None):
             q -= 2.0 * gam * (np.sqrt(r_cn) * rmax + 0.5 * rmax * rmax) + np.abs(q) * 1e-6
             row_min[s0:e] = q
             return None
-        # squared distances, lowered by the screening error bound
-        q = r_cn[:, None] - 2.0 * sc.astype(np.float64)
-        q -= (2.0 * gam * (np.sqrt(r_cn) * rmax + 0.5 * rmax * rmax))[:, None] + np.abs(q) * 1e-6
-        q[np.arange(e - s0), rows[s0:e]] = np.inf  # not its own neighbour
-        row_min[s0:e] = q.min(axis=1)
-        return q.min(axis=0)
+        # squared distances in float32, T = fl(cn_i - 2 s~_ij), one pass in place; the rounding
+        # of T and of the screened scores is lowered once, after the minima (_subset_err)
+        sc *= -2.0
+        sc += cn32[rows[s0:e], None]
+        sc[np.arange(e - s0), rows[s0:e]] = np.inf  # not its own neighbour
+        row_min[s0:e] = sc.min(axis=1)
+        return sc.min(axis=0)
 
     for part in map_ordered(one_chunk, range(0, rows.size, step)):
         if part is not None:
@@ -117,6 +128,9 @@ def _half_gaps(c, scr, moved=None, old=None):
     if full:
         out[:] = 0.5 * np.sqrt(np.maximum(row_min, 0.0))
         return out
+    err = _subset_err(scr.d) * rmax * rmax
+    col_min -= err + np.abs(col_min) * 1e-6
+    row_min -= err + np.abs(row_min) * 1e-6
     out[:] = np.minimum(old, 0.5 * np.sqrt(np.maximum(col_min, 0.0)))
     out[rows] = 0.5 * np.sqrt(np.maximum(row_min, 0.0))
     return out
@@ -156,7 +170,8 @@ def reassign(u, scr, st: State, c_new, chunk=0, force=None):
     ub = np.sqrt(d2) * (1 + 1e-12)
     mv_sorted = mv[np.argsort(-drift[mv], kind="stable")]
     ds = np.append(drift[mv_sorted], 0.0)  # ds[t]: largest drift outside the t largest movers
-    gaps = _half_gaps(c_new, scr, mv, st.gaps)
+    ca, rmax = scr.codebook(c_new)
+    gaps = _half_gaps(c_new, scr, mv, st.gaps, (ca, rmax))
     skip = ub <= gaps[a]
     # choose |J| = t among 0, 1, 2, 4, ..., |mv|: vectors with slack <= -ds[t] need J only
     slack = ub - lb
@@ -181,7 +196,6 @@ def reassign(u, scr, st: State, c_new, chunk=0, force=None):
     skip |= free
     live &= ~free
     pa = live & (slack <= -dec)
-    ca, rmax = scr.codebook(c_new)
     groups = (
         (np.flatnonzero(pa), mv_sorted[:t], lb - dec),
         (np.flatnonzero(live & ~pa & ~pm), mv, lb),
