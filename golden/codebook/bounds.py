@@ -129,8 +129,9 @@ def _half_gaps(c, scr, moved=None, old=None, cols=None):
         out[:] = 0.5 * np.sqrt(np.maximum(row_min, 0.0))
         return out
     err = _subset_err(scr.d) * rmax * rmax
-    col_min -= err + np.abs(col_min) * 1e-6
-    row_min -= err + np.abs(row_min) * 1e-6
+    # q - |q| 1e-6 - err, written so that q = +inf (no other codeword screened) stays +inf
+    col_min = np.minimum(col_min * (1 - 1e-6), col_min * (1 + 1e-6)) - err
+    row_min = np.minimum(row_min * (1 - 1e-6), row_min * (1 + 1e-6)) - err
     out[:] = np.minimum(old, 0.5 * np.sqrt(np.maximum(col_min, 0.0)))
     out[rows] = 0.5 * np.sqrt(np.maximum(row_min, 0.0))
     return out

@@ -42,3 +42,16 @@ def test_half_gaps_full_and_moved_are_lower_bounds(d, k):
     assert np.all(part <= exact2)
     slack = 1e-4 * ((c2 - 127.5) ** 2).sum(1).max()
     assert np.all((2 * part) ** 2 >= (2 * np.minimum(exact, exact2)) ** 2 - slack)
+
+
+def test_half_gaps_one_moved_codeword_has_no_nan():
+    """One moved codeword: its own column has no other moved row (+inf, never NaN)."""
+    rng = np.random.default_rng(5)
+    c = _codebook(rng, 64, 12, near=4)
+    scr = Screen(c, np.full(12, 127.5))
+    exact = _exact_half_gaps(c)
+    c2 = c.copy()
+    c2[7] += 4.0
+    with np.errstate(invalid="raise"):
+        part = bounds._half_gaps(c2, scr, np.array([7]), exact)
+    assert not np.isnan(part).any() and np.all(part <= _exact_half_gaps(c2))
