@@ -32,8 +32,8 @@ class GlaResult:
     squared error ||x - c||^2 (per vector, not per component) of that final encoding.
     iterations: Lloyd iterations run (all phases and migration rounds).  converged: the stop
     rule fired (False: max_iter reached).  history: distortion (same definition, all vectors)
-    after the initial assignment, after each iteration of the first full-data descent and after
-    each accepted migration round; non-increasing.
+    after the initial assignment, after each iteration of the first full-data descent, after
+    each accepted migration round and after the last descent; non-increasing.
     """
 
     codebook: np.ndarray
@@ -49,6 +49,9 @@ _MIGRATE_FRAC = 0.1
 _MIGRATE_RATIO = 2.0
 _COARSE_FACTOR = 1.5
 _COARSE_MIN = 8192  # smaller samples could miss rare colours altogether
+# The descents before and between migrations stop at _LOOSE x tol (measured: 10 keeps the PSNR of
+# the bench photographs within 0.02 dB and saves about a quarter of the iterations).
+_LOOSE = 10.0
 
 
 def _lloyd(u, wu, k, st: State, scr, tol, budget, chunk=0, stats=None):
@@ -154,13 +157,16 @@ def _migrate(u, wu, k, st: State, scr, frac, chunk=0):
 
 
 def _gla_core(u, wu, k, c0, max_iter, tol, migrate, frac=None, chunk=0):
-    """GLA on distinct weighted vectors; returns (codebook, history, iterations, converged)."""
+    """GLA on distinct weighted vectors; returns (state, screen, history, iterations,
+    converged).  The descents before and between migrations stop at ``_LOOSE * tol``; a last
+    descent at ``tol`` follows (see :func:`gla`)."""
     frac = _MIGRATE_FRAC if frac is None else frac
+    loose = _LOOSE * tol
     wsum = wu.sum()
     scr = Screen(u, wmean(u, wu))
     st = assign_full(u, np.array(c0, dtype=np.float64, copy=True), scr, chunk)
     hist = [float(wu @ st.d2) / wsum]
-    st, h, it, conv, stats = _lloyd(u, wu, k, st, scr, tol, max_iter, chunk)
+    st, h, it, conv, stats = _lloyd(u, wu, k, st, scr, loose, max_iter, chunk)
     hist += h
     rounds = 0
     while conv and rounds < migrate and k >= 2 and it < max_iter and hist[-1] > 0:
@@ -168,17 +174,21 @@ def _gla_core(u, wu, k, c0, max_iter, tol, migrate, frac=None, chunk=0):
         trial = _migrate(u, wu, k, st, scr, frac, chunk)
         if trial is None:
             break
-        st_t, h, it_t, conv_t, stats = _lloyd(u, wu, k, trial, scr, tol, max_iter - it, chunk,
-                                              stats)
+        st_t, h, it_t, conv_t, stats_t = _lloyd(u, wu, k, trial, scr, loose, max_iter - it,
+                                                chunk, stats)
         it += it_t
         d_t = float(wu @ st_t.d2) / wsum
         if not d_t < hist[-1]:
-            break  # rejected: keep the previous codebook (converged by the stop rule)
+            break  # rejected: keep the previous codebook
         improve = hist[-1] - d_t
-        st, conv = st_t, conv_t
+        st, conv, stats = st_t, conv_t, stats_t
         hist.append(d_t)
         if improve <= tol * d_t:
             break
+    if conv and loose > tol and it < max_iter and hist[-1] > 0:
+        st, h, it_t, conv, stats = _lloyd(u, wu, k, st, scr, tol, max_iter - it, chunk, stats)
+        it += it_t
+        hist += h[-1:]
     return st, scr, hist, it, conv
 
 
@@ -210,7 +220,10 @@ def gla(vectors, k, *, seed=0, weights=None, init=None, max_iter=100, tol=1e-3,
     Stop rule (LBG): a descent stops after the first iteration whose distortion D_m satisfies
     ``D_{m-1} - D_m <= tol * D_m``, or at a fixed point, or when D_m == 0.  The default
     tol = 1e-3 (at most ~0.004 dB gained by the last iteration) was chosen by measurement: on
-    the benchmark photographs tol = 1e-4 doubles the running time for 0.01-0.02 dB.
+    the benchmark photographs tol = 1e-4 doubles the running time for 0.01-0.02 dB.  The
+    descents before and between migrations stop at the looser ``10 * tol``: they only bring
+    the codebook near a minimum before the next migration; a last descent at ``tol`` ends the
+    run (on the bench photographs: PSNR within 0.02 dB, about a quarter fewer iterations).
 
     Migration (``migrate`` rounds at most, default 8; 0 = plain GLA): after a descent has
     stopped, move up to 10% of the codewords, those of least utility, onto the worst-coded
@@ -229,8 +242,8 @@ def gla(vectors, k, *, seed=0, weights=None, init=None, max_iter=100, tol=1e-3,
     ``init``: None or "tsvq" (default: the paper's greedy TSVQ, :func:`tsvq`, with ``seed``), or
     a (k, d) array (then there is no coarse phase).
     Returns :class:`GlaResult`; ``history`` holds the distortion (all vectors) after the initial
-    assignment, after each iteration of the first full-data descent and after each accepted
-    migration round (non-increasing).  Indices are the exact full-search nearest codewords.
+    assignment, after each iteration of the first full-data descent, after each accepted
+    migration round and after the last descent (non-increasing).  Indices are the exact full-search nearest codewords.
     With at most k distinct vectors the result is exact (see module docstring).
     Deterministic for a given seed.
     """
