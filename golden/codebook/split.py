@@ -107,13 +107,17 @@ def split_padded(xs, ws, idx, n, cents, v0, n_power=3, n_lloyd=4):
     padding: any valid row, ignored); ``cents`` (b, d) the cells' centroids, ``v0`` (b, d)
     their start vectors.  Returns one split record per cell (the mask over its n[c] rows in
     ``idx`` order), None where the cell could not be cut (the caller then uses
-    :func:`split_cell`).  Each cell's result depends on its own rows only."""
+    :func:`split_cell`).  Each cell's result depends on its own rows only.
+
+    The passes over the rows run in the dtype of ``xs`` (the TSVQ gives float32: half the
+    memory traffic; the cut's 1-D search, the returned centroids and errors are float64)."""
     b, L = idx.shape
+    ft = xs.dtype
     valid = np.arange(L) < n[:, None]
     xc = xs[idx]  # (b, L, d), a copy
-    xc -= cents[:, None, :]
+    xc -= cents.astype(ft)[:, None, :]
     xc[~valid] = 0.0
-    wv = np.where(valid, ws[idx], 0.0)
+    wv = np.where(valid, ws[idx], 0.0).astype(ft)
 
     def proj(v):  # (b, d) -> (b, L): every row of each cell against its cell's vector
         return np.matmul(v[:, None, :], xc.transpose(0, 2, 1))[:, 0]
@@ -121,17 +125,17 @@ def split_padded(xs, ws, idx, n, cents, v0, n_power=3, n_lloyd=4):
     def wsum(wr):  # (b, L) -> (b, d): weighted sum of each cell's rows
         return np.matmul(wr[:, None, :], xc)[:, 0]
 
-    v = v0.copy()
+    v = v0.astype(ft)
     for _ in range(n_power):
         vn = wsum(wv * proj(v))
         nv = np.sqrt(np.einsum("ij,ij->i", vn, vn))
         good = nv > 0
         v[good] = vn[good] / nv[good, None]
-    p = proj(v)
+    p = proj(v).astype(np.float64)
     # 1-D 2-means optimum per cell over its sorted projections (padding sorts last, weight 0)
     o = np.argsort(np.where(valid, p, np.inf), axis=1, kind="stable")
     ps = np.take_along_axis(p, o, axis=1)
-    wsr = np.take_along_axis(wv, o, axis=1)
+    wsr = np.take_along_axis(wv, o, axis=1).astype(np.float64)
     cw = np.cumsum(wsr, axis=1)
     cs = np.cumsum(wsr * ps, axis=1)
     wt, stt = cw[:, -1:], cs[:, -1:]
@@ -147,8 +151,9 @@ def split_padded(xs, ws, idx, n, cents, v0, n_power=3, n_lloyd=4):
     mask = (p > thr[:, None]) & valid
     wtot = wv.sum(axis=1)
     stot = wsum(wv)
+    zero = ft.type(0)
     for _ in range(n_lloyd):
-        w1 = np.where(mask, wv, 0.0)
+        w1 = np.where(mask, wv, zero)
         ww1 = w1.sum(axis=1)
         s1 = wsum(w1)
         n1 = mask.sum(axis=1)
@@ -169,7 +174,7 @@ def split_padded(xs, ws, idx, n, cents, v0, n_power=3, n_lloyd=4):
         mask = new
     # children statistics (centred sums, then back to the original coordinates)
     n1 = mask.sum(axis=1)
-    w1 = np.where(mask, wv, 0.0)
+    w1 = np.where(mask, wv, zero)
     w0 = wv - w1
     ww1, ww0 = w1.sum(axis=1), w0.sum(axis=1)
     ok = (n1 > 0) & (n1 < n)
@@ -177,7 +182,8 @@ def split_padded(xs, ws, idx, n, cents, v0, n_power=3, n_lloyd=4):
         c1 = wsum(w1) / ww1[:, None]
         c0 = wsum(w0) / ww0[:, None]
     # SSE = sum w |xc|^2 - W |c|^2 per side (centred at the parent: mild cancellation)
-    wxx = wv * np.einsum("ijk,ijk->ij", xc, xc)
+    wxx = (wv * np.einsum("ijk,ijk->ij", xc, xc)).astype(np.float64)
+    c1, c0, ww1, ww0 = (a.astype(np.float64) for a in (c1, c0, ww1, ww0))
     sse1 = np.maximum(np.where(mask, wxx, 0.0).sum(axis=1) - ww1 * np.einsum("ij,ij->i", c1, c1), 0.0)
     sse0 = np.maximum(np.where(mask, 0.0, wxx).sum(axis=1) - ww0 * np.einsum("ij,ij->i", c0, c0), 0.0)
     c1 += cents

@@ -15,11 +15,11 @@ import numpy as np
 
 from .inputs import as_vectors, check_k, pad, prepare, wmean
 from .split import split_cell, split_padded
-from .workers import map_ordered, one_blas_thread
+from .workers import one_blas_thread
 
 __all__ = ["TsvqTree", "tsvq_build", "tsvq_tree", "tsvq"]
 
-_GROUP_ROWS = 4096  # padded rows per split_padded call on a worker thread (measured)
+_GROUP_ROWS = 4096  # padded rows per split_padded call (measured best among 1024..16384)
 
 @dataclass
 class TsvqTree:
@@ -66,7 +66,7 @@ class TsvqTree:
 
 
 @one_blas_thread
-def tsvq_build(u, wu, k, seed, criterion="distortion", sample=2048):
+def tsvq_build(u, wu, k, seed, criterion="distortion", sample=2048, dtype=np.float32):
     """Greedy TSVQ on distinct weighted vectors.
 
     criterion "distortion" (the paper's rule): split the leaf of largest total squared error.
@@ -81,14 +81,19 @@ def tsvq_build(u, wu, k, seed, criterion="distortion", sample=2048):
     computed at once (a child's error never exceeds its parent's, so a leaf below that can never
     be split; with the "gain" rule the same batches are only a good guess).  Leaves of at most
     ``sample`` vectors are split in padded groups of similar sizes (:func:`.split.split_padded`,
-    about ``_GROUP_ROWS`` padded rows a group), larger ones one by one on a sample; both run on
-    the worker threads (:mod:`.workers`), and the groups depend on the cells' sizes only, so
-    the tree does not depend on the thread count.
+    about ``_GROUP_ROWS`` padded rows a group), larger ones one by one on a sample.  It runs on
+    one thread: its numpy calls are too short to release the GIL for long, and two worker threads
+    measured no faster (retina 4x4 k = 1024, 131,072 vectors at k = 4096).  The padded groups
+    work in ``dtype`` (float32:
+    half the memory traffic; the cuts and errors are those of float32 sums), and the centroids
+    of the finished tree are then the float64 weighted means of their vectors (a one-row leaf's
+    is that row).
     Returns (TsvqTree, labels of the distinct vectors)."""
     if criterion not in ("distortion", "gain"):
         raise ValueError(f"unknown TSVQ split criterion {criterion!r}")
     m_, d = u.shape
     v0 = np.random.default_rng(seed).standard_normal((2 * k + 1, d))
+    uw = u.astype(dtype)  # the padded groups' working copy
     cent, rows, left, right, sse = [], [], [], [], []
     rec = {}
     heap = []
@@ -109,7 +114,7 @@ def tsvq_build(u, wu, k, seed, criterion="distortion", sample=2048):
         for q, i in enumerate(ids):  # padding repeats the cell's last row (weight 0 inside)
             idx[q, : n[q]] = rows[i]
             idx[q, n[q]:] = rows[i][-1]
-        return split_padded(u, wu, idx, n, np.array([cent[i] for i in ids]), v0[ids])
+        return split_padded(uw, wu, idx, n, np.array([cent[i] for i in ids]), v0[ids])
 
     def split_one(i):
         rng = lambda: np.random.default_rng([seed, i])  # noqa: E731
@@ -128,12 +133,11 @@ def tsvq_build(u, wu, k, seed, criterion="distortion", sample=2048):
                 if g == small.size or (g + 1 - g0) * sz[g] > _GROUP_ROWS:
                     groups.append(small[g0:g])
                     g0 = g
-            parts = map_ordered(split_group, groups)
-            for i, r in zip(small.tolist(), [r for part in parts for r in part]):
-                rec[i] = r
-        rest = [i for i in nids.tolist() if rec.get(i) is None]
-        for i, r in zip(rest, map_ordered(split_one, rest)):
-            rec[i] = r
+            for g in groups:
+                rec.update(zip(g.tolist(), split_group(g)))
+        for i in nids.tolist():
+            if rec.get(i) is None:
+                rec[i] = split_one(i)
 
     def threshold():
         """The (k-1)-th largest error of the nodes made so far (-inf while there are fewer)."""
@@ -165,7 +169,6 @@ def tsvq_build(u, wu, k, seed, criterion="distortion", sample=2048):
         n_leaves += 1
     left = np.array(left, dtype=np.int64)
     right = np.array(right, dtype=np.int64)
-    cent = np.array(cent, dtype=np.float64).reshape(-1, d)
     # leaves numbered left to right (depth-first); nodes are numbered parents-first
     leaf = np.full(len(left), -1, dtype=np.int64)
     leaf_nodes = []
@@ -178,12 +181,42 @@ def tsvq_build(u, wu, k, seed, criterion="distortion", sample=2048):
         else:
             stack.append(right[nid])
             stack.append(left[nid])
+    cent = _node_centroids(u, wu, rows, left, right, leaf_nodes)
     codebook = pad(cent[leaf_nodes], k)
     # members of each leaf -> codeword index
     labels = np.empty(m_, dtype=np.int64)
     labels[np.concatenate([rows[i] for i in leaf_nodes])] = np.repeat(
         np.arange(len(leaf_nodes)), [rows[i].size for i in leaf_nodes])
     return TsvqTree(cent, left, right, leaf, codebook), labels
+
+
+def _node_centroids(u, wu, rows, left, right, leaf_nodes):
+    """float64 weighted mean of every node's vectors (a one-row leaf's is that row, exactly).
+    ``leaf_nodes``: the leaves left to right; an internal node's leaves are a contiguous run of
+    them, so its sums are a difference of prefix sums over the leaves (exact for integer texels
+    and weights, whose sums stay integers below 2^53; for other data, to a few ulps of the
+    total).  Internal centroids serve the tree search only."""
+    nn = left.size
+    sizes = np.array([rows[i].size for i in leaf_nodes])
+    who = np.concatenate([rows[i] for i in leaf_nodes])
+    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    lw = np.add.reduceat(wu[who], starts)
+    ls = np.add.reduceat(wu[who, None] * u[who], starts)
+    pw = np.concatenate([[0.0], np.cumsum(lw)])
+    ps = np.vstack([np.zeros((1, u.shape[1])), np.cumsum(ls, axis=0)])
+    lo, hi = [0] * nn, [0] * nn
+    for q, i in enumerate(leaf_nodes):
+        lo[i], hi[i] = q, q + 1
+    lft, rgt = left.tolist(), right.tolist()
+    for p in range(nn - 1, -1, -1):  # children are numbered after their parent
+        if lft[p] >= 0:
+            lo[p], hi[p] = lo[lft[p]], hi[rgt[p]]
+    lo, hi = np.array(lo), np.array(hi)
+    cent = (ps[hi] - ps[lo]) / (pw[hi] - pw[lo])[:, None]
+    cent[leaf_nodes] = ls / lw[:, None]  # a leaf's own sums
+    one = [i for i in leaf_nodes if rows[i].size == 1]
+    cent[one] = u[[rows[i][0] for i in one]]
+    return cent
 
 
 def tsvq_tree(vectors, k, *, seed=0, weights=None, criterion="distortion") -> TsvqTree:

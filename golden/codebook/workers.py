@@ -1,5 +1,6 @@
-"""The encoder's worker threads: the codeword screening, the exact distances and the TSVQ's batches
-of small-cell splits run their chunks on all the machine's cores.
+"""The encoder's worker threads: the codeword screening, the Elkan half gaps and the exact
+distances run their chunks on all the machine's cores (the TSVQ build runs on one: its numpy calls
+hold the GIL too much for threads to pay).
 
 Contract: :func:`map_ordered` ``(fn, items)`` returns ``[fn(i) for i in items]`` in order, running
 the calls on :func:`threads` worker threads (the calling thread and a shared

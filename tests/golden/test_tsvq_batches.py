@@ -67,7 +67,42 @@ def test_batched_tree_is_the_greedy_tree(k):
     _, _, u, w, _ = inputs.prepare(_data(3), None)
     left, cent = _greedy(u, w, k, seed=5)
     with using_threads(2):
-        t, labels = tree.tsvq_build(u, w, k, 5, sample=10**9)
+        t, labels = tree.tsvq_build(u, w, k, 5, sample=10**9, dtype=np.float64)
     np.testing.assert_array_equal(t.left, left)
     np.testing.assert_allclose(t.centroids, cent, rtol=1e-9, atol=1e-6)
     assert (t.leaf >= 0).sum() == k and np.bincount(labels, minlength=k).min() >= 1
+
+
+def test_float32_groups_split_like_float64():
+    """The TSVQ's float32 groups cut the cells as float64 does, up to rows at the cut."""
+    rng = np.random.default_rng(4)
+    u, w = _data(4), np.ones(1500)
+    sizes = rng.integers(2, 300, 40)
+    idx = np.array([np.resize(rng.choice(1500, s, replace=False), sizes.max()) for s in sizes])
+    cents = np.array([u[r[:s]].mean(0) for r, s in zip(idx, sizes)])
+    v0 = rng.standard_normal(cents.shape)
+    a = split.split_padded(u, w, idx, sizes, cents, v0)
+    b = split.split_padded(u.astype(np.float32), w, idx, sizes, cents, v0)
+    same = sum(int((ra[0] == rb[0]).sum()) for ra, rb in zip(a, b))
+    assert same >= 0.99 * sizes.sum()
+    for ra, rb in zip(a, b):
+        assert rb[1].dtype == np.float64 and rb[2].dtype == np.float64
+        if np.array_equal(ra[0], rb[0]):
+            for xa, xb in zip(ra[1:], rb[1:]):
+                np.testing.assert_allclose(xb, xa, rtol=1e-4, atol=1e-2)
+
+
+def test_float32_tree_codes_as_well_and_centroids_are_means():
+    """The default (float32) tree: leaves' centroids are the float64 means of their vectors, a
+    one-row leaf's is that row, and it codes within 1% of the float64 tree."""
+    _, _, u, w, _ = inputs.prepare(_data(6, n=3000), None)
+    t32, lab = tree.tsvq_build(u, w, 256, 0)
+    t64, _ = tree.tsvq_build(u, w, 256, 0, dtype=np.float64)
+    means = np.array([np.average(u[lab == j], axis=0, weights=w[lab == j]) for j in range(256)])
+    np.testing.assert_allclose(t32.codebook, means, rtol=0, atol=1e-9)
+    one = np.bincount(lab, minlength=256) == 1
+    assert one.any()
+    np.testing.assert_array_equal(t32.codebook[one], u[np.isin(lab, np.flatnonzero(one))][
+        np.argsort(lab[np.isin(lab, np.flatnonzero(one))], kind="stable")])
+    err = [float(w @ ((u - t.codebook[t.encode(u)]) ** 2).sum(1)) for t in (t32, t64)]
+    assert err[0] <= 1.01 * err[1]
