@@ -371,6 +371,8 @@ def save_plots(rows, folder: str, time_field: str = "encode_s") -> list[str]:
                 ax.plot([r[x] for r in front], [r["psnr_db"] for r in front], c=colour, lw=1.2)
             if logx:
                 ax.set_xscale("log")
+                # less than a decade of range: matplotlib labels the minor ticks, which overlap
+                ax.xaxis.set_minor_formatter(plt.NullFormatter())
             ax.set_title(image)
             ax.set_xlabel(label)
             ax.set_ylabel("PSNR (dB)")
