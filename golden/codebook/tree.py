@@ -75,19 +75,20 @@ def tsvq_build(u, wu, k, seed, criterion="distortion", sample=2048, dtype=np.flo
     error).  Ties go to the older leaf.  Stops at k leaves or when no leaf can be split.
 
     A leaf's split depends only on its vectors and its node number (seeded start vector and
-    sample), never on when it is computed, so splits are computed ahead, in batches, without
-    changing the tree: when the greedy order reaches a leaf whose split is not known, the splits
-    of every leaf whose error is at least the (k-1)-th largest error of the nodes made so far are
-    computed at once (a child's error never exceeds its parent's, so a leaf below that can never
-    be split; with the "gain" rule the same batches are only a good guess).  Leaves of at most
-    ``sample`` vectors are split in padded groups of similar sizes (:func:`.split.split_padded`,
-    about ``_GROUP_ROWS`` padded rows a group), larger ones one by one on a sample.  It runs on
-    one thread: its numpy calls are too short to release the GIL for long, and two worker threads
-    measured no faster (retina 4x4 k = 1024, 131,072 vectors at k = 4096).  The padded groups
-    work in ``dtype`` (float32:
-    half the memory traffic; the cuts and errors are those of float32 sums), and the centroids
-    of the finished tree are then the float64 weighted means of their vectors (a one-row leaf's
-    is that row).
+    sample), not on when it is computed, so splits are computed ahead, in batches: when the
+    greedy order reaches a leaf whose split is not known, the splits of every leaf whose error is
+    at least the (k-1)-th largest error of the nodes made so far are computed at once (a child's
+    error never exceeds its parent's, so no leaf below that is split first; with the "gain" rule
+    the batch is only a guess, and a split a batch missed is computed when the order reaches it).
+    Leaves of at most ``sample`` vectors are split in padded groups of similar sizes
+    (:func:`.split.split_padded`, about ``_GROUP_ROWS`` padded rows a group; a split computed in
+    a group can differ from one computed alone only in the rounding of its sums), larger ones
+    one by one on a sample.  The groups work in ``dtype`` (float32: half the memory traffic; the
+    cuts and errors are those of float32 sums); the centroids of the finished tree are then the
+    float64 weighted means of their vectors (a one-row leaf's is that row, exactly).  The build
+    runs on one thread: its numpy calls are too short to leave the GIL for long, and two worker
+    threads measured no faster (retina 4x4 k = 1024; 131,072 vectors at k = 4096).
+    Deterministic for a seed.
     Returns (TsvqTree, labels of the distinct vectors)."""
     if criterion not in ("distortion", "gain"):
         raise ValueError(f"unknown TSVQ split criterion {criterion!r}")
