@@ -13,8 +13,8 @@ the package exports, so every module stays importable.
                    on the worker threads) and exact float64 distances
 * :mod:`.workers`  the encoder's worker threads (``VQTEX_THREADS``; output independent of them)
 * :mod:`.fullsearch` exact full-search nearest codeword (``nearest``)
-* :mod:`.split`    splitting one TSVQ cell; :mod:`.tree` the greedy tree (``tsvq``,
-                   ``tsvq_tree``, ``TsvqTree``)
+* :mod:`.split`    splitting TSVQ cells (one, or a padded group at once); :mod:`.tree` the
+                   greedy tree (``tsvq``, ``tsvq_tree``, ``TsvqTree``)
 * :mod:`.cells`    per-cell sums, their updates and the repair of empty cells
 * :mod:`.bounds`   reassignment under Hamerly/Elkan bounds (the Lloyd step's search)
 * :mod:`.lloyd`    the generalized Lloyd algorithm (``gla``, ``GlaResult``) and ``design``
