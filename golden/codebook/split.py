@@ -29,7 +29,7 @@ def _child_stats(x, w, mask):
         c1, e1 = x[np.argmax(mask)].copy(), 0.0
     if n1 == mask.size - 1:
         c0, e0 = x[np.argmin(mask)].copy(), 0.0
-    return mask, c0, c1, e0, e1
+    return mask, c0.astype(np.float64), c1.astype(np.float64), e0, e1
 
 
 def split_cell(x, w, m, v0, rng, n_power=3, n_lloyd=4, sample=2048):
@@ -41,15 +41,19 @@ def split_cell(x, w, m, v0, rng, n_power=3, n_lloyd=4, sample=2048):
     iterations.  Cells of more than ``sample`` vectors fit the cut on a random sample (``rng``)
     of that size, then partition all their vectors with it.  Returns the split record
     ``(mask of the second child, c0, c1, sse0, sse1)`` or None if the vectors cannot be
-    separated.  ``rng``: a callable returning the Generator (made only when needed)."""
+    separated.  ``rng``: a callable returning the Generator (made only when needed).  The
+    arithmetic runs in the dtype of ``x`` (the TSVQ gives float32); centroids are returned as
+    float64."""
     n = x.shape[0]
+    w = w.astype(x.dtype, copy=False)
+    m = np.asarray(m, dtype=x.dtype)
     if n > sample:
         pick = np.sort(rng().choice(n, size=sample, replace=False))
         xs, ws = x[pick], w[pick]
     else:
         xs, ws = x, w
     xc = xs - m
-    v = v0.copy()
+    v = v0.astype(x.dtype)
     for _ in range(n_power):
         v = (ws * (xc @ v)) @ xc
         nv = np.sqrt(v @ v)
