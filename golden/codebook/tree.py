@@ -84,7 +84,8 @@ def tsvq_build(u, wu, k, seed, criterion="distortion", sample=2048, dtype=np.flo
     (:func:`.split.split_padded`, about ``_GROUP_ROWS`` padded rows a group; a split computed in
     a group can differ from one computed alone only in the rounding of its sums), larger ones
     one by one on a sample.  The splits work in ``dtype`` (float32: half the memory traffic; the
-    cuts and errors are those of float32 sums); the centroids of the finished tree are then the
+    cuts and errors are those of float32 sums; a cell whose rows float32 cannot tell apart is
+    split in float64); the centroids of the finished tree are then the
     float64 weighted means of their vectors (a one-row leaf's is that row, exactly).  The build
     runs on one thread: its numpy calls are too short to leave the GIL for long, and two worker
     threads measured no faster (retina 4x4 k = 1024; 131,072 vectors at k = 4096).
@@ -119,7 +120,10 @@ def tsvq_build(u, wu, k, seed, criterion="distortion", sample=2048, dtype=np.flo
 
     def split_one(i):
         rng = lambda: np.random.default_rng([seed, i])  # noqa: E731
-        return split_cell(uw[rows[i]], wu[rows[i]], cent[i], v0[i], rng, sample=sample)
+        r = split_cell(uw[rows[i]], wu[rows[i]], cent[i], v0[i], rng, sample=sample)
+        if r is None and uw.dtype != u.dtype:  # rows distinct in float64 but not in dtype
+            r = split_cell(u[rows[i]], wu[rows[i]], cent[i], v0[i], rng, sample=sample)
+        return r
 
     def compute(nids):
         nids = np.array(nids, dtype=np.int64)

@@ -106,3 +106,15 @@ def test_float32_tree_codes_as_well_and_centroids_are_means():
         np.argsort(lab[np.isin(lab, np.flatnonzero(one))], kind="stable")])
     err = [float(w @ ((u - t.codebook[t.encode(u)]) ** 2).sum(1)) for t in (t32, t64)]
     assert err[0] <= 1.01 * err[1]
+
+
+def test_rows_equal_in_float32_still_split():
+    """Distinct float64 vectors that float32 cannot tell apart (offsets of 1e-6 on 1000s) still
+    give k distinct TSVQ codewords: such cells are split in float64."""
+    rng = np.random.default_rng(0)
+    base = rng.integers(0, 4, (50, 3)).astype(np.float64) * 1000.0 + 1000.0
+    tiny = np.array([[0, 0, 0], [1e-6, 0, 0], [0, 1e-6, 0], [0, 0, 1e-6]])
+    x = np.repeat(base, 4, axis=0) + np.tile(tiny, (50, 1))
+    assert len(np.unique(x.astype(np.float32), axis=0)) < 64 <= len(np.unique(x, axis=0))
+    c = tree.tsvq(x, 64, seed=0)
+    assert len(np.unique(c, axis=0)) == 64
