@@ -246,7 +246,8 @@ def gla(vectors, k, *, seed=0, weights=None, init=None, max_iter=100, tol=1e-3,
     a (k, d) array (then there is no coarse phase).
     Returns :class:`GlaResult`; ``history`` holds the distortion (all vectors) after the initial
     assignment, after each iteration of the first full-data descent, after each accepted
-    migration round and after the last descent (non-increasing).  Indices are the exact full-search nearest codewords.
+    migration round and after the last descent (non-increasing).  Indices are the exact
+    full-search nearest codewords.
     With at most k distinct vectors the result is exact (see module docstring).
     Deterministic for a given seed.
     """

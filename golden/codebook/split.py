@@ -188,8 +188,9 @@ def split_padded(xs, ws, idx, n, cents, v0, n_power=3, n_lloyd=4):
     # SSE = sum w |xc|^2 - W |c|^2 per side (centred at the parent: mild cancellation)
     wxx = (wv * np.einsum("ijk,ijk->ij", xc, xc)).astype(np.float64)
     c1, c0, ww1, ww0 = (a.astype(np.float64) for a in (c1, c0, ww1, ww0))
-    sse1 = np.maximum(np.where(mask, wxx, 0.0).sum(axis=1) - ww1 * np.einsum("ij,ij->i", c1, c1), 0.0)
-    sse0 = np.maximum(np.where(mask, 0.0, wxx).sum(axis=1) - ww0 * np.einsum("ij,ij->i", c0, c0), 0.0)
+    sse1 = np.where(mask, wxx, 0.0).sum(axis=1) - ww1 * np.einsum("ij,ij->i", c1, c1)
+    sse0 = np.where(mask, 0.0, wxx).sum(axis=1) - ww0 * np.einsum("ij,ij->i", c0, c0)
+    sse1, sse0 = np.maximum(sse1, 0.0), np.maximum(sse0, 0.0)
     c1 += cents
     c0 += cents
     # one-row children: the row itself, exactly

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .cells import centroids
 from .inputs import as_vectors, check_k, pad, prepare, wmean
 from .split import split_cell, split_padded
 from .workers import one_blas_thread
@@ -85,10 +86,10 @@ def tsvq_build(u, wu, k, seed, criterion="distortion", sample=2048, dtype=np.flo
     a group can differ from one computed alone only in the rounding of its sums), larger ones
     one by one on a sample.  The splits work in ``dtype`` (float32: half the memory traffic; the
     cuts and errors are those of float32 sums; a cell whose rows float32 cannot tell apart is
-    split in float64); the centroids of the finished tree are then the
-    float64 weighted means of their vectors (a one-row leaf's is that row, exactly).  The build
-    runs on one thread: its numpy calls are too short to leave the GIL for long, and two worker
-    threads measured no faster (retina 4x4 k = 1024; 131,072 vectors at k = 4096).
+    split in float64); the centroids of the finished tree are then the float64 weighted means
+    of their vectors (a one-row leaf's is that row, exactly).  The build runs on one thread: its
+    numpy calls are too short to leave the GIL for long, and two worker threads measured no
+    faster (retina 4x4 k = 1024; 131,072 vectors at k = 4096).
     Deterministic for a seed.
     Returns (TsvqTree, labels of the distinct vectors)."""
     if criterion not in ("distortion", "gain"):
@@ -186,27 +187,24 @@ def tsvq_build(u, wu, k, seed, criterion="distortion", sample=2048, dtype=np.flo
         else:
             stack.append(right[nid])
             stack.append(left[nid])
-    cent = _node_centroids(u, wu, rows, left, right, leaf_nodes)
-    codebook = pad(cent[leaf_nodes], k)
     # members of each leaf -> codeword index
     labels = np.empty(m_, dtype=np.int64)
     labels[np.concatenate([rows[i] for i in leaf_nodes])] = np.repeat(
         np.arange(len(leaf_nodes)), [rows[i].size for i in leaf_nodes])
+    cent = _node_centroids(u, wu, labels, rows, left, right, leaf_nodes)
+    codebook = pad(cent[leaf_nodes], k)
     return TsvqTree(cent, left, right, leaf, codebook), labels
 
 
-def _node_centroids(u, wu, rows, left, right, leaf_nodes):
+def _node_centroids(u, wu, labels, rows, left, right, leaf_nodes):
     """float64 weighted mean of every node's vectors (a one-row leaf's is that row, exactly).
-    ``leaf_nodes``: the leaves left to right; an internal node's leaves are a contiguous run of
-    them, so its sums are a difference of prefix sums over the leaves (exact for integer texels
-    and weights, whose sums stay integers below 2^53; for other data, to a few ulps of the
-    total).  Internal centroids serve the tree search only."""
+    ``leaf_nodes``: the leaves left to right, ``labels`` each vector's leaf in that order; a
+    leaf's sums are :func:`.cells.centroids`'s, and an internal node's leaves are a contiguous
+    run of them, so its sums are a difference of prefix sums over the leaves (exact for integer
+    texels and weights, whose sums stay integers below 2^53; for other data, to a few ulps of
+    the total).  Internal centroids serve the tree search only."""
     nn = left.size
-    sizes = np.array([rows[i].size for i in leaf_nodes])
-    who = np.concatenate([rows[i] for i in leaf_nodes])
-    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
-    lw = np.add.reduceat(wu[who], starts)
-    ls = np.add.reduceat(wu[who, None] * u[who], starts)
+    lw, ls = centroids(u, wu, labels, len(leaf_nodes))
     pw = np.concatenate([[0.0], np.cumsum(lw)])
     ps = np.vstack([np.zeros((1, u.shape[1])), np.cumsum(ls, axis=0)])
     lo, hi = [0] * nn, [0] * nn
