@@ -12,12 +12,17 @@ from amaranth import *
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
+import numpy as np
+
+from vqtex.golden.color import JFIF_BT601
 from vqtex.golden.format import TextureSet
+from vqtex.golden.geometry import Geometry
 
 from .banked_rom import BANK_DEPTH
+from .bus_port import DATA_WIDTH
 from .codebook_rom import CodebookROM
 from .color_matrix import ColorMatrix
-from .descriptor import descriptor_widths
+from .descriptor import as_geometry
 from .features import Features
 from .pipeline import LinkLayout, RGBALayout, addr_bits
 
@@ -37,8 +42,13 @@ class BackEnd(wiring.Component):
 
     Arguments
     ---------
-    texture_set : TextureSet
-        Codebook memory, raw memory, colour matrix.
+    texture_set : TextureSet or None
+        Codebook memory, raw memory, colour matrix (the contents; required unless loadable).
+    geometry : Geometry, optional
+        Memory depths and field widths (default ``Geometry.of(texture_set)``).
+    load : data.StructLayout, optional
+        The bus port's load command: the codebook and raw memories and the colour matrix are
+        loadable; members ``load`` and ``load_data``.
     bank_depth
         As for :class:`hw.texel_fetch.TexelFetch`.
     features : hw.features.Features, optional
@@ -53,28 +63,39 @@ class BackEnd(wiring.Component):
         The colour shown on the output (r, g, b, a).
     """
 
-    def __init__(self, texture_set: TextureSet, *, bank_depth: int = BANK_DEPTH,
-                 features: Features | None = None):
+    def __init__(self, texture_set: TextureSet | None = None, *, bank_depth: int = BANK_DEPTH,
+                 features: Features | None = None, geometry: Geometry | None = None, load=None):
         self._ts = texture_set
+        self._geometry = geometry if geometry is not None else as_geometry(texture_set)
+        self._load = load
         self._bank_depth = bank_depth
         self._features = features if features is not None else Features.full(texture_set)
         super().__init__({
-            "link": In(LinkLayout(texture_set, self._features)),
+            "link": In(LinkLayout(self._geometry, self._features)),
             "rgba": Out(RGBALayout),
+            **({} if load is None else {"load": In(load), "load_data": Out(DATA_WIDTH)}),
         })
 
     def elaborate(self, platform):
         m = Module()
         ts = self._ts
+        g = self._geometry
         feat = self._features
-        widths = descriptor_widths(ts)
+        load = self._load
+        widths = g.descriptor_widths()
         link = self.link
         m.submodules.codebook_rom = rom = CodebookROM(
-            ts.codebook, ts.raw_words, cb_bits=widths["cb_base"], raw_bits=addr_bits(len(ts.raw_words)),
+            ts.codebook if ts is not None else np.zeros((0, g.entry_bytes), np.uint8),
+            ts.raw_words if ts is not None else (), cb_bits=widths["cb_base"], raw_bits=addr_bits(g.raw_words),
             off_bits=widths["texel_off"], bank_depth=self._bank_depth, features=feat,
-            color_bits=widths["color"])
+            color_bits=widths["color"], entries=g.codebook_entries, entry_bytes=g.entry_bytes,
+            raw_depth=g.raw_words, load=load)
         m.submodules.color_matrix = cm = ColorMatrix(
-            ts.matrix, colors=sorted(feat.output_codes) if feat.specialised else None)
+            ts.matrix if ts is not None else JFIF_BT601,
+            colors=sorted(feat.output_codes) if feat.specialised else None, load=load)
+        if load is not None:
+            m.d.comb += [rom.load.eq(self.load), cm.load.eq(self.load),
+                         self.load_data.eq(rom.load_data | cm.load_data)]
 
         # Stages 8-11: codebook ROM (and raw memory). The side fields a specialised unit does not
         # carry are constants the ROM knows from the features, or fields it does not use.

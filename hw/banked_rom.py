@@ -1,4 +1,5 @@
-"""Banked ROM: a read-only memory split into banks of at most 512 words, each read registered twice.
+"""Banked ROM: a memory split into banks of at most 512 words, each read registered twice; read-only,
+or loaded at run time through the unit's bus port (``load``: :mod:`hw.bus_port`).
 
 An ECP5 DP16KD block RAM is 512 words deep at its widest (36 bits); Yosys builds a deeper memory from
 several of them and puts a LUT multiplexer on their read data in the same cycle as the block RAM's
@@ -16,6 +17,8 @@ from amaranth import *
 from amaranth.lib import data, memory, wiring
 from amaranth.lib.wiring import In, Out
 from amaranth.utils import ceil_log2
+
+from .bus_port import DATA_WIDTH, LoadTarget, attach_memory
 
 __all__ = ["BankedROM", "BANK_DEPTH", "LATENCY", "pick", "addr_bits"]
 
@@ -38,6 +41,14 @@ def pick(values: list, index):
         values = [Mux(index[bit], values[n + 1], values[n]) for n in range(0, len(values), 2)]
         bit += 1
     return values[0]
+
+
+def _any(values):
+    """The OR of read answers (each 0 unless addressed): one value."""
+    out = values[0]
+    for v in values[1:]:
+        out = out | v
+    return out
 
 
 def addr_bits(depth: int) -> int:
@@ -82,7 +93,7 @@ class BankedROM(wiring.Component):
         If ``bank_depth`` is not a power of two.
     """
 
-    def __new__(cls, init, *, width: int, bank_depth: int = BANK_DEPTH, **kwargs):
+    def __new__(cls, init=(), *, width: int, bank_depth: int = BANK_DEPTH, **kwargs):
         # Parameters are checked before the instance exists, so a rejected one is never created
         # (and never reported by Amaranth as an elaboratable that was not used).
         for name, v in (("width", width), ("bank_depth", bank_depth)):
@@ -92,18 +103,26 @@ class BankedROM(wiring.Component):
             raise ValueError(f"bank depth {bank_depth} is not a power of two")
         return super().__new__(cls, init, width=width, bank_depth=bank_depth, **kwargs)
 
-    def __init__(self, init, *, width: int, bank_depth: int = BANK_DEPTH):
+    def __init__(self, init=(), *, width: int, bank_depth: int = BANK_DEPTH, depth: int | None = None,
+                 load: LoadTarget | None = None):
         self._init = [int(v) for v in init] or [0]
+        self._depth = max(1, len(self._init) if depth is None else int(depth))
+        if len(self._init) > self._depth:
+            raise ValueError(f"{len(self._init)} words of contents do not fit a memory of {self._depth}")
         self._width = width
         self._bank_depth = bank_depth
-        self._banks = -(-len(self._init) // bank_depth)
-        super().__init__({
-            "addr": In(addr_bits(len(self._init))),
+        self._banks = -(-self._depth // bank_depth)
+        self._load = load
+        members = {
+            "addr": In(addr_bits(self._depth)),
             "en": In(1),
             "data": Out(data.ArrayLayout(width, self._banks)),
             "bank": Out(unsigned(addr_bits(self._banks))),
             "word": Out(width),
-        })
+        }
+        if load is not None:
+            members.update(load=In(load.layout), load_data=Out(DATA_WIDTH))
+        super().__init__(members)
 
     @property
     def banks(self) -> int:
@@ -111,7 +130,7 @@ class BankedROM(wiring.Component):
 
     @property
     def depth(self) -> int:
-        return len(self._init)
+        return self._depth
 
     @property
     def latency(self) -> int:
@@ -122,19 +141,31 @@ class BankedROM(wiring.Component):
         d = self._bank_depth
         offset_bits = (d - 1).bit_length() if self._banks > 1 else len(self.addr)
         data = []
+        answers = []
+        load = self._load
+        # A loadable bank of more than 32 bits is written 32 bits at a time: its width is padded to
+        # whole bus words (the padding is never read by the pipeline).
+        stored = self._width if load is None or self._width <= DATA_WIDTH else -(-self._width // DATA_WIDTH) * DATA_WIDTH
         for k in range(self._banks):
             part = self._init[k * d:(k + 1) * d]
-            m.submodules[f"bank{k}"] = mem = memory.Memory(shape=self._width, depth=len(part), init=part)
+            depth = min(d, self._depth - k * d) if load is not None or self._depth > len(self._init) else len(part)
+            m.submodules[f"bank{k}"] = mem = memory.Memory(shape=stored, depth=depth, init=part)
+            if load is not None:
+                answers.append(attach_memory(m, mem, self.load, region=load.region, lanes=load.lanes,
+                                             stride=load.stride, phase=load.phase, first=k * d * load.stride,
+                                             name=f"bank{k}_load"))
             rd = mem.read_port(domain="sync")
             m.d.comb += [rd.addr.eq(self.addr[:offset_bits]), rd.en.eq(self.en)]
             q = Signal(self._width, name=f"data{k}")
             with m.If(self.en):
-                m.d.sync += q.eq(rd.data)
+                m.d.sync += q.eq(rd.data if stored == self._width else rd.data[:self._width])
             data.append(q)
         # A register of its own per bank, and ``data`` driven as one concatenation (pure wiring):
         # simulators (CXXRTL) then read each bank's register directly instead of assembling and
         # slicing one wide value every cycle.
         m.d.comb += self.data.eq(Cat(*data))
+        if load is not None:
+            m.d.comb += self.load_data.eq(_any(answers))
         if self._banks == 1:
             m.d.comb += [self.word.eq(data[0]), self.bank.eq(0)]
             return m

@@ -17,7 +17,10 @@ from amaranth.lib.wiring import In, Out
 
 from vqtex.golden.format import COLOR_CODES
 
+from vqtex.golden.register_map import REGIONS
+
 from .banked_rom import BANK_DEPTH, BankedROM, pick
+from .bus_port import DATA_WIDTH, LoadTarget
 from .features import Features
 from .registers import enabled_register
 
@@ -108,6 +111,12 @@ class CodebookROM(wiring.Component):
         ``cb_base`` = 0 none either). PowerVR2's paths only for its formats in ``features.colors``.
     color_bits : int
         Width of the colour code: 2 (the paper's formats) or 3 (a set with PowerVR2 textures).
+    entries, entry_bytes, raw_depth : int, optional
+        The memories' depths and the entry width when they differ from the images' (a geometry's;
+        the images are then the initial contents).
+    load : data.StructLayout, optional
+        The bus port's load command (:func:`hw.bus_port.load_layout`): both memories are loadable
+        (regions ``codebook`` and ``raw``); members ``load`` and ``load_data``.
 
     Members
     -------
@@ -136,13 +145,19 @@ class CodebookROM(wiring.Component):
     """
 
     def __init__(self, codebook, raw_words, *, cb_bits: int, raw_bits: int, off_bits: int,
-                 bank_depth: int = BANK_DEPTH, features: Features | None = None, color_bits: int = 2):
+                 bank_depth: int = BANK_DEPTH, features: Features | None = None, color_bits: int = 2,
+                 entries: int | None = None, entry_bytes: int | None = None, raw_depth: int | None = None,
+                 load=None):
         codebook = np.asarray(codebook, dtype=np.uint8)
         if codebook.ndim != 2:
             raise ValueError("codebook memory must be a 2-D uint8 array")
-        self._entry_bytes = max(1, codebook.shape[1])
+        self._entry_bytes = max(1, codebook.shape[1] if entry_bytes is None else entry_bytes)
+        if codebook.shape[1] > self._entry_bytes:
+            raise ValueError(f"codebook entries of {codebook.shape[1]} bytes exceed {self._entry_bytes}")
         self._entries = _entry_ints(codebook) or [0]
         self._raw = [int(v) for v in np.asarray(raw_words, dtype=np.uint32).tolist()] or [0]
+        self._depths = (entries, raw_depth)
+        self._load = load
         self._bank_depth = bank_depth
         if color_bits not in (2, 3):
             raise ValueError(f"color_bits must be 2 (the paper's formats) or 3 (with PowerVR2's), not {color_bits!r}")
@@ -164,6 +179,7 @@ class CodebookROM(wiring.Component):
             "en": In(1),
             "samples": Out(SamplesLayout),
             "color_out": Out(2),
+            **({} if load is None else {"load": In(load), "load_data": Out(DATA_WIDTH)}),
         })
 
     @property
@@ -189,13 +205,32 @@ class CodebookROM(wiring.Component):
         codes = feat.color_codes
         yuv422 = _YUV422 in codes
         expand = {c for c in codes if _BYTES_PER_TEXEL.get(c) == 2 and c != _YUV422}
+        load = self._load
+        answers = []
+
+        def target(region, lanes):
+            return None if load is None else LoadTarget(load, REGIONS[region], lanes=lanes)
+
         if feat.compressed:
-            m.submodules.codebook = codebook = BankedROM(self._entries, width=nbytes * 8, bank_depth=self._bank_depth)
+            lanes = 1 << max(0, (-(-nbytes // 4) - 1).bit_length())     # register_map's entry_lanes
+            m.submodules.codebook = codebook = BankedROM(
+                self._entries, width=nbytes * 8, bank_depth=self._bank_depth, depth=self._depths[0],
+                load=target("codebook", lanes))
             m.d.comb += [codebook.addr.eq(self.index if _is_zero(cb_base) else cb_base + self.index),
                          codebook.en.eq(self.en)]
+            if load is not None:
+                m.d.comb += codebook.load.eq(self.load)
+                answers.append(codebook.load_data)
         if feat.raw:
-            m.submodules.raw = raw = BankedROM(self._raw, width=32, bank_depth=self._bank_depth)
+            m.submodules.raw = raw = BankedROM(self._raw, width=32, bank_depth=self._bank_depth,
+                                               depth=self._depths[1], load=target("raw", 1))
             m.d.comb += [raw.addr.eq(self.raw_addr), raw.en.eq(self.en)]
+            if load is not None:
+                m.d.comb += raw.load.eq(self.load)
+                answers.append(raw.load_data)
+        if load is not None:
+            m.d.comb += self.load_data.eq(answers[0] if len(answers) == 1 else answers[0] | answers[1]
+                                          if answers else 0)
 
         def reg(value, name):
             return enabled_register(m, self.en, value, name)

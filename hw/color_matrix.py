@@ -18,6 +18,7 @@ from amaranth.lib.wiring import In, Out
 
 from vqtex.golden.color import ColorMatrix as ColorMatrixSpec
 from vqtex.golden.format import COLOR_CODES
+from vqtex.golden.register_map import COEFF_BITS, CONTROL, REGIONS
 
 from .codebook_rom import SamplesLayout
 
@@ -46,12 +47,21 @@ class ColorMatrix(wiring.Component):
     the output multiplexer has only their cases, and without yuv411 there is no offset, product or
     sum at all: the three stages are plain registers of the samples (the latency stays 3).
 
+    Loadable (``load``): the coefficients (18-bit signed), offsets (8 bits), ``F`` (5 bits) and the
+    rounding bit are registers the host writes over the bus port (control region, offsets
+    ``golden.register_map.CONTROL``), initialised from ``matrix`` and kept through a reset (they
+    are contents, not pipeline state); all nine products are 18 x 9-bit multipliers and the shift
+    by ``F`` is a barrel shifter. Same latency and throughput.
+
     Arguments
     ---------
     matrix : golden.color.ColorMatrix
-        Coefficients, offsets, fractional bits and rounding.
+        Coefficients, offsets, fractional bits and rounding (a loadable matrix's initial value).
     colors : iterable of int, optional
         Colour codes of the samples that can arrive (default: all four).
+    load : data.StructLayout, optional
+        The bus port's load command (:func:`hw.bus_port.load_layout`): the matrix is loadable;
+        members ``load`` and ``load_data`` (this matrix's read answer).
 
     Members
     -------
@@ -70,7 +80,7 @@ class ColorMatrix(wiring.Component):
         If ``matrix`` is not a :class:`golden.color.ColorMatrix`.
     """
 
-    def __init__(self, matrix: ColorMatrixSpec, *, colors=None):
+    def __init__(self, matrix: ColorMatrixSpec, *, colors=None, load=None):
         if not isinstance(matrix, ColorMatrixSpec):
             raise TypeError(f"matrix must be a golden.color.ColorMatrix, not {type(matrix).__name__}")
         self._matrix = matrix
@@ -78,11 +88,13 @@ class ColorMatrix(wiring.Component):
         self._colors = frozenset(range(4)) if colors is None else frozenset(int(c) for c in colors)
         if not self._colors or not self._colors <= set(range(4)):
             raise ValueError(f"colour codes {sorted(self._colors)} must be a non-empty subset of 0..3")
+        self._load = load
         super().__init__({
             "samples": In(SamplesLayout),
             "color": In(2),
             "en": In(1),
             "rgba": Out(SamplesLayout),
+            **({} if load is None else {"load": In(load), "load_data": Out(32)}),
         })
 
     @property
@@ -93,6 +105,37 @@ class ColorMatrix(wiring.Component):
     def latency(self) -> int:
         return LATENCY
 
+    def _registers(self, m) -> dict:
+        """The loadable matrix's registers (reset-less, initialised from the matrix), their bus
+        writes, and this block's read answer: name -> register (``coeff`` a 3x3 list)."""
+        mat = self._matrix
+        load = self.load
+        regs = {"coeff": [[Signal(signed(COEFF_BITS), name=f"m_{'rgb'[c]}{'yuv'[k]}", init=mat.coeffs[c][k],
+                                  reset_less=True) for k in range(3)] for c in range(3)],
+                "offset": [Signal(8, name=f"off_{'yuv'[k]}", init=mat.offsets[k], reset_less=True) for k in range(3)],
+                "frac": Signal(5, name="frac_bits", init=mat.frac_bits, reset_less=True),
+                "rounding": Signal(1, name="rounding", init=int(mat.rounding), reset_less=True)}
+        by_offset = {}
+        for c in range(3):
+            for k in range(3):
+                by_offset[CONTROL[f"MATRIX_{'RGB'[c]}{'YUV'[k]}"][0]] = regs["coeff"][c][k]
+        for k in range(3):
+            by_offset[CONTROL[f"MATRIX_OFFSET_{'YUV'[k]}"][0]] = regs["offset"][k]
+        by_offset[CONTROL["MATRIX_FRAC_BITS"][0]] = regs["frac"]
+        by_offset[CONTROL["MATRIX_ROUNDING"][0]] = regs["rounding"]
+        mine = load.region == REGIONS["control"]
+        answer = Signal(32, name="matrix_answer")
+        m.d.sync += answer.eq(0)
+        with m.Switch(load.offset):
+            for off, reg in by_offset.items():
+                with m.Case(off):
+                    with m.If(load.write & mine):
+                        m.d.sync += reg.eq(load.data[:len(reg)])
+                    with m.If(load.read & mine):        # coefficients read back sign-extended
+                        m.d.sync += answer.eq(reg.as_signed() if reg.shape().signed else reg)
+        m.d.comb += self.load_data.eq(answer)
+        return regs
+
     def elaborate(self, platform):
         m = Module()
         mat = self._matrix
@@ -102,6 +145,11 @@ class ColorMatrix(wiring.Component):
         one = len(colors) == 1              # one format: no multiplexer, no format carried
         # Input k is offset iff it feeds a product (some coefficient of its column is non-zero).
         used = [matrix and (self._all or any(mat.coeffs[c][k] for c in range(3))) for k in range(3)]
+        regs = None
+        if self._load is not None:          # registers: every product, every width at its largest
+            regs = self._registers(m)
+            used = [matrix] * 3
+            pbits, sbits = COEFF_BITS + 9, COEFF_BITS + 9 + 3
 
         # Stage 1: offsets, registered (the multipliers' operands come straight from flip-flops).
         x = [Signal(signed(9), name=f"x{k}") for k in range(3)]
@@ -112,7 +160,9 @@ class ColorMatrix(wiring.Component):
                 if not used[k]:
                     continue
                 sample, off = self.samples[k], mat.offsets[k]
-                if off == 0:
+                if regs is not None:
+                    m.d.sync += x[k].eq(sample - regs["offset"][k])
+                elif off == 0:
                     m.d.sync += x[k].eq(sample)
                 elif off == 128:        # in - 128: the top bit inverted, read as signed (no adder)
                     m.d.sync += x[k].eq(Cat(sample[:7], ~sample[7]).as_signed())
@@ -128,6 +178,10 @@ class ColorMatrix(wiring.Component):
             for c in range(3):
                 for k in range(3):
                     coeff = mat.coeffs[c][k]
+                    if regs is not None:
+                        if matrix:
+                            m.d.sync += prod[c][k].eq(x[k] * regs["coeff"][c][k])
+                        continue
                     if not matrix or (coeff == 0 and not self._all):
                         continue                # no product
                     if not self._all and abs(coeff) & (abs(coeff) - 1) == 0:   # +-2^n: a shift
@@ -146,14 +200,18 @@ class ColorMatrix(wiring.Component):
         for c in range(3):
             if not matrix:
                 break
-            terms = [prod[c][k] for k in range(3) if self._all or mat.coeffs[c][k]]
+            terms = [prod[c][k] for k in range(3) if self._all or regs is not None or mat.coeffs[c][k]]
             total = terms[0] if terms else C(0, 1)
             for term in terms[1:]:
                 total = total + term
-            m.d.comb += [
-                acc[c].eq(total + mat.bias),
-                shifted[c].eq(acc[c] >> F),
-            ]
+            if regs is not None:            # bias 2^(F-1) when rounding (and F > 0), shift by F
+                bias = Mux(regs["rounding"] & (regs["frac"] != 0), C(1, 17) << (regs["frac"] - 1)[:4], 0)
+                m.d.comb += [acc[c].eq(total + bias), shifted[c].eq(acc[c] >> regs["frac"])]
+            else:
+                m.d.comb += [
+                    acc[c].eq(total + mat.bias),
+                    shifted[c].eq(acc[c] >> F),
+                ]
             # Clamp by bit tests (no comparator): negative is the sign bit, above 255 is any bit
             # between bit 8 and the sign set.
             negative = Signal(name=f"negative_{'rgb'[c]}")

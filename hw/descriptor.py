@@ -1,8 +1,13 @@
 """Descriptor table: (texture, level) -> the level's descriptor row.
 
-Twin of :func:`golden.fetch.lookup_descriptor`. The table is a ROM holding
-``golden.format.TextureSet.descriptors`` (``MAX_LEVELS`` rows per texture, row address
-``texture * MAX_LEVELS + level``), so one pipeline serves every texture of a scene.
+Twin of :func:`golden.fetch.lookup_descriptor`. The table holds ``golden.format.TextureSet.descriptors``
+(``MAX_LEVELS`` rows per texture, row address ``texture * MAX_LEVELS + level``), so one pipeline
+serves every texture of a scene: a ROM (the baked unit), or four memories, one per 32-bit register
+word of a row (:data:`golden.register_map.DESCRIPTOR_WORDS`), that the host writes over the bus port
+(the loadable unit).
+
+The widths of the fields come from a :class:`golden.geometry.Geometry`; every function here that
+takes a geometry also takes a texture set (its smallest geometry, ``Geometry.of``).
 """
 
 from __future__ import annotations
@@ -14,22 +19,30 @@ from amaranth.lib.wiring import In, Out
 from amaranth.utils import bits_for
 
 from vqtex.golden.format import DESCRIPTOR_FIELDS, MAX_LEVELS, TextureSet, log2
+from vqtex.golden.geometry import Geometry
+from vqtex.golden.register_map import DESCRIPTOR_WORDS, REGIONS
 
-from .features import Features, Fields, pvr2_set
+from .bus_port import DATA_WIDTH, attach_memory
+from .features import READ_BY, Features, Fields
 
-__all__ = ["DescriptorLayout", "DescriptorTable", "descriptor_widths", "texture_bits", "LEVEL_BITS"]
+__all__ = ["DescriptorLayout", "DescriptorTable", "descriptor_widths", "texture_bits", "LEVEL_BITS", "as_geometry"]
 
 #: Width of a level number (``MAX_LEVELS`` = 16 rows per texture).
 LEVEL_BITS = log2(MAX_LEVELS)
 
 
-def texture_bits(ts: TextureSet) -> int:
-    """Width of a texture id for this set (at least 1)."""
-    return bits_for(ts.n_textures - 1)
+def as_geometry(shape) -> Geometry:
+    """``shape`` if it is a :class:`Geometry`, else the smallest geometry of the texture set ``shape``."""
+    return shape if isinstance(shape, Geometry) else Geometry.of(shape)
 
 
-def descriptor_widths(ts: TextureSet) -> dict:
-    """Width of every descriptor field for the memories of ``ts`` (field name -> bits).
+def texture_bits(ts: TextureSet | Geometry) -> int:
+    """Width of a texture id for this set or geometry (at least 1)."""
+    return as_geometry(ts).texture_bits
+
+
+def descriptor_widths(ts: TextureSet | Geometry) -> dict:
+    """Width of every descriptor field for the memories of ``ts`` or a geometry (field name -> bits).
 
     ``base`` is wide enough for both the index memory and the raw memory, ``cb_base`` for the
     codebook memory, the plane offsets for a byte of the widest entry. ``color`` is 2 bits (the
@@ -38,25 +51,7 @@ def descriptor_widths(ts: TextureSet) -> dict:
     the paper's unit (:func:`hw.features.pvr2_set`; :class:`hw.features.Features` says which
     PowerVR2 paths the stages elaborate).
     """
-    base_bits = bits_for(max(len(ts.index_words), len(ts.raw_words)))
-    pvr2 = pvr2_set(ts)
-    return {
-        "valid": 1,
-        "compressed": 1,
-        "base": base_bits,
-        "log2w": 4,
-        "log2h": 4,
-        "log2bw": 2,
-        "log2bh": 2,
-        "index_bits": 5,
-        "cb_base": bits_for(len(ts.codebook)),
-        "sublevel": 2,
-        "color": 3 if pvr2 else 2,
-        "texel_off": bits_for(ts.entry_bytes),
-        "u_off": bits_for(ts.entry_bytes),
-        "v_off": bits_for(ts.entry_bytes),
-        "layout": 1 if pvr2 else 0,
-    }
+    return as_geometry(ts).descriptor_widths()
 
 
 class DescriptorLayout(data.StructLayout):
@@ -79,8 +74,12 @@ class DescriptorLayout(data.StructLayout):
         super().__init__({name: unsigned(widths[name]) for name in DESCRIPTOR_FIELDS if name in fields})
 
 
+#: The fields a loadable table gives the pipeline (it stores every field, for the host to read back).
+READ_BY_TABLE = frozenset(READ_BY)
+
+
 class DescriptorTable(wiring.Component):
-    """The descriptor table ROM.
+    """The descriptor table: a ROM of a set's rows, or loaded over the bus port.
 
     Latency 1 (a synchronous read: the row for the ``texture`` and ``level`` presented in the cycle
     ``en`` is high appears on ``row`` in the next cycle and stays there while ``en`` is low).
@@ -92,16 +91,25 @@ class DescriptorTable(wiring.Component):
     no memory at all when every field is a constant; :meth:`fields` gives every field, a constant
     or a column of ``row``.
 
+    Loadable (``load``): ``geometry.descriptor_rows`` rows in four memories, one per register word
+    of a row (:data:`golden.register_map.DESCRIPTOR_WORDS`, each as wide as its fields), every
+    field stored (the host reads back what it wrote), no constants; ``ts``, if given, is the
+    initial contents.
+
     Arguments
     ---------
-    ts : TextureSet
-        The texture set whose descriptors the ROM holds.
+    ts : TextureSet, optional
+        The texture set whose descriptors the table holds (required for a ROM).
     features : Features, optional
         Default ``Features.full(ts)``: every field, ``texture * 16 + level``.
+    geometry : Geometry, optional
+        The field widths and the rows (default ``Geometry.of(ts)``).
+    load : data.StructLayout, optional
+        The bus port's load command (:func:`hw.bus_port.load_layout`): the table is loadable.
 
     Members
     -------
-    texture : In(texture_bits(ts))
+    texture : In(geometry.texture_bits)
         Texture id.
     level : In(4)
         Level inside the texture (0..15).
@@ -109,18 +117,27 @@ class DescriptorTable(wiring.Component):
         Read enable (the pipeline's advance).
     row : Out(DescriptorLayout)
         The descriptor row (the stored fields), registered.
+    load : In(load), load_data : Out(32)
+        Only when loadable: the load command and this table's read answer.
     """
 
-    def __init__(self, ts: TextureSet, *, features: Features | None = None):
+    def __init__(self, ts: TextureSet | None = None, *, features: Features | None = None,
+                 geometry: Geometry | None = None, load=None):
+        if ts is None and (geometry is None or load is None):
+            raise TypeError("a descriptor table without contents needs a geometry and a load port")
         self._ts = ts
+        self._geometry = geometry if geometry is not None else as_geometry(ts)
         self._features = features if features is not None else Features.full(ts)
-        self._widths = descriptor_widths(ts)
-        self._layout = DescriptorLayout(self._widths, self._features.stored_fields)
+        self._widths = self._geometry.descriptor_widths()
+        self._load = load
+        stored = [n for n in self._features.stored_fields if n in READ_BY_TABLE or load is None]
+        self._layout = DescriptorLayout(self._widths, stored)
         super().__init__({
-            "texture": In(texture_bits(ts)),
+            "texture": In(self._geometry.texture_bits),
             "level": In(LEVEL_BITS),
             "en": In(1),
             "row": Out(self._layout),
+            **({} if load is None else {"load": In(load), "load_data": Out(DATA_WIDTH)}),
         })
 
     @property
@@ -136,19 +153,30 @@ class DescriptorTable(wiring.Component):
         the same layout): the stored ones as its fields, the constant ones as constants."""
         return Fields(self.row if view is None else view, self._features.constants, self._widths)
 
+    def _rows(self, lb: int, tb: int) -> np.ndarray:
+        """The contents, ``1 << lb`` rows per texture, ``1 << (tb + lb)`` rows in all (zero rows past
+        the set's)."""
+        rows = self._ts.descriptors[:, :1 << lb]
+        if rows.shape[1] < 1 << lb:         # the full table: 16 rows per texture
+            pad = np.zeros((rows.shape[0], (1 << lb) - rows.shape[1]), rows.dtype)
+            rows = np.concatenate([rows, pad], axis=1)
+        rows = rows.reshape(-1)
+        depth = 1 << (tb + lb)
+        if len(rows) < depth:
+            rows = np.concatenate([rows, np.zeros(depth - len(rows), rows.dtype)])
+        return rows[:depth]
+
     def elaborate(self, platform):
+        if self._load is not None:
+            return self._elaborate_loadable()
         m = Module()
         names = [name for name, _ in self._layout]
         if not names:                       # every field a constant: nothing to store
             return m
         lb, tb = self._features.level_bits, self._features.texture_bits
-        rows = self._ts.descriptors[:, :1 << lb]
-        if rows.shape[1] < 1 << lb:         # the full table: 16 rows per texture
-            pad = np.zeros((rows.shape[0], (1 << lb) - rows.shape[1]), rows.dtype)
-            rows = np.concatenate([rows, pad], axis=1)
-        init = [{name: int(row[name]) for name in names} for row in rows.reshape(-1)]
+        rows = self._rows(lb, tb)
+        init = [{name: int(row[name]) for name in names} for row in rows]
         depth = 1 << (tb + lb)                                  # every address decodes
-        init += [{name: 0 for name in names}] * (depth - len(init))
         # A set with PowerVR2 textures keeps the table in LUTs (as Yosys does for most paper sets):
         # its twiddle adds logic after the read, and a block RAM's clock-to-output (4.3 ns on the
         # ECP5-8) left too little of the cycle for it (89 MHz, docs/pvr2.md).
@@ -160,4 +188,47 @@ class DescriptorTable(wiring.Component):
             port.en.eq(self.en),
             self.row.eq(port.data),
         ]
+        return m
+
+    def _elaborate_loadable(self):
+        """Four memories, one per register word of a row, each as wide as the word's fields; the
+        pipeline reads all four at ``texture * 16 + level``; the bus port writes and reads one."""
+        m = Module()
+        g = self._geometry
+        widths = {name: min(self._widths[name], w) for word in DESCRIPTOR_WORDS for name, _, w in word}
+        depth = g.descriptor_rows
+        addr = Signal(range(max(2, depth)), name="row_address")
+        m.d.comb += addr.eq(Cat(self.level, self.texture))
+        row = {}
+        answers = []
+        contents = self._rows(LEVEL_BITS, g.texture_bits)[:depth] if self._ts is not None else None
+        for w, word in enumerate(DESCRIPTOR_WORDS):
+            present = [(name, lsb) for name, lsb, _ in word if widths[name]]
+            if not present:
+                continue
+            layout = data.StructLayout({name: unsigned(widths[name]) for name, _ in present})
+            init = [] if contents is None else [{name: int(r[name]) & ((1 << widths[name]) - 1)
+                                                  for name, _ in present} for r in contents]
+            m.submodules[f"word{w}"] = mem = memory.Memory(shape=layout, depth=depth, init=init)
+
+            def pack(bus_word, present=present, layout=layout):     # noqa: E306
+                return Cat(*(bus_word[lsb:lsb + layout.members[name].width] for name, lsb in present))
+
+            def unpack(view, present=present):
+                out = C(0, DATA_WIDTH)
+                for name, lsb in present:
+                    out = out | (Value.cast(getattr(view, name)) << lsb)
+                return out[:DATA_WIDTH]
+
+            answers.append(attach_memory(m, mem, self.load, region=REGIONS["descriptors"], lanes=4, lane=w,
+                                         pack=pack, unpack=unpack, name=f"word{w}_load"))
+            port = mem.read_port(domain="sync")
+            m.d.comb += [port.addr.eq(addr), port.en.eq(self.en)]
+            for name, _ in present:
+                row[name] = getattr(port.data, name)
+        answer = answers[0]
+        for other in answers[1:]:
+            answer = answer | other
+        m.d.comb += self.load_data.eq(answer)
+        m.d.comb += [getattr(self.row, name).eq(row[name]) for name, _ in self._layout if name in row]
         return m

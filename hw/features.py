@@ -178,6 +178,17 @@ class Features:
                    layouts=frozenset({0, _TWIDDLED} if pvr2 else {0}))
 
     @classmethod
+    def of_geometry(cls, geometry) -> "Features":
+        """What a loadable unit of ``geometry`` (:class:`golden.geometry.Geometry`) builds: every
+        path its formats, index widths, layouts and memories can ask for, every descriptor field
+        read from the table (none is a constant: the host may load any value)."""
+        return cls(specialised=True, compressed=geometry.codebook_entries > 0, raw=geometry.raw_words > 0,
+                   colors=frozenset(geometry.colors), index_widths=tuple(geometry.index_widths),
+                   straddle=geometry.straddle, sublevels=geometry.extended, constants={},
+                   level_bits=log2(MAX_LEVELS), texture_bits=geometry.texture_bits,
+                   layouts=frozenset(LAYOUT_CODES[name] for name in geometry.layouts))
+
+    @classmethod
     def for_set(cls, ts: TextureSet, specialise: bool) -> "Features":
         return cls.of(ts) if specialise else cls.full(ts)
 

@@ -13,11 +13,13 @@ from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
 from vqtex.golden.format import TextureSet
+from vqtex.golden.geometry import Geometry
 
 from . import index_reader
 from .address import BlockAddress
 from .banked_rom import BANK_DEPTH
-from .descriptor import DescriptorTable, descriptor_widths, texture_bits
+from .bus_port import DATA_WIDTH
+from .descriptor import DescriptorTable, as_geometry
 from .features import Features
 from .index_reader import IndexReader, IndexRequestLayout
 from .registers import enabled_register
@@ -26,20 +28,17 @@ from .pipeline import STAGES, UPSTREAM_STAGES, REGISTERS, LinkLayout, RequestLay
 __all__ = ["FrontEnd", "index_port_members"]
 
 
-def k_bits(ts: TextureSet) -> int:
-    """Width of the block number ``k``: enough for the largest compressed level."""
-    d = ts.descriptors
-    comp = (d["compressed"] != 0) & (d["valid"] != 0)
-    if not comp.any():
-        return 1
-    span = (d["log2w"].astype(int) - d["log2bw"] + d["log2h"] - d["log2bh"])[comp]
-    return max(1, int(span.max()))
+def k_bits(ts: TextureSet | Geometry) -> int:
+    """Width of the block number ``k``: enough for the largest compressed level (of a set, or that a
+    geometry addresses)."""
+    return as_geometry(ts).k_bits
 
 
-def index_port_members(ts: TextureSet, features: Features) -> dict:
+def index_port_members(ts: TextureSet | Geometry, features: Features) -> dict:
     """The members of a unit whose index reader is outside it (``index_port``): ``index_request``
     (:class:`hw.index_reader.IndexRequestLayout`) out, ``index_response`` (the index) in."""
-    return {"index_request": Out(IndexRequestLayout(k_bits(ts), descriptor_widths(ts)["base"])),
+    g = as_geometry(ts)
+    return {"index_request": Out(IndexRequestLayout(g.k_bits, g.descriptor_widths()["base"])),
             "index_response": In(features.index_bits)}
 
 
@@ -73,8 +72,14 @@ class FrontEnd(wiring.Component):
 
     Arguments
     ---------
-    texture_set : TextureSet
-        Descriptor table and index memory (and the widths of the side fields).
+    texture_set : TextureSet or None
+        Descriptor table and index memory contents (required unless loadable).
+    geometry : Geometry, optional
+        Memory depths and field widths (default ``Geometry.of(texture_set)``).
+    load : data.StructLayout, optional
+        The bus port's load command (:func:`hw.bus_port.load_layout`): the descriptor table and the
+        index memory are loadable; members ``pause`` (no request is accepted while high),
+        ``load`` and ``load_data`` (the OR of their read answers).
     one_port, tag_width, bank_depth
         As for :class:`hw.texel_fetch.TexelFetch`.
     features : hw.features.Features, optional
@@ -107,18 +112,22 @@ class FrontEnd(wiring.Component):
         Only with ``index_port``: the index read the unit needs (stage 3's inputs) and its answer.
     """
 
-    def __init__(self, texture_set: TextureSet, *, one_port: bool = False, tag_width: int = 8,
-                 bank_depth: int = BANK_DEPTH, features: Features | None = None, index_port: bool = False):
+    def __init__(self, texture_set: TextureSet | None = None, *, one_port: bool = False, tag_width: int = 8,
+                 bank_depth: int = BANK_DEPTH, features: Features | None = None, index_port: bool = False,
+                 geometry: Geometry | None = None, load=None):
         if index_port and one_port:
             raise ValueError("an index reader outside the unit has both word banks: no one_port")
         self._ts = texture_set
+        self._geometry = geometry if geometry is not None else as_geometry(texture_set)
+        self._load = load
         self._one_port = bool(one_port)
         self._index_port = bool(index_port)
         self._tag_width = tag_width
         self._bank_depth = bank_depth
         self._features = features if features is not None else Features.full(texture_set)
+        g = self._geometry
         super().__init__({
-            "i": In(stream.Signature(RequestLayout(texture_bits(texture_set), tag_width))),
+            "i": In(stream.Signature(RequestLayout(g.texture_bits, tag_width))),
             "o_valid": Out(1),
             "o_ready": In(1),
             "straddle": Out(1),
@@ -126,28 +135,32 @@ class FrontEnd(wiring.Component):
             "stall_output": Out(1),
             "valid": Out(len(REGISTERS)),
             "o_tag": Out(tag_width),
-            "link": Out(LinkLayout(texture_set, self._features)),
-            **(index_port_members(texture_set, self._features) if self._index_port else {}),
+            "link": Out(LinkLayout(g, self._features)),
+            **(index_port_members(g, self._features) if self._index_port else {}),
+            **({} if load is None else {"pause": In(1), "load": In(load), "load_data": Out(DATA_WIDTH)}),
         })
 
     def elaborate(self, platform):
         m = Module()
         ts = self._ts
+        g = self._geometry
         feat = self._features
-        widths = descriptor_widths(ts)
-        kb = k_bits(ts)
+        load = self._load
+        widths = g.descriptor_widths()
+        kb = g.k_bits
 
-        m.submodules.descriptor = desc = DescriptorTable(ts, features=feat)
+        m.submodules.descriptor = desc = DescriptorTable(ts, features=feat, geometry=g, load=load)
         m.submodules.address = addr = BlockAddress(
-            base_bits=widths["base"], k_bits=kb, raw_bits=addr_bits(len(ts.raw_words)), raw=feat.raw,
+            base_bits=widths["base"], k_bits=kb, raw_bits=addr_bits(g.raw_words), raw=feat.raw,
             twiddle=feat.twiddled, linear=0 in feat.layouts)
         if feat.compressed and self._index_port:
             idx = _OutsideIndex(self.index_response)
         elif feat.compressed:
             m.submodules.index_reader = idx = IndexReader(
-                ts.index_words, word_bits=ts.word_bits, k_bits=kb, base_bits=widths["base"],
+                ts.index_words if ts is not None else (), word_bits=g.word_bits, k_bits=kb, base_bits=widths["base"],
                 one_port=self._one_port, bank_depth=self._bank_depth,
-                widths=feat.index_widths if feat.specialised else None, straddle=feat.straddle)
+                widths=feat.index_widths if feat.specialised else None, straddle=feat.straddle,
+                depth=g.index_words, load=load)
         else:                               # every level raw: no index reader, the index is 0
             idx = _NoIndex()
 
@@ -160,9 +173,11 @@ class FrontEnd(wiring.Component):
         advance = Signal(init=1)    # every register moves; a flip-flop: no output stall last cycle
         skid_valid = Signal()       # the skid register holds the response shown on ``o``
         upstream = Signal()         # the first UPSTREAM_STAGES registers and the input move
+        # A loadable unit takes no request while the host holds the bus (hw.bus_port's drain rule).
+        taken = self.i.valid if load is None else self.i.valid & ~self.pause
         m.d.comb += [
             upstream.eq(advance & ~idx.hold),
-            self.i.ready.eq(upstream),
+            self.i.ready.eq(upstream if load is None else upstream & ~self.pause),
             self.o_valid.eq(skid_valid | valid[-1]),
             self.stall_output.eq(self.o_valid & ~self.o_ready),
             self.straddle.eq(idx.straddle & upstream),
@@ -175,7 +190,7 @@ class FrontEnd(wiring.Component):
         # whole register: simulators (CXXRTL) then update it with one statement, not one per bit.
         u = UPSTREAM_STAGES
         m.d.sync += valid.eq(Cat(
-            Mux(upstream, Cat(self.i.valid, valid[:u - 1]), valid[:u]),
+            Mux(upstream, Cat(taken, valid[:u - 1]), valid[:u]),
             Mux(advance, Cat(valid[u - 1] & ~idx.hold, valid[u:-1]), valid[u:])))
 
         # -- carried fields: registers beside the blocks' own, same enables ----------------------
@@ -224,7 +239,13 @@ class FrontEnd(wiring.Component):
                 idx.base.eq(d2.base),
                 idx.en.eq(advance),
             ]
-        side = Signal(SideLayout(ts, feat))
+        if load is not None:                # the read answers of the table and the index memory
+            answers = [desc.load_data] + ([idx.load_data] if feat.compressed else [])
+            m.d.comb += self.load_data.eq(answers[0] if len(answers) == 1 else answers[0] | answers[1])
+            m.d.comb += desc.load.eq(self.load)
+            if feat.compressed:
+                m.d.comb += idx.load.eq(self.load)
+        side = Signal(SideLayout(g, feat))
         m.d.comb += side.eq(pack(side.shape(), {
             "compressed": d2.compressed, "cb_base": d2.cb_base, "raw_addr": addr.raw_addr,
             "x": addr.x, "y": addr.y, "log2bw": d2.log2bw, "color": d2.color,

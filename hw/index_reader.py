@@ -25,7 +25,10 @@ from amaranth import *
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
+from vqtex.golden.register_map import REGIONS
+
 from .banked_rom import BANK_DEPTH, BankedROM, pick
+from .bus_port import DATA_WIDTH, LoadTarget
 from .registers import enabled_register
 
 __all__ = ["IndexReader", "IndexRequestLayout", "INDEX_BITS", "LATENCY"]
@@ -120,8 +123,9 @@ class IndexReader(wiring.Component):
         If ``word_bits`` is not 16, 32 or 64, or a width is outside 1..16.
     """
 
-    def __init__(self, words, *, word_bits: int, k_bits: int, base_bits: int, one_port: bool = False,
-                 bank_depth: int = BANK_DEPTH, widths=None, straddle: bool = True):
+    def __init__(self, words=(), *, word_bits: int, k_bits: int, base_bits: int, one_port: bool = False,
+                 bank_depth: int = BANK_DEPTH, widths=None, straddle: bool = True, depth: int | None = None,
+                 load=None):
         if word_bits not in (16, 32, 64):
             raise ValueError(f"index word width {word_bits} is not 16, 32 or 64")
         if widths is not None:
@@ -129,6 +133,8 @@ class IndexReader(wiring.Component):
             if not widths or widths[0] < 1 or widths[-1] > INDEX_BITS:
                 raise ValueError(f"index widths {widths} must be in 1..{INDEX_BITS}")
         self._words = [int(w) for w in np.asarray(words).astype(np.uint64).tolist()] or [0]
+        self._depth = max(1, len(self._words) if depth is None else int(depth))
+        self._load = load
         self._word_bits = word_bits
         self._k_bits = k_bits
         self._one_port = bool(one_port)
@@ -144,6 +150,7 @@ class IndexReader(wiring.Component):
             "straddle": Out(1),
             "hold": Out(1),
             "index": Out(INDEX_BITS if widths is None else widths[-1]),
+            **({} if load is None else {"load": In(load), "load_data": Out(DATA_WIDTH)}),
         })
 
     @property
@@ -159,8 +166,16 @@ class IndexReader(wiring.Component):
         return self._widths is not None
 
     def elaborate(self, platform):
-        if self._widths is not None:
-            return self._elaborate_specialised()
+        self._answers = []                  # the loadable memories' read answers (``_memory``)
+        m = self._elaborate_specialised() if self._widths is not None else self._elaborate_full()
+        if self._load is not None:
+            answer = self._answers[0]
+            for other in self._answers[1:]:
+                answer = answer | other
+            m.d.comb += self.load_data.eq(answer)
+        return m
+
+    def _elaborate_full(self):
         m = Module()
         W = self._word_bits
         log2W = W.bit_length() - 1
@@ -194,6 +209,21 @@ class IndexReader(wiring.Component):
             m.d.sync += self.index.eq((Cat(lo, hi) >> off4)[:INDEX_BITS] & mask)
         return m
 
+    def _memory(self, m, name: str, stride: int = 1, phase: int = 0) -> BankedROM:
+        """The index memory, or its even (``phase`` 0) or odd bank (``stride`` 2), as submodule
+        ``name``: a ROM of the words, or loadable (region ``index``) with ``load``."""
+        words = self._words[phase::stride] or [0]
+        depth = None if self._depth == len(self._words) and self._load is None else \
+            max(1, (self._depth - phase + stride - 1) // stride)
+        target = None if self._load is None else LoadTarget(
+            self._load, REGIONS["index"], lanes=max(1, self._word_bits // DATA_WIDTH), stride=stride, phase=phase)
+        m.submodules[name] = mem = BankedROM(words, width=self._word_bits,
+                                             bank_depth=self._bank_depth, depth=depth, load=target)
+        if target is not None:
+            m.d.comb += mem.load.eq(self.load)
+            self._answers.append(mem.load_data)
+        return mem
+
     def _read_words(self, m, w, carried, *, straddle: bool):
         """Stages 2-4, the memory organisation both readers share: the read of word ``w`` (and
         ``w + 1`` with ``straddle``), and ``carried`` (the fields stage 5 needs) registered twice
@@ -209,7 +239,7 @@ class IndexReader(wiring.Component):
 
         lo = Signal(W, name="lo")                       # stage 4: word[w]
         if not straddle:                                # no index crosses a word: one bank, one word
-            m.submodules.memory = mem = BankedROM(self._words, width=W, bank_depth=self._bank_depth)
+            mem = self._memory(m, "memory")
             m.d.comb += [mem.addr.eq(w), mem.en.eq(self.en)]
             fields3 = reg(reg(carried, "fields_word"), "fields_data")
             with m.If(self.en):
@@ -217,8 +247,8 @@ class IndexReader(wiring.Component):
             return lo, C(0, 0), fields3
         hi = Signal(W, name="hi")                       # stage 4: word[w + 1]
         if not self._one_port:
-            m.submodules.even_bank = even = BankedROM(self._words[0::2] or [0], width=W, bank_depth=self._bank_depth)
-            m.submodules.odd_bank = odd = BankedROM(self._words[1::2] or [0], width=W, bank_depth=self._bank_depth)
+            even = self._memory(m, "even_bank", 2, 0)
+            odd = self._memory(m, "odd_bank", 2, 1)
             m.d.comb += [
                 even.addr.eq((w + 1) >> 1), even.en.eq(self.en),
                 odd.addr.eq(w >> 1), odd.en.eq(self.en),
@@ -232,7 +262,7 @@ class IndexReader(wiring.Component):
                     hi.eq(Mux(parity, even.word, odd.word)),
                 ]
         else:
-            m.submodules.memory = mem = BankedROM(self._words, width=W, bank_depth=self._bank_depth)
+            mem = self._memory(m, "memory")
             second = Signal()               # stage 1 is on the second read of a straddling index
             m.d.comb += [
                 self.hold.eq(self.straddle & ~second),

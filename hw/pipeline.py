@@ -24,7 +24,7 @@ from amaranth.lib import data
 from . import codebook_rom, color_matrix, index_reader
 from .address import COORD_BITS
 from .banked_rom import addr_bits  # noqa: F401 (the pipeline's address widths; re-exported)
-from .descriptor import LEVEL_BITS, descriptor_widths
+from .descriptor import LEVEL_BITS, as_geometry
 from .features import Features
 
 __all__ = ["STAGES", "LATENCY", "UPSTREAM_STAGES", "REGISTERS", "FRONT_STAGES", "RequestLayout",
@@ -103,9 +103,10 @@ def side_fields(ts, features: Features | None = None) -> dict:
     """The side fields a unit carries (name -> width): all of them in the full unit; in a
     specialised one, not the constant descriptor fields, ``raw_addr`` only with raw levels, ``x``
     and ``y`` only with compressed levels, the U and V plane offsets only with yuv411 or yuv422."""
-    w = descriptor_widths(ts)
+    g = as_geometry(ts)
+    w = g.descriptor_widths()
     fields = {
-        "compressed": 1, "cb_base": w["cb_base"], "raw_addr": addr_bits(len(ts.raw_words)),
+        "compressed": 1, "cb_base": w["cb_base"], "raw_addr": addr_bits(g.raw_words),
         "x": 3, "y": 3, "log2bw": 2, "color": w["color"],
         "texel_off": w["texel_off"], "u_off": w["u_off"], "v_off": w["v_off"],
     }

@@ -27,10 +27,12 @@ from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
 from vqtex.golden.format import TextureSet
+from vqtex.golden.geometry import Geometry
+from vqtex.golden.register_map import LoadError, RegisterMap
 
 from .back_end import BackEnd
 from .banked_rom import BANK_DEPTH
-from .descriptor import texture_bits
+from .bus_port import BusPort, load_layout, wishbone_signature
 from .features import Features
 from .front_end import FrontEnd, index_port_members
 from .pipeline import (FRONT_STAGES, LATENCY, REGISTERS, STAGES, UPSTREAM_STAGES, RequestLayout,
@@ -64,10 +66,25 @@ class TexelFetch(wiring.Component):
     duplicated or reordered. ``i.ready = advance & ~hold`` and ``o.valid`` depend on flip-flops
     only, not combinationally on ``o.ready``.
 
+    Loadable (``loadable=True``): the unit is built from a ``geometry`` alone
+    (:class:`golden.geometry.Geometry`: memory depths, field widths, the formats, index widths and
+    layouts it serves); its memories and colour matrix are loaded at run time through the Wishbone
+    slave ``bus`` (:mod:`hw.bus_port`; register map :mod:`golden.register_map`). While the host
+    holds a bus cycle no request is accepted, and a transfer waits until no request is in flight
+    (the drain rule). ``texture_set``, if given, is the initial contents. Same latency,
+    throughput and cycle counts as the baked unit.
+
     Arguments
     ---------
-    texture_set : TextureSet
-        The memories: descriptor table, index memory, codebook memory, raw memory, colour matrix.
+    texture_set : TextureSet, optional
+        The memories: descriptor table, index memory, codebook memory, raw memory, colour matrix
+        (the ROMs of the baked unit; the initial contents of a loadable one).
+    geometry : Geometry, optional
+        What the unit holds and serves (default: ``Geometry.of(texture_set)``, the smallest that
+        holds the set). Required for a loadable unit without contents.
+    loadable : bool
+        Memories loaded over the bus port (see above); ``specialise`` is then ignored: the unit
+        serves every set the geometry holds.
     one_port : bool
         Single-bank index memory (reproduces the paper's straddle penalty in cycle counts).
     tag_width : int
@@ -106,34 +123,55 @@ class TexelFetch(wiring.Component):
         register; ``o.valid`` is ``valid[13] | valid[14]``), for occupancy reports. One vector, so
         that a simulator samples every stage with one read.
 
+    bus : In(hw.bus_port.wishbone_signature(...))
+        Only when loadable: the Wishbone B4 pipelined slave port.
+
     Raises
     ------
     TypeError
         If ``texture_set`` is not a TextureSet or ``tag_width`` is not a non-negative int.
+    golden.register_map.LoadError
+        If a loadable unit's initial contents do not fit its geometry.
     ValueError
         If ``bank_depth`` is not a power of two.
     golden.format.FormatError
         If the texture set's descriptors point outside its memories.
     """
 
-    def __init__(self, texture_set: TextureSet, *, one_port: bool = False, tag_width: int = 8,
-                 bank_depth: int = BANK_DEPTH, specialise: bool = True, index_port: bool = False):
-        if not isinstance(texture_set, TextureSet):
+    def __init__(self, texture_set: TextureSet | None = None, *, one_port: bool = False, tag_width: int = 8,
+                 bank_depth: int = BANK_DEPTH, specialise: bool = True, index_port: bool = False,
+                 geometry: Geometry | None = None, loadable: bool = False):
+        if texture_set is not None and not isinstance(texture_set, TextureSet):
             raise TypeError(f"texture_set must be a TextureSet, not {type(texture_set).__name__}")
+        if texture_set is None and not (loadable and isinstance(geometry, Geometry)):
+            raise TypeError("a TexelFetch without a texture set must be loadable and given a Geometry")
+        if geometry is not None and not isinstance(geometry, Geometry):
+            raise TypeError(f"geometry must be a Geometry, not {type(geometry).__name__}")
         if not isinstance(tag_width, int) or tag_width < 0:
             raise TypeError(f"tag_width must be a non-negative integer, not {tag_width!r}")
         if not isinstance(bank_depth, int) or bank_depth < 1 or bank_depth & (bank_depth - 1):
             raise ValueError(f"bank_depth must be a power of two, not {bank_depth!r}")
-        texture_set.validate()
+        if texture_set is not None:
+            texture_set.validate()
         self._ts = texture_set
+        self._geometry = geometry if geometry is not None else Geometry.of(texture_set)
         if index_port and one_port:
             raise ValueError("an index reader outside the unit has both word banks: no one_port")
+        self._loadable = bool(loadable)
+        if self._loadable and index_port:
+            raise ValueError("a loadable unit keeps its index reader (no index_port)")
+        if texture_set is not None and geometry is not None:
+            misfit = self._geometry.fits(texture_set)
+            if misfit:
+                raise LoadError("the texture set does not fit the unit's geometry: " + "; ".join(misfit))
         self._one_port = bool(one_port)
         self._tag_width = tag_width
         self._bank_depth = bank_depth
-        self._features = Features.for_set(texture_set, bool(specialise))
+        self._features = (Features.of_geometry(self._geometry) if self._loadable
+                          else Features.for_set(texture_set, bool(specialise)))
         self._index_port = bool(index_port) and self._features.compressed
-        self._texture_bits = texture_bits(texture_set)
+        self._texture_bits = self._geometry.texture_bits
+        self._load = load_layout(RegisterMap(self._geometry)) if self._loadable else None
         members = {
             "i": In(stream.Signature(RequestLayout(self._texture_bits, tag_width))),
             "o": Out(stream.Signature(ResponseLayout(tag_width))),
@@ -143,7 +181,9 @@ class TexelFetch(wiring.Component):
         }
         members["valid"] = Out(len(REGISTERS))
         if self._index_port:
-            members.update(index_port_members(texture_set, self._features))
+            members.update(index_port_members(self._geometry, self._features))
+        if self._loadable:
+            members["bus"] = In(wishbone_signature(RegisterMap(self._geometry).addr_bits))
         super().__init__(members)
 
     @property
@@ -156,8 +196,17 @@ class TexelFetch(wiring.Component):
         return self._one_port
 
     @property
-    def texture_set(self) -> TextureSet:
+    def texture_set(self) -> TextureSet | None:
+        """The contents (the ROMs, or a loadable unit's initial contents; None: none)."""
         return self._ts
+
+    @property
+    def geometry(self) -> Geometry:
+        return self._geometry
+
+    @property
+    def loadable(self) -> bool:
+        return self._loadable
 
     @property
     def tag_width(self) -> int:
@@ -182,12 +231,23 @@ class TexelFetch(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
+        load = self._load
         m.submodules.front = front = FrontEnd(self._ts, one_port=self._one_port, tag_width=self._tag_width,
                                               bank_depth=self._bank_depth, features=self._features,
-                                              index_port=self._index_port)
+                                              index_port=self._index_port, geometry=self._geometry, load=load)
         if self._index_port:
             m.d.comb += [self.index_request.eq(front.index_request), front.index_response.eq(self.index_response)]
-        m.submodules.back = back = BackEnd(self._ts, bank_depth=self._bank_depth, features=self._features)
+        m.submodules.back = back = BackEnd(self._ts, bank_depth=self._bank_depth, features=self._features,
+                                           geometry=self._geometry, load=load)
+        if load is not None:                # the bus port and the drain rule (hw.bus_port)
+            m.submodules.bus_port = port = BusPort(self._geometry)
+            wiring.connect(m, wiring.flipped(self.bus), port.bus)
+            m.d.comb += [
+                port.idle.eq(front.valid == 0),
+                front.pause.eq(port.pause),
+                front.load.eq(port.load), back.load.eq(port.load),
+                port.load_data.eq(front.load_data | back.load_data),
+            ]
         wiring.connect(m, wiring.flipped(self.i), front.i)          # the request stream, forwarded
         m.d.comb += [
             self.o.valid.eq(front.o_valid), front.o_ready.eq(self.o.ready),
