@@ -38,7 +38,8 @@ from .constants import DESCRIPTOR_FIELDS, MAX_LEVELS
 from .geometry import Geometry
 
 __all__ = ["RegisterMap", "REGIONS", "DESCRIPTOR_WORDS", "CONTROL", "ID_VALUE", "VERSION", "load_writes",
-           "descriptor_words", "memory_words", "markdown", "c_header", "LoadError"]
+           "descriptor_words", "memory_words", "markdown", "c_header", "LoadError", "load_cycles", "expected_reads",
+           "mapped"]
 
 #: Region name -> code (the top three bits of a word address).
 REGIONS = {"control": 0, "descriptors": 1, "index": 2, "codebook": 3, "raw": 4}
@@ -193,7 +194,8 @@ def matrix_words(matrix) -> dict:
     regs = {}
     for c in range(3):
         for k in range(3):
-            regs[f"MATRIX_{'RGB'[c]}{'YUV'[k]}"] = int(matrix.coeffs[c][k]) & ((1 << COEFF_BITS) - 1)
+            # two's complement in 32 bits: the unit keeps 18 and reads them back sign-extended
+            regs[f"MATRIX_{'RGB'[c]}{'YUV'[k]}"] = int(matrix.coeffs[c][k]) & 0xFFFFFFFF
     for k in range(3):
         regs[f"MATRIX_OFFSET_{'YUV'[k]}"] = int(matrix.offsets[k])
     regs["MATRIX_FRAC_BITS"] = int(matrix.frac_bits)
@@ -340,3 +342,11 @@ def c_header(geometry: Geometry, prefix: str = "VQTEX") -> str:
     lines += ["", f"#define {p}_TEXTURES {g.textures}u", f"#define {p}_WORD_BITS {g.word_bits}u",
               f"#define {p}_ENTRY_BYTES {g.entry_bytes}u", "", f"#endif /* {p}_REGS_H */"]
     return "\n".join(lines) + "\n"
+
+
+def load_cycles(n_transfers: int) -> int:
+    """Cycles a load of ``n_transfers`` writes takes on an idle unit, as every simulator's Wishbone
+    master issues them (one bus cycle, back to back): the first cycle (``cyc`` rises; the unit's
+    ``pause`` flip-flop is not yet set, so ``stall`` is high), one cycle per write, the last write's
+    ``ack``, and one cycle after ``cyc`` drops for ``pause`` to clear: ``n + 3`` (0 for none)."""
+    return int(n_transfers) + 3 if n_transfers else 0

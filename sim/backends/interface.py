@@ -60,6 +60,9 @@ class SimResult:
         Index reads that straddled a word boundary (counted in both index-reader modes).
     occupancy : dict or None
         Stage name (``hw.texel_fetch.STAGES``) -> fraction of ``cycles`` its valid bit was high.
+    load_cycles : int or None
+        The loadable unit only: cycles the bus writes that loaded the set took before the requests
+        (:func:`golden.register_map.load_cycles`); not part of ``cycles``.
     """
     responses: np.ndarray
     cycles: int
@@ -68,6 +71,7 @@ class SimResult:
     stall_cycles: dict
     straddles: int
     occupancy: dict | None = None
+    load_cycles: int | None = None
 
 
 def _as_requests(requests) -> np.ndarray:

@@ -23,7 +23,7 @@ from vqtex.hw.texel_fetch import LATENCY, REGISTERS, TexelFetch
 from .interface import SimResult
 from ..streams import pattern_length, ready_pattern
 
-__all__ = ["run", "TAG_WIDTH"]
+__all__ = ["run", "run_phases", "bus_transfers", "TAG_WIDTH"]
 
 #: Tag width of the simulated unit: request n carries tag ``n mod 2**TAG_WIDTH``.
 TAG_WIDTH = 8
@@ -45,26 +45,78 @@ def _pack_requests(dut: TexelFetch, req: np.ndarray) -> list:
 
 def run(ts: TextureSet, requests: np.ndarray, *, stall: float = 0.0, seed: int = 0,
         one_port: bool = False, vcd: str | None = None, bank_depth: int | None = None,
-        specialise: bool = True) -> SimResult:
+        specialise: bool = True, geometry=None) -> SimResult:
     """Simulate ``requests`` ((N, 4) int) on ``TexelFetch(ts, one_port=one_port, specialise=specialise)``
     (with ``bank_depth``, if given: small banks put the bank select to work on small texture sets).
+    With ``geometry`` (a :class:`golden.geometry.Geometry`), the loadable unit of that geometry: the
+    set is loaded by bus writes first (:func:`run_phases`), and ``load_cycles`` reports them.
 
     Raises
     ------
     SimulationError
         If a response's tag is not the next expected one.
     """
-    req = np.asarray(requests, dtype=np.int64).reshape(-1, 4)
-    n = len(req)
-    if n == 0:
-        return SimResult(responses=np.zeros((0, 4), np.uint8), cycles=0, requests=0, latency=LATENCY,
-                         stall_cycles={"output_backpressure": 0, "one_port_straddle": 0}, straddles=0,
-                         occupancy=None)
+    if geometry is not None:
+        return run_phases(geometry, [(ts, requests)], stall=stall, seed=seed, one_port=one_port, vcd=vcd,
+                          bank_depth=bank_depth)[0]
     unit = {} if bank_depth is None else {"bank_depth": bank_depth}
     dut = TexelFetch(ts, one_port=one_port, tag_width=TAG_WIDTH, specialise=specialise, **unit)
-    packed = _pack_requests(dut, req)
-    rlayout = dut.o.payload.shape()
-    fields = {name: rlayout[name].offset for name in ("r", "g", "b", "a", "tag")}
+    return _simulate(dut, [(None, requests)], stall=stall, seed=seed, vcd=vcd)[0]
+
+
+def run_phases(geometry, phases, *, stall: float = 0.0, seed: int = 0, one_port: bool = False,
+               vcd: str | None = None, bank_depth: int | None = None) -> list:
+    """One simulation of the loadable unit of ``geometry`` through ``phases``: for each ``(ts,
+    requests)``, ``ts`` is loaded by the bus writes of :func:`golden.register_map.load_writes` (no
+    load when ``ts`` is None), then the requests run (as :func:`run` runs them, the backpressure
+    pattern restarting at each phase's first request). Returns a :class:`SimResult` per phase, with
+    ``load_cycles``."""
+    from vqtex.golden.register_map import load_writes
+    unit = {} if bank_depth is None else {"bank_depth": bank_depth}
+    dut = TexelFetch(geometry=geometry, loadable=True, one_port=one_port, tag_width=TAG_WIDTH, **unit)
+    program = [(None if ts is None else load_writes(ts, geometry), req) for ts, req in phases]
+    return _simulate(dut, program, stall=stall, seed=seed, vcd=vcd)
+
+
+async def bus_transfers(ctx, bus, ops) -> tuple:
+    """The Wishbone master of the simulations: ``ops`` ((N, 3) ints: word address, data, write)
+    issued back to back in one bus cycle (``cyc`` high throughout, ``stb`` while transfers remain,
+    the next presented when ``stall`` is low), until every one is answered; then ``cyc`` drops and
+    one more cycle lets the unit's ``pause`` clear. Returns (data, err) per transfer and the
+    cycles spent (``golden.register_map.load_cycles`` of N on an idle unit)."""
+    ops = [tuple(int(v) for v in op) for op in ops]
+    n = len(ops)
+    data, err = [0] * n, [False] * n
+    sent = got = cycles = 0
+    ctx.set(bus.cyc, 1)
+    ctx.set(bus.sel, 1)
+    shown = -1
+    while got < n:
+        if sent != shown:
+            if sent < n:
+                a, d, we = ops[sent]
+                ctx.set(bus.adr, a)
+                ctx.set(bus.dat_w, d)
+                ctx.set(bus.we, we)
+                ctx.set(bus.stb, 1)
+            else:
+                ctx.set(bus.stb, 0)
+            shown = sent
+        if ctx.get(bus.ack) or ctx.get(bus.err):
+            data[got], err[got] = ctx.get(bus.dat_r), bool(ctx.get(bus.err))
+            got += 1
+        if sent < n and not ctx.get(bus.stall):
+            sent += 1
+        cycles += 1
+        await ctx.tick()
+    ctx.set(bus.cyc, 0)
+    ctx.set(bus.stb, 0)
+    await ctx.tick()
+    return data, err, cycles + 1
+
+
+def _simulate(dut: TexelFetch, program, *, stall: float, seed: int, vcd: str | None) -> list:
+    """Run ``program`` (a list of (bus writes or None, requests)) on ``dut`` in one simulation."""
     nstages = len(REGISTERS)
     # Everything the testbench watches, gathered into one signal inside the simulated design so
     # that each cycle costs one signal read instead of an expression evaluation.
@@ -76,14 +128,17 @@ def run(ts: TextureSet, requests: np.ndarray, *, stall: float = 0.0, seed: int =
     top.d.comb += observe.eq(watched)
     pshift = 4 + nstages
     stage_mask = (1 << nstages) - 1
-
-    out = np.zeros((n, 4), np.uint8)
-    stats = {"cycles": 0, "backpressure": 0, "one_port": 0, "straddles": 0,
-             "occupancy": np.zeros(nstages, np.int64)}
-
+    rlayout = dut.o.payload.shape()
+    fields = {name: rlayout[name].offset for name in ("r", "g", "b", "a", "tag")}
     i_payload, i_valid, o_ready = dut.i.payload.as_value(), dut.i.valid, dut.o.ready
+    results = []
 
-    async def bench(ctx):
+    async def requests_phase(ctx, req):
+        n = len(req)
+        out = np.zeros((n, 4), np.uint8)
+        if n == 0:
+            return out, {"cycles": 0, "backpressure": 0, "one_port": 0, "straddles": 0, "occupancy": None}
+        packed = _pack_requests(dut, req)
         ready = ready_pattern(seed, stall, pattern_length(n, stall, 2 * dut.latency))
         ready_list = ready.tolist()
         n_in = n_out = cycle = 0
@@ -130,8 +185,28 @@ def run(ts: TextureSet, requests: np.ndarray, *, stall: float = 0.0, seed: int =
                 n_in += 1
             cycle += 1
             await ctx.tick()
-        stats.update(cycles=cycle, backpressure=backpressure, one_port=one_port_stalls,
-                     straddles=straddles, occupancy=np.array(occ))
+        ctx.set(i_valid, 0)
+        ctx.set(o_ready, 0)
+        return out, {"cycles": cycle, "backpressure": backpressure, "one_port": one_port_stalls,
+                     "straddles": straddles, "occupancy": np.array(occ)}
+
+    async def bench(ctx):
+        for writes, requests in program:
+            load_cycles = None
+            if writes is not None:
+                ops = np.concatenate([writes, np.ones((len(writes), 1), writes.dtype)], axis=1)
+                _, err, load_cycles = await bus_transfers(ctx, dut.bus, ops)
+                if any(err):
+                    raise SimulationError(f"bus write {err.index(True)} of the load answered with err")
+            req = np.asarray(requests, dtype=np.int64).reshape(-1, 4)
+            out, stats = await requests_phase(ctx, req)
+            cycles = stats["cycles"]
+            occupancy = ({name: float(c) / cycles for name, c in zip(REGISTERS, stats["occupancy"])}
+                         if cycles else None)
+            results.append(SimResult(
+                responses=out, cycles=cycles, requests=len(req), latency=dut.latency,
+                stall_cycles={"output_backpressure": stats["backpressure"], "one_port_straddle": stats["one_port"]},
+                straddles=stats["straddles"], occupancy=occupancy, load_cycles=load_cycles))
 
     sim = Simulator(top)
     sim.add_clock(1e-6)
@@ -142,11 +217,4 @@ def run(ts: TextureSet, requests: np.ndarray, *, stall: float = 0.0, seed: int =
             sim.run()
     else:
         sim.run()
-    cycles = stats["cycles"]
-    occupancy = ({name: float(c) / cycles for name, c in zip(REGISTERS, stats["occupancy"])}
-                 if cycles else None)
-    return SimResult(
-        responses=out, cycles=cycles, requests=n, latency=dut.latency,
-        stall_cycles={"output_backpressure": stats["backpressure"], "one_port_straddle": stats["one_port"]},
-        straddles=stats["straddles"], occupancy=occupancy,
-    )
+    return results
