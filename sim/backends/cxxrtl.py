@@ -51,7 +51,7 @@ CXXFLAGS = ["-std=c++17", "-O3", "-fPIC", "-shared", "-fvisibility=hidden", "-DN
 C_CYCLES, C_ACCEPTED, C_RESPONSES, C_STALL_OUTPUT, C_STALL_ONE_PORT, C_STRADDLES, C_BAD_TAG, C_BAD_TAG_VALUE = range(8)
 C_OCCUPANCY = 8
 #: VQ_API_VERSION of sim/backends/drivers/batch.h that this module speaks.
-API_VERSION = 2
+API_VERSION = 3
 
 
 def cxxrtl_sources(info: DesignInfo) -> dict:
@@ -232,7 +232,17 @@ def _in_namespace(src: str, name: str) -> str:
 def cxxrtl_program(info: DesignInfo) -> tuple[str, str]:
     """(design.cc, ports.h) of the CXXRTL library for this design: both halves, the front end in
     namespace ``vq_front`` and the back end in ``vq_back``, and their macros (``VQ_FRONT_INPLACE``,
-    ``VQ_BACK_EXACT_STEP``, ..., each 0 or 1)."""
+    ``VQ_BACK_EXACT_STEP``, ..., each 0 or 1). The loadable unit (``info.geometry``) is one model,
+    namespace ``vq_top`` (``VQ_WHOLE``), with its bus port's macros (``VQ_BUS``, ``VQ_BUS_ADR``, ...)."""
+    if info.geometry is not None:
+        src, flags = rewrite(blank_memories(write_cxxrtl(info.fragment, info.ports)))
+        macros = "#define VQ_WHOLE 1\n"
+        for flag in ("INPLACE", "EXACT_STEP"):
+            macros += f"#define VQ_TOP_{flag} {int(f'#define VQ_{flag} 1' in flags)}\n"
+        macros += "#define VQ_BUS 1\n" + "".join(
+            f"#define VQ_BUS_{name.upper()} {_mangle_cxxrtl(f'bus__{name}')}\n"
+            for name in ("adr", "dat_w", "dat_r", "sel", "cyc", "stb", "we", "ack", "err", "stall"))
+        return _in_namespace(src, "vq_top"), ports_header(info, _mangle_cxxrtl) + macros
     sources = cxxrtl_sources(info)
     parts, macros = [], ""
     for half in HALVES:
@@ -240,7 +250,7 @@ def cxxrtl_program(info: DesignInfo) -> tuple[str, str]:
         parts.append(_in_namespace(src, f"vq_{half}"))
         for flag in ("INPLACE", "EXACT_STEP"):     # 0 or 1 each: driver.cc's Half<> arguments
             macros += f"#define VQ_{half.upper()}_{flag} {int(f'#define VQ_{flag} 1' in flags)}\n"
-    return "\n".join(parts), ports_header(info, _mangle_cxxrtl, link=True) + macros
+    return "\n".join(parts), ports_header(info, _mangle_cxxrtl, link=True) + "#define VQ_WHOLE 0\n" + macros
 
 
 def _mangle_cxxrtl(name: str) -> str:
@@ -330,23 +340,26 @@ class Build:
 
 
 def build_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8, cxxflags=None, compile: bool = True,
-                 specialise: bool = True) -> Build:
+                 specialise: bool = True, geometry=None) -> Build:
     """The CXXRTL library for this design (built or taken from the cache). With ``compile=False``
     nothing is compiled: the result names the library the build would produce (``cached`` tells
     whether it exists). ``specialise`` is part of both keys: the quick key names it, and the
-    library's key hashes the generated C++, which holds a specialised unit's constants."""
+    library's key hashes the generated C++, which holds a specialised unit's constants. With
+    ``geometry``, the loadable unit: its keys name the geometry, not a texture set (one build per
+    geometry serves every set it holds; ``ts`` is ignored)."""
     cxx = find_cxx()
     flags = list(cxxflags or CXXFLAGS)
     t0 = time.perf_counter()
-    info = design_info(ts, one_port=one_port, tag_width=tag_width, specialise=specialise)
+    info = design_info(ts, one_port=one_port, tag_width=tag_width, specialise=specialise, geometry=geometry)
     steps = {"elaborate": time.perf_counter() - t0}
     drivers = driver_sources("driver.cc", "batch.h", "vq_ops.h")
     this = b""
     for mod in (__file__, inplace_cycle.__code__.co_filename):    # the C++ rewrites are part of the build
         with open(os.path.abspath(mod), "rb") as f:
             this += f.read()
-    quick = digest("cxxrtl-quick", source_stamp(), this, one_port, tag_width, texture_set_digest(ts), flags,
-                   tool_version(cxx), *drivers, *(() if specialise else ("full unit",)))
+    contents = texture_set_digest(ts) if geometry is None else ("loadable", geometry.dumps())
+    quick = digest("cxxrtl-quick", source_stamp(), this, one_port, tag_width, contents, flags,
+                   tool_version(cxx), *drivers, *(() if specialise or geometry is not None else ("full unit",)))
     key = index_get("cxxrtl", quick)
     if key and os.path.isfile(os.path.join(os_cache("cxxrtl"), key, "libvq.so")):
         return Build(os.path.join(os_cache("cxxrtl"), key, "libvq.so"), 0.0, True, info, key, steps)
@@ -404,6 +417,8 @@ class BatchLibrary:
                                            ctypes.c_uint32]
             lib.vq_run.argtypes = [ctypes.c_void_p, ctypes.c_uint64, _i64p, _u32p, _u8p, ctypes.c_uint64,
                                    ctypes.c_uint64, _u32p, _u64p]
+            lib.vq_bus.argtypes = [ctypes.c_void_p, ctypes.c_uint64, _u32p, _u32p, ctypes.c_uint64]
+            lib.vq_bus.restype = ctypes.c_int64
             if hasattr(lib, "vq_set_threads"):         # CXXRTL only (the two halves: driver.cc)
                 lib.vq_set_threads.argtypes = [ctypes.c_void_p, ctypes.c_int]
             if lib.vq_api_version() != API_VERSION:
@@ -454,6 +469,23 @@ class BatchLibrary:
             raise ValueError("batch layout must be 12 uint32 (offset, width pairs)")
         rgba = np.zeros(n, np.uint32)
         counters = np.zeros(C_OCCUPANCY + self.stage_count, np.uint64)
+        return self._run(req, n, lay, ready, max_cycles, rgba, counters)
+
+    def bus(self, ops, max_cycles: int | None = None) -> tuple:
+        """Wishbone transfers on the loadable unit's bus port (``vq_bus``): ``ops`` (N, 3) of (word
+        address, data, write). Returns (dat_r uint32 (N,), err bool (N,), cycles)."""
+        ops = np.ascontiguousarray(np.asarray(ops, dtype=np.int64).astype(np.uint32)).reshape(-1, 3)
+        n = len(ops)
+        answers = np.zeros((n, 2), np.uint32)
+        limit = max_cycles if max_cycles is not None else 8 * n + 64
+        cycles = self.lib.vq_bus(self.handle, n, ops.ctypes.data_as(_u32p), answers.ctypes.data_as(_u32p), limit)
+        if cycles == -3:
+            raise ToolchainError(f"{self.path}: this design has no bus port")
+        if cycles < 0:
+            raise ToolchainError(f"{self.path}: the bus transfers did not finish in {limit} cycles")
+        return answers[:, 0], answers[:, 1].astype(bool), int(cycles)
+
+    def _run(self, req, n, lay, ready, max_cycles, rgba, counters):
         if ready is not None:
             ready = np.ascontiguousarray(ready, dtype=np.uint8)
             rp, nr = ready.ctypes.data_as(_u8p), len(ready)
@@ -548,19 +580,37 @@ def run_batch(lib: BatchLibrary, info: DesignInfo, requests, *, stall: float = 0
 _libs: dict = {}
 
 
-def open_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True):
-    """(BatchLibrary with the memories of ``ts`` loaded, DesignInfo, Build)."""
-    b = build_cxxrtl(ts, one_port=one_port, tag_width=tag_width, specialise=specialise)
+def open_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True, geometry=None):
+    """(BatchLibrary with the memories of ``ts`` loaded, DesignInfo, Build). With ``geometry``: the
+    loadable unit's library, with nothing loaded (:func:`load_set` loads a set over its bus)."""
+    b = build_cxxrtl(ts, one_port=one_port, tag_width=tag_width, specialise=specialise, geometry=geometry)
     lib = BatchLibrary(b.library)
-    lib.load_memories(b.info.memories)
+    if geometry is None:
+        lib.load_memories(b.info.memories)
     return lib, b.info, b
 
 
+def load_set(lib: BatchLibrary, ts, geometry) -> int:
+    """Load ``ts`` into the loadable unit of ``lib`` by the bus writes a host makes
+    (:func:`golden.register_map.load_writes`); returns the cycles they took."""
+    from vqtex.golden.register_map import load_writes
+    writes = load_writes(ts, geometry).astype(np.int64)
+    ops = np.concatenate([writes, np.ones((len(writes), 1), np.int64)], axis=1)
+    _, err, cycles = lib.bus(ops)
+    if err.any():
+        raise ToolchainError(f"bus write {int(np.argmax(err))} of the load answered with err")
+    return cycles
+
+
 def run(ts, requests, *, stall: float = 0.0, seed: int = 0, one_port: bool = False,
-        tag_width: int = 8, specialise: bool = True):
-    """``sim.backends.interface.simulate(..., backend="cxxrtl")``: the backend entry point."""
-    lib, info, _ = open_cxxrtl(ts, one_port=one_port, tag_width=tag_width, specialise=specialise)
+        tag_width: int = 8, specialise: bool = True, geometry=None):
+    """``sim.backends.interface.simulate(..., backend="cxxrtl")``: the backend entry point (with
+    ``geometry``: the loadable unit, ``ts`` loaded over its bus first)."""
+    lib, info, _ = open_cxxrtl(ts, one_port=one_port, tag_width=tag_width, specialise=specialise, geometry=geometry)
     try:
-        return run_batch(lib, info, requests, stall=stall, seed=seed)
+        load = load_set(lib, ts, geometry) if geometry is not None else None
+        result = run_batch(lib, info, requests, stall=stall, seed=seed)
+        result.load_cycles = load
+        return result
     finally:
         lib.close()

@@ -52,24 +52,37 @@ def response_ports(fetch) -> dict:
 class TexelFetchTop(wiring.Component):
     """``TexelFetch`` with one port per stream member (see the module docstring).
 
+    The loadable unit (``geometry``) has its Wishbone port as ``bus_adr``, ``bus_dat_w``,
+    ``bus_dat_r``, ``bus_sel``, ``bus_cyc``, ``bus_stb``, ``bus_we``, ``bus_ack``, ``bus_err``,
+    ``bus_stall`` (amaranth-soc's names, ``bus_`` before each).
+
     Arguments
     ---------
-    texture_set : TextureSet
+    texture_set : TextureSet or None
     one_port : bool
     tag_width : int
     specialise : bool
         As for :class:`hw.texel_fetch.TexelFetch`.
+    geometry : Geometry, optional
+        The loadable unit of this geometry (``texture_set``, if given, its initial contents).
     """
 
-    def __init__(self, texture_set, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True):
+    def __init__(self, texture_set, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True,
+                 geometry=None):
         from vqtex.hw.texel_fetch import TexelFetch
-        self._fetch = TexelFetch(texture_set, one_port=one_port, tag_width=tag_width, specialise=specialise)
+        unit = {} if geometry is None else {"geometry": geometry, "loadable": True}
+        self._fetch = TexelFetch(texture_set, one_port=one_port, tag_width=tag_width, specialise=specialise, **unit)
         members = {"i_valid": In(1), "i_ready": Out(1)}
         members.update({f"i_{n}": In(w) for n, w in request_ports(self._fetch).items()})
         members.update({"o_valid": Out(1), "o_ready": In(1)})
         members.update({f"o_{n}": Out(w) for n, w in response_ports(self._fetch).items()})
-        self._extra = [n for n in self._fetch.signature.members if n not in ("i", "o")]
+        self._extra = [n for n in self._fetch.signature.members if n not in ("i", "o", "bus")]
         members.update({n: Out(len(getattr(self._fetch, n))) for n in self._extra})
+        self._bus = []
+        if geometry is not None:            # the slave's view (the unit's own signature members)
+            for name, member in self._fetch.bus.signature.members.items():
+                members[f"bus_{name}"] = (In if member.flow == In else Out)(member.shape)
+                self._bus.append(name)
         super().__init__(members)
 
     @property
@@ -88,6 +101,12 @@ class TexelFetchTop(wiring.Component):
         m.d.comb += [getattr(f.i.p, n).eq(getattr(self, f"i_{n}")) for n in request_ports(f)]
         m.d.comb += [getattr(self, f"o_{n}").eq(getattr(f.o.p, n)) for n in response_ports(f)]
         m.d.comb += [getattr(self, n).eq(getattr(f, n)) for n in self._extra]
+        for name in self._bus:
+            member = f.bus.signature.members[name]
+            if member.flow == In:           # driven by the initiator: an input of the top
+                m.d.comb += getattr(f.bus, name).eq(getattr(self, f"bus_{name}"))
+            else:
+                m.d.comb += getattr(self, f"bus_{name}").eq(getattr(f.bus, name))
         return m
 
 
@@ -137,27 +156,36 @@ class DesignInfo:
     latency: int = 0
     halves: dict = field(default_factory=dict)  # "front"/"back" -> (fragment, ports) of hw.pipeline's halves
     link_width: int = 0
+    geometry: object = None     # the loadable unit's Geometry (None: the baked unit); no halves then
 
 
 def _fields(layout) -> dict:
     return {name: (f.offset, f.width) for name, f in layout}
 
 
-def design_info(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True) -> DesignInfo:
-    """Elaborate ``TexelFetch(ts)`` and collect ports, payload layouts, stages and memory images."""
+def design_info(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True,
+                geometry=None) -> DesignInfo:
+    """Elaborate ``TexelFetch(ts)`` (with ``geometry``: the loadable unit of that geometry, no
+    contents: ``ts`` is loaded later, over the bus) and collect ports, payload layouts, stages and
+    memory images."""
     from vqtex.hw.memories import elaborate, memories
     from vqtex.hw.texel_fetch import REGISTERS, TexelFetch
 
-    top = TexelFetch(ts, one_port=one_port, tag_width=tag_width, specialise=specialise)
+    if geometry is not None:
+        top = TexelFetch(geometry=geometry, loadable=True, one_port=one_port, tag_width=tag_width)
+    else:
+        top = TexelFetch(ts, one_port=one_port, tag_width=tag_width, specialise=specialise)
     ports = port_map(top)
+    whole_ports = ports
     frag = elaborate(top)
     images = [MemoryImage(" ".join(mem.path), mem.width, mem.depth, mem.words) for mem in memories(frag)]
     halves = {}
     for sub, name, _ in frag.subfragments:      # FrontEnd and BackEnd, each converted as its own model
-        if str(name) in HALVES:
+        if str(name) in HALVES and geometry is None:
             ports = {k: v for k, v in port_map(sub.origins[0]).items() if len(v[0])}  # (no 0-bit tag)
             halves[str(name)] = (sub, ports)
-    if set(halves) != set(HALVES):
+    ports = whole_ports
+    if geometry is None and set(halves) != set(HALVES):
         raise ToolchainError("TexelFetch is not made of the front and back halves this backend runs")
     req = top.i.p.shape()
     resp = top.o.p.shape()
@@ -168,7 +196,7 @@ def design_info(ts, *, one_port: bool = False, tag_width: int = 8, specialise: b
         request_width=req.size, response_width=resp.size, tag_width=tag_width,
         stages=list(REGISTERS),
         strobes=[n for n in STROBES if n in names], memories=images, latency=int(top.latency),
-        halves=halves, link_width=len(halves["front"][1]["link"][0]))
+        halves=halves, link_width=len(halves["front"][1]["link"][0]) if halves else 0, geometry=geometry)
     for what, width in (("request", info.request_width), ("response", info.response_width)):
         if width > 64:
             raise ToolchainError(f"{what} payload of {width} bits: the compiled backends take at most 64")

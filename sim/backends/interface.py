@@ -96,14 +96,19 @@ def _golden(ts: TextureSet, req: np.ndarray, *, stall: float, seed: int, one_por
 
 
 def simulate(ts: TextureSet, requests, *, backend: str = "golden", stall: float = 0.0, seed: int = 0,
-             one_port: bool = False, specialise: bool = True) -> SimResult:
+             one_port: bool = False, specialise: bool = True, geometry=None) -> SimResult:
     """Run ``requests`` ((N, 4) int: texture, level, i, j) through ``backend`` (an RTL backend
-    simulates ``TexelFetch(ts, specialise=specialise)``: the specialised unit by default).
+    simulates ``TexelFetch(ts, specialise=specialise)``: the specialised unit by default). With
+    ``geometry`` (:class:`golden.geometry.Geometry`), the loadable unit of that geometry: ``ts`` is
+    loaded over its bus port first and ``load_cycles`` reports the load (the golden backend gives
+    :func:`golden.register_map.load_cycles`); the requests' cycles are the baked unit's.
 
     Raises
     ------
     golden.fetch.RequestError
         If a request is outside its texture (checked before any backend runs).
+    golden.register_map.LoadError
+        If ``ts`` does not fit ``geometry``.
     ValueError
         If ``stall`` is not in [0, 1), the requests are malformed or the backend is unknown.
     """
@@ -113,8 +118,14 @@ def simulate(ts: TextureSet, requests, *, backend: str = "golden", stall: float 
     req = _as_requests(requests)
     if len(req):
         check_requests(ts, req[:, 0], req[:, 1], req[:, 2], req[:, 3])
+    load = None
+    if geometry is not None:
+        from vqtex.golden.register_map import load_cycles, load_writes
+        load = load_cycles(len(load_writes(ts, geometry)))      # (refuses a set that does not fit)
     if backend == "golden":
-        return _golden(ts, req, stall=stall, seed=seed, one_port=one_port)
+        result = _golden(ts, req, stall=stall, seed=seed, one_port=one_port)
+        result.load_cycles = load
+        return result
     try:
         module = importlib.import_module(f"vqtex.sim.backends.{backend}")
     except ModuleNotFoundError as e:
@@ -122,4 +133,6 @@ def simulate(ts: TextureSet, requests, *, backend: str = "golden", stall: float 
             raise ValueError(f"unknown simulation backend {backend!r}") from None
         raise
     unit = {} if specialise else {"specialise": False}     # (a backend without the option: default)
+    if geometry is not None:
+        unit["geometry"] = geometry
     return module.run(ts, req, stall=stall, seed=seed, one_port=one_port, **unit)

@@ -18,7 +18,8 @@ import time
 
 import numpy as np
 
-from .cxxrtl import DRIVER_DIR, BatchLibrary, Build, driver_sources, run_batch, source_stamp, texture_set_digest
+from .cxxrtl import (DRIVER_DIR, BatchLibrary, Build, driver_sources, load_set, run_batch, source_stamp,
+                     texture_set_digest)
 from .design import STROBES, TOP_NAME, design_info
 from .toolchain import ToolchainError, cached_build, digest, find_tool, index_get, index_put, run_tool, tool_version
 
@@ -60,6 +61,8 @@ def ports_header(info, fetch_top) -> str:
     strobes = " ".join(f"c[{STROBES[s]}] += top->{s};" for s in info.strobes)
     lines += [f"#define VQ_SET_REQUEST(top, p) {sets}", f"#define VQ_GET_RESPONSE(top) ({gets or '0'})",
               f"#define VQ_STROBES(top, c) {strobes}"]
+    if info.geometry is not None:           # the loadable unit's Wishbone port (bus_* ports)
+        lines.append("#define VQ_BUS 1")
     return "\n".join(lines) + "\n"
 
 
@@ -105,25 +108,29 @@ def build_library(folder: str, verilog: str, header: str, *, verilator: str, cxx
     return {"verilate": t_verilate, "link": time.perf_counter() - t}
 
 
-def build_verilator(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True) -> Build:
-    """The Verilator library of the exported Verilog for ``ts`` (built or from the cache)."""
+def build_verilator(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True,
+                    geometry=None) -> Build:
+    """The Verilator library of the exported Verilog for ``ts`` (built or from the cache); with
+    ``geometry``, of the loadable unit of that geometry (one build per geometry)."""
     from .verilog import export_verilog
     verilator = find_tool("verilator")
     cxx = find_tool("g++")
     t0 = time.perf_counter()
-    info = design_info(ts, one_port=one_port, tag_width=tag_width, specialise=specialise)
+    info = design_info(ts, one_port=one_port, tag_width=tag_width, specialise=specialise, geometry=geometry)
     steps = {"elaborate": time.perf_counter() - t0}
     drivers = driver_sources("verilator_driver.cc", "verilated_top.h", "batch.h")
     flags = VERILATOR_FLAGS + CXXFLAGS + [MAKE_OPT]
-    quick = digest("verilator-quick", source_stamp(), one_port, tag_width, texture_set_digest(ts), flags,
-                   tool_version(verilator), tool_version(cxx), *drivers, *(() if specialise else ("full unit",)))
+    contents = texture_set_digest(ts) if geometry is None else ("loadable", geometry.dumps())
+    quick = digest("verilator-quick", source_stamp(), one_port, tag_width, contents, flags,
+                   tool_version(verilator), tool_version(cxx), *drivers,
+                   *(() if specialise or geometry is not None else ("full unit",)))
     key = index_get("verilator", quick)
     from .toolchain import cache_dir
     root = os.path.join(cache_dir(), "verilator")
     if key and os.path.isfile(os.path.join(root, key, "libvq.so")):
         return Build(os.path.join(root, key, "libvq.so"), 0.0, True, info, key, steps)
     t1 = time.perf_counter()
-    verilog = export_verilog(ts, one_port=one_port, tag_width=tag_width, specialise=specialise)
+    verilog = export_verilog(ts, one_port=one_port, tag_width=tag_width, specialise=specialise, geometry=geometry)
     header = ports_header(info, None)
     steps["export"] = time.perf_counter() - t1
     key = digest("verilator", verilog, header, *drivers, flags, tool_version(verilator), tool_version(cxx))
@@ -140,19 +147,24 @@ def build_verilator(ts, *, one_port: bool = False, tag_width: int = 8, specialis
     return Build(lib, 0.0 if cached else time.perf_counter() - t0, cached, info, key, steps)
 
 
-def open_verilator(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True):
-    b = build_verilator(ts, one_port=one_port, tag_width=tag_width, specialise=specialise)
+def open_verilator(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True, geometry=None):
+    b = build_verilator(ts, one_port=one_port, tag_width=tag_width, specialise=specialise, geometry=geometry)
     lib = BatchLibrary(b.library)
-    if lib.runtime_memories:
+    if lib.runtime_memories and geometry is None:
         lib.load_memories(b.info.memories)
     return lib, b.info, b
 
 
 def run(ts, requests, *, stall: float = 0.0, seed: int = 0, one_port: bool = False, tag_width: int = 8,
-        specialise: bool = True):
-    """``sim.backends.interface.simulate(..., backend="verilator")``: the backend entry point."""
-    lib, info, _ = open_verilator(ts, one_port=one_port, tag_width=tag_width, specialise=specialise)
+        specialise: bool = True, geometry=None):
+    """``sim.backends.interface.simulate(..., backend="verilator")``: the backend entry point (with
+    ``geometry``: the loadable unit, ``ts`` loaded over its bus first)."""
+    lib, info, _ = open_verilator(ts, one_port=one_port, tag_width=tag_width, specialise=specialise,
+                                  geometry=geometry)
     try:
-        return run_batch(lib, info, np.asarray(requests), stall=stall, seed=seed)
+        load = load_set(lib, ts, geometry) if geometry is not None else None
+        result = run_batch(lib, info, np.asarray(requests), stall=stall, seed=seed)
+        result.load_cycles = load
+        return result
     finally:
         lib.close()

@@ -18,6 +18,13 @@
 //                  const uint8_t *ready, uint64_t n_ready, uint64_t max_cycles, uint32_t *rgba,
 //                  uint64_t *counters);
 //
+//   int64_t vq_bus(void *h, uint64_t n, const uint32_t *ops, uint32_t *answers, uint64_t max_cycles);
+//           the loadable unit's Wishbone port: n transfers, ops[3k..3k+2] = (word address, data,
+//           write), issued back to back in one bus cycle (golden.register_map.load_cycles); answers
+//           [2k], [2k+1] = (dat_r, err) of transfer k. Returns the cycles taken, -1 if max_cycles
+//           passed, -3 if the design has no bus port. The requests' side is idle meanwhile (i.valid
+//           low, o.ready high); no reset: vq_run's reset clears the pipeline, not what was loaded.
+//
 // requests: n rows of (texture, level, i, j). layout[VQ_L_*]: the (offset, width) in i.payload of
 // texture, level, i, j and the tag (request k carries tag k mod 2^width), then the (offset, width)
 // of the tag in o.payload. vq_run packs each request into i.payload as it is presented.
@@ -43,7 +50,7 @@
 #include <string>
 #include <vector>
 
-#define VQ_API_VERSION 2
+#define VQ_API_VERSION 3
 #define VQ_EXPORT extern "C" __attribute__((visibility("default")))
 enum {
     VQ_C_CYCLES = 0, VQ_C_ACCEPTED, VQ_C_RESPONSES, VQ_C_STALL_OUTPUT, VQ_C_STALL_ONE_PORT,
@@ -235,6 +242,51 @@ static int vq_run_batch(A &a, uint64_t n, const int64_t *req, const uint32_t *la
     return vq_run_loop<false>(a, n, req, layout, ready, n_ready, max_cycles, rgba, counters);
 }
 
+// The Wishbone master of vq_bus (the one sim/backends/pysim.py's bus_transfers is): an adapter A
+// with set_inputs (the requests' side), set_bus(cyc, stb, we, adr, dat_w), cycle(sample) and the
+// reads bus_ack(), bus_err(), bus_stall(), bus_dat_r().
+template<class A>
+static int64_t vq_bus_loop(A &a, uint64_t n, const uint32_t *ops, uint32_t *answers, uint64_t max_cycles) {
+    uint64_t sent = 0, got = 0, c = 0;
+    a.set_inputs(false, 0, true);
+    while (got < n) {
+        if (c >= max_cycles)
+            return -1;
+        const bool stb = sent < n;
+        const uint32_t *op = ops + 3 * (stb ? sent : 0);
+        a.set_bus(true, stb, stb && op[2], stb ? op[0] : 0, stb ? op[1] : 0);
+        bool took = false, err = false, accepted = false;
+        uint32_t data = 0;
+        a.cycle([&]() {
+            err = a.bus_err();
+            took = a.bus_ack() || err;
+            data = a.bus_dat_r();
+            accepted = stb && !a.bus_stall();
+        });
+        if (took) {
+            answers[2 * got] = data;
+            answers[2 * got + 1] = err;
+            got++;
+        }
+        if (accepted)
+            sent++;
+        c++;
+    }
+    a.set_bus(false, false, false, 0, 0);
+    a.cycle([]() {});
+    return int64_t(c + 1);
+}
+
+#ifdef VQ_BUS
+#define VQ_BUS_EXPORT(A)                                                                            \
+    VQ_EXPORT int64_t vq_bus(void *h, uint64_t n, const uint32_t *ops, uint32_t *answers, uint64_t max_cycles) { \
+        return vq_bus_loop(*static_cast<A *>(h), n, ops, answers, max_cycles);                     \
+    }
+#else
+#define VQ_BUS_EXPORT(A)                                                                            \
+    VQ_EXPORT int64_t vq_bus(void *, uint64_t, const uint32_t *, uint32_t *, uint64_t) { return -3; }
+#endif
+
 // The exports both drivers share, for an adapter class A (one simulator instance per handle);
 // each driver defines vq_load_memory itself. RUNTIME_MEMORIES: what vq_runtime_memories() returns.
 #define VQ_BATCH_EXPORTS(A, RUNTIME_MEMORIES)                                                       \
@@ -249,4 +301,5 @@ static int vq_run_batch(A &a, uint64_t n, const int64_t *req, const uint32_t *la
                          uint64_t *counters) {                                                      \
         return vq_run_batch(*static_cast<A *>(h), n, req, layout, ready, n_ready, max_cycles, rgba, \
                             counters);                                                              \
-    }
+    }                                                                                               \
+    VQ_BUS_EXPORT(A)

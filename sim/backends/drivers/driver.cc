@@ -12,6 +12,11 @@
 // cycle, bit for bit, as the whole unit (tested against golden and against the Verilator model of the
 // whole exported unit). With two threads the back end runs on a second core, a few thousand cycles
 // behind, through a ring of records; with one thread the two alternate every VQ_CHUNK cycles.
+//
+// The loadable unit (VQ_WHOLE: its bus port writes memories in both halves and reads them back) is
+// one model, namespace vq_top, run by batch.h's loop on one thread, with vq_bus for its Wishbone
+// port. Its reset is the rst input only: what the host loaded stays (CXXRTL's reset() would blank
+// the memories).
 #include <cxxrtl/cxxrtl.h>
 
 #include <atomic>
@@ -85,6 +90,56 @@ struct Half {
     }
 };
 
+#if VQ_WHOLE
+// The loadable unit as one model: batch.h's adapter (set_inputs, cycle, the port reads) and the
+// bus port's (set_bus and its reads).
+struct Sim {
+    Half<vq_top::p_top, VQ_TOP_INPLACE, VQ_TOP_EXACT_STEP> whole;
+    bool initialised = false;
+    void reset() {
+        auto &top = whole.top;
+        if (!initialised) {             // once: the model's initial values (memories as built)
+            whole.reset();
+            initialised = true;
+        }
+        vq_put(top.VQ_I_VALID, 0); vq_put(top.VQ_O_READY, 0); vq_put(top.VQ_BUS_CYC, 0);
+        vq_put(top.VQ_BUS_STB, 0);
+        vq_put(top.VQ_CLK, 0); vq_put(top.VQ_RST, 1); top.step();
+        vq_put(top.VQ_CLK, 1); top.step();
+        vq_put(top.VQ_CLK, 0); vq_put(top.VQ_RST, 0); top.step();
+    }
+    void set_inputs(bool i_valid, uint64_t p, bool ready) {
+        auto &top = whole.top;
+        if (!initialised)
+            reset();
+        vq_put(top.VQ_I_VALID, i_valid); vq_put(top.VQ_I_PAYLOAD, p); vq_put(top.VQ_O_READY, ready);
+    }
+    void set_bus(bool cyc, bool stb, bool we, uint32_t adr, uint32_t dat) {
+        auto &top = whole.top;
+        vq_put(top.VQ_BUS_CYC, cyc); vq_put(top.VQ_BUS_STB, stb); vq_put(top.VQ_BUS_WE, we);
+        vq_put(top.VQ_BUS_SEL, 1); vq_put(top.VQ_BUS_ADR, adr); vq_put(top.VQ_BUS_DAT_W, dat);
+    }
+    template<class F> void cycle(F &&sample) { whole.cycle(sample); }
+    bool i_ready() { return vq_get(whole.top.VQ_I_READY); }
+    bool o_valid() { return vq_get(whole.top.VQ_O_VALID); }
+    uint64_t o_payload() { return vq_get(whole.top.VQ_O_PAYLOAD); }
+    void strobes(uint64_t *c) { auto &top = whole.top; VQ_STROBES(top, c) }
+    uint32_t valid() { return uint32_t(vq_get(whole.top.VQ_VALID)); }
+    bool bus_ack() { return vq_get(whole.top.VQ_BUS_ACK); }
+    bool bus_err() { return vq_get(whole.top.VQ_BUS_ERR); }
+    bool bus_stall() { return vq_get(whole.top.VQ_BUS_STALL); }
+    uint32_t bus_dat_r() { return uint32_t(vq_get(whole.top.VQ_BUS_DAT_R)); }
+};
+}
+
+VQ_BATCH_EXPORTS(Sim, 1)
+
+VQ_EXPORT int vq_load_memory(void *h, const char *name, const uint32_t *rows, uint64_t depth, uint32_t chunks_per_row) {
+    return static_cast<Sim *>(h)->whole.load(name, rows, depth, chunks_per_row);
+}
+
+VQ_EXPORT int vq_set_threads(void *, int) { return 1; }
+#else
 // What the back end needs of cycle c: the link and whether a response transfers.
 struct Record {
     value<VQ_LINK_BITS> link;
@@ -249,3 +304,4 @@ VQ_EXPORT int vq_set_threads(void *h, int threads) {
     s->threads = threads >= 2 ? 2 : 1;
     return s->threads;
 }
+#endif

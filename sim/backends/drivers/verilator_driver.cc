@@ -19,6 +19,17 @@ struct Sim : VerilatedTop {
     uint64_t o_payload() { return VQ_GET_RESPONSE(top); }
     void strobes(uint64_t *c) { VQ_STROBES(top, c) }
     uint32_t valid() { return top->valid; }
+#ifdef VQ_BUS
+    // The loadable unit's Wishbone port (batch.h's vq_bus_loop).
+    void set_bus(bool cyc, bool stb, bool we, uint32_t adr, uint32_t dat) {
+        top->bus_cyc = cyc; top->bus_stb = stb; top->bus_we = we; top->bus_sel = 1;
+        top->bus_adr = adr; top->bus_dat_w = dat;
+    }
+    bool bus_ack() { return top->bus_ack; }
+    bool bus_err() { return top->bus_err; }
+    bool bus_stall() { return top->bus_stall; }
+    uint32_t bus_dat_r() { return top->bus_dat_r; }
+#endif
 };
 }
 
