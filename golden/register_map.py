@@ -309,8 +309,10 @@ def markdown(geometry: Geometry) -> str:
 
 
 def c_header(geometry: Geometry, prefix: str = "VQTEX") -> str:
-    """The register map as a C header: byte offsets of the regions and registers, descriptor field
-    shifts and masks, the geometry (what a CPU driver includes)."""
+    """The register map as a C header: byte offsets of the regions (``VQTEX_<REGION>_BASE``) and of
+    the control registers (``VQTEX_REG_<NAME>``), descriptor word addresses
+    (``VQTEX_DESCRIPTOR(texture, level, word)``) and field shifts and masks (``VQTEX_D_<FIELD>_...``),
+    the geometry (``VQTEX_GEOMETRY_...``): what a CPU driver includes."""
     rmap = RegisterMap(geometry)
     ob = rmap.offset_bits
     p = prefix
@@ -328,7 +330,7 @@ def c_header(geometry: Geometry, prefix: str = "VQTEX") -> str:
     lines.append(f"#define {p}_INDEX_LANES {rmap.index_lanes}u /* bus words per index memory word */")
     lines.append("")
     for name, (off, acc, what) in CONTROL.items():
-        lines.append(f"#define {p}_{name} ({p}_CONTROL_BASE + 0x{off * 4:03x}u) /* {acc}: {what} */")
+        lines.append(f"#define {p}_REG_{name} ({p}_CONTROL_BASE + 0x{off * 4:03x}u) /* {acc}: {what} */")
     lines.append("")
     lines.append(f"#define {p}_DESCRIPTOR(texture, level, word) ({p}_DESCRIPTORS_BASE + "
                  f"((((texture) * {MAX_LEVELS}u + (level)) * 4u + (word)) * 4u))")
@@ -339,8 +341,8 @@ def c_header(geometry: Geometry, prefix: str = "VQTEX") -> str:
             lines.append(f"#define {p}_D_{name.upper()}_SHIFT {lsb}u")
             lines.append(f"#define {p}_D_{name.upper()}_MASK 0x{(1 << widths[name]) - 1:x}u")
     g = geometry
-    lines += ["", f"#define {p}_TEXTURES {g.textures}u", f"#define {p}_WORD_BITS {g.word_bits}u",
-              f"#define {p}_ENTRY_BYTES {g.entry_bytes}u", "", f"#endif /* {p}_REGS_H */"]
+    lines += ["", f"#define {p}_GEOMETRY_TEXTURES {g.textures}u", f"#define {p}_GEOMETRY_WORD_BITS {g.word_bits}u",
+              f"#define {p}_GEOMETRY_ENTRY_BYTES {g.entry_bytes}u", "", f"#endif /* {p}_REGS_H */"]
     return "\n".join(lines) + "\n"
 
 

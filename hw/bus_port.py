@@ -210,13 +210,15 @@ def attach_memory(m, mem: memory.Memory, load, *, region: int, lanes: int = 1, l
     entry = Signal(len(load.offset), name=f"{name}_entry")
     m.d.comb += entry.eq(load.offset >> lane_bits)
     rel = Signal(len(entry) + 1, name=f"{name}_rel")
-    m.d.comb += rel.eq(entry - first)
+    m.d.comb += rel.eq(entry - first if first else entry)
     stride_bits = (stride - 1).bit_length()
     row = Signal(range(max(2, depth)), name=f"{name}_row")
     m.d.comb += row.eq(rel >> stride_bits)
     lane_of = load.offset[:lane_bits] if lane_bits else C(0, 1)
     hit = Signal(name=f"{name}_hit")
-    cond = (load.region == region) & (entry >= first) & ((rel >> stride_bits) < depth)
+    cond = (load.region == region) & ((rel >> stride_bits) < depth)
+    if first:
+        cond &= entry >= first
     if stride > 1:
         cond &= rel[:stride_bits] == phase
     if lane is not None:

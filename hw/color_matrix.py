@@ -126,13 +126,12 @@ class ColorMatrix(wiring.Component):
         mine = load.region == REGIONS["control"]
         answer = Signal(32, name="matrix_answer")
         m.d.sync += answer.eq(0)
-        with m.Switch(load.offset):
-            for off, reg in by_offset.items():
-                with m.Case(off):
-                    with m.If(load.write & mine):
-                        m.d.sync += reg.eq(load.data[:len(reg)])
-                    with m.If(load.read & mine):        # coefficients read back sign-extended
-                        m.d.sync += answer.eq(reg.as_signed() if reg.shape().signed else reg)
+        for off, reg in by_offset.items():
+            here = mine & (load.offset == off)
+            with m.If(load.write & here):
+                m.d.sync += reg.eq(load.data[:len(reg)])
+            with m.If(load.read & here):                # coefficients read back sign-extended
+                m.d.sync += answer.eq(reg.as_signed() if reg.shape().signed else reg)
         m.d.comb += self.load_data.eq(answer)
         return regs
 

@@ -32,7 +32,7 @@ import tempfile
 import threading
 
 __all__ = ["CliError", "Parser", "block_size", "BACKEND_HELP", "add_json", "add_texture_set", "add_backend",
-           "add_hardware_options", "add_unit", "add_tag_width", "emit", "warn", "warn_slow", "progress_enabled", "progress_line",
+           "add_hardware_options", "add_unit", "unit_geometry", "add_tag_width", "emit", "warn", "warn_slow", "progress_enabled", "progress_line",
            "Outputs", "check_folder", "IMAGE_SUFFIXES", "write_bytes", "write_json", "load_set", "is_dt", "with_default",
            "file_mode", "add_sweep_options", "sweep_options", "PYSIM_CYCLES_PER_SECOND", "SLOW_SECONDS", "STAGING_PREFIX"]
 
@@ -103,18 +103,47 @@ def add_hardware_options(p, *, stall: bool = True) -> None:
                        help=with_default("seed of the --stall pattern (--seed is the old spelling)", 0))
 
 
-#: ``--unit`` choices: the texel-fetch unit specialised to the texture set, or the full one.
-UNITS = ("specialised", "full")
+#: ``--unit`` choices: the texel-fetch unit specialised to the texture set, the full one (both
+#: with the set baked into ROMs), or the loadable one (a geometry; the set loaded over its bus port).
+UNITS = ("specialised", "full", "loadable")
 
 
 def add_unit(p, *, both: bool = False) -> None:
-    """``--unit``: which texel-fetch unit the RTL is (``hw.features``); with ``both``, also both side
-    by side."""
+    """``--unit``: which texel-fetch unit the RTL is (``hw.features``); with ``both``, also the
+    specialised and full units side by side. ``--geometry``: the loadable unit's geometry."""
     p.add_argument("--unit", choices=UNITS + (("both",) if both else ()), default="specialised",
-                   help=with_default("the RTL unit: specialised (only what the texture set needs: "
-                                     "bit-exact and smaller) or full (every path, any set of these memory "
-                                     "shapes)" + ("; both: the two side by side" if both else ""),
+                   help=with_default("the RTL unit: specialised (the set in ROMs, only what it needs: "
+                                     "bit-exact and smaller), full (the set in ROMs, every path) or loadable "
+                                     "(memories loaded over a Wishbone port: one unit for every set of its "
+                                     "--geometry)" + ("; both: specialised and full side by side" if both else ""),
                                      "specialised"))
+    p.add_argument("--geometry", metavar="NAME|FILE.toml", default=None,
+                   help=with_default("with --unit loadable: what the unit holds, a preset (paper, dreamcast, "
+                                     "max) or a geometry file (docs/hardware.md)", "the texture set's own"))
+
+
+def unit_geometry(args, ts=None, where: str = ""):
+    """The loadable unit's :class:`golden.geometry.Geometry` from ``--unit``/``--geometry`` (None for
+    the baked units): the named or written geometry, else the set's own; one-line CliErrors for a
+    ``--geometry`` without ``--unit loadable``, a bad geometry, and a set that does not fit it."""
+    from vqtex.golden.geometry import Geometry, GeometryError, geometry_from
+    if args.unit != "loadable":
+        if args.geometry is not None:
+            raise CliError(f"--geometry applies to --unit loadable (not --unit {args.unit})")
+        return None
+    if args.geometry is None:
+        if ts is None:
+            raise CliError("--unit loadable needs --geometry NAME|FILE.toml (or a texture set to size it)")
+        return Geometry.of(ts)
+    try:
+        g = geometry_from(args.geometry)
+    except GeometryError as e:
+        raise CliError(str(e)) from None
+    if ts is not None:
+        misfit = g.fits(ts)
+        if misfit:
+            raise CliError(f"{where or 'the texture set'} does not fit geometry {args.geometry}: " + "; ".join(misfit))
+    return g
 
 
 def add_index_banks(p) -> None:

@@ -13,7 +13,8 @@ import time
 
 import numpy as np
 
-from .common import CliError, Outputs, add_backend, add_json, emit, with_default, write_bytes, write_json
+from .common import (CliError, Outputs, add_backend, add_json, add_unit, emit, unit_geometry, with_default, write_bytes,
+                     write_json)
 from vqtex.sim.reports.quality import DEFAULT_VMAX, side_by_side
 
 from .render import encode_scene, parse_frames, render_to_files
@@ -38,14 +39,22 @@ def cmd_demo(args) -> int:
                                      for n in ("topspin.vqt", "report.json", COMPARE_NAME))
         frame_paths = {f: outs.add(os.path.join(out_dir, f"topspin_{f:04d}.png")) for f in frames}
         images = [img for img, _ in scene.load_textures()]
+        if args.unit != "specialised" and args.backend == "golden":
+            raise CliError(f"--unit {args.unit} is an RTL unit: it needs an RTL --backend (pysim, cxxrtl, verilator)")
         t0 = time.perf_counter()
         ts = encode_scene(scene, images)
         encode_s = time.perf_counter() - t0
+        geometry = unit_geometry(args, ts, "topspin's texture set")
         write_bytes(outs.path(vqt), ts.to_bytes())
         per_frame, mismatches = render_to_files(
             scene, ts, frames, frame_paths.get, images, outs=outs, mode="trilinear", backend=args.backend,
-            cycle_model=True, on_frame=lambda r: _compare(r, outs.path(compare)) if r["frame"] == frames[0] else None)
+            cycle_model=True, on_frame=lambda r: _compare(r, outs.path(compare)) if r["frame"] == frames[0] else None,
+            unit=args.unit, geometry=geometry)
         report = _report(args, ts, per_frame, mismatches, encode_s)
+        report["unit"] = args.unit
+        if geometry is not None:
+            report["geometry"] = geometry.to_dict()
+            report["load_cycles_per_frame"] = per_frame[0].get("load_cycles")
         report["comparison"] = {"file": COMPARE_NAME, "frame": frames[0], "difference_scale": DEFAULT_VMAX,
                                 "panels": ["uncompressed", "compressed", "difference"]}
         report["total_seconds"] = round(time.perf_counter() - t_start, 2)
@@ -80,8 +89,10 @@ def _summary(args, scene, frames, report, per_frame, mismatches) -> str:
     if args.backend == "golden":
         rtl = "  RTL: not run (--backend golden); cycles below are the golden cycle model's"
     else:
-        rtl = (f"  RTL ({args.backend}) frames identical to golden: "
+        rtl = (f"  RTL ({args.backend}, {args.unit} unit) frames identical to golden: "
                f"{'yes' if not mismatches else 'NO ' + str(mismatches)}")
+        if report.get("load_cycles_per_frame") is not None:
+            rtl += f"\n  loaded over the bus port before each frame: {report['load_cycles_per_frame']} cycles"
     return "\n".join([
         f"vqtex demo: topspin, {len(frames)} frames {scene.width}x{scene.height}, trilinear mipmapping",
         "  textures: " + ", ".join(f"{n} {r:.1f}:1" for n, r in report["texture_rates"].items())
@@ -104,5 +115,6 @@ def add_parser(sub) -> None:
     d.add_argument("--frames", default="0:3", help=with_default("frames of topspin to render, a Python slice A:B[:STEP] "
                                                                "or one number", "0:3"))
     add_backend(d, BACKENDS, "cxxrtl")
+    add_unit(d)
     add_json(d)
     d.set_defaults(func=cmd_demo)

@@ -1,5 +1,9 @@
 """``vqtex export FILE.vqt -o OUT.v [--one-port] [--tag-width N] [--name NAME] [--dialect sv|v2005]
-[--lint] [--json]``.
+[--lint] [--json]``; ``vqtex export [FILE.vqt] --unit loadable [--geometry NAME|FILE.toml] -o OUT.v``.
+
+The loadable unit (``--unit loadable``) holds no texture data: its Verilog is the geometry's (the
+named one, or the smallest that holds FILE), and beside it go its register map, ``OUT.regs.md``,
+and the C header a CPU driver includes, ``OUT.h`` (:mod:`golden.register_map`).
 
 Writes the Verilog of the texel-fetch unit holding that file's memories (see
 :mod:`sim.backends.verilog`) and, beside it, ``OUT.vlt``: the Verilator configuration file that
@@ -17,8 +21,8 @@ import re
 import subprocess
 import tempfile
 
-from .common import (Outputs, add_hardware_options, add_index_banks, add_json, add_tag_width, add_texture_set, add_unit, emit, load_set,
-                     with_default)
+from .common import (Outputs, add_hardware_options, add_index_banks, add_json, add_tag_width, add_unit, emit, load_set,
+                     unit_geometry, with_default)
 
 __all__ = ["add_parser", "cmd_export", "lint_verilog", "waiver_path", "LINT_WAIVERS", "ExportError"]
 
@@ -74,14 +78,24 @@ def cmd_export(args) -> int:
         raise ExportError(f"--name {args.name!r} is not a Verilog identifier")
     if not 0 <= args.tag_width <= 16:
         raise ExportError(f"--tag-width {args.tag_width} must be in 0..16")
+    if args.file is None and args.unit != "loadable":
+        raise ExportError("FILE.vqt is required (only --unit loadable --geometry NAME exports without one)")
     with Outputs() as outs:
         out = outs.add(args.output, (".v", ".sv"), "Verilog")
         vlt = outs.add(waiver_path(args.output))
-        text, ports = _export(args, out)
+        regs = outs.add(register_map_paths(args.output)[0]) if args.unit == "loadable" else None
+        header = outs.add(register_map_paths(args.output)[1]) if args.unit == "loadable" else None
+        text, ports, geometry = _export(args, out)
         with open(outs.path(out), "w") as f:
             f.write(text)
         with open(outs.path(vlt), "w") as f:
             f.write(LINT_WAIVERS)
+        if geometry is not None:
+            from vqtex.golden.register_map import c_header, markdown
+            with open(outs.path(regs), "w") as f:
+                f.write(markdown(geometry))
+            with open(outs.path(header), "w") as f:
+                f.write(c_header(geometry))
     from vqtex.hw.texel_fetch import LATENCY as latency
     if args.filter_lanes is not None:
         from vqtex.hw.filter import LATENCY as latency
@@ -91,22 +105,40 @@ def cmd_export(args) -> int:
               "top": "texel fetch" if args.filter_lanes is None else f"texture filter, {args.filter_lanes} lane(s)"}
     if args.filter_lanes is not None:
         report["index_banks"] = args.index_banks
+    also = ""
+    if geometry is not None:
+        from vqtex.golden.register_map import RegisterMap
+        report.update(geometry=geometry.to_dict(), register_map=register_map_paths(args.output)[0],
+                      c_header=register_map_paths(args.output)[1], bus_addr_bits=RegisterMap(geometry).addr_bits)
+        also = f", its register map {register_map_paths(args.output)[0]} and C header {register_map_paths(args.output)[1]}"
     emit(report, args.json, f"wrote {args.output} (module {args.name}, {len(ports)} ports, "
                              f"latency {latency}, {len(text.encode())} bytes"
-                             f"{', lint clean' if args.lint else ''}) and its Verilator lint waivers "
-                             f"{waiver_path(args.output)}")
+                             f"{', lint clean' if args.lint else ''}), its Verilator lint waivers "
+                             f"{waiver_path(args.output)}{also}")
     return 0
 
 
+def register_map_paths(output: str) -> tuple:
+    """The loadable unit's register map and C header written beside ``OUT.v``: ``OUT.regs.md``, ``OUT.h``."""
+    stem = os.path.splitext(output)[0]
+    return stem + ".regs.md", stem + ".h"
+
+
 def _export(args, out):
-    """The Verilog text and its ports; linted when ``--lint`` (an ExportError on a warning)."""
+    """The Verilog text, its ports and the loadable unit's geometry (None for the baked units);
+    linted when ``--lint`` (an ExportError on a warning)."""
     from vqtex.golden.format import FormatError
     from vqtex.sim.backends.verilog import export_verilog
-    ts = load_set(args.file)
-    try:
-        ts.validate()
-    except FormatError as e:
-        raise ExportError(f"{args.file}: {e}") from None
+    ts = None
+    if args.file is not None:
+        ts = load_set(args.file)
+        try:
+            ts.validate()
+        except FormatError as e:
+            raise ExportError(f"{args.file}: {e}") from None
+    geometry = unit_geometry(args, ts, args.file)
+    if geometry is not None and args.filter_lanes is not None:
+        raise ExportError("--filter-lanes exports the baked texture filter; --unit loadable is the texel-fetch unit")
     ports = {}
     if args.filter_lanes is not None:
         if args.unit != "specialised":
@@ -117,7 +149,8 @@ def _export(args, out):
         ports.update({n: len(getattr(top, n)) for n in top.signature.members})
     else:
         text = export_verilog(ts, one_port=args.one_port, tag_width=args.tag_width, name=args.name,
-                              dialect=args.dialect, ports=ports, specialise=args.unit == "specialised")
+                              dialect=args.dialect, ports=ports, specialise=args.unit == "specialised",
+                              geometry=geometry)
     if args.lint:
         with tempfile.TemporaryDirectory() as tmp:
             path = os.path.join(tmp, os.path.basename(out))
@@ -126,12 +159,15 @@ def _export(args, out):
             warnings = lint_verilog(path, args.name)
         if warnings:
             raise ExportError(f"verilator lint: {len(warnings)} warning(s), first: {warnings[0]}")
-    return text, ports
+    return text, ports, geometry
 
 
 def add_parser(sub) -> None:
-    e = sub.add_parser("export", help="Verilog of the texel-fetch unit holding a .vqt's memories")
-    add_texture_set(e)
+    e = sub.add_parser("export", help="Verilog of the texel-fetch unit holding a .vqt's memories, or of a "
+                                      "loadable unit (and its register map)")
+    e.add_argument("file", metavar="FILE.vqt", nargs="?", default=None,
+                   help="a texture set written by vqtex encode or vqtex import, or a Dreamcast VQ texture (.dt); "
+                        "optional with --unit loadable --geometry NAME")
     e.add_argument("-o", "--output", required=True, help="Verilog file to write (.v or .sv)")
     add_hardware_options(e, stall=False)
     add_unit(e)

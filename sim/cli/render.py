@@ -14,7 +14,8 @@ import time
 
 import numpy as np
 
-from .common import (IMAGE_SUFFIXES, CliError, Outputs, add_backend, add_hardware_options, add_index_banks, add_json, emit, load_set,
+from .common import (IMAGE_SUFFIXES, CliError, Outputs, add_backend, add_hardware_options, add_index_banks, add_json, add_unit,
+                     emit, load_set, unit_geometry,
                      progress_enabled, warn, warn_slow, with_default, write_json)
 
 __all__ = ["add_parser", "cmd_render", "render_scene", "render_to_files", "encode_scene", "parse_frames", "parse_fovea",
@@ -90,7 +91,7 @@ def _frame_path(pattern: str, frame: int, many: bool) -> str:
 def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall=0.0, seed=0,
                  one_port=False, reference=True, images=None, progress=None, cycle_model=False,
                  stream="sparse", fovea=None, compare_fixed=False, filter_in_rtl=False, lanes=4,
-                 index_banks="parity"):
+                 index_banks="parity", unit="specialised", geometry=None):
     """Render ``frames`` of ``scene`` from TextureSet ``ts``; yields one dict per frame with the frame,
     the golden frame when the backend is RTL (for comparison), cycle results and the reference MSE.
     With the golden backend and ``cycle_model``, the cycles come from the exact cycle model (no RTL).
@@ -105,7 +106,13 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
     instead of the texel-fetch unit on its texel requests; the result's ``filter`` is its
     :class:`~vqtex.sim.backends.filter.FilterResult`. It does not go with ``compare_fixed`` (which runs
     request streams through the texel-fetch unit); the fovea's region figures then come from the
-    texel-fetch unit's exact cycle model."""
+    texel-fetch unit's exact cycle model.
+    ``unit`` is the RTL texel-fetch unit (``specialised`` or ``full``); with ``geometry`` it is the
+    loadable unit of that geometry, ``ts`` loaded over its bus port before each frame's requests
+    (``"sim"`` holds the load's cycles too)."""
+    if filter_in_rtl and geometry is not None:
+        raise ValueError("the RTL texture filter is baked: it does not take a geometry")
+    unit_kw = {"specialise": unit != "full", "geometry": geometry}
     if filter_in_rtl and compare_fixed:
         raise ValueError("compare_fixed runs request streams through the texel-fetch unit, not the RTL filter")
     from vqtex.golden.fetch import check_requests, fetch
@@ -155,7 +162,8 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
             if f == frames[0]:
                 warn_slow(backend, len(reqs) * len(frames))
             t0 = time.perf_counter()
-            res = simulate(ts, reqs, backend=backend, stall=stall, seed=seed, one_port=one_port) if len(reqs) else None
+            res = (simulate(ts, reqs, backend=backend, stall=stall, seed=seed, one_port=one_port, **unit_kw)
+                   if len(reqs) else None)
             out["rtl_seconds"] = time.perf_counter() - t0
             out["image"] = sampler.resolve(res.responses) if res is not None else golden_frame
             out["identical_to_golden"] = bool(np.array_equal(out["image"], golden_frame))
@@ -167,7 +175,8 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
         if compare_fixed:
             from vqtex.sim.backends import simulate
             freqs, fsampler = frame_requests(scene, f, src, mode, stream="fixed", fovea=fovea)
-            fres = simulate(ts, freqs, backend=backend, stall=stall, seed=seed, one_port=one_port) if len(freqs) else None
+            fres = (simulate(ts, freqs, backend=backend, stall=stall, seed=seed, one_port=one_port, **unit_kw)
+                    if len(freqs) else None)
             fimg = fsampler.resolve(fres.responses) if fres is not None else out["image"]
             out["fixed"] = {"requests": int(len(freqs)), "cycles": int(fres.cycles) if fres is not None else 0,
                             "identical": bool(np.array_equal(fimg, out["image"]))}
@@ -288,6 +297,8 @@ def _frame_report(r: dict) -> dict:
         d.update(rtl_seconds=round(r["rtl_seconds"], 4), cycles=int(s.cycles), latency=int(s.latency),
                  straddling_index_reads=int(s.straddles),
                  stall_cycles={k: int(v) for k, v in s.stall_cycles.items()})
+        if s.load_cycles is not None:
+            d["load_cycles"] = int(s.load_cycles)
         if "identical_to_golden" in r:
             d["identical_to_golden"] = r["identical_to_golden"]
     return d
@@ -335,6 +346,11 @@ def cmd_render(args) -> int:
         if args.filter_in_rtl and (ts.present_blocks is not None or any(t.absent_levels for t in ts.textures)):
             raise CliError(f"--filter-in-rtl fetches every texel of a footprint, zero weights too: {args.texture_set} "
                            "is pruned (vqtex prune); use an unpruned set")
+        geometry = unit_geometry(args, ts, args.texture_set or f"{scene.name}'s texture set")
+        if geometry is not None and args.filter_in_rtl:
+            raise CliError("--filter-in-rtl runs the baked texture filter: --unit loadable is the texel-fetch unit")
+        if args.unit != "specialised" and args.backend == "golden" and not args.filter_in_rtl:
+            raise CliError(f"--unit {args.unit} is an RTL unit: it needs an RTL --backend (pysim, cxxrtl, verilator)")
         need = _NeedReport(ts, on_frame) if report_path else None
         if need is not None:
             on_frame = need.on_frame
@@ -342,7 +358,8 @@ def cmd_render(args) -> int:
             scene, ts, frames, frame_paths.get, images, outs=outs, on_frame=on_frame,
             mode=args.mode, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port,
             stream=args.requests, fovea=fovea, compare_fixed=args.compare_fixed,
-            filter_in_rtl=args.filter_in_rtl, lanes=args.lanes, index_banks=args.index_banks)
+            filter_in_rtl=args.filter_in_rtl, lanes=args.lanes, index_banks=args.index_banks,
+            unit=args.unit, geometry=geometry)
         report = {
             "scene": scene.name, "mode": args.mode, "backend": args.backend, "frames": per_frame,
             "overall_rate": round(ts.rates()["overall"], 4),
@@ -351,6 +368,9 @@ def cmd_render(args) -> int:
             "requests_per_frame": round(float(np.mean([f["requests"] for f in per_frame])), 1),
             "fixed_requests_per_frame": round(float(np.mean([f["requests_fixed"] for f in per_frame])), 1),
         }
+        report["unit"] = args.unit
+        if geometry is not None:
+            report["geometry"] = geometry.to_dict()
         if args.filter_in_rtl:
             report["filter_in_rtl"] = True
             report["lanes"] = args.lanes
@@ -471,6 +491,7 @@ def add_parser(sub) -> None:
                    help=with_default("with --encode-needed: train the codebooks on every block of the touched level "
                                      "groups, or on the touched blocks only", "levels"))
     add_hardware_options(r)
+    add_unit(r)
     r.add_argument("--filter-in-rtl", action="store_true",
                    help="run the texture filter in the RTL (hw.filter: per-pixel (s, t, lod) in, filtered colour "
                         "out) instead of the texel-fetch unit with the filtering in numpy (default: off)")

@@ -16,7 +16,7 @@ from __future__ import annotations
 import os
 import time
 
-from .common import (Outputs, add_hardware_options, add_index_banks, add_json, add_tag_width, add_unit, check_folder, emit, load_set,
+from .common import (Outputs, add_hardware_options, add_index_banks, add_json, add_tag_width, add_unit, check_folder, emit, load_set, unit_geometry,
                      progress_line, with_default)
 from .simulate import add_trace_arguments, plot_output, run_trace
 
@@ -44,8 +44,11 @@ BUILTINS = {
 
 def cmd_report_area(args) -> int:
     from vqtex.sim.reports import synth
-    if (args.file is None) == (args.builtin is None):
-        raise ReportError("report area: give a FILE.vqt or --builtin NAME (not both)")
+    sizeless = args.unit == "loadable" and args.geometry is not None   # a geometry alone names the unit
+    if (args.file is not None and args.builtin is not None) or (args.file is None and args.builtin is None
+                                                                   and not sizeless):
+        raise ReportError("report area: give a FILE.vqt or --builtin NAME (not both; neither with --unit loadable "
+                          "--geometry NAME)")
     if not 0 <= args.tag_width <= 16:
         raise ReportError(f"--tag-width {args.tag_width} must be in 0..16")
     if not 1 <= args.freq <= 1000:
@@ -67,7 +70,9 @@ def cmd_report_area(args) -> int:
     if missing:
         raise synth.SynthError(f"{missing[0]} is not installed: {synth.INSTALL_HINT}")
     t_set = None
-    if ts is None:
+    if ts is None and sizeless and args.builtin is None:
+        name = f"geometry {args.geometry}"
+    elif ts is None:
         t0 = time.perf_counter()
         progress_line(f"report area: encoding the built-in set {args.builtin}")
         ts = getattr(synth, BUILTINS[args.builtin][0])()
@@ -75,6 +80,9 @@ def cmd_report_area(args) -> int:
         name = f"builtin {args.builtin}"
     if args.filter_lanes is not None and args.unit != "specialised":
         raise CliError("--filter-lanes builds specialised texel-fetch lanes; --unit applies to the texel-fetch unit alone")
+    geometry = unit_geometry(args, ts, name)
+    if geometry is not None and args.filter_lanes is not None:
+        raise CliError("--filter-lanes synthesizes the baked texture filter; --unit loadable is the texel-fetch unit")
     units = ["full", "specialised"] if args.unit == "both" else [args.unit]
     reps = {}
     for unit in units:
@@ -83,7 +91,7 @@ def cmd_report_area(args) -> int:
             ts, one_port=args.one_port, tag_width=args.tag_width, place=not args.no_pnr, freq=args.freq,
             seed=args.seed, workdir=workdir, timeout=args.timeout, name=name, specialise=unit == "specialised",
             progress=lambda m, u=unit: progress_line(f"report area: {u + ' unit: ' if len(units) > 1 else ''}{m}"),
-            filter_lanes=args.filter_lanes, index_banks=args.index_banks)
+            filter_lanes=args.filter_lanes, index_banks=args.index_banks, geometry=geometry)
         if t_set is not None:
             reps[unit]["seconds"] = {"encode": t_set, **reps[unit]["seconds"]}
     if len(units) == 1:

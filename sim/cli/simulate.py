@@ -8,7 +8,7 @@ import os
 import numpy as np
 
 from .common import (CliError, Outputs, add_backend, add_hardware_options, add_json, add_texture_set, add_unit,
-                     emit, load_set, warn_slow, with_default, write_bytes)
+                     emit, load_set, unit_geometry, warn_slow, with_default, write_bytes)
 
 __all__ = ["add_parser", "cmd_sim", "read_requests", "run_trace", "plot_output", "add_trace_arguments"]
 
@@ -46,13 +46,16 @@ def run_trace(args):
     if not 0.0 <= args.stall < 1.0:
         raise CliError(f"--stall {args.stall} must be in [0, 1)")
     ts = load_set(args.file)
+    geometry = unit_geometry(args, ts, args.file)
     req = read_requests(args.requests)
     check_requests(ts, req[:, 0], req[:, 1], req[:, 2], req[:, 3])
     warn_slow(args.backend, len(req))
     res = simulate(ts, req, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port,
-                   specialise=args.unit == "specialised")
-    return res, cycle_report(res, backend=args.backend, one_port=args.one_port, stall=args.stall,
-                             extra={"unit": args.unit})
+                   specialise=args.unit == "specialised", geometry=geometry)
+    extra = {"unit": args.unit}
+    if geometry is not None:
+        extra.update(geometry=args.geometry or "the set's own", load_cycles=res.load_cycles)
+    return res, cycle_report(res, backend=args.backend, one_port=args.one_port, stall=args.stall, extra=extra)
 
 
 def cmd_sim(args) -> int:

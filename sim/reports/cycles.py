@@ -35,6 +35,9 @@ def cycle_text(rep: dict) -> str:
         f"latency            {rep['latency']} cycles",
         f"straddling reads   {rep['straddling_index_reads']}",
     ]
+    if rep.get("load_cycles") is not None:
+        lines.insert(1, f"unit               loadable, geometry {rep['geometry']}")
+        lines.append(f"load (bus writes)  {rep['load_cycles']} cycles, before the requests")
     for cause, n in rep["stall_cycles"].items():
         lines.append(f"stalls: {cause:<11} {n}")
     for stage, occ in rep.get("occupancy", {}).items():

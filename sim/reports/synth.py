@@ -192,10 +192,11 @@ class Harness(wiring.Component):
     docstring). The unit is the submodule ``unit``; the harness has the same ports."""
 
     def __init__(self, texture_set, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True,
-                 unit=None):
+                 unit=None, geometry=None):
         from vqtex.sim.backends.design import TexelFetchTop
-        self.unit = unit if unit is not None else TexelFetchTop(texture_set, one_port=one_port, tag_width=tag_width,
-                                                                specialise=specialise)
+        self.unit = unit if unit is not None else TexelFetchTop(
+            None if geometry is not None else texture_set, one_port=one_port, tag_width=tag_width,
+            specialise=specialise, geometry=geometry)
         super().__init__({name: (In if m.flow == In else Out)(m.shape)
                           for name, m in self.unit.signature.members.items()})
 
@@ -541,12 +542,13 @@ def stage_of(name: str) -> str:
 def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool = True, freq: float = 150.0,
                 seed: int = 1, workdir: str | None = None, timeout: float | None = None,
                 name: str | None = None, progress=None, specialise: bool = True,
-                filter_lanes: int | None = None, index_banks: str = "parity") -> dict:
+                filter_lanes: int | None = None, index_banks: str = "parity", geometry=None) -> dict:
     """Synthesize (and unless ``place`` is false, place and route) the unit holding ``ts``: the
     specialised texel-fetch unit (:class:`hw.features.Features`), or with ``specialise=False`` the
     full one; or with ``filter_lanes`` the texture filter (``hw.filter.TextureFilter``) with that many
     (specialised) lanes (``top`` in the report says which) and ``index_banks`` (``parity``: one index
-    memory banked by block parity, or ``lane``: a copy per lane).
+    memory banked by block parity, or ``lane``: a copy per lane). With ``geometry``, the loadable
+    unit of that geometry (``ts`` is not used: the unit holds no texture data).
 
     ``progress(message)``, when given, is called as each long step starts (elaboration, synthesis,
     place and route).
@@ -568,12 +570,12 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
     if filter_lanes is not None:
         from vqtex.sim.backends.filter import FilterTop
         unit = FilterTop(ts, lanes=filter_lanes, tag_width=tag_width, index_banks=index_banks)
-    harness = Harness(ts, one_port=one_port, tag_width=tag_width, specialise=specialise, unit=unit)
+    harness = Harness(ts, one_port=one_port, tag_width=tag_width, specialise=specialise, unit=unit, geometry=geometry)
     from amaranth.back import rtlil
     il = rtlil.convert(harness, name=HARNESS_NAME, emit_src=False)
     t_rtlil = time.perf_counter() - t0
     shapes = design_memories(ts, one_port=one_port, tag_width=tag_width, specialise=specialise,
-                             filter_lanes=filter_lanes, index_banks=index_banks)
+                             filter_lanes=filter_lanes, index_banks=index_banks, geometry=geometry)
     if filter_lanes is None:
         features = harness.unit.fetch.features
     else:                               # the filter's lanes are specialised texel-fetch units
@@ -592,14 +594,17 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
                     + ("banked by block parity" if index_banks == "parity" else "per lane")),
             "device": f"{DEVICE['device']}-{DEVICE['speed']} {DEVICE['package']}",
             "index_reader": "one-port" if one_port else "two-bank",
-            "unit": "specialised" if features.specialised else "full",
+            "unit": "loadable" if geometry is not None else "specialised" if features.specialised else "full",
             "features": features.to_dict(),
             "tag_width": tag_width,
             "latency": LATENCY,
-            "textures": ts.n_textures,
-            "memory_images": {"index_words": int(len(ts.index_words)), "word_bits": int(ts.word_bits),
-                         "codebook_entries": int(len(ts.codebook)), "entry_bytes": int(ts.entry_bytes),
-                         "raw_words": int(len(ts.raw_words))},
+            "textures": ts.n_textures if geometry is None else geometry.textures,
+            "memory_images": ({"index_words": int(len(ts.index_words)), "word_bits": int(ts.word_bits),
+                               "codebook_entries": int(len(ts.codebook)), "entry_bytes": int(ts.entry_bytes),
+                               "raw_words": int(len(ts.raw_words))} if geometry is None else
+                              {"index_words": geometry.index_words, "word_bits": geometry.word_bits,
+                               "codebook_entries": geometry.codebook_entries, "entry_bytes": geometry.entry_bytes,
+                               "raw_words": geometry.raw_words}),
             "utilisation": unit.get("headline", {}),
             "cells": unit.get("cells", {}),
             "harness_ffs": (top.get("headline") or {}).get("ffs", 0),
@@ -607,6 +612,8 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
             "memories": _memory_shapes(shapes, syn["memories"]),
             "seconds": {"rtlil": round(t_rtlil, 2), "synthesis": round(syn["seconds"], 2)},
         }
+        if geometry is not None:
+            rep["geometry"] = geometry.to_dict()
         if place:
             progress(f"place and route (nextpnr, {freq:g} MHz), typically 20-40 s")
             pnr = run_nextpnr(folder, freq=freq, seed=seed, timeout=timeout)
@@ -625,7 +632,7 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
 
 
 def design_memories(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True,
-                    filter_lanes: int | None = None, index_banks: str = "parity") -> dict:
+                    filter_lanes: int | None = None, index_banks: str = "parity", geometry=None) -> dict:
     """Every memory of ``TexelFetch(ts)`` -> ``(depth, width)``, named as Yosys names it inside the
     unit (``fetch.back.codebook_rom.codebook.bank0``, ``fetch.front.descriptor.table``): the banks of
     :class:`hw.banked_rom.BankedROM` are memories of their own. With ``filter_lanes``, those of
@@ -636,7 +643,9 @@ def design_memories(ts, *, one_port: bool = False, tag_width: int = 8, specialis
         top, prefix = TextureFilter(ts, lanes=filter_lanes, tag_width=tag_width, index_banks=index_banks), "filter"
     else:
         from vqtex.hw.texel_fetch import TexelFetch
-        top, prefix = TexelFetch(ts, one_port=one_port, tag_width=tag_width, specialise=specialise), "fetch"
+        unit = {} if geometry is None else {"geometry": geometry, "loadable": True}
+        top, prefix = TexelFetch(None if geometry is not None else ts, one_port=one_port, tag_width=tag_width,
+                                 specialise=specialise, **unit), "fetch"
     return {".".join((prefix,) + mem.path): (mem.depth, mem.width) for mem in memories(elaborate(top))}
 
 
