@@ -31,8 +31,11 @@ import sys
 import tempfile
 import threading
 
-__all__ = ["CliError", "Parser", "block_size", "BACKEND_HELP", "add_json", "add_texture_set", "add_backend",
-           "add_hardware_options", "add_unit", "add_tag_width", "emit", "warn", "warn_slow", "progress_enabled", "progress_line",
+from . import limits
+from .limits import number_help
+
+__all__ = ["CliError", "Parser", "number_help", "BACKEND_HELP", "add_json", "add_texture_set", "add_backend",
+           "add_hardware_options", "stall_seed", "resolve", "add_unit", "add_tag_width", "emit", "warn", "warn_slow", "progress_enabled", "progress_line",
            "Outputs", "check_folder", "IMAGE_SUFFIXES", "write_bytes", "write_json", "load_set", "is_dt", "with_default",
            "file_mode", "add_sweep_options", "sweep_options", "PYSIM_CYCLES_PER_SECOND", "SLOW_SECONDS", "STAGING_PREFIX"]
 
@@ -96,11 +99,24 @@ def add_hardware_options(p, *, stall: bool = True) -> None:
                    help="one-port index memory: one extra cycle per straddling index (the paper's penalty; "
                         "default two banks, no penalty)")
     if stall:
-        p.add_argument("--stall", type=float, default=0.0,
-                       help=with_default("probability, in [0, 1), that the consumer holds the output's ready "
-                                         "low in a cycle", 0.0))
-        p.add_argument("--stall-seed", "--seed", dest="seed", type=int, default=0,
-                       help=with_default("seed of the --stall pattern (--seed is the old spelling)", 0))
+        p.add_argument("--stall", type=limits.STALL, default=0.0,
+                       help=number_help("probability that the consumer holds the output's ready low in a cycle",
+                                        limits.STALL, 0.0))
+        p.add_argument("--stall-seed", "--seed", dest="seed", type=limits.SEED, default=None,
+                       help=number_help("seed of the --stall pattern, with --stall above 0 (--seed is the old "
+                                        "spelling)", limits.SEED, 0))
+
+
+def stall_seed(args, stall_applies: bool = True) -> int:
+    """``--stall-seed`` checked against what it seeds: refused when the ``--stall`` pattern it seeds
+    is all ready (``--stall 0``) or when ``--stall`` itself does not apply (``stall_applies`` False:
+    then ``--stall`` above 0 is refused too); the seed, 0 when not given."""
+    if args.stall > 0 and not stall_applies:
+        raise CliError(f"--stall {args.stall:g} does not apply: nothing runs the unit's cycles here "
+                       "(an RTL backend, --compare-fixed or --fovea does)")
+    if args.seed is not None and args.stall == 0:
+        raise CliError("--stall-seed seeds the --stall pattern: it needs --stall above 0")
+    return 0 if args.seed is None else args.seed
 
 
 #: ``--unit`` choices: the texel-fetch unit specialised to the texture set, or the full one.
@@ -110,7 +126,7 @@ UNITS = ("specialised", "full")
 def add_unit(p, *, both: bool = False) -> None:
     """``--unit``: which texel-fetch unit the RTL is (``hw.features``); with ``both``, also both side
     by side."""
-    p.add_argument("--unit", choices=UNITS + (("both",) if both else ()), default="specialised",
+    p.add_argument("--unit", choices=UNITS + (("both",) if both else ()), default=None,
                    help=with_default("the RTL unit: specialised (only what the texture set needs: "
                                      "bit-exact and smaller) or full (every path, any set of these memory "
                                      "shapes)" + ("; both: the two side by side" if both else ""),
@@ -119,41 +135,50 @@ def add_unit(p, *, both: bool = False) -> None:
 
 def add_index_banks(p) -> None:
     """``--index-banks``: how the texture filter's lanes hold the index memory."""
-    p.add_argument("--index-banks", choices=["parity", "lane"], default="parity",
+    p.add_argument("--index-banks", choices=["parity", "lane"], default=None,
                    help=with_default("the texture filter's index memory: one memory banked by block parity, "
-                                     "shared by the lanes, or a copy per lane (docs/filter.md)", "parity"))
+                                     "shared by the lanes, or a copy per lane (docs/filter.md; only with the "
+                                     "filter)", "parity"))
+
+
+def resolve(args, name: str, default, applies: bool, why: str):
+    """The option ``name`` (an ``args`` attribute whose argparse default is None, so that a given
+    option is told from an absent one): a CliError ``--NAME ... WHY`` when it was given but does not
+    apply, else its value or ``default``. Stored back into ``args``."""
+    value = getattr(args, name)
+    if value is not None and not applies:
+        raise CliError(f"--{name.replace('_', '-')} {why}")
+    value = default if value is None else value
+    setattr(args, name, value)
+    return value
 
 
 def add_tag_width(p) -> None:
-    p.add_argument("--tag-width", type=int, default=8,
-                   help=with_default("bits of the request tag carried to the response, 0..16", 8))
+    p.add_argument("--tag-width", type=limits.TAG_WIDTH, default=8,
+                   help=number_help("bits of the request tag carried to the response", limits.TAG_WIDTH, 8))
 
 
 def add_sweep_options(p) -> None:
     """``--scheduler`` and ``--workers`` for commands that run a sweep of independent jobs
     (:func:`vqtex.sim.bench.sweep.run_jobs`)."""
-    p.add_argument("--scheduler", metavar="ADDRESS", default=None,
+    p.add_argument("--scheduler", metavar="ADDRESS", type=limits.SCHEDULER, default=None,
                    help=with_default("where the sweep's jobs run: the address of a running dask scheduler "
-                                     "(tcp://host:8786), 'serial' for this process, or none for a dask "
-                                     "LocalCluster of worker processes on this machine", "a LocalCluster"))
-    p.add_argument("--workers", type=int, default=None,
-                   help=with_default("worker processes of the LocalCluster", "the cores this process may use"))
+                                     "(tcp://host:8786, checked before any work), 'serial' for this process, or "
+                                     "none for a dask LocalCluster of worker processes on this machine",
+                                     "a LocalCluster"))
+    p.add_argument("--workers", type=limits.WORKERS, default=None,
+                   help=number_help("worker processes of the LocalCluster (not with --scheduler)", limits.WORKERS,
+                                    "the cores this process may use"))
 
 
 def sweep_options(args) -> dict:
-    """``run_jobs`` keyword arguments from :func:`add_sweep_options`' options, checked."""
+    """``run_jobs`` keyword arguments from :func:`add_sweep_options`' options, checked: ``--workers``
+    is at least 1 and only for the LocalCluster (no ``--scheduler``)."""
     if args.workers is not None and args.workers < 1:
         raise CliError(f"--workers must be at least 1, got {args.workers}")
+    if args.workers is not None and args.scheduler is not None:
+        raise CliError("--workers sizes the LocalCluster: it does not go with --scheduler")
     return {"scheduler": args.scheduler, "workers": args.workers, "progress": progress_enabled()}
-
-
-def block_size(text: str) -> tuple[int, int]:
-    """``WxH`` (e.g. ``4x4``) as ``(w, h)``; an ``argparse`` type."""
-    try:
-        w, h = (int(v) for v in text.lower().split("x"))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"block {text!r} is not WxH (e.g. 4x4)") from None
-    return w, h
 
 
 def emit(obj: dict, as_json: bool, text: str) -> None:
