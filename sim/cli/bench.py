@@ -17,9 +17,10 @@ from __future__ import annotations
 
 import importlib
 import inspect
+import os
 
 from . import limits
-from .common import CliError, add_json, add_sweep_options, number_help, sweep_options, with_default
+from .common import CliError, Outputs, add_json, add_sweep_options, number_help, sweep_options, with_default
 
 __all__ = ["add_parser"]
 
@@ -33,6 +34,9 @@ BENCHES = {
     "codecs": "vqtex.sim.bench.codecs",
     "tradeoff": "vqtex.sim.bench.encoding.tradeoff",
 }
+
+#: The files ``bench tradeoff --plot DIR`` writes into DIR.
+PLOTS = ("tradeoff_time.png", "tradeoff_bits.png")
 
 #: The extra that installs what a bench needs (default ``bench``).
 EXTRAS = {"codecs": "codecs"}
@@ -51,7 +55,12 @@ def cmd_bench(args) -> int:
     try:
         mod = importlib.import_module(BENCHES[args.what])
         opts = _options(args)
-        mod.run(json_out=args.json, **opts)
+        with Outputs() as outs:
+            if opts.get("plot"):                # the plots appear together when the run ends well
+                folder = outs.folder(opts["plot"])
+                staged = [outs.path(outs.add(os.path.join(folder, n))) for n in PLOTS]
+                opts["plot_into"] = os.path.dirname(staged[0])
+            mod.run(json_out=args.json, **opts)
     except ImportError as e:
         if (e.name or "").split(".")[0] == "vqtex":
             raise

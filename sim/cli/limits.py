@@ -155,7 +155,7 @@ class ListOf:
     def __call__(self, text: str) -> tuple:
         parts = [p for p in str(text).split(",")]
         if not 1 <= len(parts) <= self.most:
-            raise argparse.ArgumentTypeError(f"{text!r}: 1..{self.most} comma-separated values")
+            raise argparse.ArgumentTypeError(f"{text!r}: 1..{self.most} values, {self.range_text}")
         try:
             return tuple(self.item.parse(p) for p in parts)
         except ValueError as e:

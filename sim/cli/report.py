@@ -53,7 +53,8 @@ def cmd_report_area(args) -> int:
     resolve(args, "unit", "specialised", not lanes, "applies to the texel-fetch unit alone (--filter-lanes builds "
             "specialised texel-fetch lanes)")
     resolve(args, "freq", 150.0, not args.no_pnr, "is the clock nextpnr places for: it does not go with --no-pnr")
-    resolve(args, "seed", 1, not args.no_pnr, "seeds nextpnr's placement: it does not go with --no-pnr")
+    resolve(args, "seed", 1, not args.no_pnr, "seeds nextpnr's placement: it does not go with --no-pnr",
+            "--placer-seed")
     if args.filter_lanes is not None and args.one_port:
         raise ReportError("report area: --filter-lanes: the filter's lanes have two-bank index memories (no --one-port)")
     if args.keep:
