@@ -248,3 +248,15 @@ def test_a_scene_beyond_the_rasterizer_limits_is_one_line(tmp_path, capsys):
     assert code == 2 and out == "" and err.count("\n") == 1, err
     assert "frame 0" in err and "needs clipping" in err, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["huge.toml"]
+
+
+def test_usage_states_every_range():
+    """docs/usage.md's table holds every numeric option with its range (a new option fails here until
+    it is documented)."""
+    import os
+    from tests.support import REPO
+    doc = open(os.path.join(REPO, "docs", "usage.md")).read()
+    for words, p in _commands():
+        for a in _numeric(p):
+            rng = a.type.range_text if hasattr(a.type, "range_text") else "one of " + ", ".join(map(str, a.choices))
+            assert f"| `{'/'.join(a.option_strings)}` | {rng} |" in doc, (words, a.option_strings)
