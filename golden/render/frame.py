@@ -47,9 +47,15 @@ def _shapes(scene, source) -> list[list[tuple[int, int]]]:
 
 
 def fragments(scene, frame_no: float) -> Fragments:
-    """Visible fragments (rasterization and depth test) of one frame."""
+    """Visible fragments (rasterization and depth test) of one frame; a SceneError (one line) when the
+    frame's geometry is beyond the rasterizer's limits (``raster``'s Limits: non-finite, or a clipped
+    triangle beyond ``CLIP_RANGE`` times the near plane)."""
+    from .scene import SceneError
     clip, st, tex = scene.triangles_at(frame_no)
-    return rasterize(clip, st, tex, scene.width, scene.height, scene.camera_at(frame_no).near)
+    try:
+        return rasterize(clip, st, tex, scene.width, scene.height, scene.camera_at(frame_no).near)
+    except ValueError as e:
+        raise SceneError(f"scene {scene.name}, frame {frame_no}: {e}") from None
 
 
 def plan_frame(scene, frame_no: float, source: TextureSource | Sequence, mode: str = "trilinear", *,

@@ -25,6 +25,17 @@ w = -z_eye):
    Analytic screen derivatives of the perspective-correct interpolants:
    ``ds/dx = (a_u - s a_q) / q``, ``ds/dy = (b_u - s b_q) / q`` (and the same for t).
 
+**Limits** (checked by :func:`rasterize`, ValueError otherwise): every clip-space coordinate and
+texture coordinate is finite; a triangle that is clipped (a vertex outside a plane, not wholly
+behind the near plane) has every coordinate
+``|x|, |y|, |w|`` at most ``CLIP_RANGE * near`` (2^40 near, about 1.1e12 near). Within it a cut
+vertex is off by a few ``2^-52 * 2^40 * near`` in clip space, a small fraction of a pixel where it
+matters (coverage is exact: a full-screen quad covers every pixel once at every scale up to the
+bound); beyond it float64 cannot place the cut vertices (a quad scaled by 1e21 came out as half the
+frame), so such a triangle is refused rather than drawn wrong. A triangle that needs no clipping
+(inside the guard band, in front of the near plane) has no bound but finiteness: it scales exactly.
+The interpolated (s, t) and their derivatives must come out finite (ValueError otherwise).
+
 Everything is vectorised: triangles' bounding boxes (split into bands of rows when large) are
 processed in steps of at most ``CHUNK`` candidate pixels; there is no Python loop over pixels.
 """
@@ -37,7 +48,7 @@ import numpy as np
 
 __all__ = [
     "SUBPIXEL_BITS", "Fragments", "clip_triangles", "to_screen", "snap", "coverage",
-    "rasterize_screen", "rasterize",
+    "rasterize_screen", "rasterize", "CLIP_RANGE",
 ]
 
 SUBPIXEL_BITS = 8
@@ -45,6 +56,8 @@ CHUNK = 1 << 20  # candidate pixels per vectorised step
 _ONE = 1 << SUBPIXEL_BITS
 _HALF = _ONE >> 1
 _GUARD_PIXELS = float(1 << 19)
+#: A triangle that needs clipping has every |x|, |y|, |w| at most CLIP_RANGE * near (module docstring).
+CLIP_RANGE = float(1 << 40)
 
 
 @dataclass
@@ -263,10 +276,15 @@ def rasterize(clip: np.ndarray, st: np.ndarray, tex: np.ndarray, width: int, hei
             zero in the perspective divide).
 
     Raises:
-        ValueError: if ``near`` is not positive and finite.
+        ValueError: if ``near`` is not positive and finite; if a coordinate (clip space or texture)
+            is not finite; if a triangle that needs clipping has a coordinate beyond
+            ``CLIP_RANGE * near``; if the interpolated texture coordinates overflow.
     """
     if not (np.isfinite(near) and near > 0):
         raise ValueError(f"near plane distance must be positive and finite, got {near!r}")
+    clip = np.asarray(clip, np.float64)
+    st = np.asarray(st, np.float64)
+    _check_limits(clip, st, width, height, near)
     tex = np.asarray(tex, np.int64)
     cv, ca, src = clip_triangles(clip, st, width, height, near)
     empty = np.zeros(0)
@@ -276,7 +294,8 @@ def rasterize(clip: np.ndarray, st: np.ndarray, tex: np.ndarray, width: int, hei
     fxy = snap(to_screen(cv, width, height))
     q = 1.0 / cv[..., 3]
     vals = np.stack([ca[..., 0] * q, ca[..., 1] * q, q], -1)  # u = s q, v = t q, q: affine on screen
-    a, b = _planes(fxy, vals)
+    with np.errstate(over="ignore", invalid="ignore"):     # (s, t) that overflow: refused at the end
+        a, b = _planes(fxy, vals)
     x0 = fxy[:, 0, 0] / _ONE
     y0 = fxy[:, 0, 1] / _ONE
     v0 = vals[:, 0]
@@ -307,12 +326,45 @@ def rasterize(clip: np.ndarray, st: np.ndarray, tex: np.ndarray, width: int, hei
     xc = px + 0.5 - x0[t]
     yc = py + 0.5 - y0[t]
     au, bu, av, bv, aq, bq = a[t, 0], b[t, 0], a[t, 1], b[t, 1], a[t, 2], b[t, 2]
-    u = v0[t, 0] + au * xc + bu * yc
-    v = v0[t, 1] + av * xc + bv * yc
     qw = v0[t, 2] + aq * xc + bq * yc
-    s = u / qw
-    tc = v / qw
-    return Fragments(
-        width, height, covered.astype(np.int64), src[t], tex[src[t]], s, tc,
-        (au - s * aq) / qw, (bu - s * bq) / qw, (av - tc * aq) / qw, (bv - tc * bq) / qw,
-    )
+    with np.errstate(over="ignore", invalid="ignore"):
+        u = v0[t, 0] + au * xc + bu * yc
+        v = v0[t, 1] + av * xc + bv * yc
+        s = u / qw
+        tc = v / qw
+        out = Fragments(
+            width, height, covered.astype(np.int64), src[t], tex[src[t]], s, tc,
+            (au - s * aq) / qw, (bu - s * bq) / qw, (av - tc * aq) / qw, (bv - tc * bq) / qw,
+        )
+    for name in ("s", "t", "dsdx", "dsdy", "dtdx", "dtdy"):
+        bad = ~np.isfinite(getattr(out, name))
+        if bad.any():
+            k = int(np.argmax(bad))
+            raise ValueError(f"texture coordinates overflow float64 at pixel {int(out.pixel[k])} "
+                             f"({name} of triangle {int(out.tri[k])}): scale them down")
+    return out
+
+
+def _check_limits(clip: np.ndarray, st: np.ndarray, width: int, height: int, near: float) -> None:
+    """ValueError unless ``clip`` (T, 3, 4) and ``st`` (T, 3, 2) are finite and every triangle that
+    needs clipping is within ``CLIP_RANGE * near`` (the module's Limits)."""
+    for what, a in (("clip-space coordinates", clip), ("texture coordinates", st)):
+        bad = ~np.isfinite(a)
+        if bad.any():
+            k = int(np.argwhere(bad)[0][0])
+            raise ValueError(f"{what} of triangle {k} are not finite: a NaN or infinite vertex has no place")
+    if not len(clip):
+        return
+    x, y, w = clip[..., 0], clip[..., 1], clip[..., 3]
+    gx, gy = _GUARD_PIXELS / (width / 2.0), _GUARD_PIXELS / (height / 2.0)
+    outside = (w < near) | (np.abs(x) > gx * w) | (np.abs(y) > gy * w)
+    # every triangle with a vertex outside a plane is cut, but for one wholly behind the near plane
+    # (the first plane: dropped before any arithmetic)
+    cut = outside.any(1) & ~(w < near).all(1)
+    big = np.max(np.maximum(np.maximum(np.abs(x), np.abs(y)), np.abs(w)), axis=1) > CLIP_RANGE * near
+    bad = cut & big
+    if bad.any():
+        k = int(np.argmax(bad))
+        raise ValueError(f"triangle {k} needs clipping and has a clip-space coordinate beyond {CLIP_RANGE:.3g} "
+                         f"times the near plane distance ({near:g}): float64 cannot clip it exactly; "
+                         "scale the scene down or clip it first")

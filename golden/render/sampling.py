@@ -56,8 +56,10 @@ border repeats the edge texel.
 **Far coordinates** (:func:`fold_coordinate`): before the footprint, a wrapped coordinate with
 ``|s| >= 1`` loses its integer part (``s - floor(s)``, exact in float64), a mirrored one with
 ``|s| >= 2`` loses a multiple of 2 (``s - 2 floor(s/2)``, exact) and a clamped one is clipped
-to [-1, 2]; NaN (and, wrapped or mirrored, an infinity) is 0. The texels and the frame are exactly those of the
+to [-1, 2]; wrapped or mirrored, an infinity is 0 (clamped, the edge). The texels and the frame are exactly those of the
 formulas above wherever ``s W 256`` fits int64, and coordinates of any size (1e15, inf) stay defined.
+A NaN coordinate names no texel: :meth:`Sampler.requests` and :meth:`Sampler.filter_inputs` refuse it
+(ValueError) rather than sample one (:func:`fold_coordinate` alone still maps it to 0).
 
 **Fixed point** (:mod:`golden.filter`, the specification of the RTL filter): the folded coordinate is
 quantised to ``s_q = floor(s 2^F)`` with ``F = 8 + log2`` of the largest level-0 side; every floor
@@ -258,7 +260,8 @@ class Sampler:
         fovea's bias if any, 0 in point mode), ``mode``, ``address_s``, ``address_t`` (codes), one per fragment in request order.
 
         Raises:
-            ValueError: if a fragment's texture id is out of range or ``frac`` is too small.
+            ValueError: if a fragment's texture id is out of range, a texture coordinate is NaN, or
+                ``frac`` is too small.
         """
         if tex is None:
             tex = np.asarray(frags.tex, np.int64)
@@ -267,6 +270,11 @@ class Sampler:
         if frac < fixed.coordinate_frac_bits(self.levels.max_log2):
             raise ValueError(f"{frac} fractional bits are too few for these textures")
         m = len(tex)
+        nan = np.isnan(np.asarray(frags.s, np.float64)) | np.isnan(np.asarray(frags.t, np.float64))
+        if nan.any():
+            k = int(np.argmax(nan))
+            raise ValueError(f"texture coordinates of {int(nan.sum())} fragment(s) are NaN (the first at pixel "
+                             f"{int(np.asarray(frags.pixel)[k])}): a NaN coordinate names no texel")
         a_s, a_t = self._addr_s[tex], self._addr_t[tex]
         sc = fold_coordinate(frags.s, a_s == 0, a_s == 2)
         tc = fold_coordinate(frags.t, a_t == 0, a_t == 2)

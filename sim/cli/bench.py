@@ -15,11 +15,12 @@ stability -- numerical stability and hostile input: the colour matrix on every i
 
 from __future__ import annotations
 
-import argparse
 import importlib
 import inspect
+import os
 
-from .common import CliError, add_json, add_sweep_options, block_size, sweep_options, with_default
+from . import limits
+from .common import CliError, Outputs, add_json, add_sweep_options, number_help, sweep_options, with_default
 
 __all__ = ["add_parser"]
 
@@ -33,6 +34,9 @@ BENCHES = {
     "codecs": "vqtex.sim.bench.codecs",
     "tradeoff": "vqtex.sim.bench.encoding.tradeoff",
 }
+
+#: The files ``bench tradeoff --plot DIR`` writes into DIR.
+PLOTS = ("tradeoff_time.png", "tradeoff_bits.png")
 
 #: The extra that installs what a bench needs (default ``bench``).
 EXTRAS = {"codecs": "codecs"}
@@ -51,7 +55,12 @@ def cmd_bench(args) -> int:
     try:
         mod = importlib.import_module(BENCHES[args.what])
         opts = _options(args)
-        mod.run(json_out=args.json, **opts)
+        with Outputs() as outs:
+            if opts.get("plot"):                # the plots appear together when the run ends well
+                folder = outs.folder(opts["plot"])
+                staged = [outs.path(outs.add(os.path.join(folder, n))) for n in PLOTS]
+                opts["plot_into"] = os.path.dirname(staged[0])
+            mod.run(json_out=args.json, **opts)
     except ImportError as e:
         if (e.name or "").split(".")[0] == "vqtex":
             raise
@@ -63,7 +72,7 @@ def _options(args) -> dict:
     """The options of the bench ``args.what`` (its run() keywords): ``--quick`` for the benches
     whose run() takes it; the tradeoff grid's options are an error on any other bench."""
     grid_opts = ("plot", "codecs", "images", "sizes", "blocks", "threads", "scheduler", "workers")
-    given = [o for o in grid_opts if getattr(args, o) not in (None, False)]
+    given = [o for o in grid_opts if getattr(args, o) is not None and getattr(args, o) is not False]
     if args.what != "tradeoff":
         if given:
             raise CliError(f"--{given[0]} is an option of 'vqtex bench tradeoff' only")
@@ -81,20 +90,9 @@ def _options(args) -> dict:
             raise CliError(f"--images: unknown image {bad[0]!r} (one of {', '.join(tradeoff.IMAGES)})")
         grid["images"] = names
     if args.sizes:
-        try:
-            sizes = tuple(int(v) for v in args.sizes.split(","))
-        except ValueError:
-            raise CliError(f"--sizes: {args.sizes!r} is not a comma-separated list of integers") from None
-        if any(not 2 <= k <= 4096 for k in sizes):
-            raise CliError("--sizes: codebook sizes are 2..4096")
-        grid["sizes"] = sizes
+        grid["sizes"] = args.sizes              # checked by the parser (limits.BENCH_SIZES)
     if args.blocks:
-        try:
-            grid["blocks"] = tuple(block_size(b) for b in args.blocks.split(","))
-        except argparse.ArgumentTypeError as e:
-            raise CliError(f"--blocks: {e}") from None
-        if any(w not in (1, 2, 4, 8) or h not in (1, 2, 4, 8) for w, h in grid["blocks"]):
-            raise CliError("--blocks: sides are powers of two 1..8")
+        grid["blocks"] = args.blocks            # checked by the parser (limits.BENCH_BLOCKS)
     if args.codecs:
         try:
             importlib.import_module("vqtex.sim.bench.codecs")
@@ -102,8 +100,6 @@ def _options(args) -> dict:
             if e.name == "vqtex.sim.bench.codecs":
                 raise CliError("--codecs: this build has no codecs bench (vqtex.sim.bench.codecs)") from None
             raise
-    if args.threads is not None and args.threads < 0:
-        raise CliError(f"--threads must be 0 (the libraries' defaults) or more, got {args.threads}")
     threads = 1 if args.threads is None else (args.threads or None)
     return {"plot": args.plot, "grid": grid, "include_codecs": args.codecs, "threads": threads,
             **sweep_options(args)}
@@ -129,11 +125,12 @@ def add_parser(sub) -> None:
                    help=with_default("add the codecs' rows (BC1, JPEG 2000, wavelets) on the same images", "off"))
     t.add_argument("--images", metavar="NAMES", default=None,
                    help=with_default("comma-separated image names (docs/benchmarks.md lists them)", "the grid's"))
-    t.add_argument("--sizes", metavar="K,K", default=None,
-                   help=with_default("comma-separated codebook sizes", "16,64,256,1024,4096"))
-    t.add_argument("--blocks", metavar="WxH,WxH", default=None,
-                   help=with_default("comma-separated blocks", "2x2,4x4,4x2"))
-    t.add_argument("--threads", type=int, default=None,
-                   help=with_default("threads every library is held to in a job (0: the libraries' defaults)", 1))
+    t.add_argument("--sizes", metavar="K,K", type=limits.BENCH_SIZES, default=None,
+                   help=number_help("codebook sizes", limits.BENCH_SIZES, "16,64,256,1024,4096"))
+    t.add_argument("--blocks", metavar="WxH,WxH", type=limits.BENCH_BLOCKS, default=None,
+                   help=number_help("blocks", limits.BENCH_BLOCKS, "2x2,4x4,4x2"))
+    t.add_argument("--threads", type=limits.THREADS, default=None,
+                   help=number_help("threads every library is held to in a job (0: the libraries' defaults)",
+                                    limits.THREADS, 1))
     add_sweep_options(t)
     b.set_defaults(func=cmd_bench)

@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import time
 
-from .common import CliError, add_json, emit, with_default
+from . import limits
+from .common import CliError, add_json, emit, number_help
 
 __all__ = ["add_parser", "cmd_cache"]
 
@@ -21,6 +22,8 @@ def _mb(n: int) -> str:
 def cmd_cache(args) -> int:
     from vqtex.sim.backends import toolchain
     if args.action == "info":
+        if args.keep_mb is not None:
+            raise CliError("--keep-mb is an option of 'vqtex cache clean'")
         rep = toolchain.cache_info()
         bound = "no bound" if rep["max_bytes"] == 0 else f"bound {_mb(rep['max_bytes'])} ($VQTEX_CACHE_MAX_MB)"
         lines = [f"{rep['folder']}: {rep['entries']} builds, {_mb(rep['bytes'])} ({bound})"]
@@ -32,9 +35,7 @@ def cmd_cache(args) -> int:
             lines.append("  least recently used " + time.strftime("%Y-%m-%d %H:%M", time.localtime(rep["oldest_use"])))
         emit(rep, args.json, "\n".join(lines))
         return 0
-    if args.keep_mb < 0:
-        raise CliError(f"--keep-mb {args.keep_mb:g} must be >= 0")
-    rep = toolchain.cache_clean(int(args.keep_mb * 2**20))
+    rep = toolchain.cache_clean(int((args.keep_mb or 0.0) * 2**20))
     emit(rep, args.json, f"removed {rep['removed']} builds, freed {_mb(rep['freed_bytes'])}; "
                          f"{_mb(rep['bytes_left'])} left in {toolchain.cache_dir()}")
     return 0
@@ -44,8 +45,8 @@ def add_parser(sub) -> None:
     c = sub.add_parser("cache", help="the build cache of the compiled backends: info, clean")
     c.add_argument("action", choices=["info", "clean"],
                    help="info: what the cache holds; clean: delete builds (they are rebuilt when needed)")
-    c.add_argument("--keep-mb", type=float, default=0.0,
-                   help=with_default("clean: keep the most recently used builds up to this many MB; "
-                                     "0 deletes everything", 0))
+    c.add_argument("--keep-mb", type=limits.KEEP_MB, default=None,
+                   help=number_help("clean: keep the most recently used builds up to this many MB; "
+                                    "0 deletes everything", limits.KEEP_MB, 0))
     add_json(c)
     c.set_defaults(func=cmd_cache)

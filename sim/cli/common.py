@@ -10,10 +10,17 @@ Outputs (:class:`Outputs`) follow one rule for every command:
 * **complete or absent**: every file is written into a hidden staging folder (``.vqtex-staging-*``)
   created at registration in the destination's own folder (so the final move is a rename on one file
   system, and creating it is the writability check). Only when the command has finished its work are
-  the files renamed into place, together, with Ctrl-C held back for those few renames; an error or an
-  interrupt before that removes the staging folders and nothing of the set appears. A new output
-  folder (``vqtex demo -o DIR``) is staged whole and appears with one rename. Only a killed process
-  (SIGKILL, power loss) can leave a staging folder behind.
+  the files renamed into place, together, with the ending signals held back for those few renames; an
+  error or an interrupt before that removes the staging folders and nothing of the set appears. A new
+  output folder (``vqtex demo -o DIR``) is staged whole and appears with one rename. Only a killed
+  process (SIGKILL, power loss) can leave a staging folder behind.
+* **ending signals**: SIGINT (Ctrl-C), SIGTERM and SIGHUP end a command the same way
+  (:func:`ending_signals`, which ``vqtex``'s ``main`` runs every command in): the signal becomes an
+  exception in the main thread (``KeyboardInterrupt``; :class:`Terminated`, a subclass, for SIGTERM
+  and SIGHUP), so the staging folders are removed as for any error, and the command exits with
+  ``128 + signum`` (130, 143, 129: :func:`exit_status`) after one line on stderr. A signal that
+  arrives while the outputs are being renamed into place, or their staging removed, waits for that to
+  finish.
 * **ordinary permissions**: a written file gets ``0666 & ~umask`` (0644 under umask 022), whatever
   the writer used for its temporary file (``mkstemp`` makes 0600).
 
@@ -26,15 +33,19 @@ import argparse
 import json
 import os
 import shutil
+import contextlib
 import signal
 import sys
 import tempfile
 import threading
 
-__all__ = ["CliError", "Parser", "block_size", "BACKEND_HELP", "add_json", "add_texture_set", "add_backend",
-           "add_hardware_options", "add_unit", "unit_geometry", "add_tag_width", "emit", "warn", "warn_slow", "progress_enabled", "progress_line",
+from . import limits
+from .limits import number_help
+
+__all__ = ["CliError", "Parser", "number_help", "BACKEND_HELP", "add_json", "add_texture_set", "add_backend",
+           "add_hardware_options", "stall_seed", "resolve", "add_unit", "unit_geometry", "add_tag_width", "emit", "warn", "warn_slow", "progress_enabled", "progress_line",
            "Outputs", "check_folder", "IMAGE_SUFFIXES", "write_bytes", "write_json", "load_set", "is_dt", "with_default",
-           "file_mode", "add_sweep_options", "sweep_options", "PYSIM_CYCLES_PER_SECOND", "SLOW_SECONDS", "STAGING_PREFIX"]
+           "file_mode", "ENDING_SIGNALS", "Terminated", "ending_signals", "check_ended", "exit_status", "ending_message", "add_sweep_options", "sweep_options", "PYSIM_CYCLES_PER_SECOND", "SLOW_SECONDS", "STAGING_PREFIX"]
 
 #: Image file extensions an output image may have (all hold RGBA except JPEG and BMP, which drop alpha).
 IMAGE_SUFFIXES = (".png", ".tif", ".tiff", ".exr", ".tga", ".bmp", ".jpg", ".jpeg")
@@ -44,6 +55,95 @@ STAGING_PREFIX = ".vqtex-staging-"
 
 class CliError(Exception):
     """A user error: printed as one line, exit status 2."""
+
+
+#: The signals that end a command cleanly (staging removed, exit status 128 + signum).
+ENDING_SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM or SIGHUP as an exception (``signum``): it unwinds the command as Ctrl-C's
+    ``KeyboardInterrupt`` does (it is one), so every ``finally`` and every ``Outputs`` block cleans up."""
+
+    def __init__(self, signum: int):
+        super().__init__(signal.Signals(signum).name)
+        self.signum = int(signum)
+
+
+#: The ending signals received inside :func:`ending_signals` (emptied when it starts). Python can
+#: lose the exception a handler raises (raised inside an ``issubclass`` check of an import, it is
+#: printed as "ignored" and the program goes on), so the signal is also recorded here, and
+#: :func:`check_ended` raises it again where it must not be missed: before outputs are renamed into
+#: place and when a command returns.
+_ENDED: list = []
+
+
+def _raise_for(signum, _frame=None):
+    if signum == signal.SIGINT:
+        raise KeyboardInterrupt
+    raise Terminated(signum)
+
+
+def _on_signal(signum, _frame=None):
+    _ENDED.append(int(signum))
+    _raise_for(signum)
+
+
+def check_ended() -> None:
+    """Raise the first ending signal received inside :func:`ending_signals` (``KeyboardInterrupt``
+    or :class:`Terminated`), even if the exception its handler raised was lost; nothing otherwise."""
+    if _ENDED:
+        _raise_for(_ENDED[0])
+
+
+def exit_status(exc: KeyboardInterrupt) -> int:
+    """The conventional exit status of a command ended by ``exc``: 128 + the signal's number (130
+    for Ctrl-C's plain ``KeyboardInterrupt``)."""
+    return 128 + getattr(exc, "signum", int(signal.SIGINT))
+
+
+def ending_message(exc: KeyboardInterrupt) -> str:
+    """The one line printed when a signal ends a command: ``vqtex: interrupted`` (SIGINT) or
+    ``vqtex: terminated by SIGTERM`` (SIGHUP likewise)."""
+    if isinstance(exc, Terminated):
+        return f"vqtex: terminated by {signal.Signals(exc.signum).name}"
+    return "vqtex: interrupted"
+
+
+@contextlib.contextmanager
+def ending_signals():
+    """Inside the block, SIGTERM and SIGHUP raise :class:`Terminated` and SIGINT ``KeyboardInterrupt``
+    in the main thread (elsewhere the block changes nothing: Python delivers signals to the main thread
+    only). The previous handlers are restored after."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    _ENDED.clear()
+    old = {s: signal.signal(s, _on_signal) for s in ENDING_SIGNALS}
+    try:
+        yield
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+        _ENDED.clear()
+
+
+@contextlib.contextmanager
+def _signals_held():
+    """Inside the block the ending signals are recorded, not acted on; after it, the first one
+    recorded is raised (as :func:`ending_signals` would have). Only in the main thread."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    pending = []
+    old = {s: signal.signal(s, lambda signum, _f: pending.append(signum)) for s in ENDING_SIGNALS}
+    try:
+        yield
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+    if pending:
+        _on_signal(pending[0])
 
 
 class Parser(argparse.ArgumentParser):
@@ -96,11 +196,24 @@ def add_hardware_options(p, *, stall: bool = True) -> None:
                    help="one-port index memory: one extra cycle per straddling index (the paper's penalty; "
                         "default two banks, no penalty)")
     if stall:
-        p.add_argument("--stall", type=float, default=0.0,
-                       help=with_default("probability, in [0, 1), that the consumer holds the output's ready "
-                                         "low in a cycle", 0.0))
-        p.add_argument("--stall-seed", "--seed", dest="seed", type=int, default=0,
-                       help=with_default("seed of the --stall pattern (--seed is the old spelling)", 0))
+        p.add_argument("--stall", type=limits.STALL, default=0.0,
+                       help=number_help("probability that the consumer holds the output's ready low in a cycle",
+                                        limits.STALL, 0.0))
+        p.add_argument("--stall-seed", "--seed", dest="seed", type=limits.SEED, default=None,
+                       help=number_help("seed of the --stall pattern, with --stall above 0 (--seed is the old "
+                                        "spelling)", limits.SEED, 0))
+
+
+def stall_seed(args, stall_applies: bool = True) -> int:
+    """``--stall-seed`` checked against what it seeds: refused when the ``--stall`` pattern it seeds
+    is all ready (``--stall 0``) or when ``--stall`` itself does not apply (``stall_applies`` False:
+    then ``--stall`` above 0 is refused too); the seed, 0 when not given."""
+    if args.stall > 0 and not stall_applies:
+        raise CliError(f"--stall {args.stall:g} does not apply: nothing runs the unit's cycles here "
+                       "(an RTL backend, --compare-fixed or --fovea does)")
+    if args.seed is not None and args.stall == 0:
+        raise CliError("--stall-seed seeds the --stall pattern: it needs --stall above 0")
+    return 0 if args.seed is None else args.seed
 
 
 #: ``--unit`` choices: the texel-fetch unit specialised to the texture set, the full one (both
@@ -111,7 +224,7 @@ UNITS = ("specialised", "full", "loadable")
 def add_unit(p, *, both: bool = False) -> None:
     """``--unit``: which texel-fetch unit the RTL is (``hw.features``); with ``both``, also the
     specialised and full units side by side. ``--geometry``: the loadable unit's geometry."""
-    p.add_argument("--unit", choices=UNITS + (("both",) if both else ()), default="specialised",
+    p.add_argument("--unit", choices=UNITS + (("both",) if both else ()), default=None,
                    help=with_default("the RTL unit: specialised (the set in ROMs, only what it needs: "
                                      "bit-exact and smaller), full (the set in ROMs, every path) or loadable "
                                      "(memories loaded over a Wishbone port: one unit for every set of its "
@@ -129,7 +242,7 @@ def unit_geometry(args, ts=None, where: str = ""):
     from vqtex.golden.geometry import Geometry, GeometryError, geometry_from
     if args.unit != "loadable":
         if args.geometry is not None:
-            raise CliError(f"--geometry applies to --unit loadable (not --unit {args.unit})")
+            raise CliError(f"--geometry applies to --unit loadable (not --unit {args.unit or 'specialised'})")
         return None
     if args.geometry is None:
         if ts is None:
@@ -148,41 +261,51 @@ def unit_geometry(args, ts=None, where: str = ""):
 
 def add_index_banks(p) -> None:
     """``--index-banks``: how the texture filter's lanes hold the index memory."""
-    p.add_argument("--index-banks", choices=["parity", "lane"], default="parity",
+    p.add_argument("--index-banks", choices=["parity", "lane"], default=None,
                    help=with_default("the texture filter's index memory: one memory banked by block parity, "
-                                     "shared by the lanes, or a copy per lane (docs/filter.md)", "parity"))
+                                     "shared by the lanes, or a copy per lane (docs/filter.md; only with the "
+                                     "filter)", "parity"))
+
+
+def resolve(args, name: str, default, applies: bool, why: str, option: str | None = None):
+    """The option ``name`` (an ``args`` attribute whose argparse default is None, so that a given
+    option is told from an absent one): a CliError ``--OPTION WHY`` when it was given but does not
+    apply, else its value or ``default``. Stored back into ``args``. ``option`` is the option's
+    name when it is not ``name`` with dashes."""
+    value = getattr(args, name)
+    if value is not None and not applies:
+        raise CliError(f"{option or '--' + name.replace('_', '-')} {why}")
+    value = default if value is None else value
+    setattr(args, name, value)
+    return value
 
 
 def add_tag_width(p) -> None:
-    p.add_argument("--tag-width", type=int, default=8,
-                   help=with_default("bits of the request tag carried to the response, 0..16", 8))
+    p.add_argument("--tag-width", type=limits.TAG_WIDTH, default=8,
+                   help=number_help("bits of the request tag carried to the response", limits.TAG_WIDTH, 8))
 
 
 def add_sweep_options(p) -> None:
     """``--scheduler`` and ``--workers`` for commands that run a sweep of independent jobs
     (:func:`vqtex.sim.bench.sweep.run_jobs`)."""
-    p.add_argument("--scheduler", metavar="ADDRESS", default=None,
-                   help=with_default("where the sweep's jobs run: the address of a running dask scheduler "
-                                     "(tcp://host:8786), 'serial' for this process, or none for a dask "
-                                     "LocalCluster of worker processes on this machine", "a LocalCluster"))
-    p.add_argument("--workers", type=int, default=None,
-                   help=with_default("worker processes of the LocalCluster", "the cores this process may use"))
+    p.add_argument("--scheduler", metavar="ADDRESS", type=limits.SCHEDULER, default=None,
+                   help=number_help("where the sweep's jobs run: the address of a running dask scheduler "
+                                    "(its form checked before any work), 'serial' for this process, or none for "
+                                    "a dask LocalCluster of worker processes on this machine", limits.SCHEDULER,
+                                    "a LocalCluster"))
+    p.add_argument("--workers", type=limits.WORKERS, default=None,
+                   help=number_help("worker processes of the LocalCluster (not with --scheduler)", limits.WORKERS,
+                                    "the cores this process may use"))
 
 
 def sweep_options(args) -> dict:
-    """``run_jobs`` keyword arguments from :func:`add_sweep_options`' options, checked."""
+    """``run_jobs`` keyword arguments from :func:`add_sweep_options`' options, checked: ``--workers``
+    is at least 1 and only for the LocalCluster (no ``--scheduler``)."""
     if args.workers is not None and args.workers < 1:
         raise CliError(f"--workers must be at least 1, got {args.workers}")
+    if args.workers is not None and args.scheduler is not None:
+        raise CliError("--workers sizes the LocalCluster: it does not go with --scheduler")
     return {"scheduler": args.scheduler, "workers": args.workers, "progress": progress_enabled()}
-
-
-def block_size(text: str) -> tuple[int, int]:
-    """``WxH`` (e.g. ``4x4``) as ``(w, h)``; an ``argparse`` type."""
-    try:
-        w, h = (int(v) for v in text.lower().split("x"))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"block {text!r} is not WxH (e.g. 4x4)") from None
-    return w, h
 
 
 def emit(obj: dict, as_json: bool, text: str) -> None:
@@ -242,7 +365,8 @@ def _probe_writable(folder: str) -> None:
     if not os.path.isdir(folder):
         raise CliError(f"output folder {folder} is not a folder")
     try:
-        os.rmdir(tempfile.mkdtemp(prefix=STAGING_PREFIX, dir=folder))
+        with _signals_held():                   # a signal between the two calls would leave the probe
+            os.rmdir(tempfile.mkdtemp(prefix=STAGING_PREFIX, dir=folder))
     except OSError as e:
         raise CliError(f"output folder {folder} is not writable ({e.strerror})") from None
 
@@ -288,12 +412,14 @@ class Outputs:
             if exc_type is None and not self._committed:
                 self.commit()
         finally:
-            self._discard()
+            with _signals_held():
+                self._discard()
 
     def _stage_in(self, folder: str) -> str:
         if folder not in self._staging:
             _probe_writable(folder)
-            self._staging[folder] = tempfile.mkdtemp(prefix=STAGING_PREFIX, dir=folder)
+            with _signals_held():               # created and recorded (so removed) as one step
+                self._staging[folder] = tempfile.mkdtemp(prefix=STAGING_PREFIX, dir=folder)
         return self._staging[folder]
 
     def folder(self, path: str) -> str:
@@ -339,12 +465,10 @@ class Outputs:
         raise KeyError(f"{final} was not registered as an output")
 
     def commit(self) -> None:
-        """Rename every written file (and new folder) into place, Ctrl-C held back meanwhile; a
-        registered output that was not written is skipped."""
-        pending = []
-        main = threading.current_thread() is threading.main_thread()
-        old = signal.signal(signal.SIGINT, lambda *_: pending.append(1)) if main else None
-        try:
+        """Rename every written file (and new folder) into place, the ending signals (SIGINT,
+        SIGTERM, SIGHUP) held back meanwhile; a registered output that was not written is skipped."""
+        with _signals_held():
+            check_ended()                       # a signal whose exception was lost: nothing appears
             mode = file_mode()
             staged = list(self._files.values()) + [
                 os.path.join(d, n) for d in self._new_dirs.values() for n in os.listdir(d)]
@@ -357,11 +481,6 @@ class Outputs:
                 if os.path.exists(f):
                     os.replace(f, final)
             self._committed = True
-        finally:
-            if main:
-                signal.signal(signal.SIGINT, old)
-        if pending:
-            raise KeyboardInterrupt
 
     def _discard(self) -> None:
         for staging in self._staging.values():

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import IMAGE_SUFFIXES, CliError, Outputs, add_json, add_texture_set, emit, load_set, with_default
+from . import limits
+from .common import IMAGE_SUFFIXES, CliError, Outputs, add_json, add_texture_set, emit, load_set, number_help
 
 __all__ = ["add_parser", "cmd_decode"]
 
@@ -38,7 +39,9 @@ def add_parser(sub) -> None:
     d = sub.add_parser("decode", help="decode one level of one texture to an image")
     add_texture_set(d)
     d.add_argument("-o", "--output", required=True, help="image to write (.png, .tif, .exr, ...)")
-    d.add_argument("--texture", type=int, default=0, help=with_default("texture number (vqtex info lists them)", 0))
-    d.add_argument("--level", type=int, default=0, help=with_default("mip level, 0 = full size", 0))
+    d.add_argument("--texture", type=limits.TEXTURE, default=0,
+                   help=number_help("texture number (vqtex info lists them)", limits.TEXTURE, 0))
+    d.add_argument("--level", type=limits.LEVEL, default=0,
+                   help=number_help("mip level, 0 = full size", limits.LEVEL, 0))
     add_json(d)
     d.set_defaults(func=cmd_decode)

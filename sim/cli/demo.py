@@ -13,7 +13,7 @@ import time
 
 import numpy as np
 
-from .common import (CliError, Outputs, add_backend, add_json, add_unit, emit, unit_geometry, with_default, write_bytes,
+from .common import (CliError, Outputs, add_backend, add_json, add_unit, emit, resolve, unit_geometry, with_default, write_bytes,
                      write_json)
 from vqtex.sim.reports.quality import DEFAULT_VMAX, side_by_side
 
@@ -39,8 +39,8 @@ def cmd_demo(args) -> int:
                                      for n in ("topspin.vqt", "report.json", COMPARE_NAME))
         frame_paths = {f: outs.add(os.path.join(out_dir, f"topspin_{f:04d}.png")) for f in frames}
         images = [img for img, _ in scene.load_textures()]
-        if args.unit != "specialised" and args.backend == "golden":
-            raise CliError(f"--unit {args.unit} is an RTL unit: it needs an RTL --backend (pysim, cxxrtl, verilator)")
+        resolve(args, "unit", "specialised", args.backend != "golden",
+                "chooses the RTL texel-fetch unit: it needs an RTL --backend (pysim, cxxrtl, verilator)")
         t0 = time.perf_counter()
         ts = encode_scene(scene, images)
         encode_s = time.perf_counter() - t0

@@ -16,7 +16,7 @@ from __future__ import annotations
 import sys
 
 from . import bench, cache, decode, demo, encode, experiments, export, import_dt, info, need, prune, render, report, simulate
-from .common import CliError, Parser
+from .common import CliError, Parser, check_ended, ending_message, ending_signals, exit_status
 
 __all__ = ["main", "build_parser", "version", "COMMANDS"]
 
@@ -55,17 +55,22 @@ def _user_errors():
 
 
 def main(argv=None) -> int:
-    """Run ``vqtex`` with ``argv``; returns the exit status (2 for a user error, 130 if interrupted)."""
-    try:
-        args = build_parser().parse_args(argv)
-        return args.func(args) or 0
-    except _user_errors() as e:
-        msg = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
-        print(f"vqtex: error: {msg}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("vqtex: interrupted", file=sys.stderr)
-        return 130
+    """Run ``vqtex`` with ``argv``; returns the exit status: 2 for a user error, 128 + signum when
+    SIGINT, SIGTERM or SIGHUP ended it (130, 143, 129; :func:`~vqtex.sim.cli.common.ending_signals`:
+    outputs removed as at any error, one line on stderr)."""
+    with ending_signals():
+        try:
+            args = build_parser().parse_args(argv)
+            code = args.func(args) or 0
+            check_ended()                       # a signal whose exception Python lost on the way
+            return code
+        except _user_errors() as e:
+            msg = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+            print(f"vqtex: error: {msg}", file=sys.stderr)
+            return 2
+        except KeyboardInterrupt as e:
+            print(ending_message(e), file=sys.stderr)
+            return exit_status(e)
 
 
 if __name__ == "__main__":

@@ -10,7 +10,8 @@ import json
 
 from vqtex.sim.bench.scenes import experiments, hardware_tradeoff
 
-from .common import CliError, Outputs, add_json, add_sweep_options, sweep_options, with_default
+from . import limits
+from .common import CliError, Outputs, add_json, add_sweep_options, number_help, resolve, sweep_options, with_default
 from .render import parse_frames
 
 __all__ = ["add_parser", "cmd_experiments", "print_table", "DEFAULT_FRAMES", "SCENES"]
@@ -41,13 +42,12 @@ def cmd_experiments(args) -> int:
     if args.frame_step is not None:
         if args.frames is not None:
             raise CliError("give --frames or --frame-step, not both")
-        if args.frame_step < 1:
-            raise CliError(f"--frame-step {args.frame_step} must be at least 1")
         text = f"::{args.frame_step}"
     else:
         text = args.frames or DEFAULT_FRAMES[args.table]
     if args.plot is not None and args.table != "hardware":
         raise CliError("--plot is for the hardware experiment")
+    _options_that_apply(args)
     if args.table == "hardware" and not text.startswith("::"):
         raise CliError("hardware renders every Nth frame of each scene: give --frame-step N (or --frames ::N)")
     scene = load_scene(args.scene or SCENES[args.table])
@@ -82,6 +82,21 @@ def cmd_experiments(args) -> int:
     return 0
 
 
+def _options_that_apply(args) -> None:
+    """Refuse an option given to a table it changes nothing in, whatever its value: ``--backend``
+    (table5, hardware), ``--requests`` (hardware), ``--paper-only`` (tables 3 and 4), ``--scheduler``
+    and ``--workers`` (the sweeps: tables 3 and 4, hardware)."""
+    t = args.table
+    resolve(args, "backend", "cxxrtl" if t == "hardware" else "golden", t in ("table5", "hardware"),
+            "is where the cycles of table5 and hardware come from: tables 3 and 4 count no cycles")
+    resolve(args, "requests", "fixed", t == "hardware", "is the hardware experiment's request stream")
+    if args.paper_only and t not in ("table3", "table4"):
+        raise CliError("--paper-only is for tables 3 and 4 (the paper's rows and ours)")
+    for opt in ("scheduler", "workers"):
+        if getattr(args, opt) is not None and t == "table5":
+            raise CliError(f"--{opt} is for the sweeps (table3, table4, hardware): table5 runs none")
+
+
 def add_parser(sub) -> None:
     e = sub.add_parser("experiments", help="regenerate the paper's Tables 3, 4 and 5, and the hardware's "
                                            "cycles against error")
@@ -91,8 +106,9 @@ def add_parser(sub) -> None:
     e.add_argument("--frames", default=None,
                    help="frames to render, a Python slice A:B[:STEP] or one number (default "
                         + ", ".join(f"{t} {v}" for t, v in DEFAULT_FRAMES.items()) + ")")
-    e.add_argument("--frame-step", type=int, default=None,
-                   help=with_default("render every Nth frame: the same as --frames ::N", "see --frames"))
+    e.add_argument("--frame-step", type=limits.FRAME_STEP, default=None,
+                   help=number_help("render every Nth frame: the same as --frames ::N", limits.FRAME_STEP,
+                                    "see --frames"))
     e.add_argument("--backend", choices=["golden", "cxxrtl", "verilator"], default=None,
                    help=with_default("where the cycles of table5 and hardware come from (golden = the exact "
                                      "cycle model, which every RTL backend matches)",
@@ -103,7 +119,7 @@ def add_parser(sub) -> None:
                                      "roads, other, grey, cutouts)",
                                      ", ".join(f"{t} {v}" for t, v in SCENES.items() if t != "hardware")
                                      + ", hardware both paper scenes"))
-    e.add_argument("--requests", choices=["fixed", "sparse"], default="fixed",
+    e.add_argument("--requests", choices=["fixed", "sparse"], default=None,
                    help=with_default("hardware: the request stream, fixed (eight requests a trilinear pixel, as "
                                      "the paper's renderer) or sparse (the requests that cannot change a pixel "
                                      "left out: the same frames in fewer cycles)", "fixed"))

@@ -71,13 +71,19 @@ def lint_verilog(path: str, top: str) -> list:
 def cmd_export(args) -> int:
     if args.name is None:
         args.name = "texel_fetch" if args.filter_lanes is None else "texture_filter"
+    if args.filter_lanes is None and args.index_banks is not None:
+        raise ExportError("--index-banks is how the texture filter's lanes hold the index memory: it needs "
+                          "--filter-lanes")
+    if args.filter_lanes is not None and args.unit is not None:
+        raise ExportError("--filter-lanes builds specialised texel-fetch lanes; --unit applies to the texel-fetch "
+                          "unit alone")
+    args.unit = args.unit or "specialised"
+    args.index_banks = args.index_banks or "parity"
     if args.filter_lanes is not None and (args.one_port or args.dialect != "sv"):
         raise ExportError("--filter-lanes: the texture filter is exported as SystemVerilog with two-bank lanes "
                           "(no --one-port, no --dialect v2005)")
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", args.name):
         raise ExportError(f"--name {args.name!r} is not a Verilog identifier")
-    if not 0 <= args.tag_width <= 16:
-        raise ExportError(f"--tag-width {args.tag_width} must be in 0..16")
     if args.file is None and args.unit != "loadable":
         raise ExportError("FILE.vqt is required (only --unit loadable --geometry NAME exports without one)")
     with Outputs() as outs:
@@ -141,8 +147,6 @@ def _export(args, out):
         raise ExportError("--filter-lanes exports the baked texture filter; --unit loadable is the texel-fetch unit")
     ports = {}
     if args.filter_lanes is not None:
-        if args.unit != "specialised":
-            raise ExportError("--filter-lanes builds specialised texel-fetch lanes; --unit applies to the texel-fetch unit alone")
         from vqtex.sim.backends.filter_verilator import export_filter_verilog
         text, top = export_filter_verilog(ts, lanes=args.filter_lanes, tag_width=args.tag_width, name=args.name,
                                           index_banks=args.index_banks)

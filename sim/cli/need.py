@@ -8,7 +8,8 @@ import os
 
 import numpy as np
 
-from .common import CliError, Outputs, add_json, block_size, emit, load_set, with_default
+from . import limits
+from .common import CliError, Outputs, add_json, emit, load_set, number_help, with_default
 
 __all__ = ["add_parser", "cmd_need", "need_text", "scene_need", "write_heatmaps", "add_need_source"]
 
@@ -144,9 +145,9 @@ def add_parser(sub) -> None:
     p.add_argument("--texture-set", metavar="FILE.vqt",
                    help=with_default("analyse this texture set instead of encoding the scene's textures",
                                      "encode them with the scene's settings"))
-    p.add_argument("--cache-tile", type=block_size, default=(8, 8),
-                   help=with_default("the block cache's sets as a WxH tile of block coordinates (powers of two; "
-                                     "8x8 is 64 sets)", "8x8"))
+    p.add_argument("--cache-tile", type=limits.CACHE_TILE, default=(8, 8),
+                   help=number_help("the block cache's sets as a WxH tile of block coordinates (8x8 is 64 sets)",
+                                    limits.CACHE_TILE, "8x8"))
     p.add_argument("--cache-ways", type=int, choices=[1, 2], default=2,
                    help=with_default("blocks per cache set: 1 direct-mapped, 2 two-way LRU", 2))
     p.add_argument("--heatmap", metavar="DIR",

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import time
 
-from .common import CliError, Outputs, add_json, emit, load_set, with_default, write_bytes
+from .common import CliError, Outputs, add_json, emit, load_set, resolve, with_default, write_bytes
 from .need import add_need_source, scene_need
 
 __all__ = ["add_parser", "cmd_prune", "prune_text", "add_train_on"]
@@ -43,9 +43,9 @@ def cmd_prune(args) -> int:
         scene = load_scene(args.scene)
         frames = parse_frames(args.frames, scene.frames)
         extra = {"scene": scene.name, "frames": frames, "mode": args.mode, "requests": args.requests}
+        resolve(args, "train_on", "levels", not args.file,
+                "is for encoding (no SET.vqt): a set's codebooks are already trained")
         if args.file:
-            if args.train_on != "levels":
-                raise CliError("--train-on is for encoding (no SET.vqt): a set's codebooks are already trained")
             if args.compare:
                 raise CliError("--compare times a full encode against encoding for the frames: give no SET.vqt")
             ts = load_set(args.file)
@@ -98,6 +98,6 @@ def add_parser(sub) -> None:
 
 def add_train_on(p) -> None:
     """``--train-on``: what encoding for the frames trains the codebooks on."""
-    p.add_argument("--train-on", choices=["levels", "blocks"], default="levels",
+    p.add_argument("--train-on", choices=["levels", "blocks"], default=None,
                    help=with_default("encoding for the frames: train the codebooks on every block of the touched "
                                      "level groups, or on the touched blocks only", "levels"))

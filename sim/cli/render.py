@@ -14,9 +14,10 @@ import time
 
 import numpy as np
 
+from . import limits
 from .common import (IMAGE_SUFFIXES, CliError, Outputs, add_backend, add_hardware_options, add_index_banks, add_json, add_unit,
-                     emit, load_set, unit_geometry,
-                     progress_enabled, warn, warn_slow, with_default, write_json)
+                     emit, load_set, number_help, progress_enabled, resolve, stall_seed, unit_geometry, warn, warn_slow,
+                     with_default, write_json)
 
 __all__ = ["add_parser", "cmd_render", "render_scene", "render_to_files", "encode_scene", "parse_frames", "parse_fovea",
            "Progress"]
@@ -322,17 +323,14 @@ def cmd_render(args) -> int:
         if args.filter_in_rtl and args.encode_needed:
             raise CliError("--filter-in-rtl fetches every texel of a footprint, zero weights too: it does not go "
                            "with --encode-needed (a pruned texture set)")
+        _options_that_apply(args, fovea)
         frame_paths = {f: _frame_path(args.output, f, len(frames) > 1) for f in frames}
         for path in frame_paths.values():
             outs.add(path)
-        if args.diff_scale < 1:
-            raise CliError(f"--diff-scale {args.diff_scale} must be at least 1")
         on_frame = _extra_outputs(args, outs, frames)
         images = [img for img, _ in scene.load_textures()]
         if args.encode_needed and args.texture_set:
             raise CliError("--encode-needed encodes the scene's textures: it does not go with --texture-set")
-        if args.train_on != "levels" and not args.encode_needed:
-            raise CliError("--train-on goes with --encode-needed")
         if args.encode_needed and (args.requests != "sparse" or args.compare_fixed or fovea is not None):
             raise CliError("--encode-needed encodes what the sparse, unbiased stream needs: it does not go with "
                            "--requests fixed, --compare-fixed or --fovea")
@@ -346,11 +344,10 @@ def cmd_render(args) -> int:
         if args.filter_in_rtl and (ts.present_blocks is not None or any(t.absent_levels for t in ts.textures)):
             raise CliError(f"--filter-in-rtl fetches every texel of a footprint, zero weights too: {args.texture_set} "
                            "is pruned (vqtex prune); use an unpruned set")
+        resolve(args, "unit", "specialised", args.backend != "golden" and not args.filter_in_rtl,
+                "chooses the RTL texel-fetch unit: it needs an RTL --backend (pysim, cxxrtl, verilator) and does "
+                "not go with --filter-in-rtl (the filter's lanes are specialised)")
         geometry = unit_geometry(args, ts, args.texture_set or f"{scene.name}'s texture set")
-        if geometry is not None and args.filter_in_rtl:
-            raise CliError("--filter-in-rtl runs the baked texture filter: --unit loadable is the texel-fetch unit")
-        if args.unit != "specialised" and args.backend == "golden" and not args.filter_in_rtl:
-            raise CliError(f"--unit {args.unit} is an RTL unit: it needs an RTL --backend (pysim, cxxrtl, verilator)")
         need = _NeedReport(ts, on_frame) if report_path else None
         if need is not None:
             on_frame = need.on_frame
@@ -424,6 +421,25 @@ def cmd_render(args) -> int:
     return 0
 
 
+def _options_that_apply(args, fovea) -> None:
+    """Refuse an option given where it changes nothing, whatever its value (their argparse defaults
+    are None), then fill in the defaults: ``--lanes`` and ``--index-banks`` need ``--filter-in-rtl``;
+    ``--train-on`` needs ``--encode-needed``; ``--diff-scale`` needs ``--diff``; ``--stall`` above 0,
+    ``--stall-seed`` and ``--one-port`` need something that runs the unit's cycles (an RTL backend,
+    ``--compare-fixed`` or ``--fovea``; ``--filter-in-rtl`` for ``--stall``)."""
+    filt = args.filter_in_rtl
+    resolve(args, "lanes", 4, filt, "is the RTL filter's lanes: it needs --filter-in-rtl")
+    resolve(args, "index_banks", "parity", filt, "is how the RTL filter's lanes hold the index memory: it needs "
+            "--filter-in-rtl")
+    resolve(args, "train_on", "levels", args.encode_needed, "goes with --encode-needed")
+    resolve(args, "diff_scale", 32, bool(args.diff), "is the top of the --diff heat map: it needs --diff")
+    cycles = args.backend != "golden" or args.compare_fixed or fovea is not None
+    args.seed = stall_seed(args, stall_applies=bool(cycles or filt))
+    if args.one_port and not cycles:
+        raise CliError("--one-port does not apply: nothing runs the unit's cycles here (an RTL backend, "
+                       "--compare-fixed or --fovea does)")
+
+
 def _requests_line(report: dict) -> str:
     n, fixed = report["requests_per_frame"], report["fixed_requests_per_frame"]
     saved = f", {100 * (1 - n / fixed):.1f}% fewer than the fixed stream's {fixed:,.0f}" if fixed and n != fixed else ""
@@ -476,18 +492,19 @@ def add_parser(sub) -> None:
                                      "point (pixels from the top-left corner; --fovea=-X,Y when X is negative), 0 inside --fovea-radius; the report "
                                      "compares fovea and periphery with the unbiased frame (docs/skipping.md)",
                                      "no foveation"))
-    r.add_argument("--fovea-radius", type=float, metavar="R",
-                   help=with_default("radius of the fovea in pixels: inside it frames are unchanged",
-                                     "a quarter of the frame's smaller side"))
-    r.add_argument("--fovea-falloff", type=float, metavar="F",
-                   help=with_default("levels of bias per radius of distance beyond the fovea's edge", 1.0))
+    r.add_argument("--fovea-radius", type=limits.FOVEA_RADIUS, metavar="R",
+                   help=number_help("radius of the fovea: inside it frames are unchanged", limits.FOVEA_RADIUS,
+                                    "a quarter of the frame's smaller side"))
+    r.add_argument("--fovea-falloff", type=limits.FOVEA_FALLOFF, metavar="F",
+                   help=number_help("levels of bias per radius of distance beyond the fovea's edge",
+                                    limits.FOVEA_FALLOFF, 1.0))
     r.add_argument("--texture-set", metavar="FILE.vqt",
                    help=with_default("use this texture set instead of encoding the scene's textures",
                                      "encode them with the scene's settings"))
     r.add_argument("--encode-needed", action="store_true",
                    help="encode only what the rendered frames need (their levels; codebooks trained on those, "
                         "then pruned: golden.need.prune.encode_needed; default: encode everything)")
-    r.add_argument("--train-on", choices=["levels", "blocks"], default="levels",
+    r.add_argument("--train-on", choices=["levels", "blocks"], default=None,
                    help=with_default("with --encode-needed: train the codebooks on every block of the touched level "
                                      "groups, or on the touched blocks only", "levels"))
     add_hardware_options(r)
@@ -495,7 +512,7 @@ def add_parser(sub) -> None:
     r.add_argument("--filter-in-rtl", action="store_true",
                    help="run the texture filter in the RTL (hw.filter: per-pixel (s, t, lod) in, filtered colour "
                         "out) instead of the texel-fetch unit with the filtering in numpy (default: off)")
-    r.add_argument("--lanes", type=int, choices=[1, 2, 4, 8], default=4,
+    r.add_argument("--lanes", type=int, choices=[1, 2, 4, 8], default=None,
                    help=with_default("texel-fetch lanes of the RTL filter (--filter-in-rtl): texels per clock", 4))
     add_index_banks(r)
     r.add_argument("--report", metavar="REPORT.json", help=with_default("also write the JSON report here", "none"))
@@ -505,7 +522,8 @@ def add_parser(sub) -> None:
     r.add_argument("--diff", metavar="DIFF.png",
                    help=with_default("also write the difference from the uncompressed frame as a heat map with "
                                      "its colour scale (needs the plot extra; _NNNN added like -o)", "none"))
-    r.add_argument("--diff-scale", type=int, default=32,
-                   help=with_default("the heat map's top: differences of this many levels or more saturate", 32))
+    r.add_argument("--diff-scale", type=limits.DIFF_SCALE, default=None,
+                   help=number_help("with --diff, the heat map's top: differences of this many levels or more "
+                                    "saturate", limits.DIFF_SCALE, 32))
     add_json(r)
     r.set_defaults(func=cmd_render)

@@ -16,8 +16,9 @@ from __future__ import annotations
 import os
 import time
 
-from .common import (Outputs, add_hardware_options, add_index_banks, add_json, add_tag_width, add_unit, check_folder, emit, load_set, unit_geometry,
-                     progress_line, with_default)
+from . import limits
+from .common import (Outputs, add_hardware_options, add_index_banks, add_json, add_tag_width, add_unit, check_folder, emit, load_set,
+                     number_help, progress_line, resolve, unit_geometry, with_default)
 from .simulate import add_trace_arguments, plot_output, run_trace
 
 __all__ = ["add_parser", "cmd_report_area", "cmd_report_cycles", "BUILTINS", "ReportError"]
@@ -49,12 +50,14 @@ def cmd_report_area(args) -> int:
                                                                    and not sizeless):
         raise ReportError("report area: give a FILE.vqt or --builtin NAME (not both; neither with --unit loadable "
                           "--geometry NAME)")
-    if not 0 <= args.tag_width <= 16:
-        raise ReportError(f"--tag-width {args.tag_width} must be in 0..16")
-    if not 1 <= args.freq <= 1000:
-        raise ReportError(f"--freq {args.freq} must be in 1..1000 MHz")
-    if args.timeout is not None and args.timeout <= 0:
-        raise ReportError(f"--timeout {args.timeout} must be positive")
+    lanes = args.filter_lanes is not None
+    resolve(args, "index_banks", "parity", lanes, "is how the texture filter's lanes hold the index memory: "
+            "it needs --filter-lanes")
+    resolve(args, "unit", "specialised", not lanes, "applies to the texel-fetch unit alone (--filter-lanes builds "
+            "specialised texel-fetch lanes)")
+    resolve(args, "freq", 150.0, not args.no_pnr, "is the clock nextpnr places for: it does not go with --no-pnr")
+    resolve(args, "seed", 1, not args.no_pnr, "seeds nextpnr's placement: it does not go with --no-pnr",
+            "--placer-seed")
     if args.filter_lanes is not None and args.one_port:
         raise ReportError("report area: --filter-lanes: the filter's lanes have two-bank index memories (no --one-port)")
     if args.keep:
@@ -78,11 +81,7 @@ def cmd_report_area(args) -> int:
         ts = getattr(synth, BUILTINS[args.builtin][0])()
         t_set = round(time.perf_counter() - t0, 2)
         name = f"builtin {args.builtin}"
-    if args.filter_lanes is not None and args.unit != "specialised":
-        raise CliError("--filter-lanes builds specialised texel-fetch lanes; --unit applies to the texel-fetch unit alone")
     geometry = unit_geometry(args, ts, name)
-    if geometry is not None and args.filter_lanes is not None:
-        raise CliError("--filter-lanes synthesizes the baked texture filter; --unit loadable is the texel-fetch unit")
     units = ["full", "specialised"] if args.unit == "both" else [args.unit]
     reps = {}
     for unit in units:
@@ -137,14 +136,16 @@ def add_parser(sub) -> None:
     add_index_banks(a)
     add_unit(a, both=True)
     add_tag_width(a)
-    a.add_argument("--freq", type=float, default=150.0, help=with_default("clock constraint in MHz", 150))
-    a.add_argument("--placer-seed", "--seed", dest="seed", type=int, default=1,
-                   help=with_default("nextpnr's placement seed (--seed is the old spelling)", 1))
+    a.add_argument("--freq", type=limits.FREQ, default=None,
+                   help=number_help("clock constraint of place and route", limits.FREQ, 150))
+    a.add_argument("--placer-seed", "--seed", dest="seed", type=limits.PLACER_SEED, default=None,
+                   help=number_help("nextpnr's placement seed (--seed is the old spelling)", limits.PLACER_SEED, 1))
     a.add_argument("--no-pnr", action="store_true",
                    help="synthesis only: utilisation, no Fmax (default: also place and route)")
     a.add_argument("--keep", metavar="DIR", default=None,
                    help=with_default("keep the tools' files (RTLIL, netlist, logs, nextpnr report) in DIR",
                                      "a temporary folder, removed"))
-    a.add_argument("--timeout", type=float, default=None, help=with_default("seconds allowed per tool run", "none"))
+    a.add_argument("--timeout", type=limits.TIMEOUT, default=None,
+                   help=number_help("seconds allowed per tool run", limits.TIMEOUT, "none"))
     add_json(a)
     a.set_defaults(func=cmd_report_area)

@@ -8,7 +8,7 @@ import os
 import numpy as np
 
 from .common import (CliError, Outputs, add_backend, add_hardware_options, add_json, add_texture_set, add_unit,
-                     emit, load_set, unit_geometry, warn_slow, with_default, write_bytes)
+                     emit, load_set, resolve, stall_seed, unit_geometry, warn_slow, with_default, write_bytes)
 
 __all__ = ["add_parser", "cmd_sim", "read_requests", "run_trace", "plot_output", "add_trace_arguments"]
 
@@ -43,8 +43,9 @@ def run_trace(args):
     from vqtex.golden.fetch import check_requests
     from vqtex.sim.backends.interface import simulate
     from vqtex.sim.reports.cycles import cycle_report
-    if not 0.0 <= args.stall < 1.0:
-        raise CliError(f"--stall {args.stall} must be in [0, 1)")
+    args.seed = stall_seed(args)
+    resolve(args, "unit", "specialised", args.backend != "golden",
+            "chooses the RTL unit: it does not apply to --backend golden (the cycle model)")
     ts = load_set(args.file)
     geometry = unit_geometry(args, ts, args.file)
     req = read_requests(args.requests)

@@ -188,8 +188,9 @@ def test_clamped_coordinates_beyond_the_edge_fetch_the_edge(far, shapes, mode, d
 
 @pytest.mark.parametrize("addressing", ["wrap", "clamp"])
 def test_coordinates_of_any_size_are_defined(addressing):
-    """1e15 (beyond int64 once scaled), 1e300, infinities and NaN: requests in range, no warning."""
-    far = [1e6, -1e6, 1e12, 1e15, -1e15, 1e300, -1e300, np.inf, -np.inf, np.nan, 2.0 ** 60 + 0.5]
+    """1e15 (beyond int64 once scaled), 1e300 and infinities: requests in range, no warning; NaN
+    names no texel and is refused."""
+    far = [1e6, -1e6, 1e12, 1e15, -1e15, 1e300, -1e300, np.inf, -np.inf, 2.0 ** 60 + 0.5]
     n = len(far)
     shapes = SHAPES[0]
     for mode in ("point", "trilinear"):
@@ -201,3 +202,6 @@ def test_coordinates_of_any_size_are_defined(addressing):
         w = np.array([shapes[k][0] for k in reqs[:, 1]])
         h = np.array([shapes[k][1] for k in reqs[:, 1]])
         assert ((reqs[:, 2] >= 0) & (reqs[:, 2] < w) & (reqs[:, 3] >= 0) & (reqs[:, 3] < h)).all()
+        for s, t in (([0.5, np.nan], [0.5, 0.5]), ([0.5, 0.5], [np.nan, 0.5])):
+            with pytest.raises(ValueError, match="NaN"):
+                Sampler([shapes], addressing, mode).requests(_fragments(s, t, (1e-3, 0, 0, 1e-3)))

@@ -421,9 +421,11 @@ def _scored(r) -> bool:
 def run(json_out: bool = False, *, plot: str | None = None, quick: bool = False,
         include_codecs: bool = False, grid: dict | None = None, seed: int = 0,
         threads: int | None = 1, scheduler: str | None = None, workers: int | None = None,
-        progress: bool = True) -> dict:
+        progress: bool = True, plot_into: str | None = None) -> dict:
     """Run the grid (``grid``, else :data:`QUICK` or :data:`FULL`); print a table (or one JSON
-    object) and return ``{"benchmark", "grid", "threads", "rows", "pareto", "plots"}``."""
+    object) and return ``{"benchmark", "grid", "threads", "rows", "pareto", "plots"}``. The plots
+    are named in the folder ``plot`` and written into ``plot_into`` when given (the command line's
+    staging folder, renamed into ``plot`` when the run ends well), else into ``plot``."""
     from vqtex.sim.bench.sweep import run_jobs
 
     g = dict(grid or (QUICK if quick else FULL))
@@ -452,7 +454,7 @@ def run(json_out: bool = False, *, plot: str | None = None, quick: bool = False,
         "bits_per_texel": "index map (nblocks x ceil(log2 k)) + the whole codebook (k x entry bytes x 8), over the texels",
         "rows": [{k: _json_safe(v) for k, v in r.items()} for r in rows],
         "pareto": fronts,
-        "plots": save_plots(rows, plot) if plot else [],
+        "plots": [os.path.join(plot, os.path.basename(p)) for p in save_plots(rows, plot_into or plot)] if plot else [],
     }
     if json_out:
         print(json.dumps(out))

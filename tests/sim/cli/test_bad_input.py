@@ -29,8 +29,8 @@ def vqt(tmp_path):
 
 
 def test_experiments_frame_selection(capsys, monkeypatch):
-    _one_error(capsys, ["experiments", "table3", "--frame-step", "0"], "--frame-step 0 must be at least 1")
-    _one_error(capsys, ["experiments", "table4", "--frame-step", "-2"], "--frame-step -2 must be at least 1")
+    _one_error(capsys, ["experiments", "table3", "--frame-step", "0"], "argument --frame-step: '0' is not in 1..2^31 - 1")
+    _one_error(capsys, ["experiments", "table4", "--frame-step", "-2"], "argument --frame-step: '-2' is not in 1..")
     _one_error(capsys, ["experiments", "table5", "--frames", "::0"], "step must not be 0")
     _one_error(capsys, ["experiments", "table5", "--frames", "60:70"], "selects no frame")
     _one_error(capsys, ["experiments", "table3", "--frames", "0:5", "--frame-step", "2"], "not both")
@@ -174,5 +174,5 @@ def test_cache_info_and_clean(tmp_path, capsys, monkeypatch):
     code, out, _ = _run(capsys, "cache", "clean")
     assert code == 0 and "freed" in out
     assert toolchain.cache_entries() == [] and not (tmp_path / "index").exists()
-    _one_error(capsys, ["cache", "clean", "--keep-mb", "-1"], "--keep-mb -1 must be >= 0")
+    _one_error(capsys, ["cache", "clean", "--keep-mb", "-1"], "argument --keep-mb: '-1' is not in [0, 2^43] MB")
     _one_error(capsys, ["cache", "purge"], "invalid choice")

@@ -88,7 +88,7 @@ def _bad_cases(tmp_path, images):
         (["encode", str(txt), "-o", str(tmp_path / "x.vqt")], "notimage.png"),
         (["encode", images[0], "-o", str(tmp_path / "x.vqt"), "--block", "3x3"], "powers of two"),
         (["encode", images[0], "-o", str(tmp_path / "x.vqt"), "--block", "four"], "WxH"),
-        (["encode", images[0], "-o", str(tmp_path / "x.vqt"), "-k", "9999"], "2..4096"),
+        (["encode", images[0], "-o", str(tmp_path / "x.vqt"), "-k", "9999"], "1..4096"),
         (["sim", good, str(req), "-o", str(tmp_path / "x.npy")], "outside"),
         (["sim", good, str(badreq), "-o", str(tmp_path / "x.npy")], "shape"),
         (["sim", good, str(tmp_path / "none.npy"), "-o", str(tmp_path / "x.npy")], "no such file"),

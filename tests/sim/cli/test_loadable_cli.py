@@ -57,7 +57,7 @@ def test_refusals(tmp_path, rgb8, capsys):
     small = tmp_path / "small.toml"
     g = Geometry.of(texture_set("rgb_4x4_b8_mip"))
     small.write_text(Geometry(**{**g.to_dict(), "index_words": 4, "colors": ["yuv411"]}).dumps())
-    base = ["sim", rgb8, req, "-o", tmp_path / "r.npy"]
+    base = ["sim", rgb8, req, "-o", tmp_path / "r.npy", "--backend", "pysim"]
     assert_one_error(capsys, base + ["--unit", "loadable", "--geometry", small], "index memory: ")
     assert_one_error(capsys, base + ["--unit", "loadable", "--geometry", small], "colour format rgb not supported")
     assert_one_error(capsys, base + ["--geometry", "paper"], "--geometry applies to --unit loadable")
@@ -66,7 +66,7 @@ def test_refusals(tmp_path, rgb8, capsys):
     assert_one_error(capsys, base + ["--unit", "loadable", "--geometry", tmp_path / "bad.toml"], "bad.toml")
     assert_one_error(capsys, ["export", "-o", tmp_path / "x.v"], "FILE.vqt is required")
     assert_one_error(capsys, ["render", "topspin", "--frames", "0", "-o", tmp_path / "f.png", "--unit", "loadable"],
-                     "needs an RTL --backend")
+                     "--unit chooses the RTL texel-fetch unit")
     assert not (tmp_path / "r.npy").exists() and not (tmp_path / "x.v").exists()
 
 

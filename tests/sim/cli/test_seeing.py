@@ -75,7 +75,7 @@ def test_render_reference_and_difference(tmp_path, capsys):
         assert heat.ndim == 3 and heat.shape[1] > 200                # a figure with its colour bar
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
     code, _, err = _run(capsys, "render", scene_file, "-o", tmp_path / "x.png", "--diff-scale", "0")
-    assert code == 2 and "--diff-scale 0" in err
+    assert code == 2 and "--diff-scale: '0' is not in 1..255" in err
 
 
 def test_report_cycles(tmp_path, capsys):
