@@ -151,11 +151,13 @@ class BankedROM(wiring.Component):
             depth = min(d, self._depth - k * d) if load is not None or self._depth > len(self._init) else len(part)
             m.submodules[f"bank{k}"] = mem = memory.Memory(shape=stored, depth=depth, init=part)
             if load is not None:
-                answers.append(attach_memory(m, mem, self.load, region=load.region, lanes=load.lanes,
-                                             stride=load.stride, phase=load.phase, first=k * d * load.stride,
-                                             name=f"bank{k}_load"))
-            rd = mem.read_port(domain="sync")
-            m.d.comb += [rd.addr.eq(self.addr[:offset_bits]), rd.en.eq(self.en)]
+                rd, answer = attach_memory(m, mem, self.load, region=load.region, lanes=load.lanes,
+                                           stride=load.stride, phase=load.phase, first=k * d * load.stride,
+                                           name=f"bank{k}_load", read_addr=self.addr[:offset_bits], read_en=self.en)
+                answers.append(answer)
+            else:
+                rd = mem.read_port(domain="sync")
+                m.d.comb += [rd.addr.eq(self.addr[:offset_bits]), rd.en.eq(self.en)]
             q = Signal(self._width, name=f"data{k}")
             with m.If(self.en):
                 m.d.sync += q.eq(rd.data if stored == self._width else rd.data[:self._width])

@@ -192,10 +192,15 @@ class LoadTarget:
 
 
 def attach_memory(m, mem: memory.Memory, load, *, region: int, lanes: int = 1, lane: int | None = None,
-                  stride: int = 1, phase: int = 0, first: int = 0, pack=None, unpack=None, name: str):
-    """Give ``mem`` (an ``amaranth.lib.memory.Memory``, not yet elaborated) a write port and a read
-    port for the load command ``load``; returns its read answer (32 bits, 0 unless this memory was
-    addressed by the read ``READ_LATENCY - 1`` cycles after its acceptance).
+                  stride: int = 1, phase: int = 0, first: int = 0, pack=None, unpack=None, name: str,
+                  read_addr, read_en):
+    """Give ``mem`` (an ``amaranth.lib.memory.Memory``, not yet elaborated) a write port for the load
+    command ``load``, and its one read port, shared: the pipeline reads at ``read_addr`` when
+    ``read_en``; a bus read takes the port in the cycle of its command (the pipeline is empty then:
+    the drain rule), so the memory has two ports, as a true dual-port block RAM does. Returns
+    ``(read_port, answer)``: the read port (the pipeline takes ``read_port.data``) and the memory's
+    read answer (32 bits, 0 unless this memory was addressed by the read ``READ_LATENCY - 1`` cycles
+    after its acceptance).
 
     Entry ``e`` of ``region`` spans bus words ``e * lanes .. e * lanes + lanes - 1``. The memory holds
     the entries ``e`` with ``e % stride == phase`` (even and odd index banks), from entry ``first``
@@ -234,15 +239,17 @@ def attach_memory(m, mem: memory.Memory, load, *, region: int, lanes: int = 1, l
         wp = mem.write_port()
         m.d.comb += [wp.addr.eq(row), wp.en.eq(load.write & hit)]
         m.d.comb += wp.data.eq(pack(load.data) if pack is not None else load.data[:width])
-    rp = mem.read_port(domain="sync", transparent_for=())
-    m.d.comb += [rp.addr.eq(row), rp.en.eq(load.read & hit)]
+    rp = mem.read_port(domain="sync")
+    bus_read = Signal(name=f"{name}_bus_read")
+    m.d.comb += [bus_read.eq(load.read & hit),
+                 rp.addr.eq(Mux(bus_read, row, read_addr)), rp.en.eq(read_en | bus_read)]
     hit_r = Signal(name=f"{name}_hit_r")
     lane_r = Signal(max(1, lane_bits), name=f"{name}_lane_r")
-    m.d.sync += [hit_r.eq(load.read & hit), lane_r.eq(lane_of)]
+    m.d.sync += [hit_r.eq(bus_read), lane_r.eq(lane_of)]
     if wide:
         word = Value.cast(rp.data).word_select(lane_r, DATA_WIDTH)
     else:
         word = unpack(rp.data) if unpack is not None else Value.cast(rp.data)
     answer = Signal(DATA_WIDTH, name=f"{name}_answer")
     m.d.comb += answer.eq(Mux(hit_r, word, 0))
-    return answer
+    return rp, answer

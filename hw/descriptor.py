@@ -220,10 +220,10 @@ class DescriptorTable(wiring.Component):
                     out = out | (Value.cast(getattr(view, name)) << lsb)
                 return out[:DATA_WIDTH]
 
-            answers.append(attach_memory(m, mem, self.load, region=REGIONS["descriptors"], lanes=4, lane=w,
-                                         pack=pack, unpack=unpack, name=f"word{w}_load"))
-            port = mem.read_port(domain="sync")
-            m.d.comb += [port.addr.eq(addr), port.en.eq(self.en)]
+            port, answer = attach_memory(m, mem, self.load, region=REGIONS["descriptors"], lanes=4, lane=w,
+                                         pack=pack, unpack=unpack, name=f"word{w}_load", read_addr=addr,
+                                         read_en=self.en)
+            answers.append(answer)
             for name, _ in present:
                 row[name] = getattr(port.data, name)
         answer = answers[0]
