@@ -202,6 +202,45 @@ def _alias_locals(src: str) -> str:
     return src[:m.start()] + body + src[m.end():]
 
 
+_MEM_WRITE = re.compile(r"^(?P<ind>\t+)(?P<mem>memory_\w+)\.update\((?P<args>.*)\);$", re.M)
+
+
+def _split_args(text: str) -> list:
+    """The top-level arguments of a C++ call's argument list (commas inside (), <> and {} kept)."""
+    out, depth, start = [], 0, 0
+    for k, ch in enumerate(text):
+        if ch in "(<{":
+            depth += 1
+        elif ch in ")>}":
+            depth -= 1
+        elif ch == "," and depth == 0:
+            out.append(text[start:k].strip())
+            start = k + 1
+    out.append(text[start:].strip())
+    return out
+
+
+def guarded_writes(src: str) -> tuple[str, int]:
+    """Every memory write port's ``memory_x.update(index, data, mask, priority)`` guarded by its
+    mask: CXXRTL queues a write in every clock cycle, its mask all zeros when the port is not
+    enabled (an insert into a sorted vector per write port and cycle, then the commit's walk of the
+    queue); the loadable unit has a write port per block RAM bank, idle while requests run. The
+    same writes, none queued with an empty mask. Returns the C++ and the number of ports guarded
+    (0 for a unit without write ports, the baked ones)."""
+    count = 0
+
+    def guard(m):
+        nonlocal count
+        args = _split_args(m.group("args"))
+        if len(args) != 4:
+            return m.group(0)
+        count += 1
+        ind = m.group("ind")
+        return (f"{ind}{{ const auto vq_mask = {args[2]};\n"
+                f"{ind}if (!vq_mask.is_zero()) {m.group('mem')}.update({args[0]}, {args[1]}, vq_mask, {args[3]}); }}")
+    return _MEM_WRITE.sub(guard, src), count
+
+
 def rewrite(src: str) -> tuple[str, str]:
     """The generated C++ of one model as the driver compiles it, and the macros that go with it
     (``VQ_EXACT_STEP``, ``VQ_INPLACE``; see driver.cc): every rewrite below (exact, checked by the
@@ -210,6 +249,7 @@ def rewrite(src: str) -> tuple[str, str]:
     if "converged = false" in src:          # combinational feedback: see driver.cc
         macros += "#define VQ_EXACT_STEP 1\n"
     src = _padded_memories(_fast_shifts(_fast_slices(_alias_locals(src))))
+    src, _ = guarded_writes(src)
     inplace = inplace_cycle(src)
     if inplace is not None:
         src = inplace

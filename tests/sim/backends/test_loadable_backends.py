@@ -104,3 +104,16 @@ def test_simulate_geometry_all_backends(sets, geometry):
     from vqtex.golden.register_map import LoadError
     with pytest.raises(LoadError, match="textures"):
         simulate(ts, req, backend="cxxrtl", geometry=small)
+
+
+def test_guarded_writes_match_every_write_port(geometry):
+    """The CXXRTL rewrite that skips idle write ports finds every write port of the loadable unit
+    (one per memory: a Yosys update that changes CXXRTL's text fails here, not as a slowdown), and
+    none in the baked unit."""
+    from vqtex.sim.backends.design import design_info
+    info = design_info(None, geometry=geometry)
+    src = cxxrtl.write_cxxrtl(info.fragment, info.ports)
+    _, count = cxxrtl.guarded_writes(src)
+    assert count == len(info.memories) > 0
+    baked = design_info(texture_set("rgb_4x4_b8_mip"))
+    assert all(cxxrtl.guarded_writes(cxxrtl.write_cxxrtl(*baked.halves[h]))[1] == 0 for h in baked.halves)
