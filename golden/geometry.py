@@ -39,6 +39,9 @@ MAX_K_BITS = 24
 #: The largest memory a geometry may name (words or entries): 2^24 - 1, so that a descriptor's
 #: ``base`` and ``cb_base`` fit the register map's 24-bit fields (golden.register_map).
 MAX_DEPTH = (1 << 24) - 1
+#: The most 32-bit words a region of the register map may span (golden.register_map): 2^27, so that
+#: the 3-bit region code and the offset make a word address of at most 30 bits, a byte address of 32.
+MAX_REGION_WORDS = 1 << 27
 
 
 class GeometryError(ValueError):
@@ -109,8 +112,10 @@ class Geometry:
         count("entry_bytes", 1, 512)
         count("raw_words", 0, MAX_DEPTH)
         count("k_bits", 1, MAX_K_BITS)
-        if self.word_bits not in WORD_BITS_ALLOWED:
+        if (isinstance(self.word_bits, bool) or not isinstance(self.word_bits, (int, np.integer))
+                or self.word_bits not in WORD_BITS_ALLOWED):
             raise GeometryError(f"geometry word_bits must be one of {WORD_BITS_ALLOWED}, not {self.word_bits!r}")
+        object.__setattr__(self, "word_bits", int(self.word_bits))
         colors = tuple(self.colors)
         if not colors or any(c not in COLORS for c in colors):
             raise GeometryError(f"geometry colors must be a non-empty list of {', '.join(COLORS)}; got {list(colors)}")
@@ -128,7 +133,8 @@ class Geometry:
         for shape in self.blocks:
             if isinstance(shape, str):
                 parts = shape.lower().split("x")
-                shape = tuple(int(p) for p in parts) if len(parts) == 2 and all(p.isdigit() for p in parts) else shape
+                shape = (tuple(int(p) for p in parts)
+                         if len(parts) == 2 and all(p.isascii() and p.isdigit() for p in parts) else shape)
             shape = tuple(shape) if not isinstance(shape, str) else shape
             if shape not in BLOCK_SHAPES:
                 raise GeometryError(f"geometry block {shape!r} is not WxH with sides 1, 2, 4 or 8")
@@ -136,7 +142,15 @@ class Geometry:
         if not blocks:
             raise GeometryError("geometry blocks must name at least one block shape")
         object.__setattr__(self, "blocks", tuple(sorted(set(blocks))))
+        if not isinstance(self.extended, (bool, np.bool_)):
+            raise GeometryError(f"geometry extended must be true or false, not {self.extended!r}")
         object.__setattr__(self, "extended", bool(self.extended))
+        lanes = 1 << max(0, (-(-self.entry_bytes // 4) - 1).bit_length())       # register_map's entry lanes
+        words = max(self.codebook_entries * lanes, self.index_words * max(1, self.word_bits // 32), self.raw_words,
+                    self.textures * MAX_LEVELS * 4)
+        if words > MAX_REGION_WORDS:
+            raise GeometryError(f"geometry too large for the bus: a region of {words} words (at most "
+                                f"{MAX_REGION_WORDS}, so that a CPU's byte address fits 32 bits)")
 
     # -- derived ---------------------------------------------------------------------------------
     @property
@@ -302,8 +316,8 @@ class Geometry:
         try:
             with open(path, "rb") as f:
                 data = f.read((1 << 16) + 1)
-        except OSError as e:
-            raise GeometryError(f"{path}: {e.strerror or e}") from None
+        except (OSError, ValueError) as e:          # ValueError: a NUL byte in the path
+            raise GeometryError(f"{path!s}: {getattr(e, 'strerror', None) or e}") from None
         if len(data) > 1 << 16:
             raise GeometryError(f"{path}: larger than 64 KiB, not a geometry file")
         try:
