@@ -18,7 +18,7 @@ from amaranth.lib import data, memory, wiring
 from amaranth.lib.wiring import In, Out
 from amaranth.utils import ceil_log2
 
-from .bus_port import DATA_WIDTH, LoadTarget, attach_memory
+from .bus_port import DATA_WIDTH, LoadTarget, attach_memory, load_decode
 
 __all__ = ["BankedROM", "BANK_DEPTH", "LATENCY", "pick", "addr_bits"]
 
@@ -146,13 +146,18 @@ class BankedROM(wiring.Component):
         # A loadable bank of more than 32 bits is written 32 bits at a time: its width is padded to
         # whole bus words (the padding is never read by the pipeline).
         stored = self._width if load is None or self._width <= DATA_WIDTH else -(-self._width // DATA_WIDTH) * DATA_WIDTH
+        if load is not None:                # the command decoded once, then a bank compare each
+            hit, row, lane = load_decode(m, self.load, region=load.region, lanes=load.lanes, stride=load.stride,
+                                         phase=load.phase, depth=self._depth, name="load")
+            if len(row) < offset_bits:
+                row = Cat(row, C(0, offset_bits - len(row)))
         for k in range(self._banks):
             part = self._init[k * d:(k + 1) * d]
             depth = min(d, self._depth - k * d) if load is not None or self._depth > len(self._init) else len(part)
             m.submodules[f"bank{k}"] = mem = memory.Memory(shape=stored, depth=depth, init=part)
             if load is not None:
-                rd, answer = attach_memory(m, mem, self.load, region=load.region, lanes=load.lanes,
-                                           stride=load.stride, phase=load.phase, first=k * d * load.stride,
+                bank_hit = hit if self._banks == 1 else hit & (row[offset_bits:] == k)
+                rd, answer = attach_memory(m, mem, self.load, hit=bank_hit, row=row[:offset_bits], lane=lane,
                                            name=f"bank{k}_load", read_addr=self.addr[:offset_bits], read_en=self.en)
                 answers.append(answer)
             else:

@@ -37,13 +37,22 @@ from amaranth.lib.wiring import In, Out
 from vqtex.golden.geometry import Geometry
 from vqtex.golden.register_map import (CONTROL, REGION_BITS, REGIONS, RegisterMap, geometry_words)
 
-__all__ = ["wishbone_signature", "load_layout", "BusPort", "LoadTarget", "attach_memory", "READ_LATENCY",
+__all__ = ["wishbone_signature", "load_layout", "BusPort", "LoadTarget", "load_decode", "attach_memory", "READ_LATENCY",
            "DATA_WIDTH"]
 
 #: Bus data width.
 DATA_WIDTH = 32
 #: Cycles from a read's acceptance to its ``ack`` and ``dat_r``.
 READ_LATENCY = 3
+
+
+def _or(values):
+    """The OR of ``values`` (at least one)."""
+    values = list(values)
+    out = values[0]
+    for v in values[1:]:
+        out = out | v
+    return out
 
 
 def wishbone_signature(addr_width: int) -> wiring.Signature:
@@ -106,7 +115,8 @@ class BusPort(wiring.Component):
         rmap = self._map
         words = rmap.region_words()
         ctrl_ok = Cat(*((offset == off) & (~we | C(int("w" in acc), 1)) for off, acc, _ in CONTROL.values())).any()
-        lane_ok = (offset & (rmap.entry_lanes - 1)) < rmap.used_entry_lanes
+        lane_bits = (rmap.entry_lanes - 1).bit_length()
+        lane_ok = offset[:lane_bits] < rmap.used_entry_lanes if lane_bits else C(1, 1)
         return {
             REGIONS["control"]: ctrl_ok,
             REGIONS["descriptors"]: offset < words["descriptors"],
@@ -140,13 +150,10 @@ class BusPort(wiring.Component):
                 m.d.comb += mapped.eq(0)
 
         # The command register: one cycle per accepted transfer.
-        m.d.sync += [
-            self.load.write.eq(accept & bus.we & bus.sel & mapped),
-            self.load.read.eq(accept & ~bus.we & mapped),
-            self.load.region.eq(region),
-            self.load.offset.eq(offset),
-            self.load.data.eq(bus.dat_w),
-        ]
+        # (one assignment of the whole register: field by field, CXXRTL would assemble it with
+        # read-modify-writes every cycle)
+        m.d.sync += self.load.eq(Cat(accept & bus.we & bus.sel & mapped, accept & ~bus.we & mapped, region, offset,
+                                     bus.dat_w))
         # Answers: a write (or any refused transfer) in the next cycle, a read READ_LATENCY later.
         ack_write = Signal()
         err = Signal()
@@ -157,17 +164,13 @@ class BusPort(wiring.Component):
         ]
         # The read-only control registers (ID, version, geometry) answer here; everything else
         # through ``load_data``.
+        # (an OR of masked constants, not a case statement: Yosys would make that a ROM, which
+        # simulators then read every cycle)
         own = Signal(DATA_WIDTH, name="own_data")
         values = geometry_words(self._geometry)
-        with m.If(self.load.read & (self.load.region == REGIONS["control"])):
-            with m.Switch(self.load.offset):
-                for name, value in values.items():
-                    with m.Case(CONTROL[name][0]):
-                        m.d.sync += own.eq(value)
-                with m.Default():
-                    m.d.sync += own.eq(0)
-        with m.Else():
-            m.d.sync += own.eq(0)
+        mine = self.load.read & (self.load.region == REGIONS["control"])
+        m.d.sync += own.eq(_or(Mux(mine & (self.load.offset == CONTROL[name][0]), C(value, DATA_WIDTH), 0)
+                               for name, value in values.items()))
         dat_r = Signal(DATA_WIDTH, name="dat_r_reg")
         ack_read = Signal()
         m.d.sync += [dat_r.eq(self.load_data | own), ack_read.eq(reading[-1])]
@@ -191,62 +194,65 @@ class LoadTarget:
     phase: int = 0
 
 
-def attach_memory(m, mem: memory.Memory, load, *, region: int, lanes: int = 1, lane: int | None = None,
-                  stride: int = 1, phase: int = 0, first: int = 0, pack=None, unpack=None, name: str,
-                  read_addr, read_en):
+def load_decode(m, load, *, region: int, lanes: int = 1, stride: int = 1, phase: int = 0, depth: int,
+                name: str) -> tuple:
+    """Which word of a memory of ``depth`` words the load command addresses, decoded once for all
+    of that memory's banks: ``(hit, row, lane)`` (combinational). Entry ``e`` of ``region`` spans bus
+    words ``e * lanes .. e * lanes + lanes - 1``; the memory holds the entries with ``e % stride ==
+    phase`` (even and odd index banks), entry ``e`` in row ``e // stride``; ``hit`` is high when the
+    command's region is ``region`` and its entry is one of them, ``lane`` is the bus word in the
+    entry."""
+    lane_bits = (lanes - 1).bit_length()
+    stride_bits = (stride - 1).bit_length()
+    entry = load.offset[lane_bits:]
+    row = Signal(max(1, len(entry) - stride_bits), name=f"{name}_row")
+    m.d.comb += row.eq(entry[stride_bits:])
+    hit = Signal(name=f"{name}_hit")
+    cond = (load.region == region) & (row < depth)
+    if stride > 1:
+        cond &= entry[:stride_bits] == phase
+    m.d.comb += hit.eq(cond)
+    lane = load.offset[:lane_bits] if lane_bits else C(0, 1)
+    return hit, row, lane
+
+
+def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int | None = None, pack=None,
+                  unpack=None, name: str, read_addr, read_en):
     """Give ``mem`` (an ``amaranth.lib.memory.Memory``, not yet elaborated) a write port for the load
     command ``load``, and its one read port, shared: the pipeline reads at ``read_addr`` when
     ``read_en``; a bus read takes the port in the cycle of its command (the pipeline is empty then:
-    the drain rule), so the memory has two ports, as a true dual-port block RAM does. Returns
+    the drain rule), so the memory has two ports, as a true dual-port block RAM does. ``hit``,
+    ``row`` and ``lane`` say whether the command addresses this memory, which row, which 32-bit
+    lane of it (:func:`load_decode`, then narrowed to a bank by the caller). Returns
     ``(read_port, answer)``: the read port (the pipeline takes ``read_port.data``) and the memory's
     read answer (32 bits, 0 unless this memory was addressed by the read ``READ_LATENCY - 1`` cycles
     after its acceptance).
 
-    Entry ``e`` of ``region`` spans bus words ``e * lanes .. e * lanes + lanes - 1``. The memory holds
-    the entries ``e`` with ``e % stride == phase`` (even and odd index banks), from entry ``first``
-    (banks of a banked memory) on: memory row ``(e - first) // stride``. With ``lane=None`` a row is
-    the entry's lanes side by side (width ``32 * lanes`` or less, written 32 bits at a time); with
-    ``lane=k`` the memory holds lane ``k`` of each entry only (``pack(bus_word)`` gives the row,
-    ``unpack(row)`` the bus word; default: the low bits).
+    With ``only_lane=None`` a row is the entry's lanes side by side (width ``32 * lanes`` or less,
+    written 32 bits at a time); with ``only_lane=k`` the memory holds lane ``k`` of each entry only
+    (``pack(bus_word)`` gives the row, ``unpack(row)`` the bus word; default: the low bits).
     """
     width = Shape.cast(mem.shape).width
-    depth = mem.depth
-    lane_bits = (lanes - 1).bit_length()
-    entry = Signal(len(load.offset), name=f"{name}_entry")
-    m.d.comb += entry.eq(load.offset >> lane_bits)
-    rel = Signal(len(entry) + 1, name=f"{name}_rel")
-    m.d.comb += rel.eq(entry - first if first else entry)
-    stride_bits = (stride - 1).bit_length()
-    row = Signal(range(max(2, depth)), name=f"{name}_row")
-    m.d.comb += row.eq(rel >> stride_bits)
-    lane_of = load.offset[:lane_bits] if lane_bits else C(0, 1)
-    hit = Signal(name=f"{name}_hit")
-    cond = (load.region == region) & ((rel >> stride_bits) < depth)
-    if first:
-        cond &= entry >= first
-    if stride > 1:
-        cond &= rel[:stride_bits] == phase
-    if lane is not None:
-        cond &= lane_of == lane
-    m.d.comb += hit.eq(cond)
-
-    wide = lane is None and width > DATA_WIDTH
+    mine = Signal(name=f"{name}_mine")
+    m.d.comb += mine.eq(hit & (lane == only_lane) if only_lane is not None else hit)
+    wide = only_lane is None and width > DATA_WIDTH
     if wide:
         wp = mem.write_port(granularity=DATA_WIDTH)
         m.d.comb += [wp.addr.eq(row), wp.data.eq(load.data.replicate(width // DATA_WIDTH)),
-                     wp.en.eq(Mux(load.write & hit, 1 << lane_of, 0))]
+                     wp.en.eq(Mux(load.write & mine, 1 << lane, 0))]
     else:
         wp = mem.write_port()
-        m.d.comb += [wp.addr.eq(row), wp.en.eq(load.write & hit)]
+        m.d.comb += [wp.addr.eq(row), wp.en.eq(load.write & mine)]
         m.d.comb += wp.data.eq(pack(load.data) if pack is not None else load.data[:width])
     rp = mem.read_port(domain="sync")
     bus_read = Signal(name=f"{name}_bus_read")
-    m.d.comb += [bus_read.eq(load.read & hit),
+    m.d.comb += [bus_read.eq(load.read & mine),
                  rp.addr.eq(Mux(bus_read, row, read_addr)), rp.en.eq(read_en | bus_read)]
     hit_r = Signal(name=f"{name}_hit_r")
-    lane_r = Signal(max(1, lane_bits), name=f"{name}_lane_r")
-    m.d.sync += [hit_r.eq(bus_read), lane_r.eq(lane_of)]
+    m.d.sync += hit_r.eq(bus_read)
     if wide:
+        lane_r = Signal(len(lane), name=f"{name}_lane_r")
+        m.d.sync += lane_r.eq(lane)
         word = Value.cast(rp.data).word_select(lane_r, DATA_WIDTH)
     else:
         word = unpack(rp.data) if unpack is not None else Value.cast(rp.data)

@@ -22,7 +22,7 @@ from vqtex.golden.format import DESCRIPTOR_FIELDS, MAX_LEVELS, TextureSet, log2
 from vqtex.golden.geometry import Geometry
 from vqtex.golden.register_map import DESCRIPTOR_WORDS, REGIONS
 
-from .bus_port import DATA_WIDTH, attach_memory
+from .bus_port import DATA_WIDTH, attach_memory, load_decode
 from .features import READ_BY, Features, Fields
 
 __all__ = ["DescriptorLayout", "DescriptorTable", "descriptor_widths", "texture_bits", "LEVEL_BITS", "as_geometry"]
@@ -201,6 +201,8 @@ class DescriptorTable(wiring.Component):
         m.d.comb += addr.eq(Cat(self.level, self.texture))
         row = {}
         answers = []
+        hit, row_of, lane = load_decode(m, self.load, region=REGIONS["descriptors"], lanes=len(DESCRIPTOR_WORDS),
+                                        depth=depth, name="load")
         contents = self._rows(LEVEL_BITS, g.texture_bits)[:depth] if self._ts is not None else None
         for w, word in enumerate(DESCRIPTOR_WORDS):
             present = [(name, lsb) for name, lsb, _ in word if widths[name]]
@@ -220,7 +222,7 @@ class DescriptorTable(wiring.Component):
                     out = out | (Value.cast(getattr(view, name)) << lsb)
                 return out[:DATA_WIDTH]
 
-            port, answer = attach_memory(m, mem, self.load, region=REGIONS["descriptors"], lanes=4, lane=w,
+            port, answer = attach_memory(m, mem, self.load, hit=hit, row=row_of, lane=lane, only_lane=w,
                                          pack=pack, unpack=unpack, name=f"word{w}_load", read_addr=addr,
                                          read_en=self.en)
             answers.append(answer)
@@ -230,5 +232,9 @@ class DescriptorTable(wiring.Component):
         for other in answers[1:]:
             answer = answer | other
         m.d.comb += self.load_data.eq(answer)
-        m.d.comb += [getattr(self.row, name).eq(row[name]) for name, _ in self._layout if name in row]
+        # ``row`` assigned in one piece (plain wiring; field by field, CXXRTL would assemble it
+        # with read-modify-writes every cycle, and its in-place cycle would not apply)
+        parts = [row[name] if name in row else C(0, f.width)
+                 for name, f in sorted(self._layout, key=lambda item: item[1].offset)]
+        m.d.comb += self.row.eq(Cat(*parts))
         return m

@@ -19,10 +19,16 @@ that does the same clock cycle with ``rst`` low:
    read a copy taken before the updates. ``p_rst`` is the constant 0 in this function, so the
    compiler drops the reset multiplexers.
 
+Memory write ports (the loadable unit's) are ``if (posedge_p_clk)`` blocks that queue a write
+(``memory_x.update(...)``) and write no register: they run before the register updates (so they
+read this cycle's register states, as in ``eval()``), every register update then reads the memories
+unchanged (the read ports are not transparent: a read in the cycle of a write returns the old
+word), and the queued writes are committed last (``memory_x.commit``), as ``commit()`` does.
+
 The result is the same as ``eval(); commit();`` bit for bit (tested against CXXRTL's own stepping and
 against golden). It is built only from the generated code's regular shape; anything unexpected (a
-combinational loop, a memory write port, a statement of another form) makes :func:`inplace_cycle`
-return ``None`` and the driver keeps CXXRTL's own ``eval()``/``commit()``.
+combinational loop, a statement of another form) makes :func:`inplace_cycle` return ``None`` and
+the driver keeps CXXRTL's own ``eval()``/``commit()``.
 """
 
 from __future__ import annotations
@@ -42,6 +48,7 @@ _ALIAS = re.compile(r"^\tconst value<(?P<width>\d+)> &(?P<dst>\w+) = (?P<src>\w+
 _NEXT = re.compile(r"\b(\w+)\.next\b")
 _CURR = re.compile(r"\b(\w+)\.curr\b")
 _IDENT = re.compile(r"\b[A-Za-z_]\w*\b")
+_WRITE = re.compile(r"\b(memory_\w+)\.update\(")
 
 
 def _items(body: str):
@@ -124,11 +131,16 @@ def inplace_cycle(src: str) -> str | None:
         if a:
             aliases[a.group("dst")] = a.group("src").removesuffix(".curr")
     bodies, writes, reads = [], [], []
+    memory_writes, written_memories = [], []    # write-port blocks, and the memories they write
     for kind, inner in items:
         if kind != "reg":
             continue
         text = "\n".join(inner)
         w = set(_NEXT.findall(text))
+        if not w and _WRITE.search(text):       # a memory write port: queued, committed last
+            memory_writes.append(text)
+            written_memories += [mem for mem in _WRITE.findall(text) if mem not in written_memories]
+            continue
         if not w or not w <= widths.keys():
             return None
         bodies.append(text)
@@ -147,6 +159,8 @@ def inplace_cycle(src: str) -> str | None:
             line = f"\tconst value<{a.group('width')}> {a.group('dst')} = {a.group('src')};"
         out.append(line)
     out.append("\tsample();")
+    for text in memory_writes:                  # queued with this cycle's register states
+        out.append("\t{\n" + text + "\n\t}")
     for w in sorted(snap):                      # copies taken before any register changes
         out.append(f"\tconst value<{widths[w]}> vq_old_{w} = {w}.curr;")
     for i in order:
@@ -154,6 +168,9 @@ def inplace_cycle(src: str) -> str | None:
         for w in snap:
             text = re.sub(rf"\b{w}\.curr\b", f"vq_old_{w}", text)
         out.append("\t{\n" + _NEXT.sub(lambda mm: f"{mm.group(1)}.curr", text) + "\n\t}")
+    if written_memories:                        # the writes land after every read of this cycle
+        out.append("\tobserver vq_observer;")
+        out += [f"\t{mem}.commit(vq_observer);" for mem in written_memories]
     out.append("}\n")
     # the definition goes right after eval()'s (inside the design's namespace)
     src = src[:m.end()] + "\n" + "\n".join(out) + src[m.end():]
