@@ -254,13 +254,13 @@ class CodebookROM(wiring.Component):
             groups = {tb: [c for c in sorted(per_texel) if per_texel[c] == tb] for tb in (3, 4, 2, 1)}
             groups = {tb: cs for tb, cs in groups.items() if cs}
             default = 1 if 1 in groups else list(groups)[-1]
-            with m.Switch(color_in):
-                for tb, cs in groups.items():
-                    if tb != default:
-                        with m.Case(*cs):
-                            m.d.comb += tbt.eq(times[tb])
-                with m.Default():
-                    m.d.comb += tbt.eq(times[default])
+            # (multiplexers, not a case statement of several values a case: Yosys writes that as a
+            # comparison vector assigned bit by bit, which CXXRTL's in-place cycle cannot take)
+            product = times[default]
+            for tb, cs in groups.items():
+                if tb != default:
+                    product = Mux(Cat(*(color_in == c for c in cs)).any(), times[tb], product)
+            m.d.comb += tbt.eq(product)
         if yuv422:
             # yuv422: U and V are the low bytes of the row's left and right texels, at u_off + 2x
             # and v_off + 2x (``x`` is the row: PowerVR2 offsets come transposed)

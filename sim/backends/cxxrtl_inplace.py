@@ -39,8 +39,8 @@ import re
 __all__ = ["inplace_cycle", "CLASS_DECL"]
 
 _EVAL = re.compile(r"^bool p_top::eval\(performer \*performer\) \{\n(.*?)^\}\n", re.S | re.M)
-#: The member declaration added to ``struct p_top`` (after ``eval``'s).
-CLASS_DECL = "\ttemplate<class F> void vq_cycle(F &&sample);\n"
+#: The member declarations added to ``struct p_top`` (after ``eval``'s).
+CLASS_DECL = "\ttemplate<class F> void vq_cycle(F &&sample);\n\tvoid vq_reset_cycle();\n"
 _EVAL_DECL = "\tbool eval(performer *performer = nullptr) override;\n"
 _SKIP = {"\tbool converged = true;", "\tbool posedge_p_clk = this->posedge_p_clk();", "\treturn converged;"}
 _COMB = re.compile(r"^\t(?:value<\d+> \w+|const value<\d+> &?\w+ = [\w.]+|\w+ = .*);$")
@@ -151,13 +151,19 @@ def inplace_cycle(src: str) -> str | None:
         return None                             # the combinational part never writes a register
     order, snap = _order(reads, writes)
 
+    # Two functions of one body: vq_cycle (rst low, ``sample`` between the combinational part and
+    # the updates) and vq_reset_cycle (rst high: a reset edge that keeps every register's state in
+    # ``curr``, where eval()/commit() would commit the stale ``next`` of the registers this
+    # function updated in place; the loadable unit resets this way, keeping what was loaded).
     out = ["template<class F> void p_top::vq_cycle(F &&sample) {",
            "\tconst value<1> p_rst{0u};\t// vq_cycle is a cycle with rst low"]
+    head = len(out)
     for line in combs:
         a = _ALIAS.match(line)
         if a and aliases[a.group("dst")] in snap:   # a reference would see the update: a copy
             line = f"\tconst value<{a.group('width')}> {a.group('dst')} = {a.group('src')};"
         out.append(line)
+    sample_at = len(out)
     out.append("\tsample();")
     for text in memory_writes:                  # queued with this cycle's register states
         out.append("\t{\n" + text + "\n\t}")
@@ -172,6 +178,9 @@ def inplace_cycle(src: str) -> str | None:
         out.append("\tobserver vq_observer;")
         out += [f"\t{mem}.commit(vq_observer);" for mem in written_memories]
     out.append("}\n")
+    reset = (["void p_top::vq_reset_cycle() {", "\tconst value<1> p_rst{1u};\t// a clock edge with rst high"]
+             + out[head:sample_at] + out[sample_at + 1:])
+    out += reset
     # the definition goes right after eval()'s (inside the design's namespace)
     src = src[:m.end()] + "\n" + "\n".join(out) + src[m.end():]
     return src.replace(_EVAL_DECL, _EVAL_DECL + CLASS_DECL, 1)

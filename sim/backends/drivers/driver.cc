@@ -104,9 +104,14 @@ struct Sim {
         }
         vq_put(top.VQ_I_VALID, 0); vq_put(top.VQ_O_READY, 0); vq_put(top.VQ_BUS_CYC, 0);
         vq_put(top.VQ_BUS_STB, 0);
+#if VQ_TOP_INPLACE
+        // registers live in ``curr`` only (vq_cycle): a reset edge of the same kind, not step()
+        top.vq_reset_cycle();
+#else
         vq_put(top.VQ_CLK, 0); vq_put(top.VQ_RST, 1); top.step();
         vq_put(top.VQ_CLK, 1); top.step();
         vq_put(top.VQ_CLK, 0); vq_put(top.VQ_RST, 0); top.step();
+#endif
     }
     void set_inputs(bool i_valid, uint64_t p, bool ready) {
         auto &top = whole.top;
