@@ -22,13 +22,12 @@ format or layout is supported (else 2 and 0).
 
 from __future__ import annotations
 
-import math
 import tomllib
 from dataclasses import MISSING, asdict, dataclass, fields
 
 import numpy as np
 
-from .constants import (COLOR_CODES, COLORS, LAYOUT_CODES, LAYOUTS, MAX_LEVELS, PVR2_COLORS, WORD_BITS_ALLOWED)
+from .constants import (COLOR_CODES, COLORS, LAYOUTS, MAX_LEVELS, PVR2_COLORS, WORD_BITS_ALLOWED)
 
 __all__ = ["Geometry", "GeometryError", "PRESETS", "preset", "geometry_from", "BLOCK_SHAPES"]
 

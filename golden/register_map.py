@@ -277,7 +277,7 @@ def markdown(geometry: Geometry) -> str:
     """The register map as a Markdown document (what ``vqtex export --unit loadable`` writes)."""
     rmap = RegisterMap(geometry)
     ob = rmap.offset_bits
-    lines = [f"# vqtex loadable unit: register map", "",
+    lines = ["# vqtex loadable unit: register map", "",
              f"Geometry: {geometry.describe()}.", "",
              f"Wishbone B4 pipelined slave, 32-bit data, word addresses of {rmap.addr_bits} bits "
              f"(`adr = region << {ob} | offset`; a CPU's byte address is `4 * adr`). Out-of-range "

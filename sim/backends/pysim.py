@@ -18,7 +18,7 @@ from amaranth import Cat, Module, Signal
 from amaranth.sim import Simulator
 
 from vqtex.golden.format import TextureSet
-from vqtex.hw.texel_fetch import LATENCY, REGISTERS, TexelFetch
+from vqtex.hw.texel_fetch import REGISTERS, TexelFetch
 
 from .interface import SimResult
 from ..streams import pattern_length, ready_pattern

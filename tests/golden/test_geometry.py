@@ -31,7 +31,9 @@ def scene_set(name):
     return build_texture_set(load_scene(name))
 
 
+@functools.lru_cache(maxsize=None)
 def get_set(name):
+    """A test set by name: a CONFIGS name, ``combined``, ``pvr2:NAME`` or ``scene:NAME``."""
     if name == "combined":
         return combined_set()
     if name.startswith("pvr2:"):

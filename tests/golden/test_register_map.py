@@ -21,8 +21,9 @@ from vqtex.golden.constants import COLORS, LAYOUTS, MAX_LEVELS
 from vqtex.golden.geometry import BLOCK_SHAPES, PRESETS, Geometry, GeometryError
 from vqtex.golden.register_map import (CONTROL, DESCRIPTOR_WORDS, ID_VALUE, REGIONS, LoadError, RegisterMap,
                                        c_header, expected_reads, load_cycles, load_writes, mapped, markdown)
-from vqtex.golden.render.scene import build_texture_set, load_scene
-from tests.support import combined_set, need, pvr2_small_sets, texture_set
+from tests.support import need, texture_set
+
+from .test_geometry import get_set
 
 #: Region codes (the top three bits of a word address).
 CODES = {"control": 0, "descriptors": 1, "index": 2, "codebook": 3, "raw": 4}
@@ -56,15 +57,6 @@ def test_tables_as_documented():
 
 # -- the sets and the geometries they are loaded into ---------------------------------------------------
 
-@functools.lru_cache(maxsize=None)
-def get_set(name):
-    if name == "combined":
-        return combined_set()
-    if name.startswith("pvr2:"):
-        return pvr2_small_sets()[name[5:]]
-    if name.startswith("scene:"):
-        return build_texture_set(load_scene(name[6:]))
-    return texture_set(name)
 
 
 def wide(g):

@@ -10,7 +10,7 @@ from amaranth.sim import Simulator
 
 from vqtex.golden.fetch import fetch, random_requests
 from vqtex.golden.geometry import Geometry
-from vqtex.golden.register_map import (CONTROL, REGIONS, RegisterMap, expected_reads, load_cycles, load_writes,
+from vqtex.golden.register_map import (CONTROL, RegisterMap, expected_reads, load_cycles, load_writes,
                                        mapped)
 from vqtex.hw.bus_port import READ_LATENCY
 from vqtex.hw.texel_fetch import LATENCY, TexelFetch
@@ -153,7 +153,6 @@ def test_drain_rule():
     ts = texture_set("rgb_4x4_b8_mip")
     g = _geometry(ts)
     rmap = RegisterMap(g)
-    d = ts.descriptors[0, 0]
     # texel (0, 0) of level 0 reads codeword index[0]: find it, and rewrite that entry's first word
     req = np.array([[0, 0, 0, 0]] * 6, np.int64)
     old = fetch(ts, req[:, 0], req[:, 1], req[:, 2], req[:, 3])
@@ -173,7 +172,6 @@ def test_drain_rule():
     log = {"accepted_during_cyc": [], "responses": [], "write_accepted": None}
 
     async def bench(ctx):
-        layout = dut.i.payload.shape()
         ctx.set(dut.o.ready, 0)
         # three requests enter, the output is stalled
         for n in range(3):

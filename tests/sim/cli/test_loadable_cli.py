@@ -6,7 +6,6 @@ what does not fit is refused in one line."""
 from __future__ import annotations
 
 import json
-import shutil
 import subprocess
 
 import numpy as np
@@ -19,7 +18,7 @@ from vqtex.golden.geometry import PRESETS, Geometry
 from vqtex.golden.register_map import load_cycles, load_writes
 from vqtex.sim.backends.toolchain import using_cache
 
-from .test_pvr2_cli import ARGB, YUV_MIP
+from .test_pvr2_cli import crates_scene
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -102,35 +101,9 @@ def test_render_topspin_town_and_dt_one_build(tmp_path, capsys):
     """One CXXRTL build of the dreamcast geometry renders topspin, then town, then a scene of .dt
     textures, every frame identical to golden; the cache holds that one build."""
     need("g++")
-    for p in (YUV_MIP, ARGB):
-        shutil.copy(p, tmp_path / p.name)
-    (tmp_path / "dt.toml").write_text(f"""
-[scene]
-name = "crates"
-frames = 1
-size = [48, 48]
-[camera]
-position = [0.0, 1.2, 3.0]
-target = [0.0, 0.0, 0.0]
-fov = 45
-[[texture]]
-name = "crate"
-file = "{YUV_MIP.name}"
-[[texture]]
-name = "floor"
-file = "{ARGB.name}"
-[[mesh]]
-name = "box"
-shape = "box"
-texture = "crate"
-[[mesh]]
-name = "floor"
-shape = "plane"
-texture = "floor"
-translate = [0.0, -0.6, 0.0]
-""")
+    scene = crates_scene(tmp_path)
     with using_cache(str(tmp_path / "cache")):
-        for scene in ("topspin", "town", tmp_path / "dt.toml"):
+        for scene in ("topspin", "town", scene):
             code, out, err = run_cli(capsys, "render", scene, "--frames", "0", "-o", tmp_path / "f.png",
                                      "--backend", "cxxrtl", "--unit", "loadable", "--geometry", "dreamcast",
                                      "--stall", "0.1", "--json")

@@ -73,11 +73,11 @@ def test_export_a_dt_lint_clean(capsys, tmp_path):
     assert json.loads(text)["lint"] == "clean" and "module texel_fetch" in out.read_text()
 
 
-def test_render_a_scene_naming_dt_textures(capsys, tmp_path):
-    need("g++")
+def crates_scene(folder):
+    """A scene of two pvrtex .dt textures (a crate on a floor) written into ``folder``; its path."""
     for p in (YUV_MIP, ARGB):
-        shutil.copy(p, tmp_path / p.name)
-    (tmp_path / "crates.toml").write_text(f'''
+        shutil.copy(p, folder / p.name)
+    (folder / "crates.toml").write_text(f'''
 [scene]
 name = "crates"
 frames = 1
@@ -102,6 +102,12 @@ shape = "plane"
 texture = "floor"
 translate = [0.0, -0.6, 0.0]
 ''')
+    return folder / "crates.toml"
+
+
+def test_render_a_scene_naming_dt_textures(capsys, tmp_path):
+    need("g++")
+    crates_scene(tmp_path)
     code, text, err = _run(capsys, "render", tmp_path / "crates.toml", "-o", tmp_path / "f.png", "--backend", "cxxrtl",
                            "--json")
     assert code == 0, err
