@@ -33,7 +33,7 @@ from vqtex.golden import filter as spec
 from vqtex.golden.fetch import fetch
 from vqtex.golden.format import TextureSet
 
-from .design import FIELDS, FilterTop, filter_design_info
+from .design import FIELDS, FilterTop, filter_design_info     # (FilterTop: re-exported, its home is design.py)
 
 __all__ = ["FilterResult", "simulate_filter", "golden_colors", "check_pixels", "FIELDS", "FILTER_BACKENDS",
            "FilterTop", "texel_slots", "run_pysim", "run_compiled", "TAG_WIDTH"]
