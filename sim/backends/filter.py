@@ -10,11 +10,13 @@ Backends
     :func:`golden.filter.footprint`, the texels from :func:`golden.fetch.fetch`,
     :func:`golden.filter.blend`; no cycles.
 ``pysim``
-    Amaranth's simulator running ``TextureFilter`` (:mod:`sim.backends.filter_pysim`): tiny cases.
-``cxxrtl``
-    The compiled model (:mod:`sim.backends.filter_cxxrtl`).
-``verilator``
-    The exported Verilog under Verilator (:mod:`sim.backends.filter_verilator`).
+    Amaranth's simulator running ``TextureFilter`` (:func:`run_pysim`, through the texel-fetch
+    unit's testbench :func:`sim.backends.pysim.run_stream`): tiny cases.
+``cxxrtl``, ``verilator``
+    The compiled model, or the exported Verilog under Verilator (:func:`run_compiled`), built and run
+    by the texel-fetch unit's backends from the filter's description
+    (:func:`sim.backends.design.filter_design_info`): :func:`sim.backends.cxxrtl.build_design`,
+    :func:`sim.backends.verilator.build_design`, :class:`sim.backends.cxxrtl.BatchLibrary`.
 
 Every RTL backend presents the requests back to back from cycle 0, drives ``o.ready`` from
 :func:`sim.streams.ready_pattern` and counts cycles up to and including the cycle the last colour
@@ -23,25 +25,22 @@ transfers; it checks every response's tag (in order, none lost or duplicated).
 
 from __future__ import annotations
 
-import importlib
 from dataclasses import dataclass
 
 import numpy as np
-
-from amaranth import Module
-from amaranth.lib import wiring
-from amaranth.lib.wiring import In, Out
 
 from vqtex.golden import filter as spec
 from vqtex.golden.fetch import fetch
 from vqtex.golden.format import TextureSet
 
-__all__ = ["FilterResult", "simulate_filter", "golden_colors", "check_pixels", "FIELDS", "FILTER_BACKENDS",
-           "FilterTop", "texel_slots"]
+from .design import FIELDS, FilterTop, filter_design_info     # (FilterTop: re-exported, its home is design.py)
 
-#: The per-pixel input fields, in the order of the filter request.
-FIELDS = ("texture", "s", "t", "lod", "mode", "address_s", "address_t")
+__all__ = ["FilterResult", "simulate_filter", "golden_colors", "check_pixels", "FIELDS", "FILTER_BACKENDS",
+           "FilterTop", "texel_slots", "run_pysim", "run_compiled", "TAG_WIDTH"]
+
 FILTER_BACKENDS = ("golden", "pysim", "cxxrtl", "verilator")
+#: Tag width of the simulated filter: pixel n carries tag ``n mod 2**TAG_WIDTH``.
+TAG_WIDTH = 16
 #: Pixels the golden backend filters at a time (bounded temporaries).
 GOLDEN_CHUNK = 1 << 16
 
@@ -165,8 +164,9 @@ def simulate_filter(ts: TextureSet, pixels: dict, *, backend: str = "golden", la
                             golden_conflicts(ts, p, frac, lanes) if index_banks == "parity" else 0)
     if backend not in FILTER_BACKENDS:
         raise ValueError(f"unknown filter backend {backend!r} (known: {', '.join(FILTER_BACKENDS)})")
-    module = importlib.import_module(f"vqtex.sim.backends.filter_{backend}")
-    return module.run(ts, p, lanes=lanes, frac=frac, stall=stall, seed=seed, index_banks=index_banks)
+    if backend == "pysim":
+        return run_pysim(ts, p, lanes=lanes, frac=frac, stall=stall, seed=seed, index_banks=index_banks)
+    return run_compiled(backend, ts, p, lanes=lanes, frac=frac, stall=stall, seed=seed, index_banks=index_banks)
 
 
 def golden_conflicts(ts: TextureSet, pixels: dict, frac: int, lanes: int) -> int:
@@ -185,45 +185,60 @@ def texel_slots(mode: np.ndarray, lanes: int) -> int:
     return int((-(-used // lanes) * lanes).sum())
 
 
-class FilterTop(wiring.Component):
-    """``hw.filter.TextureFilter`` with one port per stream member (``i_valid``, ``i_ready``,
-    ``i_payload``, ``o_valid``, ``o_ready``, ``o_payload``) and its strobes, for synthesis
-    (:mod:`sim.reports.synth`'s harness) and Verilog.
+def _result(info, pixels: dict, lanes: int, rgba, cycles: int, strobes: dict) -> FilterResult:
+    return FilterResult(rgba, cycles, len(rgba), texel_slots(pixels["mode"], lanes), lanes, info.latency,
+                        {"output_backpressure": strobes["stall_output"], "input_wait": strobes["busy"]},
+                        strobes["bank_conflict"])
 
-    Arguments
-    ---------
-    texture_set : TextureSet
-    lanes, tag_width, frac, index_banks
-        As for :class:`hw.filter.TextureFilter`.
+
+def run_pysim(ts, pixels: dict, *, lanes: int = 1, frac: int | None = None, stall: float = 0.0, seed: int = 0,
+              bank_depth: int | None = None, vcd: str | None = None, index_banks: str = "parity") -> FilterResult:
+    """Filter ``pixels`` (checked int64 arrays, :func:`check_pixels`) on ``TextureFilter(ts, lanes=lanes,
+    frac=frac)`` in Amaranth's simulator (about 2e3 cycles per second; a trilinear pixel on one lane
+    is 8 cycles): the texel-fetch unit's testbench, :func:`sim.backends.pysim.run_stream`.
+    ``VQTEX_VCD=path.vcd`` writes a waveform.
+
+    Raises
+    ------
+    sim.backends.pysim.SimulationError
+        If a response's tag is not the next expected one.
     """
+    from vqtex.hw.filter import TextureFilter
 
-    def __init__(self, texture_set, *, lanes: int = 1, tag_width: int = 8, frac: int | None = None,
-                 index_banks: str = "parity"):
-        from vqtex.hw.filter import TextureFilter
-        self._filter = TextureFilter(texture_set, lanes=lanes, tag_width=tag_width, frac=frac,
-                                     index_banks=index_banks)
-        f = self._filter
-        self._strobes = [n for n in f.signature.members if n not in ("i", "o")]    # stall_output, busy, ...
-        super().__init__({
-            "i_valid": In(1), "i_ready": Out(1), "i_payload": In(len(f.i.p.as_value())),
-            "o_valid": Out(1), "o_ready": In(1), "o_payload": Out(len(f.o.p.as_value())),
-            **{n: Out(len(getattr(f, n))) for n in self._strobes},
-        })
+    from .pysim import run_stream
+    unit = {} if bank_depth is None else {"bank_depth": bank_depth}
+    dut = TextureFilter(ts, lanes=lanes, tag_width=TAG_WIDTH, frac=frac, index_banks=index_banks, **unit)
+    rows = np.stack([np.asarray(pixels[f], np.int64) for f in FIELDS], 1)
+    ph, = run_stream(dut, [(None, rows)], columns=FIELDS, tag_width=TAG_WIDTH,
+                     strobes=[n for n in dut.signature.members if n not in ("i", "o")], valid=dut.o.valid,
+                     stall=stall, seed=seed, vcd=vcd, name="filter")
+    return _result(dut, pixels, lanes, ph["responses"], ph["cycles"], ph["strobes"])
 
-    @property
-    def filter(self):
-        return self._filter
 
-    @property
-    def latency(self) -> int:
-        return self._filter.latency
-
-    def elaborate(self, platform):
-        m = Module()
-        m.submodules.filter = f = self._filter
-        m.d.comb += [
-            f.i.valid.eq(self.i_valid), self.i_ready.eq(f.i.ready), f.i.p.eq(self.i_payload),
-            self.o_valid.eq(f.o.valid), f.o.ready.eq(self.o_ready), self.o_payload.eq(f.o.p),
-        ]
-        m.d.comb += [getattr(self, n).eq(getattr(f, n)) for n in self._strobes]
-        return m
+def run_compiled(backend: str, ts, pixels: dict, *, lanes: int = 1, frac: int | None = None, stall: float = 0.0,
+                 seed: int = 0, index_banks: str = "parity") -> FilterResult:
+    """Filter ``pixels`` (checked int64 arrays) on a compiled backend (``cxxrtl``, ``verilator``): the
+    filter's description (:func:`sim.backends.design.filter_design_info`) built by that backend's
+    ``build_design``, as the texel-fetch unit is, and run by :func:`sim.backends.cxxrtl.run_checked`."""
+    from . import cxxrtl
+    info = filter_design_info(ts, lanes=lanes, frac=frac, tag_width=TAG_WIDTH, index_banks=index_banks)
+    n = len(pixels["texture"])
+    if n == 0:
+        return _result(info, pixels, lanes, np.zeros((0, 4), np.uint8), 0, dict.fromkeys(info.strobes, 0))
+    if backend == "cxxrtl":
+        build = cxxrtl.build_design(info)
+    else:
+        from . import verilator
+        from .verilog import export_filter_verilog
+        build = verilator.build_design(info, lambda: export_filter_verilog(
+            ts, lanes=lanes, tag_width=TAG_WIDTH, frac=frac, index_banks=index_banks, name=info.verilog_name)[0])
+    lib, info, _ = cxxrtl.open_design(build)
+    try:
+        rows = np.stack([np.asarray(pixels[f], np.int64) for f in FIELDS], 1)
+        groups = int(texel_slots(pixels["mode"], lanes) // lanes)
+        rgba, counters = cxxrtl.run_checked(lib, rows, cxxrtl.batch_layout(info), n=n, transfers=groups,
+                                            latency=info.latency, worst=groups + info.latency + 64, stall=stall,
+                                            seed=seed, tag_width=TAG_WIDTH, what="colour")
+    finally:
+        lib.close()
+    return _result(info, pixels, lanes, rgba, int(counters[cxxrtl.C_CYCLES]), cxxrtl.strobe_sums(info, counters))

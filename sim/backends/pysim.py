@@ -1,9 +1,10 @@
 """The ``pysim`` backend: ``hw.texel_fetch.TexelFetch`` in Amaranth's own simulator.
 
-One async testbench drives the request stream back to back, drives ``o.ready`` from
-:func:`sim.streams.ready_pattern`, collects the responses, checks their tags (in order, none lost or
-duplicated) and counts cycles, stall strobes, straddles and per-stage valid bits, one loop iteration
-per clock cycle (cycle 0 is the first cycle the first request is presented).
+One async testbench (:func:`run_stream`, which runs the texture filter too: :mod:`sim.backends.filter`)
+drives the request stream back to back, drives ``o.ready`` from :func:`sim.streams.ready_pattern`,
+collects the responses, checks their tags (in order, none lost or duplicated) and counts cycles,
+the unit's strobes (stalls, straddles, ...) and per-stage valid bits, one loop iteration per clock
+cycle (cycle 0 is the first cycle the first request is presented).
 
 About 1e4 cycles per second: for unit tests and small traces. Set ``VQTEX_VCD=path.vcd`` to write a
 waveform (large memories make large files).
@@ -23,7 +24,7 @@ from vqtex.hw.texel_fetch import REGISTERS, TexelFetch
 from .interface import SimResult
 from ..streams import pattern_length, ready_pattern
 
-__all__ = ["run", "run_phases", "bus_transfers", "TAG_WIDTH"]
+__all__ = ["run", "run_phases", "run_stream", "pack_rows", "bus_transfers", "SimulationError", "TAG_WIDTH"]
 
 #: Tag width of the simulated unit: request n carries tag ``n mod 2**TAG_WIDTH``.
 TAG_WIDTH = 8
@@ -33,13 +34,16 @@ class SimulationError(RuntimeError):
     """The RTL broke the stream contract (a response out of order, lost or duplicated)."""
 
 
-def _pack_requests(dut: TexelFetch, req: np.ndarray) -> list:
-    layout = dut.i.payload.shape()
-    tags = np.arange(len(req), dtype=np.int64) & ((1 << TAG_WIDTH) - 1)
-    packed = np.zeros(len(req), dtype=object)
-    for col, name in enumerate(("texture", "level", "i", "j")):
-        packed += req[:, col].astype(object) << layout[name].offset
-    packed += tags.astype(object) << layout["tag"].offset
+def pack_rows(layout, columns, rows: np.ndarray, tag_width: int) -> list:
+    """The request payloads (Python ints) of ``rows`` ((n, len(columns)) int: one column per request
+    field named in ``columns``) in the request ``layout``; row n carries tag ``n mod 2**tag_width``."""
+    rows = np.asarray(rows, np.int64).reshape(-1, len(columns))
+    packed = np.zeros(len(rows), dtype=object)
+    for col, name in enumerate(columns):
+        f = layout[name]
+        packed += (rows[:, col] & ((1 << f.width) - 1)).astype(object) << f.offset
+    if tag_width:
+        packed += (np.arange(len(rows), dtype=np.int64) & ((1 << tag_width) - 1)).astype(object) << layout["tag"].offset
     return packed.tolist()
 
 
@@ -61,7 +65,7 @@ def run(ts: TextureSet, requests: np.ndarray, *, stall: float = 0.0, seed: int =
                           bank_depth=bank_depth)[0]
     unit = {} if bank_depth is None else {"bank_depth": bank_depth}
     dut = TexelFetch(ts, one_port=one_port, tag_width=TAG_WIDTH, specialise=specialise, **unit)
-    return _simulate(dut, [(None, requests)], stall=stall, seed=seed, vcd=vcd)[0]
+    return _texel_fetch(dut, [(None, requests)], stall=stall, seed=seed, vcd=vcd)[0]
 
 
 def run_phases(geometry, phases, *, stall: float = 0.0, seed: int = 0, one_port: bool = False,
@@ -75,7 +79,23 @@ def run_phases(geometry, phases, *, stall: float = 0.0, seed: int = 0, one_port:
     unit = {} if bank_depth is None else {"bank_depth": bank_depth}
     dut = TexelFetch(geometry=geometry, loadable=True, one_port=one_port, tag_width=TAG_WIDTH, **unit)
     program = [(None if ts is None else load_writes(ts, geometry), req) for ts, req in phases]
-    return _simulate(dut, program, stall=stall, seed=seed, vcd=vcd)
+    return _texel_fetch(dut, program, stall=stall, seed=seed, vcd=vcd)
+
+
+def _texel_fetch(dut: TexelFetch, program, *, stall: float, seed: int, vcd: str | None) -> list:
+    phases = run_stream(dut, [(w, np.asarray(r, dtype=np.int64).reshape(-1, 4)) for w, r in program],
+                        columns=("texture", "level", "i", "j"), tag_width=TAG_WIDTH,
+                        strobes=("stall_output", "stall_one_port", "straddle"), valid=dut.valid,
+                        stall=stall, seed=seed, vcd=vcd, name="texel_fetch")
+    out = []
+    for ph in phases:
+        cycles, st = ph["cycles"], ph["strobes"]
+        occupancy = ({name: float(c) / cycles for name, c in zip(REGISTERS, ph["occupancy"])} if cycles else None)
+        out.append(SimResult(
+            responses=ph["responses"], cycles=cycles, requests=len(ph["responses"]), latency=dut.latency,
+            stall_cycles={"output_backpressure": st["stall_output"], "one_port_straddle": st["stall_one_port"]},
+            straddles=st["straddle"], occupancy=occupancy, load_cycles=ph["load_cycles"]))
+    return out
 
 
 async def bus_transfers(ctx, bus, ops) -> tuple:
@@ -115,37 +135,46 @@ async def bus_transfers(ctx, bus, ops) -> tuple:
     return data, err, cycles + 1
 
 
-def _simulate(dut: TexelFetch, program, *, stall: float, seed: int, vcd: str | None) -> list:
-    """Run ``program`` (a list of (bus writes or None, requests)) on ``dut`` in one simulation."""
-    nstages = len(REGISTERS)
+def run_stream(dut, program, *, columns, tag_width: int, strobes, valid, stall: float, seed: int,
+               vcd: str | None = None, name: str = "dut") -> list:
+    """Run ``program`` on ``dut`` (a unit with ``i``/``o`` streams, ``i.payload`` holding the
+    request fields ``columns`` and the tag, ``o.payload`` r, g, b, a and the tag, the 1-bit
+    ``strobes`` as attributes, ``valid`` one bit per stage and, for bus phases, ``bus``) in one
+    simulation: for each ``(bus writes or None, rows)``, the writes by :func:`bus_transfers`, then
+    the request rows back to back. Returns a dict per phase: ``responses`` ((n, 4) uint8 RGBA),
+    ``cycles``, ``strobes`` (name -> cycles high), ``occupancy`` (per-stage valid-bit sums, or None
+    for no requests), ``load_cycles`` (None without writes)."""
+    nstages, nstrobes = len(valid), len(strobes)
     # Everything the testbench watches, gathered into one signal inside the simulated design so
     # that each cycle costs one signal read instead of an expression evaluation.
-    watched = Cat(dut.i.ready, dut.o.valid, dut.straddle, dut.stall_one_port,
-                  dut.valid, dut.o.payload.as_value())
+    watched = Cat(dut.i.ready, dut.o.valid, *(getattr(dut, n) for n in strobes), valid, dut.o.payload.as_value())
     observe = Signal(len(watched), name="observe")
     top = Module()
-    top.submodules.texel_fetch = dut
+    top.submodules[name] = dut
     top.d.comb += observe.eq(watched)
-    pshift = 4 + nstages
+    vshift = 2 + nstrobes
+    pshift = vshift + nstages
     stage_mask = (1 << nstages) - 1
     rlayout = dut.o.payload.shape()
-    fields = {name: rlayout[name].offset for name in ("r", "g", "b", "a", "tag")}
+    fields = {name: rlayout[name].offset for name in ("r", "g", "b", "a")}
+    tag_off, tag_mask = (rlayout["tag"].offset if tag_width else 0), (1 << tag_width) - 1
     i_payload, i_valid, o_ready = dut.i.payload.as_value(), dut.i.valid, dut.o.ready
+    ilayout = dut.i.payload.shape()
     results = []
 
     async def requests_phase(ctx, req):
         n = len(req)
         out = np.zeros((n, 4), np.uint8)
         if n == 0:
-            return out, {"cycles": 0, "backpressure": 0, "one_port": 0, "straddles": 0, "occupancy": None}
-        packed = _pack_requests(dut, req)
+            return out, {"cycles": 0, "strobes": dict.fromkeys(strobes, 0), "occupancy": None}
+        packed = pack_rows(ilayout, columns, req, tag_width)
         ready = ready_pattern(seed, stall, pattern_length(n, stall, 2 * dut.latency))
         ready_list = ready.tolist()
         n_in = n_out = cycle = 0
         shown = -1               # request currently on i.payload
         last_ready = None
         occ = [0] * nstages
-        backpressure = one_port_stalls = straddles = 0
+        sums = [0] * nstrobes
         while n_out < n:
             if n_in != shown:
                 if n_in < n:
@@ -161,22 +190,18 @@ def _simulate(dut: TexelFetch, program, *, stall: float, seed: int, vcd: str | N
                 ctx.set(o_ready, r)
                 last_ready = r
             v = ctx.get(observe)
-            if v & 2:
-                if r:
-                    p = v >> pshift
-                    tag = (p >> fields["tag"]) & ((1 << TAG_WIDTH) - 1)
-                    if tag != n_out & ((1 << TAG_WIDTH) - 1):
-                        raise SimulationError(f"cycle {cycle}: response tag {tag}, expected "
-                                              f"{n_out & ((1 << TAG_WIDTH) - 1)} (response {n_out})")
-                    out[n_out] = [(p >> fields[c]) & 0xFF for c in "rgba"]
-                    n_out += 1
-                else:
-                    backpressure += 1
-            if v & 4:
-                straddles += 1
-            if v & 8:
-                one_port_stalls += 1
-            valids = (v >> 4) & stage_mask
+            if v & 2 and r:
+                p = v >> pshift
+                tag = (p >> tag_off) & tag_mask
+                if tag != n_out & tag_mask:
+                    raise SimulationError(f"cycle {cycle}: response tag {tag}, expected "
+                                          f"{n_out & tag_mask} (response {n_out})")
+                out[n_out] = [(p >> fields[c]) & 0xFF for c in "rgba"]
+                n_out += 1
+            if v >> 2 & ((1 << nstrobes) - 1):
+                for k in range(nstrobes):
+                    sums[k] += v >> (2 + k) & 1
+            valids = (v >> vshift) & stage_mask
             if valids:
                 for s in range(nstages):
                     if valids >> s & 1:
@@ -187,8 +212,7 @@ def _simulate(dut: TexelFetch, program, *, stall: float, seed: int, vcd: str | N
             await ctx.tick()
         ctx.set(i_valid, 0)
         ctx.set(o_ready, 0)
-        return out, {"cycles": cycle, "backpressure": backpressure, "one_port": one_port_stalls,
-                     "straddles": straddles, "occupancy": np.array(occ)}
+        return out, {"cycles": cycle, "strobes": dict(zip(strobes, sums)), "occupancy": np.array(occ)}
 
     async def bench(ctx):
         for writes, requests in program:
@@ -198,15 +222,8 @@ def _simulate(dut: TexelFetch, program, *, stall: float, seed: int, vcd: str | N
                 _, err, load_cycles = await bus_transfers(ctx, dut.bus, ops)
                 if any(err):
                     raise SimulationError(f"bus write {err.index(True)} of the load answered with err")
-            req = np.asarray(requests, dtype=np.int64).reshape(-1, 4)
-            out, stats = await requests_phase(ctx, req)
-            cycles = stats["cycles"]
-            occupancy = ({name: float(c) / cycles for name, c in zip(REGISTERS, stats["occupancy"])}
-                         if cycles else None)
-            results.append(SimResult(
-                responses=out, cycles=cycles, requests=len(req), latency=dut.latency,
-                stall_cycles={"output_backpressure": stats["backpressure"], "one_port_straddle": stats["one_port"]},
-                straddles=stats["straddles"], occupancy=occupancy, load_cycles=load_cycles))
+            out, stats = await requests_phase(ctx, np.asarray(requests, dtype=np.int64).reshape(-1, len(columns)))
+            results.append({"responses": out, "load_cycles": load_cycles, **stats})
 
     sim = Simulator(top)
     sim.add_clock(1e-6)

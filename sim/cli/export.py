@@ -147,7 +147,7 @@ def _export(args, out):
         raise ExportError("--filter-lanes exports the baked texture filter; --unit loadable is the texel-fetch unit")
     ports = {}
     if args.filter_lanes is not None:
-        from vqtex.sim.backends.filter_verilator import export_filter_verilog
+        from vqtex.sim.backends.verilog import export_filter_verilog
         text, top = export_filter_verilog(ts, lanes=args.filter_lanes, tag_width=args.tag_width, name=args.name,
                                           index_banks=args.index_banks)
         ports.update({n: len(getattr(top, n)) for n in top.signature.members})

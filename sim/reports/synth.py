@@ -188,7 +188,7 @@ def town_texture_set():
 
 class Harness(wiring.Component):
     """:class:`sim.backends.verilog.TexelFetchTop` (or ``unit``, any component with plain ports, such
-    as :class:`sim.backends.filter.FilterTop`) with a flip-flop on every port (see the module
+    as :class:`sim.backends.design.FilterTop`) with a flip-flop on every port (see the module
     docstring). The unit is the submodule ``unit``; the harness has the same ports."""
 
     def __init__(self, texture_set, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True,
@@ -568,7 +568,7 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
     progress("elaborating the unit (Amaranth to RTLIL)")
     unit = None
     if filter_lanes is not None:
-        from vqtex.sim.backends.filter import FilterTop
+        from vqtex.sim.backends.design import FilterTop
         unit = FilterTop(ts, lanes=filter_lanes, tag_width=tag_width, index_banks=index_banks)
     harness = Harness(ts, one_port=one_port, tag_width=tag_width, specialise=specialise, unit=unit, geometry=geometry)
     from amaranth.back import rtlil

@@ -126,8 +126,8 @@ def test_filter_with_more_fractional_bits_and_small_banks():
     px = edge_pixels(table, frac, 30, 5)
     res = simulate_filter(ts, px, backend="pysim", lanes=2, frac=frac)
     assert (res.colors == golden_colors(ts, px, frac)).all()
-    from vqtex.sim.backends import filter_pysim
-    small = filter_pysim.run(ts, px, lanes=1, frac=frac, bank_depth=8, stall=0.2, seed=3)
+    from vqtex.sim.backends.filter import run_pysim
+    small = run_pysim(ts, px, lanes=1, frac=frac, bank_depth=8, stall=0.2, seed=3)
     assert (small.colors == res.colors).all()
 
 

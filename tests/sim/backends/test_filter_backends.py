@@ -57,3 +57,32 @@ def test_verilator_filter_equals_cxxrtl():
     c = simulate_filter(ts, px, backend="cxxrtl", lanes=2, stall=0.3, seed=2)
     assert (v.colors == golden_colors(ts, px, frac)).all()
     assert (v.colors == c.colors).all() and (v.cycles, v.stall_cycles) == (c.cycles, c.stall_cycles)
+
+
+def test_filter_library_runs_again_and_describes_the_filter():
+    """The filter is one model on the unit's CXXRTL driver (VQ_WHOLE, no bus): its ports.h asks for
+    several payload words and its own strobes, and one library handle runs stream after stream
+    (vq_run's reset is the rst input; the memories stay loaded), each equal to golden."""
+    need("g++")
+    from vqtex.sim.backends import cxxrtl
+    from vqtex.sim.backends.design import FIELDS, filter_design_info
+    from vqtex.sim.backends.filter import TAG_WIDTH
+    ts, frac, px = _pixels(600, 7)
+    info = filter_design_info(ts, lanes=2, frac=frac, tag_width=TAG_WIDTH)
+    header = cxxrtl.ports_header(info)
+    assert f"#define VQ_REQUEST_FIELDS {len(FIELDS)}" in header and info.payload_words > 1
+    assert f"#define VQ_PAYLOAD_WORDS {info.payload_words}" in header
+    assert info.strobes == ["stall_output", "busy", "bank_conflict"] and not info.halves and not info.bus
+    lib, info, _ = cxxrtl.open_design(cxxrtl.build_design(info))
+    try:
+        assert lib.strobes == info.strobes and lib.request_fields == len(FIELDS)
+        rows = np.stack([px[f] for f in FIELDS], 1)
+        want = golden_colors(ts, px, frac)
+        for stall in (0.0, 0.4, 0.0):
+            rgba, counters = cxxrtl.run_checked(lib, rows, cxxrtl.batch_layout(info), n=len(rows), transfers=8 * len(rows),
+                                                latency=info.latency, worst=8 * len(rows) + 64, stall=stall, seed=1,
+                                                tag_width=TAG_WIDTH, what="colour")
+            assert (rgba == want).all()
+            assert (cxxrtl.strobe_sums(info, counters)["stall_output"] > 0) == (stall > 0)
+    finally:
+        lib.close()

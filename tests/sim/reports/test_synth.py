@@ -264,7 +264,7 @@ def test_report_area_tiny(tmp_path, capsys, monkeypatch):
 # the texture filter in the harness (no tools: the design the tools would get)
 
 def test_filter_harness_and_memories():
-    from vqtex.sim.backends.filter import FilterTop
+    from vqtex.sim.backends.design import FilterTop
     ts = synth.tiny_texture_set()
     top = FilterTop(ts, lanes=2)
     harness = synth.Harness(ts, unit=top)
