@@ -71,6 +71,12 @@ class BankedROM(wiring.Component):
     bank_depth : int
         Words per bank, a power of two (default ``BANK_DEPTH`` = 512; tests use small banks to
         exercise the bank select with small memories).
+    depth : int, optional
+        Words of the memory (default ``len(init)``; more: the rest start as zero).
+    load : hw.bus_port.LoadTarget, optional
+        Loadable: where the memory sits in the register map; each bank gets a write port and
+        shares its read port with the bus's reads (:func:`hw.bus_port.attach_memory`), and a bank
+        wider than 32 bits is padded to whole bus words.
 
     Members
     -------
@@ -84,6 +90,8 @@ class BankedROM(wiring.Component):
         ``addr // bank_depth``, registered twice (beside ``data``; constant 0 for a single bank).
     word : Out(width)
         Combinational: ``data[bank]``, the word at ``addr``.
+    load : In(load.layout), load_data : Out(32)
+        Only when loadable: the bus port's load command, and this memory's read answer.
 
     Raises
     ------
