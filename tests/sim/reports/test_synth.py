@@ -12,7 +12,7 @@ import json
 import pytest
 
 from vqtex.sim.reports import synth
-from tests.support import need_synth_tools as _need_tools, run_cli as _run
+from tests.support import builtin_set, need_synth_tools as _need_tools, run_cli as _run
 
 
 # ---------------------------------------------------------------------------------------------
@@ -265,7 +265,7 @@ def test_report_area_tiny(tmp_path, capsys, monkeypatch):
 
 def test_filter_harness_and_memories():
     from vqtex.sim.backends.design import FilterTop
-    ts = synth.tiny_texture_set()
+    ts = builtin_set("tiny")
     top = FilterTop(ts, lanes=2)
     harness = synth.Harness(ts, unit=top)
     assert harness.port_bits == sum(len(getattr(top, n)) for n in top.signature.members)
