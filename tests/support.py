@@ -57,8 +57,8 @@ def builtin_set(name: str) -> TextureSet:
     """The built-in texture set ``name`` of ``vqtex report area --builtin NAME`` (``tiny``, ``four``,
     ...), encoded once per test run: tests take it from here, not from the product's modules."""
     from vqtex.sim.cli.report import BUILTINS
-    from vqtex.sim.reports import synth
-    return getattr(synth, BUILTINS[name][0])()
+    from vqtex.sim.reports.synth import texture_sets
+    return getattr(texture_sets, BUILTINS[name][0])()
 
 
 @contextlib.contextmanager

@@ -12,6 +12,7 @@ import json
 import pytest
 
 from vqtex.sim.reports import synth
+from vqtex.sim.reports.synth import tools
 from tests.support import builtin_set, need_synth_tools as _need_tools, run_cli as _run
 
 
@@ -151,7 +152,7 @@ def test_parse_nextpnr_log():
 
 
 def test_run_nextpnr_reads_report_or_falls_back_to_log(monkeypatch, tmp_path):
-    monkeypatch.setattr(synth, "_run", lambda *a, **k: ("", 1.5))        # the tool "ran"
+    monkeypatch.setattr(tools, "_run", lambda *a, **k: ("", 1.5))        # the tool "ran"
     (tmp_path / "nextpnr.log").write_text(LOG_SAMPLE)
     rep = synth.run_nextpnr(str(tmp_path))                               # no report.json: the log
     assert rep["fmax_mhz"] == 87.28 and rep["seconds"] == 1.5
@@ -209,7 +210,7 @@ def test_missing_tools_one_line_naming_the_extra(monkeypatch, capsys):
 
 
 def test_missing_tool_in_run_is_synth_error(monkeypatch, tmp_path):
-    monkeypatch.setattr(synth, "_find_spec", lambda name: None)
+    monkeypatch.setattr(tools, "_find_spec", lambda name: None)
     with pytest.raises(synth.SynthError, match=r"pip install '\.\[synth\]'"):
         synth.run_yosys("", str(tmp_path))
 
