@@ -31,6 +31,11 @@ class Harness(wiring.Component):
         """Flip-flops the harness adds (one per port bit)."""
         return sum(len(getattr(self, n)) for n in self.signature.members)
 
+    def rtlil(self) -> str:
+        """The harness as RTLIL: top module ``vqtex_harness``, the unit ``vqtex_harness.unit``."""
+        from amaranth.back import rtlil
+        return rtlil.convert(self, name=HARNESS_NAME, emit_src=False)
+
     def elaborate(self, platform):
         m = Module()
         m.submodules.unit = u = self.unit
@@ -44,9 +49,7 @@ class Harness(wiring.Component):
 
 def design_rtlil(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True) -> str:
     """RTLIL of :class:`Harness` for ``ts`` (top module ``vqtex_harness``, unit ``vqtex_harness.unit``)."""
-    from amaranth.back import rtlil
-    return rtlil.convert(Harness(ts, one_port=one_port, tag_width=tag_width, specialise=specialise),
-                         name=HARNESS_NAME, emit_src=False)
+    return Harness(ts, one_port=one_port, tag_width=tag_width, specialise=specialise).rtlil()
 
 
 def design_memories(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True,

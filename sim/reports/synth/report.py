@@ -46,8 +46,7 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
         from vqtex.sim.backends.design import FilterTop
         unit = FilterTop(ts, lanes=filter_lanes, tag_width=tag_width, index_banks=index_banks)
     harness = Harness(ts, one_port=one_port, tag_width=tag_width, specialise=specialise, unit=unit, geometry=geometry)
-    from amaranth.back import rtlil
-    il = rtlil.convert(harness, name=HARNESS_NAME, emit_src=False)
+    il = harness.rtlil()
     t_rtlil = time.perf_counter() - t0
     shapes = design_memories(ts, one_port=one_port, tag_width=tag_width, specialise=specialise,
                              filter_lanes=filter_lanes, index_banks=index_banks, geometry=geometry)

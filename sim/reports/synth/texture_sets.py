@@ -87,8 +87,8 @@ def _bundled_encode(names, size, **kw):
 
 
 def tiny_texture_set(seed: int = 0):
-    """A small set for tests: two mipmapped 32x32 textures (rgb 4x4 K=16 8-bit indices, yuv411 4x4
-    K=16 12-bit indices), generated in code."""
+    """The small set (``--builtin tiny``; the tests' synthesis run): two mipmapped 32x32 textures
+    (rgb 4x4 K=16 8-bit indices, yuv411 4x4 K=16 12-bit indices), generated in code."""
     import numpy as np
 
     from vqtex.golden.encode import encode

@@ -270,8 +270,7 @@ def test_filter_harness_and_memories():
     top = FilterTop(ts, lanes=2)
     harness = synth.Harness(ts, unit=top)
     assert harness.port_bits == sum(len(getattr(top, n)) for n in top.signature.members)
-    from amaranth.back import rtlil
-    il = rtlil.convert(harness, name=synth.HARNESS_NAME, emit_src=False)
+    il = harness.rtlil()
     assert "vqtex_harness.unit" in il
     unit = synth.design_memories(ts)
     # index_banks="lane": each lane holds the texel-fetch unit's memories, under filter.laneK
