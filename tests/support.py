@@ -23,7 +23,7 @@ from vqtex.hw.texel_fetch import LATENCY, REGISTERS
 from vqtex.sim.backends import simulate
 from vqtex.sim.backends.toolchain import using_cache
 
-__all__ = ["REPO", "need", "shared_cache", "need_synth_tools", "run_cli", "assert_one_error", "shared_cache_dir", "image", "CONFIGS", "texture_set", "combined_set", "texture_sets",
+__all__ = ["REPO", "need", "shared_cache", "need_synth_tools", "builtin_set", "run_cli", "assert_one_error", "shared_cache_dir", "image", "CONFIGS", "texture_set", "combined_set", "texture_sets",
            "levels", "random_requests", "random_dt", "adversarial_requests", "back_to_back_requests", "straddle_offsets",
            "assert_same", "compare_with_golden", "stream_put", "stream_get", "run_lockstep", "JFIF_BT601"]
 
@@ -50,6 +50,15 @@ def need_synth_tools():
         if os.environ.get("VQTEX_REQUIRE_TOOLS"):
             pytest.fail(msg)
         pytest.skip(msg)
+
+
+@functools.lru_cache(maxsize=None)
+def builtin_set(name: str) -> TextureSet:
+    """The built-in texture set ``name`` of ``vqtex report area --builtin NAME`` (``tiny``, ``four``,
+    ...), encoded once per test run: tests take it from here, not from the product's modules."""
+    from vqtex.sim.cli.report import BUILTINS
+    from vqtex.sim.reports.synth import texture_sets
+    return getattr(texture_sets, BUILTINS[name][0])()
 
 
 @contextlib.contextmanager

@@ -6,7 +6,7 @@ with the figure of :mod:`vqtex.sim.reports.plotting` when ``--plot`` is given.
 
 Synthesizes the texel-fetch unit holding a texture set's memories for a Lattice ECP5 (LFE5U-85F,
 speed grade 8) with Yosys, places and routes it with nextpnr, and reports LUTs, flip-flops, block
-RAMs, multipliers, Fmax and the critical path (see :mod:`sim.reports.synth` and docs/area.md). The tools are
+RAMs, multipliers, Fmax and the critical path (see the package :mod:`sim.reports.synth` and docs/area.md). The tools are
 the PyPI packages of the ``synth`` extra; without them the command fails with one line naming
 ``pip install '.[synth]'``.
 """
@@ -29,7 +29,7 @@ class ReportError(OSError):
     and exits 2)."""
 
 
-#: Built-in texture sets: name -> (function in sim.reports.synth, description).
+#: Built-in texture sets: name -> (function in sim.reports.synth.texture_sets, description).
 BUILTINS = {
     "four": ("four_texture_set", "four bundled images, 128x128 mipmapped: rgb 4x4 K=256 8-bit (x2, one shared "
                                  "codebook), yuv411 4x4 K=256 12-bit, rgb 2x2 K=1024 12-bit (docs/area.md)"),
@@ -45,6 +45,7 @@ BUILTINS = {
 
 def cmd_report_area(args) -> int:
     from vqtex.sim.reports import synth
+    from vqtex.sim.reports.synth import texture_sets
     sizeless = args.unit == "loadable" and args.geometry is not None   # a geometry alone names the unit
     if (args.file is not None and args.builtin is not None) or (args.file is None and args.builtin is None
                                                                    and not sizeless):
@@ -78,7 +79,7 @@ def cmd_report_area(args) -> int:
     elif ts is None:
         t0 = time.perf_counter()
         progress_line(f"report area: encoding the built-in set {args.builtin}")
-        ts = getattr(synth, BUILTINS[args.builtin][0])()
+        ts = getattr(texture_sets, BUILTINS[args.builtin][0])()
         t_set = round(time.perf_counter() - t0, 2)
         name = f"builtin {args.builtin}"
     geometry = unit_geometry(args, ts, name)

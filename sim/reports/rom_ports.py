@@ -34,7 +34,7 @@ def rom_cost(depth: int, width: int, ports: int, *, seed: int = 1) -> dict:
     from amaranth.lib import memory, wiring
     from amaranth.lib.wiring import In, Out
 
-    from .synth import run_yowasp
+    from .synth.tools import run_yowasp
 
     class Rom(wiring.Component):
         def __init__(self):

@@ -35,7 +35,7 @@ def color_figures(seed: int = 1) -> dict:
 
 
 def load_figures(n: int = 10_000_000, n_one_port: int = 1_000_000) -> dict:
-    from vqtex.sim.reports.synth import four_texture_set
+    from vqtex.sim.reports.synth.texture_sets import four_texture_set
     from .load import load_check
     return {"backpressure_30pct": load_check(n, stall=0.3, seed=5),
             "one_port_20pct": load_check(n_one_port, stall=0.2, one_port=True, seed=6, ts=four_texture_set())}

@@ -12,7 +12,8 @@ import json
 import pytest
 
 from vqtex.sim.reports import synth
-from tests.support import need_synth_tools as _need_tools, run_cli as _run
+from vqtex.sim.reports.synth import tools
+from tests.support import builtin_set, need_synth_tools as _need_tools, run_cli as _run
 
 
 # ---------------------------------------------------------------------------------------------
@@ -151,7 +152,7 @@ def test_parse_nextpnr_log():
 
 
 def test_run_nextpnr_reads_report_or_falls_back_to_log(monkeypatch, tmp_path):
-    monkeypatch.setattr(synth, "_run", lambda *a, **k: ("", 1.5))        # the tool "ran"
+    monkeypatch.setattr(tools, "_run", lambda *a, **k: ("", 1.5))        # the tool "ran"
     (tmp_path / "nextpnr.log").write_text(LOG_SAMPLE)
     rep = synth.run_nextpnr(str(tmp_path))                               # no report.json: the log
     assert rep["fmax_mhz"] == 87.28 and rep["seconds"] == 1.5
@@ -209,7 +210,7 @@ def test_missing_tools_one_line_naming_the_extra(monkeypatch, capsys):
 
 
 def test_missing_tool_in_run_is_synth_error(monkeypatch, tmp_path):
-    monkeypatch.setattr(synth, "_find_spec", lambda name: None)
+    monkeypatch.setattr(tools, "_find_spec", lambda name: None)
     with pytest.raises(synth.SynthError, match=r"pip install '\.\[synth\]'"):
         synth.run_yosys("", str(tmp_path))
 
@@ -265,12 +266,11 @@ def test_report_area_tiny(tmp_path, capsys, monkeypatch):
 
 def test_filter_harness_and_memories():
     from vqtex.sim.backends.design import FilterTop
-    ts = synth.tiny_texture_set()
+    ts = builtin_set("tiny")
     top = FilterTop(ts, lanes=2)
     harness = synth.Harness(ts, unit=top)
     assert harness.port_bits == sum(len(getattr(top, n)) for n in top.signature.members)
-    from amaranth.back import rtlil
-    il = rtlil.convert(harness, name=synth.HARNESS_NAME, emit_src=False)
+    il = harness.rtlil()
     assert "vqtex_harness.unit" in il
     unit = synth.design_memories(ts)
     # index_banks="lane": each lane holds the texel-fetch unit's memories, under filter.laneK

