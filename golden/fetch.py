@@ -23,7 +23,7 @@ import numpy as np
 from .format import COLOR_CODES, COLORS, LAYOUT_CODES, MAX_LEVELS, PVR2_COLORS, TextureSet, unpack_indices
 from .pvr2.pvr import decode_texels, decode_yuv422_blocks, twiddle_indices
 
-__all__ = ["fetch", "decode", "decode_bands", "DECODE_CHUNK_TEXELS", "random_requests", "lookup_descriptor", "block_address", "read_index", "read_codeword",
+__all__ = ["fetch", "decode", "decode_bands", "FETCH_CHUNK", "DECODE_CHUNK_TEXELS", "random_requests", "lookup_descriptor", "block_address", "read_index", "read_codeword",
            "convert_color", "straddles", "twiddled_block", "expand_texels", "RequestError", "check_requests"]
 
 
@@ -142,10 +142,10 @@ def read_index(ts: TextureSet, d: np.ndarray, k) -> np.ndarray:
     bit = np.asarray(k, dtype=np.int64) * b
     w = d["base"].astype(np.int64) + (bit // wb)
     off = (bit % wb).astype(np.uint64)
-    words = ts.index_words.astype(np.uint64)
+    words = ts.index_words
     last = len(words) - 1
-    lo = words[np.minimum(w, last)]
-    hi = words[np.minimum(w + 1, last)]
+    lo = words[np.minimum(w, last)].astype(np.uint64)      # the words read, not the whole memory, widened
+    hi = words[np.minimum(w + 1, last)].astype(np.uint64)
     if wb == 64:
         # 128-bit concatenation: shift the pair down by ``off`` in two halves.
         sh = off
@@ -224,12 +224,29 @@ def convert_color(ts: TextureSet, color, samples: np.ndarray) -> np.ndarray:
     return out
 
 
+#: Requests :func:`fetch` works on at a time: its temporaries are a few hundred bytes a request of
+#: the chunk (the codebook rows among them), whatever the number of requests.
+FETCH_CHUNK = 1 << 16
+
+
 def fetch(ts: TextureSet, tex, level, i, j) -> np.ndarray:
     """RGBA8888 texels, (N, 4) uint8, for requests (tex, level, i, j) (int arrays of equal length).
 
-    Requests must be valid (see :func:`check_requests`); the hardware does not check either.
+    Requests must be valid (see :func:`check_requests`); the hardware does not check either. Works in
+    chunks of :data:`FETCH_CHUNK` requests, so its memory is the requests, the texels and a bounded
+    working set.
     """
     tex, level, i, j = np.broadcast_arrays(*(np.asarray(a, dtype=np.int64).ravel() for a in (tex, level, i, j)))
+    if len(tex) <= FETCH_CHUNK:
+        return _fetch(ts, tex, level, i, j)
+    out = np.empty((len(tex), 4), np.uint8)
+    for a in range(0, len(tex), FETCH_CHUNK):
+        s = slice(a, a + FETCH_CHUNK)
+        out[s] = _fetch(ts, tex[s], level[s], i[s], j[s])
+    return out
+
+
+def _fetch(ts: TextureSet, tex, level, i, j) -> np.ndarray:
     d = lookup_descriptor(ts, tex, level)
     out = np.zeros((len(tex), 4), np.uint8)
     comp = d["compressed"].astype(bool)

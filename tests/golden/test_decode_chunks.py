@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from tests.support import CONFIGS, combined_set, levels, pvr2_small_sets, texture_set
+from vqtex.golden import fetch as fetch_module
 from vqtex.golden import format as fmt
 from vqtex.golden.fetch import decode, decode_bands, expand_texels, fetch, random_requests
 from vqtex.golden.format import COLOR_CODES, COLORS, LAYOUT_CODES, pack_indices, unpack_indices
@@ -159,3 +160,12 @@ def test_twiddle_band_is_a_slice_of_the_grid():
         full = twiddle_indices(gw, gh)
         for y0, y1 in ((0, gh), (1, gh), (0, 1), (gh // 2, gh)):
             assert np.array_equal(twiddle_indices(gw, gh, y0, y1), full[y0:y1])
+
+
+@pytest.mark.parametrize("name", ["combined", "pvr2 rectangles_and_mip8", "1x1 blocks 1-bit 256x256, 48-byte entries"])
+def test_fetch_in_chunks_equals_one_call(monkeypatch, name):
+    ts = SETS[name]()
+    req = random_requests(ts, 5000, seed=7)
+    whole = fetch(ts, *req.T)
+    monkeypatch.setattr(fetch_module, "FETCH_CHUNK", 333)        # many chunks, the last one short
+    assert np.array_equal(fetch(ts, *req.T), whole)
