@@ -23,7 +23,7 @@ import numpy as np
 from .format import COLOR_CODES, COLORS, LAYOUT_CODES, MAX_LEVELS, PVR2_COLORS, TextureSet, unpack_indices
 from .pvr2.pvr import decode_texels, decode_yuv422_blocks, twiddle_indices
 
-__all__ = ["fetch", "decode", "random_requests", "lookup_descriptor", "block_address", "read_index", "read_codeword",
+__all__ = ["fetch", "decode", "decode_bands", "FETCH_CHUNK", "DECODE_CHUNK_TEXELS", "random_requests", "lookup_descriptor", "block_address", "read_index", "read_codeword",
            "convert_color", "straddles", "twiddled_block", "expand_texels", "RequestError", "check_requests"]
 
 
@@ -142,10 +142,10 @@ def read_index(ts: TextureSet, d: np.ndarray, k) -> np.ndarray:
     bit = np.asarray(k, dtype=np.int64) * b
     w = d["base"].astype(np.int64) + (bit // wb)
     off = (bit % wb).astype(np.uint64)
-    words = ts.index_words.astype(np.uint64)
+    words = ts.index_words
     last = len(words) - 1
-    lo = words[np.minimum(w, last)]
-    hi = words[np.minimum(w + 1, last)]
+    lo = words[np.minimum(w, last)].astype(np.uint64)      # the words read, not the whole memory, widened
+    hi = words[np.minimum(w + 1, last)].astype(np.uint64)
     if wb == 64:
         # 128-bit concatenation: shift the pair down by ``off`` in two halves.
         sh = off
@@ -224,12 +224,29 @@ def convert_color(ts: TextureSet, color, samples: np.ndarray) -> np.ndarray:
     return out
 
 
+#: Requests :func:`fetch` works on at a time: its temporaries are a few hundred bytes a request of
+#: the chunk (the codebook rows among them), whatever the number of requests.
+FETCH_CHUNK = 1 << 16
+
+
 def fetch(ts: TextureSet, tex, level, i, j) -> np.ndarray:
     """RGBA8888 texels, (N, 4) uint8, for requests (tex, level, i, j) (int arrays of equal length).
 
-    Requests must be valid (see :func:`check_requests`); the hardware does not check either.
+    Requests must be valid (see :func:`check_requests`); the hardware does not check either. Works in
+    chunks of :data:`FETCH_CHUNK` requests, so its memory is the requests, the texels and a bounded
+    working set.
     """
     tex, level, i, j = np.broadcast_arrays(*(np.asarray(a, dtype=np.int64).ravel() for a in (tex, level, i, j)))
+    if len(tex) <= FETCH_CHUNK:
+        return _fetch(ts, tex, level, i, j)
+    out = np.empty((len(tex), 4), np.uint8)
+    for a in range(0, len(tex), FETCH_CHUNK):
+        s = slice(a, a + FETCH_CHUNK)
+        out[s] = _fetch(ts, tex[s], level[s], i[s], j[s])
+    return out
+
+
+def _fetch(ts: TextureSet, tex, level, i, j) -> np.ndarray:
     d = lookup_descriptor(ts, tex, level)
     out = np.zeros((len(tex), 4), np.uint8)
     comp = d["compressed"].astype(bool)
@@ -246,35 +263,78 @@ def fetch(ts: TextureSet, tex, level, i, j) -> np.ndarray:
     return out
 
 
+#: Texels :func:`decode` works on at a time (whole rows of blocks, at least one row of blocks): its
+#: temporaries are a few tens of bytes a texel of the chunk, whatever the level's size.
+DECODE_CHUNK_TEXELS = 1 << 16
+
+
 def decode(ts: TextureSet, tex: int, level: int = 0) -> np.ndarray:
     """A whole level as an (h, w, 4) uint8 RGBA image.
 
-    An independent path from :func:`fetch` (whole index maps unpacked, whole codewords tiled), so
-    that "fetch over every texel equals decode" checks the per-texel address arithmetic. In a pruned
-    set (``golden.need.prune``) a level it does not store raises :class:`RequestError` and the texels of
+    An independent path from :func:`fetch` (index maps unpacked, whole codewords tiled), so that
+    "fetch over every texel equals decode" checks the per-texel address arithmetic. In a pruned set
+    (``golden.need.prune``) a level it does not store raises :class:`RequestError` and the texels of
     blocks it does not store are (0, 0, 0, 0).
+
+    The level is decoded in bands of whole block rows (:func:`decode_bands`), so the memory it takes
+    is the picture and a bounded working set.
     """
+    d = _stored_level(ts, tex, level)
+    out = np.empty((1 << d["log2h"], 1 << d["log2w"], 4), np.uint8)
+    for j0, rows in decode_bands(ts, tex, level):
+        out[j0: j0 + len(rows)] = rows
+    return out
+
+
+def _stored_level(ts: TextureSet, tex: int, level: int) -> dict:
     d = ts.descriptor(tex, level)
     if not d["valid"]:
         if level < ts.textures[tex].levels:
             raise RequestError(f"texture {tex} level {level} was pruned from this texture set")
         raise RequestError(f"texture {tex} has no level {level}")
-    w, h = 1 << d["log2w"], 1 << d["log2h"]
-    if not d["compressed"]:
-        return ts.raw_words[d["base"]: d["base"] + w * h].astype("<u4").view(np.uint8).reshape(h, w, 4).copy()
-    bw, bh = 1 << d["log2bw"], 1 << d["log2bh"]
-    nbx, nby = w // bw, h // bh
-    idx = unpack_indices(ts.index_words, d["index_bits"], nbx * nby, d["base"], ts.word_bits)
-    entries = ts.codebook[d["cb_base"] + idx].astype(np.int64)
-    if d["layout"] == LAYOUT_CODES["pvr2"]:
-        out = _decode_pvr2(ts, d, idx, nbx, nby)
-        if ts.present_blocks is not None:             # a pruned set, as below; block numbers twiddled
-            k = twiddle_indices(nbx, nby).ravel()
-            gone = ~ts.block_present(np.full(k.shape, tex), np.full(k.shape, level), k).reshape(nby, nbx)
-            out[np.repeat(np.repeat(gone, bh, axis=0), bw, axis=1)] = 0
-        return out
+    return d
 
-    def tile(plane, pw, ph, c):       # (nblocks, ph*pw*c) -> (h, w, c), each sample covering (bh/ph, bw/pw)
+
+def decode_bands(ts: TextureSet, tex: int, level: int = 0, texels: int = DECODE_CHUNK_TEXELS):
+    """Yield ``(j0, rows)``: the level of :func:`decode`, top to bottom, as (n, w, 4) uint8 bands of
+    rows ``j0 .. j0 + n - 1``, each a whole number of block rows holding about ``texels`` texels
+    (at least one row of blocks). Raises :class:`RequestError` as :func:`decode` does, before the
+    first band."""
+    d = _stored_level(ts, tex, level)
+    w, h = 1 << d["log2w"], 1 << d["log2h"]
+    bh = 1 << d["log2bh"] if d["compressed"] else 1
+    step = max(bh, texels // w // bh * bh)
+    return _bands(ts, tex, level, d, w, h, step)
+
+
+def _bands(ts, tex, level, d, w, h, step):
+    pvr2 = d["compressed"] and d["layout"] == LAYOUT_CODES["pvr2"]
+    idx = _index_map(ts, d, w, h) if pvr2 else None
+    for j0 in range(0, h, step):
+        j1 = min(h, j0 + step)
+        if not d["compressed"]:
+            a = d["base"] + j0 * w
+            rows = ts.raw_words[a: a + (j1 - j0) * w].astype("<u4").view(np.uint8).reshape(j1 - j0, w, 4)
+        elif pvr2:
+            rows = _decode_pvr2(ts, tex, level, d, idx, w, h, j0, j1)
+        else:
+            rows = _decode_rows(ts, tex, level, d, w, j0, j1)
+        yield j0, rows
+
+
+def _decode_rows(ts: TextureSet, tex: int, level: int, d: dict, w: int, j0: int, j1: int) -> np.ndarray:
+    """Rows ``j0 .. j1 - 1`` (whole block rows) of a compressed level of the paper's layout: the
+    blocks' indices unpacked from their stretch of the row-major index map, the codewords' planes
+    (only the bytes this sub-level reads) tiled."""
+    bw, bh = 1 << d["log2bw"], 1 << d["log2bh"]
+    nbx, nby = w // bw, (j1 - j0) // bh
+    k0 = (j0 // bh) * nbx                            # the band's first block
+    idx = unpack_indices(ts.index_words, d["index_bits"], nbx * nby, d["base"], ts.word_bits, first=k0)
+    rows = d["cb_base"] + idx
+    h = j1 - j0
+
+    def tile(off, pw, ph, c):       # the plane of pw*ph samples of c bytes at ``off`` -> (h, w, c)
+        plane = ts.codebook[rows, off: off + pw * ph * c]
         a = plane.reshape(nby, nbx, ph, pw, c)
         a = np.repeat(np.repeat(a, bh // ph, axis=2), bw // pw, axis=3)
         return a.transpose(0, 2, 1, 3, 4).reshape(h, w, c)
@@ -284,30 +344,43 @@ def decode(ts: TextureSet, tex: int, level: int = 0) -> np.ndarray:
     t0 = d["texel_off"]
     if color == COLOR_CODES["yuv411"]:
         cw, ch = max(1, bw >> 1), max(1, bh >> 1)
-        y = tile(entries[:, t0: t0 + bw * bh], bw, bh, 1)
-        u = tile(entries[:, d["u_off"]: d["u_off"] + cw * ch], cw, ch, 1)
-        v = tile(entries[:, d["v_off"]: d["v_off"] + cw * ch], cw, ch, 1)
-        out[..., :3] = ts.matrix.apply(np.concatenate([y, u, v], axis=2))
+        yuv = np.concatenate([tile(t0, bw, bh, 1), tile(d["u_off"], cw, ch, 1), tile(d["v_off"], cw, ch, 1)], axis=2)
+        out[..., :3] = ts.matrix.apply(yuv)
     else:
         c = {COLOR_CODES["rgb"]: 3, COLOR_CODES["rgba"]: 4, COLOR_CODES["intensity"]: 1}[color]
-        out[..., :c] = tile(entries[:, t0: t0 + bw * bh * c], bw, bh, c)
+        out[..., :c] = tile(t0, bw, bh, c)
         if c == 1:
             out[..., 1] = out[..., 2] = out[..., 0]
     if color != COLOR_CODES["rgba"]:
         out[..., 3] = 255
     if ts.present_blocks is not None:                 # a pruned set: blocks it no longer holds are (0, 0, 0, 0)
-        k = np.arange(nbx * nby)
+        k = np.arange(k0, k0 + nbx * nby)
         gone = ~ts.block_present(np.full(k.shape, tex), np.full(k.shape, level), k).reshape(nby, nbx)
         out[np.repeat(np.repeat(gone, bh, axis=0), bw, axis=1)] = 0
     return out
 
 
-def _decode_pvr2(ts: TextureSet, d: dict, idx: np.ndarray, nbx: int, nby: int) -> np.ndarray:
-    """A PowerVR2 level decoded whole, as :mod:`golden.pvr2.pvr` decodes a ``.dt``: the twiddled index
-    map gathered into raster order, every block's 16-bit texels decoded at once (yuv422 pairs through
-    the set's colour matrix), the blocks tiled column by column."""
-    grid = idx[twiddle_indices(nbx, nby)]                        # (nby, nbx) entries, raster order
+def _index_map(ts: TextureSet, d: dict, w: int, h: int) -> np.ndarray:
+    """A PowerVR2 level's whole index map (8-bit indices, in twiddled order) as uint16."""
+    n = (w >> d["log2bw"]) * (h >> d["log2bh"])
+    out = np.empty(n, np.uint16)
+    step = DECODE_CHUNK_TEXELS
+    for a in range(0, n, step):
+        out[a: a + step] = unpack_indices(ts.index_words, d["index_bits"], min(step, n - a), d["base"],
+                                          ts.word_bits, first=a)
+    return out
+
+
+def _decode_pvr2(ts: TextureSet, tex: int, level: int, d: dict, idx: np.ndarray, w: int, h: int,
+                 j0: int, j1: int) -> np.ndarray:
+    """Rows ``j0 .. j1 - 1`` (whole block rows) of a PowerVR2 level, as :mod:`golden.pvr2.pvr` decodes
+    a ``.dt``: the band's twiddled block numbers gathered from the index map into raster order, its
+    blocks' 16-bit texels decoded at once (yuv422 pairs through the set's colour matrix), the blocks
+    tiled column by column. In a pruned set the blocks it does not store are (0, 0, 0, 0)."""
     bw, bh = 1 << d["log2bw"], 1 << d["log2bh"]
+    nbx, nby = w // bw, h // bh
+    k = twiddle_indices(nbx, nby, j0 // bh, j1 // bh)            # (band rows, nbx) block numbers
+    grid = idx[k].astype(np.int64)
     start = d["texel_off"]
     raw = ts.codebook[d["cb_base"] + grid.ravel(), start: start + 2 * bw * bh]
     texels = np.ascontiguousarray(raw).view("<u2").astype(np.int64)          # (n, bw*bh)
@@ -316,5 +389,11 @@ def _decode_pvr2(ts: TextureSet, d: dict, idx: np.ndarray, nbx: int, nby: int) -
         blocks = decode_yuv422_blocks(texels, matrix=ts.matrix)
     else:
         blocks = expand_texels(texels.ravel(), name).reshape(len(texels), bw * bh, 4)
-    tiles = blocks.reshape(nby, nbx, bw, bh, 4)                  # texel t = (x << log2bh) | y
-    return np.ascontiguousarray(tiles.transpose(0, 3, 1, 2, 4).reshape(nby * bh, nbx * bw, 4))
+    rows = len(k)
+    tiles = blocks.reshape(rows, nbx, bw, bh, 4)                 # texel t = (x << log2bh) | y
+    out = np.ascontiguousarray(tiles.transpose(0, 3, 1, 2, 4).reshape(rows * bh, nbx * bw, 4))
+    if ts.present_blocks is not None:             # a pruned set, as above; block numbers twiddled
+        kk = k.ravel()
+        gone = ~ts.block_present(np.full(kk.shape, tex), np.full(kk.shape, level), kk).reshape(k.shape)
+        out[np.repeat(np.repeat(gone, bh, axis=0), bw, axis=1)] = 0
+    return out

@@ -110,30 +110,48 @@ def entry_layout(color: str, bw: int, bh: int, nsub: int = 1) -> EntryLayout:
 # ---------------------------------------------------------------------------------------------
 # Bit packing
 
+#: Indices :func:`pack_indices` and :func:`unpack_indices` handle at a time (their temporaries: about
+#: 17 bytes a bit of the chunk).
+UNPACK_CHUNK = 1 << 16
+
 def pack_indices(indices: np.ndarray, b: int, word_bits: int = 32) -> np.ndarray:
     """Pack indices into the little-endian bit stream of ``word_bits``-bit words.
 
     Index ``k`` occupies bits ``[k*b, k*b+b)``; the last word is zero-padded.
-    Returns an unsigned array of ``ceil(n*b/word_bits)`` words (dtype of ``word_bits``).
+    Returns an unsigned array of ``ceil(n*b/word_bits)`` words (dtype of ``word_bits``). Works in
+    chunks of :data:`UNPACK_CHUNK` indices.
     """
     idx = np.asarray(indices, dtype=np.uint64).ravel()
     if not 1 <= b <= 16:
         raise FormatError(f"index width {b} is outside 1..16")
     if idx.size and int(idx.max()) >> b:
         raise FormatError(f"an index does not fit in {b} bits")
-    bits = ((idx[:, None] >> np.arange(b, dtype=np.uint64)) & 1).astype(np.uint8).ravel()
-    nwords = -(-bits.size // word_bits)
-    bits = np.concatenate([bits, np.zeros(nwords * word_bits - bits.size, np.uint8)])
-    packed = np.packbits(bits, bitorder="little")
-    return packed.view(np.dtype(f"<u{word_bits // 8}")).copy()
+    nwords = -(-(idx.size * b) // word_bits)
+    out = np.zeros(nwords * word_bits // 8, np.uint8)
+    shifts = np.arange(b, dtype=np.uint64)
+    for a in range(0, idx.size, UNPACK_CHUNK):     # bounded temporaries; a * b is a whole byte
+        bits = ((idx[a: a + UNPACK_CHUNK, None] >> shifts) & 1).astype(np.uint8).ravel()
+        packed = np.packbits(bits, bitorder="little")
+        out[a * b // 8: a * b // 8 + len(packed)] = packed
+    return out.view(np.dtype(f"<u{word_bits // 8}"))
 
 
-def unpack_indices(words: np.ndarray, b: int, n: int, base: int = 0, word_bits: int = 32) -> np.ndarray:
-    """Inverse of :func:`pack_indices`: ``n`` indices from the map starting at word ``base``."""
-    span = -(-(n * b) // word_bits)                # the words the map occupies, and no more
-    w = np.asarray(words[base: base + span]).astype(f"<u{word_bits // 8}")
-    bits = np.unpackbits(w.view(np.uint8), bitorder="little")[: n * b]
-    return (bits.reshape(n, b).astype(np.int64) << np.arange(b)).sum(axis=1)
+def unpack_indices(words: np.ndarray, b: int, n: int, base: int = 0, word_bits: int = 32,
+                   first: int = 0) -> np.ndarray:
+    """Inverse of :func:`pack_indices`: ``n`` indices from the map starting at word ``base``, from
+    index ``first`` of the map on (int64). Works in chunks of :data:`UNPACK_CHUNK` indices, so its
+    memory is the result and a bounded working set."""
+    out = np.empty(n, np.int64)
+    for a in range(0, n, UNPACK_CHUNK):
+        m = min(UNPACK_CHUNK, n - a)
+        start = (first + a) * b                    # the chunk's first bit in the map
+        skip = start % word_bits
+        w0 = base + start // word_bits
+        span = -(-(skip + m * b) // word_bits)     # the words the chunk occupies, and no more
+        w = np.asarray(words[w0: w0 + span]).astype(f"<u{word_bits // 8}")
+        bits = np.unpackbits(w.view(np.uint8), bitorder="little")[skip: skip + m * b]
+        out[a: a + m] = (bits.reshape(m, b).astype(np.int64) << np.arange(b)).sum(axis=1)
+    return out
 
 
 # ---------------------------------------------------------------------------------------------

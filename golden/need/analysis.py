@@ -243,9 +243,11 @@ class Need:
         """bool (n_textures, MAX_LEVELS): levels with at least one request."""
         nbx, nby, offset = self.grids
         size = (nbx * nby).ravel()
-        csum = np.concatenate([[0], np.cumsum(self.counts)])
         off = offset.ravel()
-        return ((csum[off + size] - csum[off]) > 0).reshape(nbx.shape)
+        out = np.zeros(size.shape, bool)
+        for r in np.flatnonzero(size):                   # a loop over levels; no copy of the counts
+            out[r] = bool(self.counts[off[r]: off[r] + size[r]].any())
+        return out.reshape(nbx.shape)
 
     @property
     def textures(self) -> np.ndarray:

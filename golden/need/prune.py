@@ -27,7 +27,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..format import (CodebookInfo, TextureInfo, TextureSet, default_index_bits, pack_indices, unpack_indices)
+from ..format import (UNPACK_CHUNK, CodebookInfo, TextureInfo, TextureSet, default_index_bits, pack_indices,
+                      unpack_indices)
 
 __all__ = ["prune", "pruned_bytes", "stored_counts", "prune_report", "touched_texels", "touched_levels",
            "encode_needed", "TRAIN_ON"]
@@ -37,6 +38,20 @@ def _group_rows(d, t: int, top: int, levels: int, keep: np.ndarray) -> list[int]
     """The stored compressed levels of the level group that starts at ``top`` and that ``keep``."""
     return [L for L in range(top, min(levels, top + 3))       # a group has at most 3 levels
             if keep[t, L] and d["compressed"][t, L] and L - int(d["sublevel"][t, L]) == top]
+
+
+def _reindexed(ts: TextureSet, row0, n: int, touched: np.ndarray, remap: np.ndarray, b_new: int) -> np.ndarray:
+    """A level group's index map (``n`` blocks from descriptor ``row0``) with each touched block's
+    index renumbered by ``remap`` and the others 0, packed at ``b_new`` bits. In chunks of
+    :data:`UNPACK_CHUNK` blocks (each packs to whole words), so the memory is the map and a bounded
+    working set, not a few int64 copies of it."""
+    wb, b = ts.word_bits, int(row0["index_bits"])
+    parts = []
+    for a in range(0, n, UNPACK_CHUNK):
+        m = min(UNPACK_CHUNK, n - a)
+        old = unpack_indices(ts.index_words, b, m, int(row0["base"]), wb, first=a)
+        parts.append(pack_indices(np.where(touched[a: a + m], remap[old], 0), b_new, wb))
+    return np.concatenate(parts) if parts else pack_indices(np.zeros(0, np.int64), b_new, wb)
 
 
 def prune(ts: TextureSet, need) -> TextureSet:
@@ -95,14 +110,12 @@ def prune(ts: TextureSet, need) -> TextureSet:
                     continue
                 row0 = d[t, L]
                 n = int(need.grids[0][t, L] * need.grids[1][t, L])
-                old = unpack_indices(ts.index_words, int(row0["index_bits"]), n, int(row0["base"]), wb)
                 touched = np.zeros(n, bool)
                 for M in rows:
                     m = need.touched_blocks(t, M).ravel()
                     present[(t, M)] = m
                     touched |= m
-                new = np.where(touched, remap[c][old], 0)
-                words = pack_indices(new, b_new, wb)
+                words = _reindexed(ts, row0, n, touched, remap[c], b_new)
                 for M in rows:
                     descriptors[t, M] = d[t, M]
                     descriptors["base"][t, M] = iw

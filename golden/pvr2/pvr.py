@@ -175,14 +175,17 @@ def parse_header(data: bytes) -> DtHeader:
     return hdr
 
 
-def twiddle_indices(bw: int, bh: int) -> np.ndarray:
+def twiddle_indices(bw: int, bh: int, y0: int = 0, y1: int | None = None) -> np.ndarray:
     """Twiddled position of every cell of a ``bw x bh`` grid, as a ``(bh, bw)`` int64 array.
 
     Morton order with y in bit 0 and x in bit 1 (then y in bit 2, ...). A rectangular grid is
     twiddled in squares of side ``min(bw, bh)`` stored one after another along the longer side.
+    ``y0``, ``y1``: only rows ``y0 .. y1 - 1`` of the grid (``(y1 - y0, bw)``; a band of a large grid
+    without computing the rest).
     """
     m = min(bw, bh)
-    y, x = np.mgrid[0:bh, 0:bw].astype(np.int64)
+    y1 = bh if y1 is None else y1
+    y, x = np.mgrid[y0:y1, 0:bw].astype(np.int64)
     sx, sy = x % m, y % m
     out = (x // m + y // m) * m * m
     for bit in range(max(m.bit_length() - 1, 0)):

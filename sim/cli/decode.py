@@ -15,24 +15,31 @@ def cmd_decode(args) -> int:
     with Outputs() as outs:
         out = outs.add(args.output, IMAGE_SUFFIXES, "an image")
         ts = load_set(args.file)
-        img, channels = _decoded(ts, args)
-        write_image(outs.path(out), np.ascontiguousarray(img[..., :channels]))
+        img = _decoded(ts, args)
+        write_image(outs.path(out), img)
     h, w = img.shape[:2]
     emit({"texture": args.texture, "level": args.level, "width": w, "height": h, "output": args.output},
          args.json, f"wrote {args.output} ({w}x{h}, texture {args.texture} level {args.level})")
     return 0
 
 
-def _decoded(ts, args):
-    from vqtex.golden.fetch import decode
+def _decoded(ts, args) -> np.ndarray:
+    """The level as the (h, w, channels) image written, filled band by band (golden.fetch.decode_bands):
+    the picture and a bounded working set, never the RGBA level beside it."""
+    from vqtex.golden.fetch import decode_bands
     if not 0 <= args.texture < ts.n_textures:
         raise CliError(f"texture {args.texture} does not exist (the file has {ts.n_textures})")
     levels = ts.textures[args.texture].levels
     if not 0 <= args.level < levels:
         raise CliError(f"texture {args.texture} has no level {args.level} (it has {levels})")
-    img = decode(ts, args.texture, args.level)
-    return img, {"rgb": 3, "yuv411": 3, "rgba": 4, "intensity": 1, "rgb565": 3, "yuv422": 3, "argb1555": 4,
-                 "argb4444": 4}[ts.textures[args.texture].color]
+    channels = {"rgb": 3, "yuv411": 3, "rgba": 4, "intensity": 1, "rgb565": 3, "yuv422": 3, "argb1555": 4,
+                "argb4444": 4}[ts.textures[args.texture].color]
+    w, h = ts.level_shapes(args.texture)[args.level]
+    bands = decode_bands(ts, args.texture, args.level)       # RequestError (a pruned level) before allocating
+    img = np.empty((h, w, channels), np.uint8)
+    for j0, rows in bands:
+        img[j0: j0 + len(rows)] = rows[..., :channels]
+    return img
 
 
 def add_parser(sub) -> None:

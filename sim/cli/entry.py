@@ -6,9 +6,10 @@ helpers they share are in :mod:`vqtex.sim.cli.common`. This module imports the s
 other way round.
 
 Every command that reports takes ``--json`` and then prints exactly one JSON object on stdout.
-Bad input ends with a one-line error on stderr and exit status 2, never a traceback and never a
-partly written output file: every command's outputs are checked before any work and appear together
-or not at all (:class:`vqtex.sim.cli.common.Outputs`). Warnings are one line each on stderr.
+Bad input, and an allocation that fails (``MemoryError``, numpy's ``_ArrayMemoryError`` among them),
+end with a one-line error on stderr and exit status 2, never a traceback and never a partly written
+output file: every command's outputs are checked before any work and appear together or not at all
+(:class:`vqtex.sim.cli.common.Outputs`). Warnings are one line each on stderr.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import sys
 from . import bench, cache, decode, demo, encode, experiments, export, import_dt, info, need, prune, render, report, simulate
 from .common import CliError, Parser, check_ended, ending_message, ending_signals, exit_status
 
-__all__ = ["main", "build_parser", "version", "COMMANDS"]
+__all__ = ["main", "build_parser", "version", "memory_message", "COMMANDS"]
 
 #: The subcommand modules, in the order ``vqtex --help`` lists them.
 COMMANDS = (encode, import_dt, info, decode, simulate, render, need, prune, demo, export, report, bench, experiments, cache)
@@ -54,8 +55,15 @@ def _user_errors():
     return (CliError, FormatError, EncodeError, RequestError, SceneError, ThreadSettingError, OSError)
 
 
+def memory_message(e: MemoryError) -> str:
+    """One line for an allocation that failed (numpy says how much and of what shape)."""
+    text = " ".join(str(e).split())
+    return "out of memory" + (f": {text}" if text else "") + " (free memory, or a smaller input or level)"
+
+
 def main(argv=None) -> int:
-    """Run ``vqtex`` with ``argv``; returns the exit status: 2 for a user error, 128 + signum when
+    """Run ``vqtex`` with ``argv``; returns the exit status: 2 for a user error or a failed allocation
+    (``MemoryError``: one line, no traceback), 128 + signum when
     SIGINT, SIGTERM or SIGHUP ended it (130, 143, 129; :func:`~vqtex.sim.cli.common.ending_signals`:
     outputs removed as at any error, one line on stderr)."""
     with ending_signals():
@@ -67,6 +75,9 @@ def main(argv=None) -> int:
         except _user_errors() as e:
             msg = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
             print(f"vqtex: error: {msg}", file=sys.stderr)
+            return 2
+        except MemoryError as e:                # numpy's _ArrayMemoryError among them; outputs removed as at any error
+            print(f"vqtex: error: {memory_message(e)}", file=sys.stderr)
             return 2
         except KeyboardInterrupt as e:
             print(ending_message(e), file=sys.stderr)
