@@ -85,6 +85,11 @@ class TexelFetch(wiring.Component):
     loadable : bool
         Memories loaded over the bus port (see above); ``specialise`` is then ignored: the unit
         serves every set the geometry holds.
+    bus_port : bool
+        Loadable only: the unit has its own Wishbone port (default). False: the port is its
+        parent's (the texture filter's lanes share one): members ``load`` (the port's load
+        command) and ``load_data`` (this unit's read answer) instead of ``bus``, and the parent
+        keeps requests away while its host holds the bus.
     one_port : bool
         Single-bank index memory (reproduces the paper's straddle penalty in cycle counts).
     tag_width : int
@@ -140,7 +145,7 @@ class TexelFetch(wiring.Component):
 
     def __init__(self, texture_set: TextureSet | None = None, *, one_port: bool = False, tag_width: int = 8,
                  bank_depth: int = BANK_DEPTH, specialise: bool = True, index_port: bool = False,
-                 geometry: Geometry | None = None, loadable: bool = False):
+                 geometry: Geometry | None = None, loadable: bool = False, bus_port: bool = True):
         if texture_set is not None and not isinstance(texture_set, TextureSet):
             raise TypeError(f"texture_set must be a TextureSet, not {type(texture_set).__name__}")
         if texture_set is None and not (loadable and isinstance(geometry, Geometry)):
@@ -182,8 +187,11 @@ class TexelFetch(wiring.Component):
         members["valid"] = Out(len(REGISTERS))
         if self._index_port:
             members.update(index_port_members(self._geometry, self._features))
-        if self._loadable:
+        self._bus_port = self._loadable and bool(bus_port)
+        if self._bus_port:
             members["bus"] = In(wishbone_signature(RegisterMap(self._geometry).addr_bits))
+        elif self._loadable:
+            members.update(load=In(self._load), load_data=Out(32))
         super().__init__(members)
 
     @property
@@ -207,6 +215,11 @@ class TexelFetch(wiring.Component):
     @property
     def loadable(self) -> bool:
         return self._loadable
+
+    @property
+    def load_layout(self):
+        """The load command's layout (:func:`hw.bus_port.load_layout`; None for the baked unit)."""
+        return self._load
 
     @property
     def tag_width(self) -> int:
@@ -239,7 +252,10 @@ class TexelFetch(wiring.Component):
             m.d.comb += [self.index_request.eq(front.index_request), front.index_response.eq(self.index_response)]
         m.submodules.back = back = BackEnd(self._ts, bank_depth=self._bank_depth, features=self._features,
                                            geometry=self._geometry, load=load)
-        if load is not None:                # the bus port and the drain rule (hw.bus_port)
+        if load is not None and not self._bus_port:     # the parent's port (a filter's lanes)
+            m.d.comb += [front.pause.eq(0), front.load.eq(self.load), back.load.eq(self.load),
+                         self.load_data.eq(front.load_data | back.load_data)]
+        elif load is not None:              # the bus port and the drain rule (hw.bus_port)
             m.submodules.bus_port = port = BusPort(self._geometry)
             wiring.connect(m, wiring.flipped(self.bus), port.bus)
             m.d.comb += [

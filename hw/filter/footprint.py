@@ -18,6 +18,11 @@ products, the same unused slots), five pipeline stages:
 5. *weights*: each slot's bilinear product times its level's weight (one 17x9-bit multiplier per
    slot, between registers). Registered: the output.
 
+Loadable (a texture filter built from a geometry): the level table is a memory of one byte per
+descriptor row (log2 width and height) and a valid bit per row, written as the host writes word 0
+of each descriptor row over the bus port (the footprint watches the load command); a texture's last
+level is its highest valid row. The same stages, latency and results.
+
 Latency 5, throughput one request per cycle; a stream in and out with backpressure: the five stages
 move together, whenever the output is empty or taken (``move = ~o.valid | o.ready``, one enable for
 every register; ``i.ready = move``). A bubble in a stalled pipeline stays a bubble (the filter's
@@ -29,7 +34,7 @@ gate (the multi-lane filter's critical path was that chain, 8.99 ns at 2 lanes).
 from __future__ import annotations
 
 from amaranth import *
-from amaranth.lib import data, stream, wiring
+from amaranth.lib import data, memory, stream, wiring
 from amaranth.lib.wiring import In, Out
 
 from vqtex.golden import filter as spec
@@ -128,11 +133,16 @@ class Footprint(wiring.Component):
     frac : int
         Fractional bits of ``s`` and ``t`` (at least ``golden.filter.coordinate_frac_bits(table.max_log2)``).
     tag_width : int
+    load : data.StructLayout, optional
+        The bus port's load command (:func:`hw.bus_port.load_layout`): the level table is loaded
+        from the descriptor writes (``table``, if given, is its initial contents). Member ``load``.
 
     Members
     -------
     i : In(stream.Signature(FilterRequestLayout))
     o : Out(stream.Signature(FootprintLayout))
+    load : In(load)
+        Only when loadable.
 
     Raises
     ------
@@ -140,7 +150,7 @@ class Footprint(wiring.Component):
         If ``frac`` is too small for the table's textures, or a level is larger than 4096.
     """
 
-    def __init__(self, table: spec.LevelTable, *, texture_bits: int, frac: int, tag_width: int = 8):
+    def __init__(self, table: spec.LevelTable, *, texture_bits: int, frac: int, tag_width: int = 8, load=None):
         if frac < spec.coordinate_frac_bits(table.max_log2):
             raise ValueError(f"{frac} fractional bits are too few for textures of 2^{table.max_log2} texels a side")
         if table.max_log2 > COORD_BITS:
@@ -151,14 +161,56 @@ class Footprint(wiring.Component):
         self._frac = int(frac)
         self._texture_bits = texture_bits
         self._tag_width = tag_width
+        self._load = load
         super().__init__({
             "i": In(stream.Signature(FilterRequestLayout(texture_bits, spec.coordinate_bits(frac), tag_width))),
             "o": Out(stream.Signature(FootprintLayout(texture_bits, tag_width))),
+            **({} if load is None else {"load": In(load)}),
         })
 
     @property
     def latency(self) -> int:
         return LATENCY
+
+    def _loaded_table(self, m, entries, tb):
+        """The loadable level table (see the module docstring): ``(sizes, last_of)``, the
+        functions the level stage reads it with (combinational)."""
+        from vqtex.golden.register_map import DESCRIPTOR_WORDS, REGIONS
+        fields = {name: lsb for name, lsb, _ in DESCRIPTOR_WORDS[0]}
+        load = self.load
+        rows = len(entries)
+        table = memory.Memory(shape=8, depth=rows, init=[e.value for e in entries])
+        m.submodules.level_table = table
+        valid = Signal(rows, name="level_valid", init=sum(1 << r for r, e in enumerate(entries) if self._row_valid(r)),
+                       reset_less=True)
+        word = load.offset[:2]                  # the four words of a row: word 0 holds the sizes
+        row = load.offset[2:]
+        writes = Signal(name="level_write")
+        m.d.comb += writes.eq(load.write & (load.region == REGIONS["descriptors"]) & (word == 0) & (row < rows))
+        wp = table.write_port()
+        m.d.comb += [wp.addr.eq(row), wp.en.eq(writes),
+                     wp.data.eq(Cat(load.data[fields["log2w"]:fields["log2w"] + 4],
+                                    load.data[fields["log2h"]:fields["log2h"] + 4]))]
+        with m.If(writes):
+            m.d.sync += valid.bit_select(row[:len(Const(rows - 1))], 1).eq(load.data[fields["valid"]])
+
+        def sizes(texture, level):
+            rp = table.read_port(domain="comb")
+            m.d.comb += rp.addr.eq(Cat(level, texture))
+            return rp.data[:4], rp.data[4:]
+
+        def last_of(texture):
+            bits = valid.word_select(texture, 1 << LEVEL_BITS)
+            last = C(0, LEVEL_BITS)
+            for lv in range(1, 1 << LEVEL_BITS):         # the highest valid level
+                last = Mux(bits[lv], lv, last)
+            return last
+        return sizes, last_of
+
+    def _row_valid(self, r: int) -> bool:
+        """Row ``r`` (``texture * 16 + level``) of the initial table is a level of its texture."""
+        t, lv = divmod(r, 1 << LEVEL_BITS)
+        return t < len(self._table.last) and lv <= int(self._table.last[t])
 
     def elaborate(self, platform):
         m = Module()
@@ -192,6 +244,12 @@ class Footprint(wiring.Component):
             e = pick(entries, Cat(level, texture))
             return e[:4], e[4:]
 
+        if self._load is not None:
+            sizes, last_of = self._loaded_table(m, entries, tb)
+        else:
+            def last_of(texture):
+                return pick(lasts, texture)
+
         # Stage 1: level.
         p = self.i.p
         r1 = Signal(data.StructLayout({
@@ -203,7 +261,7 @@ class Footprint(wiring.Component):
         last = Signal(LEVEL_BITS, name="last")
         m.d.comb += [
             l0.eq(p.lod[spec.FRAC_BITS:]),
-            last.eq(pick(lasts, p.texture)),
+            last.eq(last_of(p.texture)),
             l1.eq(Mux(l0 < last, l0 + 1, l0)),
         ]
         lw0, lh0 = sizes(p.texture, l0)

@@ -24,6 +24,14 @@ with 8 lanes (the second set) a trilinear pixel per clock. Latency (``LATENCY``)
 cycle ``t`` whose slots go out in ``g`` groups without stalls is on ``o`` in cycle
 ``t + LATENCY + g - 1`` with ``LATENCY = 5 + 14 + 4 = 23``.
 
+Loadable (``loadable=True``, from a ``geometry``): every lane is the loadable texel-fetch unit
+with its own copy of the memories (``index_banks="lane"``), the footprint's level table is loaded
+from the descriptor writes, and the filter has one Wishbone port (:mod:`hw.bus_port`) whose load
+commands reach every lane (each writes its copy; lane 0 answers reads). The drain rule is the
+texel-fetch unit's, counted in pixels: while ``cyc`` is high no pixel is accepted, and a transfer
+waits until every accepted pixel's colour has left. The register map and the host's writes are the
+texel-fetch unit's (:mod:`golden.register_map`).
+
 Stream backpressure throughout: ``i`` and ``o`` are ``amaranth.lib.stream`` streams; a stalled output
 holds the blend, which holds the lanes (their own skid registers), which hold the sequencer and the
 footprint; nothing is lost, duplicated or reordered.
@@ -39,7 +47,12 @@ from vqtex.golden import filter as spec
 from vqtex.golden.format import TextureSet
 from vqtex.golden.index_banks import banked_index, lane_banks
 
+from vqtex.golden.geometry import Geometry
+from vqtex.golden.register_map import RegisterMap
+
+from ..address import COORD_BITS
 from ..banked_rom import BANK_DEPTH, pick
+from ..bus_port import BusPort, wishbone_signature
 from ..descriptor import descriptor_widths, texture_bits
 from ..features import Features
 from ..front_end import k_bits
@@ -104,10 +117,17 @@ class TextureFilter(wiring.Component):
         On a bad texture set, lane count or fractional bits.
     """
 
-    def __new__(cls, texture_set: TextureSet, *, lanes: int = 1, tag_width: int = 8, frac: int | None = None,
-                index_banks: str = "parity", **kwargs):
+    def __new__(cls, texture_set: TextureSet | None = None, *, lanes: int = 1, tag_width: int = 8,
+                frac: int | None = None, index_banks: str = "parity", geometry=None, loadable: bool = False,
+                **kwargs):
         # Parameters are checked before the instance exists (a rejected one is never reported by
         # Amaranth as an elaboratable that was not used).
+        if loadable:
+            if not isinstance(geometry, Geometry):
+                raise TypeError("a loadable texture filter needs a Geometry")
+            if index_banks != "lane":
+                raise ValueError("a loadable texture filter keeps a copy of the memories per lane: index_banks='lane'")
+            texture_set = texture_set if texture_set is not None else _blank_set(geometry)
         if not isinstance(texture_set, TextureSet):
             raise TypeError(f"texture_set must be a TextureSet, not {type(texture_set).__name__}")
         if lanes not in LANES:
@@ -116,33 +136,43 @@ class TextureFilter(wiring.Component):
             raise ValueError(f"index_banks must be one of {INDEX_BANKS}, not {index_banks!r}")
         if not isinstance(tag_width, int) or tag_width < 0:
             raise TypeError(f"tag_width must be a non-negative integer, not {tag_width!r}")
-        minimum = spec.coordinate_frac_bits(level_table(texture_set).max_log2)
+        minimum = spec.coordinate_frac_bits(COORD_BITS if loadable else level_table(texture_set).max_log2)
         if frac is not None and frac < minimum:
             raise ValueError(f"frac {frac} is below {minimum} for this texture set")
         return super().__new__(cls)
 
-    def __init__(self, texture_set: TextureSet, *, lanes: int = 1, tag_width: int = 8, frac: int | None = None,
-                 bank_depth: int = BANK_DEPTH, index_banks: str = "parity"):
+    def __init__(self, texture_set: TextureSet | None = None, *, lanes: int = 1, tag_width: int = 8,
+                 frac: int | None = None, bank_depth: int = BANK_DEPTH, index_banks: str = "parity",
+                 geometry=None, loadable: bool = False):
+        self._loadable = bool(loadable)
+        self._geometry = geometry
+        self._contents = texture_set
+        if self._loadable and texture_set is None:
+            texture_set = _blank_set(geometry)
         self._ts = texture_set
         self._table = level_table(texture_set)
-        minimum = spec.coordinate_frac_bits(self._table.max_log2)
+        # a loadable filter serves every level size the coordinates can address
+        minimum = spec.coordinate_frac_bits(COORD_BITS if self._loadable else self._table.max_log2)
         self._frac = minimum if frac is None else int(frac)
         self._lanes = lanes
         self._tag_width = tag_width
         self._bank_depth = bank_depth
-        self._texture_bits = texture_bits(texture_set)
-        self._features = Features.of(texture_set)
+        self._texture_bits = geometry.texture_bits if self._loadable else texture_bits(texture_set)
+        self._features = Features.of_geometry(geometry) if self._loadable else Features.of(texture_set)
         # one lane reads its own memory; so does a set without compressed levels
         self._banks = lane_banks(lanes) if index_banks == "parity" and self._features.compressed else 1
         self._index_banks = index_banks
-        super().__init__({
+        members = {
             "i": In(stream.Signature(FilterRequestLayout(self._texture_bits, spec.coordinate_bits(self._frac),
                                                          tag_width))),
             "o": Out(stream.Signature(ResponseLayout(tag_width))),
             "stall_output": Out(1),
             "busy": Out(1),
             "bank_conflict": Out(1),
-        })
+        }
+        if self._loadable:
+            members["bus"] = In(wishbone_signature(RegisterMap(geometry).addr_bits))
+        super().__init__(members)
 
     @property
     def latency(self) -> int:
@@ -167,8 +197,17 @@ class TextureFilter(wiring.Component):
         return self._frac
 
     @property
-    def texture_set(self) -> TextureSet:
-        return self._ts
+    def texture_set(self) -> TextureSet | None:
+        """The contents (a loadable filter's initial contents; None: none)."""
+        return self._contents
+
+    @property
+    def loadable(self) -> bool:
+        return self._loadable
+
+    @property
+    def geometry(self):
+        return self._geometry
 
     def elaborate(self, platform):
         m = Module()
@@ -176,17 +215,28 @@ class TextureFilter(wiring.Component):
         tw = self._tag_width
         lane_tag = WEIGHT_WIDTH + 2 + tw          # weight, first, last, pixel tag
 
+        loadable = self._loadable
+        if loadable:
+            m.submodules.bus_port = port = BusPort(self._geometry)
+            wiring.connect(m, wiring.flipped(self.bus), port.bus)
         m.submodules.footprint = fp = Footprint(self._table, texture_bits=self._texture_bits, frac=self._frac,
-                                                tag_width=tw)
+                                                tag_width=tw, load=port.load.shape() if loadable else None)
         m.submodules.blend = bl = Blend(lanes, tw)
         fetch = []
         banked = self._banks > 1
         banked_image = banked_index(self._ts, self._banks) if banked else None
         lane_set = banked_image.view(self._ts) if banked else self._ts
         for k in range(lanes):
-            f = TexelFetch(lane_set, tag_width=lane_tag, bank_depth=self._bank_depth, index_port=banked)
+            if loadable:                    # the filter's port loads every lane's copy
+                f = TexelFetch(self._contents, tag_width=lane_tag, bank_depth=self._bank_depth, geometry=self._geometry,
+                               loadable=True, bus_port=False)
+            else:
+                f = TexelFetch(lane_set, tag_width=lane_tag, bank_depth=self._bank_depth, index_port=banked)
             m.submodules[f"lane{k}"] = f
             fetch.append(f)
+        if loadable:
+            m.d.comb += [f.load.eq(port.load) for f in fetch]
+            m.d.comb += [fp.load.eq(port.load), port.load_data.eq(fetch[0].load_data)]
         conflicts = []
         if banked:                      # sets of ``banks`` lanes, each with its banks
             feat = self._features
@@ -200,7 +250,20 @@ class TextureFilter(wiring.Component):
                     m.d.comb += [ib.requests[n].eq(f.index_request), f.index_response.eq(ib.index[n])]
                 conflicts.append(ib.conflict)
         m.d.comb += self.bank_conflict.eq(Cat(*conflicts).any() if conflicts else 0)
-        wiring.connect(m, wiring.flipped(self.i), fp.i)
+        if loadable:
+            # The drain rule in pixels: none accepted while the host holds the bus, and a transfer
+            # only when every accepted pixel's colour has left (a count of the pixels in flight).
+            taken, given = Signal(), Signal()
+            in_flight = Signal(range(1 << 10), name="pixels_in_flight")
+            m.d.comb += [
+                fp.i.valid.eq(self.i.valid & ~port.pause), self.i.ready.eq(fp.i.ready & ~port.pause),
+                fp.i.p.eq(self.i.p),
+                taken.eq(self.i.valid & self.i.ready), given.eq(self.o.valid & self.o.ready),
+                port.idle.eq(in_flight == 0),
+            ]
+            m.d.sync += in_flight.eq(in_flight + taken - given)
+        else:
+            wiring.connect(m, wiring.flipped(self.i), fp.i)
         wiring.connect(m, bl.o, wiring.flipped(self.o))
         m.d.comb += [
             self.stall_output.eq(self.o.valid & ~self.o.ready),
@@ -248,3 +311,11 @@ class TextureFilter(wiring.Component):
                 bl.i.p.weight[k].eq(f.o.p.tag[:WEIGHT_WIDTH]),
             ]
         return m
+
+
+def _blank_set(geometry) -> TextureSet:
+    """A texture set of one 1x1 raw texture: what a loadable filter without contents starts from
+    (its level table and memories are loaded over the bus before use)."""
+    from vqtex.golden.encode import encode
+    import numpy as np
+    return encode([np.zeros((1, 1, 4), np.uint8)], color="rgba", mipmaps=False)

@@ -93,11 +93,7 @@ class TexelFetchTop(wiring.Component):
         members.update({f"o_{n}": Out(w) for n, w in response_ports(self._fetch).items()})
         self._extra = [n for n in self._fetch.signature.members if n not in ("i", "o", "bus")]
         members.update({n: Out(len(getattr(self._fetch, n))) for n in self._extra})
-        self._bus = []
-        if geometry is not None:            # the slave's view (the unit's own signature members)
-            for name, member in self._fetch.bus.signature.members.items():
-                members[f"bus_{name}"] = (In if member.flow == In else Out)(member.shape)
-                self._bus.append(name)
+        members.update(bus_members(self._fetch))
         super().__init__(members)
 
     @property
@@ -116,13 +112,28 @@ class TexelFetchTop(wiring.Component):
         m.d.comb += [getattr(f.i.p, n).eq(getattr(self, f"i_{n}")) for n in request_ports(f)]
         m.d.comb += [getattr(self, f"o_{n}").eq(getattr(f.o.p, n)) for n in response_ports(f)]
         m.d.comb += [getattr(self, n).eq(getattr(f, n)) for n in self._extra]
-        for name in self._bus:
-            member = f.bus.signature.members[name]
-            if member.flow == In:           # driven by the initiator: an input of the top
-                m.d.comb += getattr(f.bus, name).eq(getattr(self, f"bus_{name}"))
-            else:
-                m.d.comb += getattr(self, f"bus_{name}").eq(getattr(f.bus, name))
+        connect_bus(m, self, f)
         return m
+
+
+def bus_members(unit) -> dict:
+    """A loadable unit's Wishbone port as top-level members ``bus_adr``, ``bus_dat_w``, ... (the
+    slave's view: the unit's own signature members); none for a unit without ``bus``."""
+    if "bus" not in unit.signature.members:
+        return {}
+    return {f"bus_{name}": (In if member.flow == In else Out)(member.shape)
+            for name, member in unit.bus.signature.members.items()}
+
+
+def connect_bus(m, top, unit) -> None:
+    """Wire ``top``'s ``bus_*`` members (:func:`bus_members`) to ``unit.bus``."""
+    if "bus" not in unit.signature.members:
+        return
+    for name, member in unit.bus.signature.members.items():
+        if member.flow == In:               # driven by the initiator: an input of the top
+            m.d.comb += getattr(unit.bus, name).eq(getattr(top, f"bus_{name}"))
+        else:
+            m.d.comb += getattr(top, f"bus_{name}").eq(getattr(unit.bus, name))
 
 
 class FilterTop(wiring.Component):
@@ -138,16 +149,18 @@ class FilterTop(wiring.Component):
     """
 
     def __init__(self, texture_set, *, lanes: int = 1, tag_width: int = 8, frac: int | None = None,
-                 index_banks: str = "parity"):
+                 index_banks: str = "parity", geometry=None):
         from vqtex.hw.filter import TextureFilter
+        unit = {} if geometry is None else {"geometry": geometry, "loadable": True}
         self._filter = TextureFilter(texture_set, lanes=lanes, tag_width=tag_width, frac=frac,
-                                     index_banks=index_banks)
+                                     index_banks=index_banks, **unit)
         f = self._filter
-        self._strobes = [n for n in f.signature.members if n not in ("i", "o")]    # stall_output, busy, ...
+        self._strobes = [n for n in f.signature.members if n not in ("i", "o", "bus")]  # stall_output, busy, ...
         super().__init__({
             "i_valid": In(1), "i_ready": Out(1), "i_payload": In(len(f.i.p.as_value())),
             "o_valid": Out(1), "o_ready": In(1), "o_payload": Out(len(f.o.p.as_value())),
             **{n: Out(len(getattr(f, n))) for n in self._strobes},
+            **bus_members(f),
         })
 
     @property
@@ -166,6 +179,7 @@ class FilterTop(wiring.Component):
             self.o_valid.eq(f.o.valid), f.o.ready.eq(self.o_ready), self.o_payload.eq(f.o.p),
         ]
         m.d.comb += [getattr(self, n).eq(getattr(f, n)) for n in self._strobes]
+        connect_bus(m, self, f)
         return m
 
 
@@ -283,14 +297,18 @@ def design_info(ts, *, one_port: bool = False, tag_width: int = 8, specialise: b
 
 
 def filter_design_info(ts, *, lanes: int = 1, frac: int | None = None, tag_width: int = 16,
-                       index_banks: str = "parity", bank_depth: int | None = None) -> DesignInfo:
+                       index_banks: str = "parity", bank_depth: int | None = None, geometry=None) -> DesignInfo:
     """Elaborate ``hw.filter.TextureFilter(ts, ...)`` and describe it as :func:`design_info` does the
     texel-fetch unit: one model (no halves), a request row is the pixel's :data:`FIELDS`, the
     strobes (``stall_output``, ``busy``, ``bank_conflict``) in the filter's signature order, and
-    ``o.valid`` as its one stage's valid bit ("output")."""
+    ``o.valid`` as its one stage's valid bit ("output"). With ``geometry``, the loadable filter of
+    that geometry (no contents: ``ts`` is loaded over its bus)."""
     from vqtex.hw.filter import TextureFilter
     from vqtex.hw.memories import elaborate, memories
     unit = {} if bank_depth is None else {"bank_depth": bank_depth}
+    if geometry is not None:
+        unit.update(geometry=geometry, loadable=True)
+        ts = None
     top = TextureFilter(ts, lanes=lanes, tag_width=tag_width, frac=frac, index_banks=index_banks, **unit)
     frag = elaborate(top)
     req, resp = top.i.p.shape(), top.o.p.shape()
@@ -298,12 +316,14 @@ def filter_design_info(ts, *, lanes: int = 1, frac: int | None = None, tag_width
         top=top, fragment=frag, ports=port_map(top),
         request_fields=_fields(req), response_fields=_fields(resp),
         request_width=req.size, response_width=resp.size, tag_width=tag_width,
-        stages=["output"], strobes=[n for n in top.signature.members if n not in ("i", "o")],
+        stages=["output"], strobes=[n for n in top.signature.members if n not in ("i", "o", "bus")],
         memories=[MemoryImage(" ".join(m.path), m.width, m.depth, m.words) for m in memories(frag)],
         latency=int(top.latency), unit="filter", columns=FIELDS, valid="o__valid",
         verilog_name=FILTER_TOP_NAME,
         verilog_request=[("i_payload", 0, req.size)], verilog_response=[("o_payload", 0, resp.size)],
-        options=(lanes, index_banks, top.frac, tag_width, bank_depth, texture_set_digest(ts)))
+        geometry=geometry,
+        options=(lanes, index_banks, top.frac, tag_width, bank_depth,
+                 texture_set_digest(ts) if geometry is None else ("loadable", geometry.dumps())))
     return _checked(info)
 
 

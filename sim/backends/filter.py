@@ -134,11 +134,14 @@ def golden_colors(ts: TextureSet, pixels: dict, frac: int) -> np.ndarray:
 
 def simulate_filter(ts: TextureSet, pixels: dict, *, backend: str = "golden", lanes: int = 1,
                     frac: int | None = None, stall: float = 0.0, seed: int = 0,
-                    index_banks: str = "parity") -> FilterResult:
+                    index_banks: str = "parity", geometry=None) -> FilterResult:
     """Filter ``pixels`` on ``backend`` (see the module docstring); ``frac`` defaults to the
     filter's (``golden.filter.coordinate_frac_bits`` of the set's largest level 0); ``index_banks``
     as for :class:`hw.filter.TextureFilter` (the golden backend counts the conflicts the banks would
-    have, :func:`golden.index_banks.conflicts`).
+    have, :func:`golden.index_banks.conflicts`). With ``geometry``, the loadable filter of that
+    geometry (every lane its own copy of the memories: ``index_banks`` must be ``lane``), ``ts``
+    loaded over its bus port first; its ``s`` and ``t`` have the fractional bits of the largest level
+    it can address, so the pixels are widened to them (the same footprints).
 
     Raises
     ------
@@ -157,6 +160,11 @@ def simulate_filter(ts: TextureSet, pixels: dict, *, backend: str = "golden", la
         table = spec.LevelTable([ts.level_shapes(t) for t in range(ts.n_textures)])
         frac = spec.coordinate_frac_bits(table.max_log2)
     p = check_pixels(ts, pixels, frac)
+    if geometry is not None:
+        from vqtex.golden.register_map import load_writes
+        if index_banks != "lane":
+            raise ValueError("the loadable texture filter keeps a copy of the memories per lane: index_banks 'lane'")
+        load_writes(ts, geometry)          # (a set that does not fit is refused here, before any backend)
     if backend == "golden":
         colors = golden_colors(ts, p, frac)
         return FilterResult(colors, 0, len(colors), int(texel_slots(p["mode"], lanes)), lanes, LATENCY,
@@ -164,9 +172,16 @@ def simulate_filter(ts: TextureSet, pixels: dict, *, backend: str = "golden", la
                             golden_conflicts(ts, p, frac, lanes) if index_banks == "parity" else 0)
     if backend not in FILTER_BACKENDS:
         raise ValueError(f"unknown filter backend {backend!r} (known: {', '.join(FILTER_BACKENDS)})")
+    if geometry is not None:                # the loadable filter's coordinates: widened, exactly
+        from vqtex.hw.address import COORD_BITS
+        unit_frac = spec.coordinate_frac_bits(COORD_BITS)
+        p = {**p, "s": p["s"] << (unit_frac - frac), "t": p["t"] << (unit_frac - frac)}
+        frac = unit_frac
     if backend == "pysim":
-        return run_pysim(ts, p, lanes=lanes, frac=frac, stall=stall, seed=seed, index_banks=index_banks)
-    return run_compiled(backend, ts, p, lanes=lanes, frac=frac, stall=stall, seed=seed, index_banks=index_banks)
+        return run_pysim(ts, p, lanes=lanes, frac=frac, stall=stall, seed=seed, index_banks=index_banks,
+                         geometry=geometry)
+    return run_compiled(backend, ts, p, lanes=lanes, frac=frac, stall=stall, seed=seed, index_banks=index_banks,
+                        geometry=geometry)
 
 
 def golden_conflicts(ts: TextureSet, pixels: dict, frac: int, lanes: int) -> int:
@@ -192,7 +207,8 @@ def _result(info, pixels: dict, lanes: int, rgba, cycles: int, strobes: dict) ->
 
 
 def run_pysim(ts, pixels: dict, *, lanes: int = 1, frac: int | None = None, stall: float = 0.0, seed: int = 0,
-              bank_depth: int | None = None, vcd: str | None = None, index_banks: str = "parity") -> FilterResult:
+              bank_depth: int | None = None, vcd: str | None = None, index_banks: str = "parity",
+              geometry=None) -> FilterResult:
     """Filter ``pixels`` (checked int64 arrays, :func:`check_pixels`) on ``TextureFilter(ts, lanes=lanes,
     frac=frac)`` in Amaranth's simulator (about 2e3 cycles per second; a trilinear pixel on one lane
     is 8 cycles): the texel-fetch unit's testbench, :func:`sim.backends.pysim.run_stream`.
@@ -207,21 +223,28 @@ def run_pysim(ts, pixels: dict, *, lanes: int = 1, frac: int | None = None, stal
 
     from .pysim import run_stream
     unit = {} if bank_depth is None else {"bank_depth": bank_depth}
-    dut = TextureFilter(ts, lanes=lanes, tag_width=TAG_WIDTH, frac=frac, index_banks=index_banks, **unit)
+    writes = None
+    if geometry is not None:                # the loadable filter: the set loaded over its bus first
+        from vqtex.golden.register_map import load_writes
+        unit.update(geometry=geometry, loadable=True)
+        writes = load_writes(ts, geometry)
+    dut = TextureFilter(None if geometry is not None else ts, lanes=lanes, tag_width=TAG_WIDTH, frac=frac,
+                        index_banks=index_banks, **unit)
     rows = np.stack([np.asarray(pixels[f], np.int64) for f in FIELDS], 1)
-    ph, = run_stream(dut, [(None, rows)], columns=FIELDS, tag_width=TAG_WIDTH,
-                     strobes=[n for n in dut.signature.members if n not in ("i", "o")], valid=dut.o.valid,
+    ph, = run_stream(dut, [(writes, rows)], columns=FIELDS, tag_width=TAG_WIDTH,
+                     strobes=[n for n in dut.signature.members if n not in ("i", "o", "bus")], valid=dut.o.valid,
                      stall=stall, seed=seed, vcd=vcd, name="filter")
     return _result(dut, pixels, lanes, ph["responses"], ph["cycles"], ph["strobes"])
 
 
 def run_compiled(backend: str, ts, pixels: dict, *, lanes: int = 1, frac: int | None = None, stall: float = 0.0,
-                 seed: int = 0, index_banks: str = "parity") -> FilterResult:
+                 seed: int = 0, index_banks: str = "parity", geometry=None) -> FilterResult:
     """Filter ``pixels`` (checked int64 arrays) on a compiled backend (``cxxrtl``, ``verilator``): the
     filter's description (:func:`sim.backends.design.filter_design_info`) built by that backend's
     ``build_design``, as the texel-fetch unit is, and run by :func:`sim.backends.cxxrtl.run_checked`."""
     from . import cxxrtl
-    info = filter_design_info(ts, lanes=lanes, frac=frac, tag_width=TAG_WIDTH, index_banks=index_banks)
+    info = filter_design_info(ts, lanes=lanes, frac=frac, tag_width=TAG_WIDTH, index_banks=index_banks,
+                              geometry=geometry)
     n = len(pixels["texture"])
     if n == 0:
         return _result(info, pixels, lanes, np.zeros((0, 4), np.uint8), 0, dict.fromkeys(info.strobes, 0))
@@ -231,9 +254,12 @@ def run_compiled(backend: str, ts, pixels: dict, *, lanes: int = 1, frac: int | 
         from . import verilator
         from .verilog import export_filter_verilog
         build = verilator.build_design(info, lambda: export_filter_verilog(
-            ts, lanes=lanes, tag_width=TAG_WIDTH, frac=frac, index_banks=index_banks, name=info.verilog_name)[0])
+            ts, lanes=lanes, tag_width=TAG_WIDTH, frac=frac, index_banks=index_banks, name=info.verilog_name,
+            geometry=geometry)[0])
     lib, info, _ = cxxrtl.open_design(build)
     try:
+        if geometry is not None:
+            cxxrtl.load_set(lib, ts, geometry)
         rows = np.stack([np.asarray(pixels[f], np.int64) for f in FIELDS], 1)
         groups = int(texel_slots(pixels["mode"], lanes) // lanes)
         rgba, counters = cxxrtl.run_checked(lib, rows, cxxrtl.batch_layout(info), n=n, transfers=groups,

@@ -86,12 +86,13 @@ def _systemverilog(top, name: str) -> str:
 
 
 def export_filter_verilog(ts, *, lanes: int = 1, tag_width: int = 8, frac: int | None = None,
-                          name: str = FILTER_TOP_NAME, index_banks: str = "parity"):
+                          name: str = FILTER_TOP_NAME, index_banks: str = "parity", geometry=None):
     """SystemVerilog of :class:`sim.backends.design.FilterTop` for ``ts`` (ports ``clk``, ``rst``,
     ``i_valid``, ``i_ready``, ``i_payload``, ``o_valid``, ``o_ready``, ``o_payload``,
     ``stall_output``, ``busy``, ``bank_conflict``), written as :func:`export_verilog` writes the
     texel-fetch unit. Returns (the text, the FilterTop)."""
-    top = FilterTop(ts, lanes=lanes, tag_width=tag_width, frac=frac, index_banks=index_banks)
+    top = FilterTop(None if geometry is not None else ts, lanes=lanes, tag_width=tag_width, frac=frac,
+                    index_banks=index_banks, geometry=geometry)
     text = _systemverilog(top, name)
     f = top.filter
     head = (f"// {name}: vqtex texture filter, {lanes} texel-fetch lane(s), {f.banks} index bank(s) per "

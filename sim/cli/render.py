@@ -109,10 +109,8 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
     request streams through the texel-fetch unit); the fovea's region figures then come from the
     texel-fetch unit's exact cycle model.
     ``unit`` is the RTL texel-fetch unit (``specialised`` or ``full``); with ``geometry`` it is the
-    loadable unit of that geometry, ``ts`` loaded over its bus port before each frame's requests
-    (``"sim"`` holds the load's cycles too)."""
-    if filter_in_rtl and geometry is not None:
-        raise ValueError("the RTL texture filter is baked: it does not take a geometry")
+    loadable unit of that geometry (or, with ``filter_in_rtl``, the loadable texture filter),
+    ``ts`` loaded over its bus port before each frame (``"sim"`` holds the load's cycles too)."""
     unit_kw = {"specialise": unit != "full", "geometry": geometry}
     if filter_in_rtl and compare_fixed:
         raise ValueError("compare_fixed runs request streams through the texel-fetch unit, not the RTL filter")
@@ -147,7 +145,7 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
                 warn_slow(backend, int(len(pixels["mode"]) * 8 // lanes * len(frames)))
             t0 = time.perf_counter()
             res = simulate_filter(ts, pixels, backend=backend, lanes=lanes, frac=sampler.frac, stall=stall, seed=seed,
-                                  index_banks=index_banks)
+                                  index_banks=index_banks, geometry=geometry)
             out["rtl_seconds"] = time.perf_counter() - t0
             out["image"] = sampler.place(res.colors)
             out["identical_to_golden"] = bool(np.array_equal(out["image"], golden_frame))
@@ -344,10 +342,13 @@ def cmd_render(args) -> int:
         if args.filter_in_rtl and (ts.present_blocks is not None or any(t.absent_levels for t in ts.textures)):
             raise CliError(f"--filter-in-rtl fetches every texel of a footprint, zero weights too: {args.texture_set} "
                            "is pruned (vqtex prune); use an unpruned set")
-        resolve(args, "unit", "specialised", args.backend != "golden" and not args.filter_in_rtl,
-                "chooses the RTL texel-fetch unit: it needs an RTL --backend (pysim, cxxrtl, verilator) and does "
-                "not go with --filter-in-rtl (the filter's lanes are specialised)")
+        resolve(args, "unit", "specialised", args.backend != "golden",
+                "chooses the RTL unit: it needs an RTL --backend (pysim, cxxrtl, verilator)")
+        if args.filter_in_rtl and args.unit == "full":
+            raise CliError("--filter-in-rtl: the filter's lanes are specialised or loadable (no --unit full)")
         geometry = unit_geometry(args, ts, args.texture_set or f"{scene.name}'s texture set")
+        if geometry is not None and args.filter_in_rtl and args.index_banks != "lane":
+            raise CliError("--filter-in-rtl --unit loadable keeps a copy of the memories per lane: --index-banks lane")
         need = _NeedReport(ts, on_frame) if report_path else None
         if need is not None:
             on_frame = need.on_frame
@@ -429,8 +430,8 @@ def _options_that_apply(args, fovea) -> None:
     ``--compare-fixed`` or ``--fovea``; ``--filter-in-rtl`` for ``--stall``)."""
     filt = args.filter_in_rtl
     resolve(args, "lanes", 4, filt, "is the RTL filter's lanes: it needs --filter-in-rtl")
-    resolve(args, "index_banks", "parity", filt, "is how the RTL filter's lanes hold the index memory: it needs "
-            "--filter-in-rtl")
+    resolve(args, "index_banks", "lane" if args.unit == "loadable" else "parity", filt,
+            "is how the RTL filter's lanes hold the index memory: it needs --filter-in-rtl")
     resolve(args, "train_on", "levels", args.encode_needed, "goes with --encode-needed")
     resolve(args, "diff_scale", 32, bool(args.diff), "is the top of the --diff heat map: it needs --diff")
     cycles = args.backend != "golden" or args.compare_fixed or fovea is not None

@@ -86,3 +86,17 @@ def test_filter_library_runs_again_and_describes_the_filter():
             assert (cxxrtl.strobe_sums(info, counters)["stall_output"] > 0) == (stall > 0)
     finally:
         lib.close()
+
+
+@pytest.mark.parametrize("backend", ["cxxrtl", "verilator"])
+def test_loadable_filter_compiled(backend):
+    """The loadable filter (its set loaded over the bus port) on the compiled backends: golden's
+    colours, and the cycles and stalls of the baked filter with a copy of the memories per lane."""
+    need("g++", *(["verilator"] if backend == "verilator" else []))
+    from vqtex.golden.geometry import Geometry
+    ts, frac, px = _pixels(2000 if backend == "cxxrtl" else 600, 21)
+    g = Geometry.of(ts)
+    loaded = simulate_filter(ts, px, backend=backend, lanes=2, stall=0.3, seed=4, index_banks="lane", geometry=g)
+    baked = simulate_filter(ts, px, backend=backend, lanes=2, stall=0.3, seed=4, index_banks="lane")
+    assert (loaded.colors == golden_colors(ts, px, frac)).all()
+    assert (loaded.cycles, loaded.stall_cycles) == (baked.cycles, baked.stall_cycles)

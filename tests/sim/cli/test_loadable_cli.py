@@ -65,7 +65,7 @@ def test_refusals(tmp_path, rgb8, capsys):
     assert_one_error(capsys, base + ["--unit", "loadable", "--geometry", tmp_path / "bad.toml"], "bad.toml")
     assert_one_error(capsys, ["export", "-o", tmp_path / "x.v"], "FILE.vqt is required")
     assert_one_error(capsys, ["render", "topspin", "--frames", "0", "-o", tmp_path / "f.png", "--unit", "loadable"],
-                     "--unit chooses the RTL texel-fetch unit")
+                     "--unit chooses the RTL unit: it needs an RTL --backend")
     assert not (tmp_path / "r.npy").exists() and not (tmp_path / "x.v").exists()
 
 
@@ -114,6 +114,19 @@ def test_render_topspin_town_and_dt_one_build(tmp_path, capsys):
         code, out, _ = run_cli(capsys, "cache", "info", "--json")
         info = json.loads(out)
         assert info["kinds"] == {"cxxrtl": info["kinds"]["cxxrtl"]} and info["kinds"]["cxxrtl"]["entries"] == 1
+
+
+def test_render_filter_in_rtl_loadable(tmp_path, capsys):
+    """The RTL texture filter, loadable (its own geometry, one lane), renders the .dt scene as golden."""
+    need("g++")
+    scene = crates_scene(tmp_path)
+    code, out, err = run_cli(capsys, "render", scene, "--frames", "0", "-o", tmp_path / "f.png", "--backend", "cxxrtl",
+                             "--filter-in-rtl", "--lanes", "1", "--unit", "loadable", "--json")
+    assert code == 0, err
+    rep = json.loads(out)
+    assert rep["identical_to_golden"] and rep["unit"] == "loadable" and rep["index_banks"] == "lane"
+    assert_one_error(capsys, ["render", scene, "--frames", "0", "-o", tmp_path / "g.png", "--backend", "cxxrtl",
+                              "--filter-in-rtl", "--unit", "loadable", "--index-banks", "parity"], "--index-banks lane")
 
 
 def test_demo_loadable(tmp_path, capsys):
