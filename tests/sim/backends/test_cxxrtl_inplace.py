@@ -106,7 +106,7 @@ def test_rewritten_cycle_equals_cxxrtl_stepping(tmp_path, compiler):
     need(compiler)
     cxx = os.environ.get("CXX") if compiler == "g++" and os.environ.get("CXX") else compiler
     raw = _toy_source()
-    fast, _ = cb.rewrite(raw)
+    fast, _, report = cb.rewrite(raw)
     assert "void p_top::vq_cycle" in fast
     assert "vq_old_" in fast                    # the swap needed its snapshot
     assert "vq_shr_uu<" in fast and "vq_shl_uu<" in fast
