@@ -130,16 +130,6 @@ def _fast_slices(src: str) -> str:
     return "\n".join(line(text) for text in src.split("\n")), count
 
 
-_SHIFT = re.compile(r"\b(shl_uu|shr_uu|shift_uu)<")
-
-
-def _fast_shifts(src: str) -> str:
-    """Every ``shl_uu``/``shr_uu``/``shift_uu`` as the ``vq_`` one of vq_ops.h (one machine shift
-    when the operands fit in 64 bits; the index reader's 64-bit funnel shift is one of them).
-    Returns the C++ and the number of shifts rewritten."""
-    return _SHIFT.subn(lambda m: f"vq_{m.group(1)}<", src)
-
-
 _MEM_DECL = re.compile(r"^\tmemory<(\d+)> (memory_\w+) \{ (\d+)u \};$", re.M)
 _MEM_READ = re.compile(
     r"^(?P<ind>\t+)auto (?P<tmp>tmp_\d+) = memory_index\((?P<addr>.+), 0, \d+\);\n"
@@ -279,7 +269,6 @@ def guarded_writes(src: str) -> tuple[str, int]:
 PASSES = {
     "alias_locals": _alias_locals,
     "fast_slices": _fast_slices,
-    "fast_shifts": _fast_shifts,
     "padded_memories": _padded_memories,
     "guarded_writes": guarded_writes,
     "inplace_cycle": inplace_rewrite,

@@ -18,7 +18,7 @@ from vqtex.sim.backends import cxxrtl, design
 #: model -> passes that must change something in it. ``guarded_writes`` applies only to a unit with
 #: memory write ports (the loadable one); ``padded_memories`` only to memories shallower than their
 #: address reaches (the baked units' partial banks, the filter's).
-BAKED = {"alias_locals", "fast_slices", "fast_shifts", "padded_memories", "inplace_cycle"}
+BAKED = {"alias_locals", "fast_slices", "padded_memories", "inplace_cycle"}
 UNITS = {
     "specialised": {"front": BAKED, "back": BAKED - {"alias_locals"}},
     "full": {"front": BAKED, "back": BAKED - {"alias_locals"}},
