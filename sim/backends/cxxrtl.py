@@ -46,8 +46,8 @@ from .yosys import rtlil_script, run_yosys
 from .toolchain import (ToolchainError, cached_build, digest, find_cxx, index_get, index_put, run_tool,
                         source_stamp, texture_set_digest, tool_version)
 
-__all__ = ["cxxrtl_sources", "cxxrtl_program", "write_cxxrtl", "blank_memories",
-           "rewrite", "PASSES", "guarded_writes", "memory_initialisers", "build_cxxrtl", "build_design", "open_design", "driver_sources", "source_stamp",
+__all__ = ["cxxrtl_sources", "cxxrtl_program", "write_cxxrtl", "blank_memories", "memory_initialisers",
+           "rewrite", "PASSES", "guarded_writes", "build_cxxrtl", "build_design", "open_design", "driver_sources", "source_stamp",
            "texture_set_digest", "BatchLibrary", "batch_layout", "strobe_sums", "run_batch", "run_checked", "run",
            "run_unit", "open_cxxrtl", "load_set", "CXXFLAGS", "ready_pattern", "DRIVER_DIR"]
 
