@@ -39,15 +39,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .cxxrtl_inplace import inplace_cycle
+from .cxxrtl_inplace import inplace_cycle, inplace_rewrite
 from .design import HALVES, DesignInfo, design_info
 from .interface import SimResult
 from .yosys import rtlil_script, run_yosys
 from .toolchain import (ToolchainError, cached_build, digest, find_cxx, index_get, index_put, run_tool,
                         source_stamp, texture_set_digest, tool_version)
 
-__all__ = ["cxxrtl_sources", "cxxrtl_program", "write_cxxrtl", "blank_memories",
-           "rewrite", "build_cxxrtl", "build_design", "open_design", "driver_sources", "source_stamp",
+__all__ = ["cxxrtl_sources", "cxxrtl_program", "write_cxxrtl", "blank_memories", "memory_initialisers",
+           "rewrite", "PASSES", "guarded_writes", "build_cxxrtl", "build_design", "open_design", "driver_sources", "source_stamp",
            "texture_set_digest", "BatchLibrary", "batch_layout", "strobe_sums", "run_batch", "run_checked", "run",
            "run_unit", "open_cxxrtl", "load_set", "CXXFLAGS", "ready_pattern", "DRIVER_DIR"]
 
@@ -67,14 +67,22 @@ def cxxrtl_sources(info: DesignInfo) -> dict:
     CXXRTL writes each memory's contents as an initialiser block; removing them makes the C++ depend
     on the design's structure only, so one build serves every texture set of the same shapes. If
     CXXRTL's output format changes and nothing matches, the contents stay: the library is then built
-    per texture set (slower to build, still right, since the driver loads the memories anyway)."""
-    return {half: blank_memories(write_cxxrtl(*info.halves[half])) for half in HALVES}
+    per texture set (slower to build, still right, since the driver loads the memories anyway);
+    ``blank_memories``'s count and the tests (test_cxxrtl_rewrites.py) catch that."""
+    return {half: blank_memories(write_cxxrtl(*info.halves[half]))[0] for half in HALVES}
 
 
-def blank_memories(src: str) -> str:
+def blank_memories(src: str) -> tuple[str, int]:
     """CXXRTL output without its memories' initialiser blocks (same widths and depths): the contents
-    are loaded at run time (``vq_load_memory``), so the C++ depends on the design's structure only."""
-    return _MEM_INIT.sub("", src)
+    are loaded at run time (``vq_load_memory``), so the C++ depends on the design's structure only.
+    Returns the C++ and the number of initialisers removed (one per memory with contents)."""
+    return _MEM_INIT.subn("", src)
+
+
+def memory_initialisers(src: str) -> int:
+    """Memory initialiser blocks left in CXXRTL output (``static const value<N> mem_init_k[...]``),
+    whatever their form: 0 after :func:`blank_memories` if it matched them all."""
+    return len(re.findall(r"\bmem_init_\d+\[", src))
 
 
 #: ``write_cxxrtl`` options. ``-g1``: debug information for the design's named wires and the
@@ -106,22 +114,20 @@ def _fast_slices(src: str) -> str:
 
     Only right of a statement's ``=``: CXXRTL assigns to a concatenation of slices
     (``x.slice<14>().concat(x.slice<1,0>()) = ...``, as it writes a constant-masked field of a
-    specialised unit), and a ``vq_slice`` there would assign to a copy."""
+    specialised unit), and a ``vq_slice`` there would assign to a copy. Returns the C++ and the
+    number of slices rewritten."""
+    count = 0
+
+    def sub(text):
+        nonlocal count
+        text, n = _SLICE.subn(lambda m: f"vq_slice<{m.group(2)}>({m.group(1)})", text)
+        count += n
+        return text
+
     def line(text):
         at = text.find(" = ")
-        if at < 0:
-            return _SLICE.sub(lambda m: f"vq_slice<{m.group(2)}>({m.group(1)})", text)
-        return text[:at] + _SLICE.sub(lambda m: f"vq_slice<{m.group(2)}>({m.group(1)})", text[at:])
-    return "\n".join(line(text) for text in src.split("\n"))
-
-
-_SHIFT = re.compile(r"\b(shl_uu|shr_uu|shift_uu)<")
-
-
-def _fast_shifts(src: str) -> str:
-    """Every ``shl_uu``/``shr_uu``/``shift_uu`` as the ``vq_`` one of vq_ops.h (one machine shift
-    when the operands fit in 64 bits; the index reader's 64-bit funnel shift is one of them)."""
-    return _SHIFT.sub(lambda m: f"vq_{m.group(1)}<", src)
+        return sub(text) if at < 0 else text[:at] + sub(text[at:])
+    return "\n".join(line(text) for text in src.split("\n")), count
 
 
 _MEM_DECL = re.compile(r"^\tmemory<(\d+)> (memory_\w+) \{ (\d+)u \};$", re.M)
@@ -160,7 +166,8 @@ def _padded_memories(src: str) -> str:
     past its depth stay zero (what CXXRTL reads out of bounds), and the read is one indexed load.
     The check was a branch on the address, which mispredicts on random addresses (the last,
     partial bank of a banked memory: 81 of 128 index words, 341 of 512 raw words). Memories read in
-    any other way keep their depth and their checks."""
+    any other way keep their depth and their checks. Returns the C++ and the number of reads
+    rewritten (a memory already ``2**w`` deep is not padded, but its reads lose the check too)."""
     reads = list(_MEM_READ.finditer(src))
     depth = {m.group(2): int(m.group(3)) for m in _MEM_DECL.finditer(src)}
     width: dict = {}
@@ -170,9 +177,13 @@ def _padded_memories(src: str) -> str:
     pad = {mem: 1 << max(w) for mem, w in width.items()
            if mem in depth and mem not in other and None not in w and len(w) == 1 and (1 << max(w)) >= depth[mem]}
 
+    count = 0
+
     def read(m):
+        nonlocal count
         if m["mem"] not in pad:
             return m.group(0)
+        count += 1
         ind = m["ind"]
         return (f"{ind}if ({m['en']}) {{\n"
                 f"{ind}\t{m['dst']} = {m['mem']}[size_t(({m['addr']}).data[0])];\n{ind}}}")
@@ -180,7 +191,7 @@ def _padded_memories(src: str) -> str:
     def decl(m):
         d = pad.get(m.group(2))
         return m.group(0) if d is None else f"\tmemory<{m.group(1)}> {m.group(2)} {{ {d}u }};"
-    return _MEM_DECL.sub(decl, _MEM_READ.sub(read, src))
+    return _MEM_DECL.sub(decl, _MEM_READ.sub(read, src)), count
 
 
 _EVAL_BODY = re.compile(r"^bool p_top::eval\(performer \*performer\) \{\n.*?^\}\n", re.S | re.M)
@@ -194,18 +205,22 @@ def _alias_locals(src: str) -> str:
     the bits are the same and the 504-bit codebook registers are not copied every cycle. (The
     in-place cycle made from this ``eval()``, :mod:`sim.backends.cxxrtl_inplace`, counts a read of such a
     reference as a read of the register, and turns it back into a copy if the register's update
-    cannot wait for its readers.)"""
+    cannot wait for its readers.) Returns the C++ and the number of locals made references."""
     m = _EVAL_BODY.search(src)
     if not m:
-        return src
+        return src, 0
     body = m.group(0)
+    count = 0
     for name, wire in _ALIAS.findall(body):
         decl = re.search(rf"^\tvalue<(\d+)> {name};\n", body, re.M)
         if not decl or len(re.findall(rf"\b{name} =[^=]", body)) != 1 or decl.start() > body.find(f"\t{name} = "):
             continue
+        if re.search(rf"^\t+[^=\n]*\b{name}\.slice<[^=\n]* = ", body, re.M):
+            continue                            # also assigned in parts
         body = body.replace(decl.group(0), "", 1)
         body = body.replace(f"\t{name} = {wire};", f"\tconst value<{decl.group(1)}> &{name} = {wire};", 1)
-    return src[:m.start()] + body + src[m.end():]
+        count += 1
+    return src[:m.start()] + body + src[m.end():], count
 
 
 _MEM_WRITE = re.compile(r"^(?P<ind>\t+)(?P<mem>memory_\w+)\.update\((?P<args>.*)\);$", re.M)
@@ -247,20 +262,38 @@ def guarded_writes(src: str) -> tuple[str, int]:
     return _MEM_WRITE.sub(guard, src), count
 
 
-def rewrite(src: str) -> tuple[str, str]:
-    """The generated C++ of one model as the driver compiles it, and the macros that go with it
-    (``VQ_EXACT_STEP``, ``VQ_INPLACE``; see driver.cc): every rewrite below (exact, checked by the
-    tests against golden and against CXXRTL's own stepping)."""
+#: The passes of :func:`rewrite`, in their order: name -> function of the C++ returning (C++,
+#: number of edits). Each matches Yosys's exact text and does nothing when it stops matching, so
+#: the count is the only sign that it still works: tests/sim/backends/test_cxxrtl_rewrites.py
+#: asserts, for every real unit, that each pass that applies to it changed something.
+PASSES = {
+    "alias_locals": _alias_locals,
+    "fast_slices": _fast_slices,
+    "padded_memories": _padded_memories,
+    "guarded_writes": guarded_writes,
+    "inplace_cycle": inplace_rewrite,
+}
+
+
+def rewrite(src: str, skip=()) -> tuple[str, str, dict]:
+    """The generated C++ of one model as the driver compiles it, the macros that go with it
+    (``VQ_EXACT_STEP``, ``VQ_INPLACE``; see driver.cc), and the report: pass (:data:`PASSES`) ->
+    number of edits it made (0: it matched nothing). Every pass is exact (checked by the tests
+    against golden and against CXXRTL's own stepping). ``skip``: passes not to run (to measure what
+    each buys; the build cache does not know about it, so use a cache of its own)."""
     macros = ""
     if "converged = false" in src:          # combinational feedback: see driver.cc
         macros += "#define VQ_EXACT_STEP 1\n"
-    src = _padded_memories(_fast_shifts(_fast_slices(_alias_locals(src))))
-    src, _ = guarded_writes(src)
-    inplace = inplace_cycle(src)
-    if inplace is not None:
-        src = inplace
-        macros += "#define VQ_INPLACE 1\n"
-    return src, macros
+    report = {}
+    for name, apply in PASSES.items():
+        if name in skip:
+            report[name] = 0
+            continue
+        out, report[name] = apply(src)
+        if name == "inplace_cycle" and out is not src:
+            macros += "#define VQ_INPLACE 1\n"
+        src = out
+    return src, macros, report
 
 
 _NAMESPACE = re.compile(r"^namespace cxxrtl_design \{$(.*)^\} // namespace cxxrtl_design$", re.S | re.M)
@@ -275,14 +308,22 @@ def _in_namespace(src: str, name: str) -> str:
     return src[:m.start()] + f"namespace {name} {{{m.group(1)}}} // namespace {name}\n"
 
 
-def cxxrtl_program(info: DesignInfo) -> tuple[str, str]:
+def cxxrtl_program(info: DesignInfo, reports: dict | None = None) -> tuple[str, str]:
     """(design.cc, ports.h) of the CXXRTL library of a unit. The baked texel-fetch unit
     (``info.halves``): both halves, the front end in namespace ``vq_front`` and the back end in
     ``vq_back``, and their macros (``VQ_FRONT_INPLACE``, ``VQ_BACK_EXACT_STEP``, ..., each 0 or 1).
     Any other unit (the loadable texel-fetch unit, the filter) is one model, namespace ``vq_top``
-    (``VQ_WHOLE``), with a bus port's macros (``VQ_BUS``, ``VQ_BUS_ADR``, ...) if it has one."""
+    (``VQ_WHOLE``), with a bus port's macros (``VQ_BUS``, ``VQ_BUS_ADR``, ...) if it has one.
+
+    ``reports``, if given, is filled with model ("front", "back" or "top") -> what each pass did:
+    :func:`rewrite`'s report, with ``blank_memories`` (initialisers removed) and
+    ``initialisers_left`` (:func:`memory_initialisers` after it)."""
+    reports = {} if reports is None else reports
     if not info.halves:
-        src, flags = rewrite(blank_memories(write_cxxrtl(info.fragment, info.ports)))
+        src, blanked = blank_memories(write_cxxrtl(info.fragment, info.ports))
+        left = memory_initialisers(src)
+        src, flags, report = rewrite(src)
+        reports["top"] = {"blank_memories": blanked, "initialisers_left": left, **report}
         macros = "#define VQ_WHOLE 1\n"
         for flag in ("INPLACE", "EXACT_STEP"):
             macros += f"#define VQ_TOP_{flag} {int(f'#define VQ_{flag} 1' in flags)}\n"
@@ -291,10 +332,12 @@ def cxxrtl_program(info: DesignInfo) -> tuple[str, str]:
                 f"#define VQ_BUS_{name.upper()} {_mangle_cxxrtl(f'bus__{name}')}\n"
                 for name in ("adr", "dat_w", "dat_r", "sel", "cyc", "stb", "we", "ack", "err", "stall"))
         return _in_namespace(src, "vq_top"), ports_header(info) + macros
-    sources = cxxrtl_sources(info)
     parts, macros = [], ""
     for half in HALVES:
-        src, flags = rewrite(sources[half])
+        src, blanked = blank_memories(write_cxxrtl(*info.halves[half]))
+        left = memory_initialisers(src)
+        src, flags, report = rewrite(src)
+        reports[half] = {"blank_memories": blanked, "initialisers_left": left, **report}
         parts.append(_in_namespace(src, f"vq_{half}"))
         for flag in ("INPLACE", "EXACT_STEP"):     # 0 or 1 each: driver.cc's Half<> arguments
             macros += f"#define VQ_{half.upper()}_{flag} {int(f'#define VQ_{flag} 1' in flags)}\n"

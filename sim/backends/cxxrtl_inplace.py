@@ -36,14 +36,27 @@ from __future__ import annotations
 import heapq
 import re
 
-__all__ = ["inplace_cycle", "CLASS_DECL"]
+__all__ = ["inplace_cycle", "inplace_rewrite", "CLASS_DECL"]
 
 _EVAL = re.compile(r"^bool p_top::eval\(performer \*performer\) \{\n(.*?)^\}\n", re.S | re.M)
 #: The member declarations added to ``struct p_top`` (after ``eval``'s).
 CLASS_DECL = "\ttemplate<class F> void vq_cycle(F &&sample);\n\tvoid vq_reset_cycle();\n"
 _EVAL_DECL = "\tbool eval(performer *performer = nullptr) override;\n"
 _SKIP = {"\tbool converged = true;", "\tbool posedge_p_clk = this->posedge_p_clk();", "\treturn converged;"}
-_COMB = re.compile(r"^\t(?:value<\d+> \w+|const value<\d+> &?\w+ = [\w.]+|\w+ = .*);$")
+_PART = r"\w+\.slice<\d+(?:,\d+)?>\(\)"          # a slice of a wire or local, as an lvalue
+#: A combinational statement: a local's declaration, a reference to a register's state, or an
+#: assignment to a whole wire or local, to a slice of one (``x.slice<7,0>() = ...``, as CXXRTL
+#: writes a signal assigned in parts, the texture filter's wide payloads) or to a concatenation of
+#: slices (``x.slice<14>().concat(x.slice<1,0>()) = ...``).
+_COMB = re.compile(rf"^\t(?:value<\d+> \w+|const value<\d+> &?\w+ = [\w.]+"
+                   rf"|(?:\w+|{_PART}(?:\.concat\({_PART}\))*) = .*);$")
+_TARGET = re.compile(r"(\w+)\.slice<")
+
+
+def _targets(line: str) -> set:
+    """The wires and locals a combinational assignment writes (all of them, or parts)."""
+    lhs = line.split(" = ", 1)[0].strip()
+    return set(_TARGET.findall(lhs)) or {lhs}
 _ALIAS = re.compile(r"^\tconst value<(?P<width>\d+)> &(?P<dst>\w+) = (?P<src>\w+\.curr);$")
 _NEXT = re.compile(r"\b(\w+)\.next\b")
 _CURR = re.compile(r"\b(\w+)\.curr\b")
@@ -115,14 +128,22 @@ def _order(reads, writes):
 
 def inplace_cycle(src: str) -> str | None:
     """The generated C++ with ``p_top::vq_cycle`` added (see the module docstring), or None."""
+    out, _ = inplace_rewrite(src)
+    return None if out is src else out
+
+
+def inplace_rewrite(src: str) -> tuple[str, int]:
+    """(the generated C++ with ``p_top::vq_cycle`` added, the number of register and write-port
+    update blocks it moved into it), or (``src`` itself, 0) when the code does not have the shape
+    the rewrite needs (the pass's report in :func:`sim.backends.cxxrtl.rewrite`)."""
     if _EVAL_DECL not in src:
-        return None
+        return src, 0
     m = _EVAL.search(src)
     if not m or "converged = false" in m.group(1):
-        return None
+        return src, 0
     items = _items(m.group(1))
     if items is None:
-        return None
+        return src, 0
     widths = {name: int(w) for w, name in re.findall(r"^\t(?:/\*\w+\*/ )?wire<(\d+)> (\w+);$", src, re.M)}
     combs = [text for kind, text in items if kind == "comb"]
     aliases = {}                                # local -> the register it is a reference to
@@ -142,13 +163,13 @@ def inplace_cycle(src: str) -> str | None:
             written_memories += [mem for mem in _WRITE.findall(text) if mem not in written_memories]
             continue
         if not w or not w <= widths.keys():
-            return None
+            return src, 0
         bodies.append(text)
         writes.append(w)
         reads.append(set(_CURR.findall(text)) | {aliases[i] for i in _IDENT.findall(text) if i in aliases})
     written = set().union(*writes) if writes else set()
-    if any(line.split(" = ", 1)[0].strip() in written for line in combs):
-        return None                             # the combinational part never writes a register
+    if any(_targets(line) & written for line in combs):
+        return src, 0                           # the combinational part never writes a register
     order, snap = _order(reads, writes)
 
     # Two functions of one body: vq_cycle (rst low, ``sample`` between the combinational part and
@@ -183,4 +204,4 @@ def inplace_cycle(src: str) -> str | None:
     out += reset
     # the definition goes right after eval()'s (inside the design's namespace)
     src = src[:m.end()] + "\n" + "\n".join(out) + src[m.end():]
-    return src.replace(_EVAL_DECL, _EVAL_DECL + CLASS_DECL, 1)
+    return src.replace(_EVAL_DECL, _EVAL_DECL + CLASS_DECL, 1), len(bodies) + len(memory_writes)

@@ -47,7 +47,7 @@ class Toy(Elaboratable):
         m.d.sync += [pipe[0].eq(a + self.inp), pipe[1].eq(pipe[0]), pipe[2].eq(pipe[1] ^ pipe[0])]
         m.d.comb += [rd.addr.eq(wide[:4] ^ a[:4]), rd.en.eq(self.en),
                      self.out.eq(Cat(a, b, pipe[2], wide[90:100]) ^ rd.data ^ wide[:64]),
-                     # shifts by a variable amount: 64-bit (native) and 100-bit (CXXRTL's own)
+                     # shifts by a variable amount, 64-bit and 100-bit
                      self.out2.eq((wide[:64] >> a[:6]) ^ (b << a[:5]) ^ (wide << a[:3])[36:100]
                                   ^ (pipe[2] >> b[:4]))]
         return m
@@ -101,15 +101,15 @@ def _trace(folder, src, cxx, *defines):
 @pytest.mark.parametrize("compiler", CXX_PREFERENCE)
 def test_rewritten_cycle_equals_cxxrtl_stepping(tmp_path, compiler):
     """CXXRTL's code as generated, stepped by eval()/commit() with the clock toggled, against the
-    code after every rewrite (slices, aliases, shifts, in-place cycle) run by vq_cycle; built by
+    code after every rewrite (slices, aliases, padded memory, in-place cycle) run by vq_cycle; built by
     each compiler the backend may pick."""
     need(compiler)
     cxx = os.environ.get("CXX") if compiler == "g++" and os.environ.get("CXX") else compiler
     raw = _toy_source()
-    fast, _ = cb.rewrite(raw)
+    fast, _, report = cb.rewrite(raw)
     assert "void p_top::vq_cycle" in fast
     assert "vq_old_" in fast                    # the swap needed its snapshot
-    assert "vq_shr_uu<" in fast and "vq_shl_uu<" in fast
+    assert report["fast_slices"] > 0 and report["alias_locals"] == 0     # (the toy copies no register whole)
     assert "memory<40> memory_p_mem { 12u };" in raw and "memory<40> memory_p_mem { 16u };" in fast
     assert "out of bounds read" in raw and "out of bounds read" not in fast
     want = _trace(tmp_path / "cxxrtl", raw, cxx)
