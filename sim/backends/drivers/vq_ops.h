@@ -1,5 +1,5 @@
-// The operations the generated code is rewritten to call (sim/backends/cxxrtl.py: _fast_slices,
-// _fast_shifts): the same bits as CXXRTL's own, with less work. Included before the generated
+// The operation the generated code is rewritten to call (sim/backends/cxxrtl.py: _fast_slices):
+// the same bits as CXXRTL's own, with less work. Included before the generated
 // design.cc by sim/backends/drivers/driver.cc and by the tests.
 #pragma once
 #include <cxxrtl/cxxrtl.h>
@@ -26,37 +26,4 @@ static inline __attribute__((always_inline)) cxxrtl::value<Stop - Start + 1> vq_
 template<size_t Bit, size_t N>
 static inline __attribute__((always_inline)) cxxrtl::value<1> vq_slice(const cxxrtl::value<N> &v) {
     return vq_slice<Bit, Bit>(v);
-}
-
-// vq_shl_uu / vq_shr_uu / vq_shift_uu<BitsY>(a, b): CXXRTL's shl_uu (a zero-extended to BitsY, then
-// shifted left by b), shr_uu and shift_uu (a shifted right by b in its own width, then zero-extended
-// or truncated to BitsY), as one 64-bit machine shift when every operand fits in 64 bits (CXXRTL
-// shifts chunk by chunk with carries). Wider operands go to CXXRTL's own.
-template<size_t Bits>
-static inline __attribute__((always_inline)) cxxrtl::value<Bits> vq_from_u64(uint64_t x) {
-    cxxrtl::value<Bits> r;
-    r.template set<uint64_t>(Bits >= 64 ? x : x & ((uint64_t(1) << (Bits % 64)) - 1));
-    return r;
-}
-template<size_t BitsY, size_t BitsA, size_t BitsB>
-static inline __attribute__((always_inline)) cxxrtl::value<BitsY> vq_shl_uu(const cxxrtl::value<BitsA> &a, const cxxrtl::value<BitsB> &b) {
-    if constexpr (BitsY <= 64 && BitsA <= 64 && BitsB <= 64) {
-        uint64_t n = b.template get<uint64_t>();
-        return vq_from_u64<BitsY>(n >= BitsY ? 0 : a.template get<uint64_t>() << n);
-    } else {
-        return cxxrtl_yosys::shl_uu<BitsY>(a, b);
-    }
-}
-template<size_t BitsY, size_t BitsA, size_t BitsB>
-static inline __attribute__((always_inline)) cxxrtl::value<BitsY> vq_shr_uu(const cxxrtl::value<BitsA> &a, const cxxrtl::value<BitsB> &b) {
-    if constexpr (BitsY <= 64 && BitsA <= 64 && BitsB <= 64) {
-        uint64_t n = b.template get<uint64_t>();
-        return vq_from_u64<BitsY>(n >= BitsA ? 0 : a.template get<uint64_t>() >> n);
-    } else {
-        return cxxrtl_yosys::shr_uu<BitsY>(a, b);
-    }
-}
-template<size_t BitsY, size_t BitsA, size_t BitsB>
-static inline __attribute__((always_inline)) cxxrtl::value<BitsY> vq_shift_uu(const cxxrtl::value<BitsA> &a, const cxxrtl::value<BitsB> &b) {
-    return vq_shr_uu<BitsY>(a, b);
 }
