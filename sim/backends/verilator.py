@@ -134,6 +134,11 @@ def build_verilator(ts, *, one_port: bool = False, tag_width: int = 8, specialis
                                                      specialise=specialise, geometry=geometry), elaborated=t0)
 
 
+def _verilog_file() -> str:
+    from . import verilog
+    return verilog.__file__
+
+
 def build_design(info: DesignInfo, verilog, *, elaborated: float | None = None) -> Build:
     """The Verilator library of any unit (built or from the cache): ``verilog()`` gives the unit's
     exported Verilog (module ``info.verilog_name``), called only when the library must be built."""
@@ -143,8 +148,10 @@ def build_design(info: DesignInfo, verilog, *, elaborated: float | None = None) 
     steps = {"elaborate": time.perf_counter() - t0}
     drivers = driver_sources("verilator_driver.cc", "batch.h")
     flags = VERILATOR_FLAGS + CXXFLAGS + [MAKE_OPT]
-    with open(os.path.abspath(__file__), "rb") as f:       # (ports_header is part of the build)
-        this = f.read()
+    this = b""
+    for mod in (__file__, _verilog_file()):     # (ports_header is part of the build; so is the export)
+        with open(os.path.abspath(mod), "rb") as f:
+            this += f.read()
     quick = digest("verilator-quick", source_stamp(), this, info.unit, *info.options, flags,
                    tool_version(verilator), tool_version(cxx), *drivers)
     key = index_get("verilator", quick)

@@ -40,7 +40,10 @@ def test_export_cli_ports_and_constructs(mixed_file, tmp_path, capsys):
     # No simulation-only constructs: no system tasks, no delays; initial blocks only fill memories.
     assert not re.search(r"\$(display|finish|fatal|stop|readmem|write|monitor|random)", text)
     assert not re.search(r"#\s*\d", text)
-    assert "always_comb" in text and "always @*" not in text
+    # sv dialect: registers as always_ff with their enable and reset, combinational logic as assign
+    # statements (no always_comb next-state blocks: Verilator re-evaluates them on every input change)
+    assert "always_ff" in text and "always @*" not in text and "always_comb" not in text
+    assert re.search(r"always_ff @\(posedge clk\)\s*\n?\s*if \(rst\) \S+ <= [^;]+;\s*else if \(", text)
     blocks = re.findall(r"initial begin\n(.*?)\n\s*end", text, re.S)
     assert blocks and all(re.fullmatch(r"(\s*[\\\w$.]+\s*\[\d+\] = \d+'[hdb][0-9a-fA-F_]+;\s*)+", b) for b in blocks)
 
