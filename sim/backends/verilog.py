@@ -35,7 +35,9 @@ from .yosys import rtlil_script, run_yosys
 #: ``always_comb`` block from the enables. Same logic as Amaranth's script (Yosys's own rewrites,
 #: bit- and cycle-exact); the shape is what a compiled simulator wants: Verilator evaluates the
 #: ``always_comb`` next-state blocks of Amaranth's script again on every input change (every register
-#: of a pipeline whose enable depends on ``o_ready``), about 1.7x slower (docs/simulation.md).
+#: of a pipeline whose enable depends on ``o_ready``; docs/simulation.md, Verilator section). No
+#: ``-norename``: Yosys's internal names become ``_N_`` (Icarus reads a function named
+#: ``\$procmux$2`` as an unknown system function).
 _ATTRS = "-remove generator -remove top -remove src -remove amaranth.hierarchy -remove amaranth.decoding"
 SV_SCRIPT = ("proc -norom", "opt_clean", "opt_dff", "opt_clean", "memory_collect", f"attrmap {_ATTRS}",
              f"attrmap -modattr {_ATTRS}", "write_verilog -sv -noparallelcase")

@@ -87,3 +87,15 @@ def test_icarus_no_x_and_golden(sets, name, one_port, stall):
     assert np.array_equal(res["responses"], fetch(ts, *req.T))
     assert np.array_equal(res["tags"], np.arange(len(req)) & 0xFF)
     assert res["cycles"] == simulate(ts, req, stall=stall, seed=2, one_port=one_port).cycles
+
+
+def test_verilator_build_has_no_warnings(sets):
+    """The Verilator backend's build (lint and style rules off, the lint test above covers them)
+    reports nothing: no UNOPTFLAT or other scheduling warning that would cost speed (docs/simulation.md,
+    Verilator section: they are fixed in the hardware or the export, not waived)."""
+    need("verilator")
+    from vqtex.sim.backends.verilator import build_verilator
+    build = build_verilator(sets["mixed"])
+    with open(os.path.join(os.path.dirname(build.library), "build.log")) as f:
+        log = f.read()
+    assert "%Warning" not in log, [ln for ln in log.splitlines() if "%Warning" in ln][:5]
