@@ -194,7 +194,11 @@ class ColorMatrix(wiring.Component):
 
         # Stage 3: sum + bias, shift, clamp; or bypass.
         acc = [Signal(signed(sbits), name=f"sum_{'rgb'[c]}") for c in range(3)]
-        shifted = [Signal(signed(max(sbits, 10)), name=f"shifted_{'rgb'[c]}") for c in range(3)]
+        # The shift's own width (a constant shift keeps sbits - F bits): no extra copies of the sign
+        # bit, which an exported netlist would write as a vector assigned from its own top bit (a
+        # combinational loop to Verilator, UNOPTFLAT). The clamp below reads the same bits either way.
+        swidth = max(sbits, 10) if regs is not None else max(sbits - F, 1)
+        shifted = [Signal(signed(swidth), name=f"shifted_{'rgb'[c]}") for c in range(3)]
         conv = [Signal(8, name=f"conv_{'rgb'[c]}") for c in range(3)]
         for c in range(3):
             if not matrix:

@@ -16,9 +16,9 @@ initialised the way Amaranth/Yosys write them: one ``initial begin mem[k] = ...;
 block per memory in the module that owns it. Verilator, Icarus Verilog and FPGA synthesis tools
 (Yosys, Vivado, Quartus) all accept this for ROMs, and the file stands alone (no ``$readmemh``
 side files whose paths would have to be right at simulation time). The other constructs a
-simulator-minded reader might notice are Yosys's: ``reg x = value;`` register initial values and
-a constant ``$auto$verilog_backend...`` trigger register in some ``always @*`` blocks (an empty
-``if`` that synthesis removes). There are no system tasks, delays or assertions.
+simulator-minded reader might notice are Yosys's: ``reg x = value;`` register initial values, and
+(``--dialect v2005`` only) a constant ``$auto$verilog_backend...`` trigger register in some ``always
+@*`` blocks (an empty ``if`` that synthesis removes). There are no system tasks, delays or assertions.
 """
 
 from __future__ import annotations
@@ -26,16 +26,27 @@ from __future__ import annotations
 from .design import FILTER_TOP_NAME, TOP_NAME, FilterTop, TexelFetchTop, port_map, response_ports
 from .yosys import rtlil_script, run_yosys
 
-#: amaranth.back.verilog's own Yosys script (amaranth 0.5, internal attributes stripped), with
-#: ``write_verilog -sv``: the same netlist as the v2005 dialect, written as SystemVerilog.
+#: The Yosys script of the sv dialect: amaranth.back.verilog's own (amaranth 0.5, internal attributes
+#: stripped) with the processes turned into multiplexers (``proc`` without ``-nomux``) and each
+#: register's enable and synchronous reset folded into its flip-flop (``opt_clean; opt_dff``), written
+#: with ``write_verilog -sv -noparallelcase``. So every register is one ``always_ff`` block (``if (rst)
+#: q <= 0; else if (en) q <= d;``) and the combinational logic is ``assign`` statements (a multi-way
+#: multiplexer is a function with a plain ``case``): no next-state variable computed in an
+#: ``always_comb`` block from the enables. Same logic as Amaranth's script (Yosys's own rewrites,
+#: bit- and cycle-exact); the shape is what a compiled simulator wants: Verilator evaluates the
+#: ``always_comb`` next-state blocks of Amaranth's script again on every input change (every register
+#: of a pipeline whose enable depends on ``o_ready``; docs/simulation.md, Verilator section). No
+#: ``-norename``: Yosys's internal names become ``_N_`` (Icarus reads a function named
+#: ``\$procmux$2`` as an unknown system function).
 _ATTRS = "-remove generator -remove top -remove src -remove amaranth.hierarchy -remove amaranth.decoding"
-SV_SCRIPT = ("proc -nomux -norom", "memory_collect", f"attrmap {_ATTRS}", f"attrmap -modattr {_ATTRS}",
-             "write_verilog -norename -sv")
+SV_SCRIPT = ("proc -norom", "opt_clean", "opt_dff", "opt_clean", "memory_collect", f"attrmap {_ATTRS}",
+             f"attrmap -modattr {_ATTRS}", "write_verilog -sv -noparallelcase")
 
 __all__ = ["export_verilog", "export_filter_verilog", "icarus_testbench", "run_icarus", "DIALECTS"]
 
-#: Output dialects: "sv" (default) writes combinational logic as ``always_comb`` and registers as
-#: ``always_ff`` (Yosys ``write_verilog -sv``); "v2005" is Amaranth's plain Verilog-2005.
+#: Output dialects: "sv" (default) writes combinational logic as ``assign`` statements and registers
+#: as ``always_ff`` blocks with their enable and reset (:data:`SV_SCRIPT`); "v2005" is Amaranth's plain
+#: Verilog-2005 (``always @*`` processes).
 DIALECTS = ("sv", "v2005")
 
 
@@ -46,12 +57,13 @@ def export_verilog(ts, *, one_port: bool = False, tag_width: int = 8, name: str 
     depends only on the design and the memories). If ``ports`` is a dict, it receives the top's
     port names and widths.
 
-    Why ``always_comb`` by default: in plain Verilog-2005 Yosys writes combinational processes as
-    ``always @*`` blocks made sensitive to a constant "trigger" register initialised to 0, hoping the
-    initialisation is an event at time 0. Icarus Verilog 11 does not treat it as one, so a block
+    Why not Amaranth's plain output by default: in Verilog-2005 Yosys writes combinational processes
+    as ``always @*`` blocks made sensitive to a constant "trigger" register initialised to 0, hoping
+    the initialisation is an event at time 0. Icarus Verilog 11 does not treat it as one, so a block
     whose inputs never change (e.g. a colour-format mux while every request is rgb) keeps X on its
-    output forever, and X reaches responses even after reset. ``always_comb`` runs at time 0 by
-    definition (IEEE 1800), in Icarus (``-g2012``), Verilator and synthesis tools alike.
+    output forever, and X reaches responses even after reset. The default dialect has no
+    combinational processes at all (continuous ``assign`` statements, evaluated at time 0 by every
+    simulator) and writes registers as ``always_ff`` (:data:`SV_SCRIPT`; Icarus needs ``-g2012``).
     """
     from amaranth.back import verilog
     if dialect not in DIALECTS:
@@ -72,7 +84,7 @@ def export_verilog(ts, *, one_port: bool = False, tag_width: int = 8, name: str 
             + (f"// Textures: {ts.n_textures}; memories initialised by initial blocks. " if geometry is None else
                f"// Loadable: {geometry.describe()}; memories and colour matrix loaded over the Wishbone "
                "port bus_* (register map: vqtex export --register-map). ")
-            + f"{'SystemVerilog always_comb/always_ff (iverilog -g2012)' if dialect == 'sv' else 'Verilog-2005'}. "
+            + f"{'SystemVerilog: assign and always_ff (iverilog -g2012)' if dialect == 'sv' else 'Verilog-2005'}. "
             f"Generated by vqtex export.\n")
     return head + text
 

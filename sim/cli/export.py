@@ -183,7 +183,7 @@ def add_parser(sub) -> None:
                                      "texel-fetch lanes instead of the texel-fetch unit", "the texel-fetch unit"))
     add_index_banks(e)
     e.add_argument("--dialect", choices=["sv", "v2005"], default="sv",
-                   help=with_default("sv: always_comb/always_ff (X-free in Icarus -g2012); v2005: plain Verilog", "sv"))
+                   help=with_default("sv: assign and always_ff (X-free in Icarus -g2012); v2005: plain Verilog", "sv"))
     e.add_argument("--lint", action="store_true",
                    help="also run verilator --lint-only -Wall on it and fail on any warning (default off)")
     add_json(e)
