@@ -7,7 +7,7 @@ and the C header a CPU driver includes, ``OUT.h`` (:mod:`golden.register_map`).
 
 Writes the Verilog of the texel-fetch unit holding that file's memories (see
 :mod:`sim.backends.verilog`) and, beside it, ``OUT.vlt``: the Verilator configuration file that
-waives the four rules Yosys's output trips (:data:`LINT_WAIVERS`, explained in docs/usage.md), so
+waives the five rules Yosys's output trips (:data:`LINT_WAIVERS`, explained in docs/usage.md), so
 ``verilator --lint-only -Wall OUT.vlt OUT.v`` is clean in the user's own flow. Both files appear
 together or not at all. ``--lint`` also runs
 ``verilator --lint-only -Wall`` with the project's documented waivers (docs/simulation.md) and fails
@@ -44,6 +44,10 @@ lint_off -rule WIDTH
 // A memory of one word has a zero-width address; Yosys declares it as [-1:0] (only bit 0 is used,
 // and it is always 0).
 lint_off -rule LITENDIAN
+// Yosys writes a multiplexer of several cases as a function whose inputs are named a, b and s; a
+// signal of the design with one of those names (the index width b) is hidden inside the function
+// only, where it is not used.
+lint_off -rule VARHIDDEN
 """
 
 
