@@ -197,7 +197,9 @@ class ColorMatrix(wiring.Component):
         # The shift's own width (a constant shift keeps sbits - F bits): no extra copies of the sign
         # bit, which an exported netlist would write as a vector assigned from its own top bit (a
         # combinational loop to Verilator, UNOPTFLAT). The clamp below reads the same bits either way.
-        swidth = max(sbits, 10) if regs is not None else max(sbits - F, 1)
+        # (at least 10 bits: the clamp tests bits 8 and up; a matrix whose sums are that narrow after
+        # the shift is rare)
+        swidth = max(sbits, 10) if regs is not None else max(sbits - F, 10)
         shifted = [Signal(signed(swidth), name=f"shifted_{'rgb'[c]}") for c in range(3)]
         conv = [Signal(8, name=f"conv_{'rgb'[c]}") for c in range(3)]
         for c in range(3):
