@@ -29,7 +29,8 @@ import numpy as np
 
 from .constants import (COLOR_CODES, COLORS, LAYOUTS, MAX_LEVELS, PVR2_COLORS, WORD_BITS_ALLOWED)
 
-__all__ = ["Geometry", "GeometryError", "PRESETS", "preset", "geometry_from", "BLOCK_SHAPES"]
+__all__ = ["Geometry", "GeometryError", "PRESETS", "preset", "geometry_from", "BLOCK_SHAPES", "entry_lanes",
+           "index_lanes"]
 
 #: Block shapes (width, height) the format allows: 1, 2, 4 or 8 texels a side.
 BLOCK_SHAPES = tuple((1 << a, 1 << b) for a in range(4) for b in range(4))
@@ -51,6 +52,17 @@ def _bits_for(n: int) -> int:
     """Bits of an unsigned value up to ``n`` (at least 1): ``amaranth.utils.bits_for`` without
     Amaranth (golden imports numpy only)."""
     return max(1, int(n).bit_length())
+
+
+def entry_lanes(entry_bytes: int) -> int:
+    """Bus words (32 bits) a codebook entry of ``entry_bytes`` spans in the register map: its 32-bit
+    words rounded up to a power of two (golden.register_map; hw.codebook_rom's loadable banks)."""
+    return 1 << max(0, (-(-int(entry_bytes) // 4) - 1).bit_length())
+
+
+def index_lanes(word_bits: int) -> int:
+    """Bus words an index memory word of ``word_bits`` spans in the register map (2 for 64 bits)."""
+    return max(1, int(word_bits) // 32)
 
 
 def _block_name(shape) -> str:
@@ -144,9 +156,8 @@ class Geometry:
         if not isinstance(self.extended, (bool, np.bool_)):
             raise GeometryError(f"geometry extended must be true or false, not {self.extended!r}")
         object.__setattr__(self, "extended", bool(self.extended))
-        lanes = 1 << max(0, (-(-self.entry_bytes // 4) - 1).bit_length())       # register_map's entry lanes
-        words = max(self.codebook_entries * lanes, self.index_words * max(1, self.word_bits // 32), self.raw_words,
-                    self.textures * MAX_LEVELS * 4)
+        words = max(self.codebook_entries * entry_lanes(self.entry_bytes),
+                    self.index_words * index_lanes(self.word_bits), self.raw_words, self.textures * MAX_LEVELS * 4)
         if words > MAX_REGION_WORDS:
             raise GeometryError(f"geometry too large for the bus: a region of {words} words (at most "
                                 f"{MAX_REGION_WORDS}, so that a CPU's byte address fits 32 bits)")

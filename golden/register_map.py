@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .constants import DESCRIPTOR_FIELDS, MAX_LEVELS
-from .geometry import Geometry
+from .geometry import Geometry, entry_lanes, index_lanes
 
 __all__ = ["RegisterMap", "REGIONS", "DESCRIPTOR_WORDS", "CONTROL", "ID_VALUE", "VERSION", "load_writes",
            "descriptor_words", "memory_words", "markdown", "c_header", "LoadError", "load_cycles", "expected_reads",
@@ -90,10 +90,6 @@ class LoadError(ValueError):
     """A texture set does not fit the geometry it is to be loaded into."""
 
 
-def _pow2_at_least(n: int) -> int:
-    return 1 << max(0, (int(n) - 1).bit_length())
-
-
 @dataclass(frozen=True)
 class RegisterMap:
     """The address map of a geometry's loadable unit.
@@ -107,12 +103,12 @@ class RegisterMap:
     @property
     def index_lanes(self) -> int:
         """Bus words per index memory word (2 for 64-bit words, else 1)."""
-        return max(1, self.geometry.word_bits // 32)
+        return index_lanes(self.geometry.word_bits)
 
     @property
     def entry_lanes(self) -> int:
         """Bus words per codebook entry: ``ceil(entry_bytes / 4)`` rounded up to a power of two."""
-        return _pow2_at_least(-(-self.geometry.entry_bytes // 4))
+        return entry_lanes(self.geometry.entry_bytes)
 
     @property
     def used_entry_lanes(self) -> int:

@@ -18,7 +18,7 @@ from amaranth.lib import data, memory, wiring
 from amaranth.lib.wiring import In, Out
 from amaranth.utils import ceil_log2
 
-from .bus_port import DATA_WIDTH, LoadTarget, attach_memory, load_decode
+from .bus_port import DATA_WIDTH, LoadTarget, attach_memory, load_decode, or_all
 
 __all__ = ["BankedROM", "BANK_DEPTH", "LATENCY", "pick", "addr_bits"]
 
@@ -41,14 +41,6 @@ def pick(values: list, index):
         values = [Mux(index[bit], values[n + 1], values[n]) for n in range(0, len(values), 2)]
         bit += 1
     return values[0]
-
-
-def _any(values):
-    """The OR of read answers (each 0 unless addressed): one value."""
-    out = values[0]
-    for v in values[1:]:
-        out = out | v
-    return out
 
 
 def addr_bits(depth: int) -> int:
@@ -180,7 +172,7 @@ class BankedROM(wiring.Component):
         # slicing one wide value every cycle.
         m.d.comb += self.data.eq(Cat(*data))
         if load is not None:
-            m.d.comb += self.load_data.eq(_any(answers))
+            m.d.comb += self.load_data.eq(or_all(answers))
         if self._banks == 1:
             m.d.comb += [self.word.eq(data[0]), self.bank.eq(0)]
             return m

@@ -37,7 +37,8 @@ from amaranth.lib.wiring import In, Out
 from vqtex.golden.geometry import Geometry
 from vqtex.golden.register_map import (CONTROL, REGION_BITS, REGIONS, RegisterMap, geometry_words)
 
-__all__ = ["wishbone_signature", "load_layout", "BusPort", "LoadTarget", "load_decode", "attach_memory", "READ_LATENCY",
+__all__ = ["wishbone_signature", "load_layout", "BusPort", "LoadTarget", "load_decode", "attach_memory", "or_all",
+           "READ_LATENCY",
            "DATA_WIDTH"]
 
 #: Bus data width.
@@ -46,10 +47,11 @@ DATA_WIDTH = 32
 READ_LATENCY = 3
 
 
-def _or(values):
-    """The OR of ``values`` (at least one)."""
+def or_all(values):
+    """The OR of ``values``: the read answers of a unit's memories (each 0 unless addressed) as one
+    answer, or masked constants; a 32-bit 0 for none."""
     values = list(values)
-    out = values[0]
+    out = values[0] if values else C(0, DATA_WIDTH)
     for v in values[1:]:
         out = out | v
     return out
@@ -169,7 +171,7 @@ class BusPort(wiring.Component):
         own = Signal(DATA_WIDTH, name="own_data")
         values = geometry_words(self._geometry)
         mine = self.load.read & (self.load.region == REGIONS["control"])
-        m.d.sync += own.eq(_or(Mux(mine & (self.load.offset == CONTROL[name][0]), C(value, DATA_WIDTH), 0)
+        m.d.sync += own.eq(or_all(Mux(mine & (self.load.offset == CONTROL[name][0]), C(value, DATA_WIDTH), 0)
                                for name, value in values.items()))
         dat_r = Signal(DATA_WIDTH, name="dat_r_reg")
         ack_read = Signal()

@@ -17,10 +17,11 @@ from amaranth.lib.wiring import In, Out
 
 from vqtex.golden.format import COLOR_CODES
 
+from vqtex.golden.geometry import entry_lanes
 from vqtex.golden.register_map import REGIONS
 
 from .banked_rom import BANK_DEPTH, BankedROM, pick
-from .bus_port import DATA_WIDTH, LoadTarget
+from .bus_port import DATA_WIDTH, LoadTarget, or_all
 from .features import Features
 from .registers import enabled_register
 
@@ -212,7 +213,7 @@ class CodebookROM(wiring.Component):
             return None if load is None else LoadTarget(load, REGIONS[region], lanes=lanes)
 
         if feat.compressed:
-            lanes = 1 << max(0, (-(-nbytes // 4) - 1).bit_length())     # register_map's entry_lanes
+            lanes = entry_lanes(nbytes)
             m.submodules.codebook = codebook = BankedROM(
                 self._entries, width=nbytes * 8, bank_depth=self._bank_depth, depth=self._depths[0],
                 load=target("codebook", lanes))
@@ -229,8 +230,7 @@ class CodebookROM(wiring.Component):
                 m.d.comb += raw.load.eq(self.load)
                 answers.append(raw.load_data)
         if load is not None:
-            m.d.comb += self.load_data.eq(answers[0] if len(answers) == 1 else answers[0] | answers[1]
-                                          if answers else 0)
+            m.d.comb += self.load_data.eq(or_all(answers))
 
         def reg(value, name):
             return enabled_register(m, self.en, value, name)

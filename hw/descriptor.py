@@ -21,7 +21,7 @@ from vqtex.golden.format import DESCRIPTOR_FIELDS, MAX_LEVELS, TextureSet, log2
 from vqtex.golden.geometry import Geometry
 from vqtex.golden.register_map import DESCRIPTOR_WORDS, REGIONS
 
-from .bus_port import DATA_WIDTH, attach_memory, load_decode
+from .bus_port import DATA_WIDTH, attach_memory, load_decode, or_all
 from .features import READ_BY, Features, Fields
 
 __all__ = ["DescriptorLayout", "DescriptorTable", "descriptor_widths", "texture_bits", "LEVEL_BITS", "as_geometry"]
@@ -227,10 +227,7 @@ class DescriptorTable(wiring.Component):
             answers.append(answer)
             for name, _ in present:
                 row[name] = getattr(port.data, name)
-        answer = answers[0]
-        for other in answers[1:]:
-            answer = answer | other
-        m.d.comb += self.load_data.eq(answer)
+        m.d.comb += self.load_data.eq(or_all(answers))
         # ``row`` assigned in one piece (plain wiring; field by field, CXXRTL would assemble it
         # with read-modify-writes every cycle, and its in-place cycle would not apply)
         parts = [row[name] if name in row else C(0, f.width)

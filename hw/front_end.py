@@ -18,7 +18,7 @@ from vqtex.golden.geometry import Geometry
 from . import index_reader
 from .address import BlockAddress
 from .banked_rom import BANK_DEPTH
-from .bus_port import DATA_WIDTH
+from .bus_port import DATA_WIDTH, or_all
 from .descriptor import DescriptorTable, as_geometry
 from .features import Features
 from .index_reader import IndexReader, IndexRequestLayout
@@ -240,8 +240,7 @@ class FrontEnd(wiring.Component):
                 idx.en.eq(advance),
             ]
         if load is not None:                # the read answers of the table and the index memory
-            answers = [desc.load_data] + ([idx.load_data] if feat.compressed else [])
-            m.d.comb += self.load_data.eq(answers[0] if len(answers) == 1 else answers[0] | answers[1])
+            m.d.comb += self.load_data.eq(or_all([desc.load_data] + ([idx.load_data] if feat.compressed else [])))
             m.d.comb += desc.load.eq(self.load)
             if feat.compressed:
                 m.d.comb += idx.load.eq(self.load)

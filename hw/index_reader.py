@@ -25,10 +25,11 @@ from amaranth import *
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
+from vqtex.golden.geometry import index_lanes
 from vqtex.golden.register_map import REGIONS
 
 from .banked_rom import BANK_DEPTH, BankedROM, pick
-from .bus_port import DATA_WIDTH, LoadTarget
+from .bus_port import DATA_WIDTH, LoadTarget, or_all
 from .registers import enabled_register
 
 __all__ = ["IndexReader", "IndexRequestLayout", "INDEX_BITS", "LATENCY"]
@@ -169,10 +170,7 @@ class IndexReader(wiring.Component):
         self._answers = []                  # the loadable memories' read answers (``_memory``)
         m = self._elaborate_specialised() if self._widths is not None else self._elaborate_full()
         if self._load is not None:
-            answer = self._answers[0]
-            for other in self._answers[1:]:
-                answer = answer | other
-            m.d.comb += self.load_data.eq(answer)
+            m.d.comb += self.load_data.eq(or_all(self._answers))
         return m
 
     def _elaborate_full(self):
@@ -216,7 +214,7 @@ class IndexReader(wiring.Component):
         depth = None if self._depth == len(self._words) and self._load is None else \
             max(1, (self._depth - phase + stride - 1) // stride)
         target = None if self._load is None else LoadTarget(
-            self._load, REGIONS["index"], lanes=max(1, self._word_bits // DATA_WIDTH), stride=stride, phase=phase)
+            self._load, REGIONS["index"], lanes=index_lanes(self._word_bits), stride=stride, phase=phase)
         m.submodules[name] = mem = BankedROM(words, width=self._word_bits,
                                              bank_depth=self._bank_depth, depth=depth, load=target)
         if target is not None:
