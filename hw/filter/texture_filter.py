@@ -127,8 +127,7 @@ class TextureFilter(wiring.Component):
                 raise TypeError("a loadable texture filter needs a Geometry")
             if index_banks != "lane":
                 raise ValueError("a loadable texture filter keeps a copy of the memories per lane: index_banks='lane'")
-            texture_set = texture_set if texture_set is not None else _blank_set(geometry)
-        if not isinstance(texture_set, TextureSet):
+        if not (loadable and texture_set is None) and not isinstance(texture_set, TextureSet):
             raise TypeError(f"texture_set must be a TextureSet, not {type(texture_set).__name__}")
         if lanes not in LANES:
             raise ValueError(f"lanes must be one of {LANES}, not {lanes!r}")
@@ -147,10 +146,10 @@ class TextureFilter(wiring.Component):
         self._loadable = bool(loadable)
         self._geometry = geometry
         self._contents = texture_set
-        if self._loadable and texture_set is None:
-            texture_set = _blank_set(geometry)
         self._ts = texture_set
-        self._table = level_table(texture_set)
+        # a loadable filter without contents starts from a level table of 1x1 textures (the host
+        # loads the real one with the descriptors)
+        self._table = level_table(texture_set) if texture_set is not None else spec.LevelTable([[(1, 1)]])
         # a loadable filter serves every level size the coordinates can address
         minimum = spec.coordinate_frac_bits(COORD_BITS if self._loadable else self._table.max_log2)
         self._frac = minimum if frac is None else int(frac)
@@ -311,11 +310,3 @@ class TextureFilter(wiring.Component):
                 bl.i.p.weight[k].eq(f.o.p.tag[:WEIGHT_WIDTH]),
             ]
         return m
-
-
-def _blank_set(geometry) -> TextureSet:
-    """A texture set of one 1x1 raw texture: what a loadable filter without contents starts from
-    (its level table and memories are loaded over the bus before use)."""
-    from vqtex.golden.encode import encode
-    import numpy as np
-    return encode([np.zeros((1, 1, 4), np.uint8)], color="rgba", mipmaps=False)
