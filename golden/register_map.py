@@ -39,7 +39,7 @@ from .geometry import Geometry, entry_lanes, index_lanes
 
 __all__ = ["RegisterMap", "REGIONS", "DESCRIPTOR_WORDS", "CONTROL", "ID_VALUE", "VERSION", "load_writes",
            "descriptor_words", "memory_words", "markdown", "c_header", "LoadError", "load_cycles", "expected_reads",
-           "mapped"]
+           "mapped", "mapped_words"]
 
 #: Region name -> code (the top three bits of a word address).
 REGIONS = {"control": 0, "descriptors": 1, "index": 2, "codebook": 3, "raw": 4}
@@ -238,35 +238,45 @@ def expected_reads(ts, geometry: Geometry, addresses) -> tuple:
     (data uint32, err bool) per address. Only the words the load wrote, the read-only registers and
     unmapped addresses are known (any other word reads as 0 here: ask only known ones)."""
     rmap = RegisterMap(geometry)
-    known = {}
-    for name, value in {**geometry_words(geometry), **matrix_words(ts.matrix)}.items():
-        known[int(rmap.address("control", CONTROL[name][0]))] = value
-    for a, d in load_writes(ts, geometry).tolist():
-        known[a] = d
-    data, err = [], []
-    for a in np.asarray(addresses, np.uint64).tolist():
-        if a in known:
-            data.append(known[a]); err.append(False)
-        else:
-            data.append(0); err.append(not mapped(rmap, a))
-    return np.array(data, np.uint32), np.array(err, bool)
+    regs = {**geometry_words(geometry), **matrix_words(ts.matrix)}
+    writes = load_writes(ts, geometry)
+    # every known word, once (the load's matrix writes are the matrix registers' values again)
+    known_addr = np.concatenate([rmap.address("control", [CONTROL[n][0] for n in regs]),
+                                 writes[:, 0].astype(np.uint64)])
+    known_data = np.concatenate([np.array(list(regs.values()), np.uint64), writes[:, 1].astype(np.uint64)])
+    known_addr, first = np.unique(known_addr, return_index=True)
+    known_data = known_data[first]
+    addrs = np.asarray(addresses, np.uint64).reshape(-1)
+    at = np.minimum(np.searchsorted(known_addr, addrs), max(len(known_addr) - 1, 0))
+    hit = known_addr[at] == addrs if len(known_addr) else np.zeros(len(addrs), bool)
+    data = np.where(hit, known_data[at] if len(known_addr) else 0, 0).astype(np.uint32)
+    return data, ~hit & ~mapped_words(rmap, addrs)
+
+
+def mapped_words(rmap: RegisterMap, addresses, write: bool = False) -> np.ndarray:
+    """Whether each word address answers with ``ack`` (else ``err``), for reads or writes (bool array)."""
+    a = np.asarray(addresses, np.uint64).reshape(-1)
+    region = (a >> np.uint64(rmap.offset_bits)).astype(np.int64)
+    offset = (a & np.uint64((1 << rmap.offset_bits) - 1)).astype(np.int64)
+    words = rmap.region_words()
+    ok = np.zeros(len(a), bool)
+    inside = (a >> np.uint64(rmap.addr_bits)) == 0
+    for name, code in REGIONS.items():
+        here = inside & (region == code) & (offset < words[name])
+        if name == "control":
+            allowed = [off for off, acc, _ in CONTROL.values() if not write or "w" in acc]
+            here &= np.isin(offset, allowed)
+        elif name == "codebook":
+            here &= offset % rmap.entry_lanes < rmap.used_entry_lanes
+        ok |= here
+    return ok
 
 
 def mapped(rmap: RegisterMap, address: int, write: bool = False) -> bool:
     """Whether word ``address`` answers with ``ack`` (else ``err``), for a read or a write."""
-    region, offset = int(address) >> rmap.offset_bits, int(address) & ((1 << rmap.offset_bits) - 1)
-    names = {code: name for name, code in REGIONS.items()}
-    if int(address) >> rmap.addr_bits or region not in names:
+    if not 0 <= int(address) < 1 << 64:
         return False
-    name = names[region]
-    if offset >= rmap.region_words()[name]:
-        return False
-    if name == "control":
-        access = {off: acc for off, acc, _ in CONTROL.values()}
-        return offset in access and (not write or "w" in access[offset])
-    if name == "codebook":
-        return offset % rmap.entry_lanes < rmap.used_entry_lanes
-    return True
+    return bool(mapped_words(rmap, [int(address)], write)[0])
 
 
 def markdown(geometry: Geometry) -> str:
