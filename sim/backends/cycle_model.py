@@ -50,7 +50,7 @@ from vqtex.golden.format import TextureSet
 
 from ..streams import pattern_length, ready_pattern
 
-__all__ = ["straddle_flags", "transfer_cycles", "run_cycles", "run_flags", "LATENCY", "STAGES", "REGISTERS"]
+__all__ = ["straddle_flags", "transfer_cycles", "run_cycles", "run_flags", "run_cached", "LATENCY", "STAGES", "REGISTERS"]
 
 # The RTL's constants (hw imports amaranth; these are plain ints and names).
 from vqtex.hw.texel_fetch import LATENCY, REGISTERS, STAGES, UPSTREAM_STAGES  # noqa: E402
@@ -173,3 +173,27 @@ def _occupancy(n, bubbles, ov, ready, cycles, latency):
         occ[name] = float(valid.sum()) / cycles
     occ["skid"] = float((~adv).sum()) / cycles
     return occ
+
+
+def run_cached(ts: TextureSet, requests: np.ndarray, config, *, stall: float = 0.0, seed: int = 0,
+               zero_latency: bool = True) -> dict:
+    """The exact cycles of ``requests`` on the cached unit of ``config``
+    (:class:`golden.memory.system.MemoryConfig`): this pipeline (``LATENCY``) behind the caches and
+    memory of :mod:`golden.memory.timing`, with the shared backpressure pattern.
+
+    Returns :func:`golden.memory.timing.run_requests`'s dict, plus ``texels_per_clock`` and, with
+    ``zero_latency``, ``zero_latency_cycles`` (the same stream and backpressure with every reference a
+    hit) and ``of_zero_latency`` (the ratio of texels per clock, cached against zero latency)."""
+    from vqtex.golden.memory.timing import run_requests
+
+    def pattern(n):
+        return ready_pattern(seed, stall, n)
+
+    out = run_requests(ts, requests, config, LATENCY, pattern)
+    n = out["requests"]
+    out["texels_per_clock"] = n / out["cycles"] if out["cycles"] else 0.0
+    if zero_latency:
+        ideal = run_requests(ts, requests, config, LATENCY, pattern, ideal=True)
+        out["zero_latency_cycles"] = ideal["cycles"]
+        out["of_zero_latency"] = ideal["cycles"] / out["cycles"] if out["cycles"] else 1.0
+    return out
