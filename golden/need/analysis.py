@@ -18,10 +18,10 @@ reports
 The cache (:class:`CacheSpec`, default 64 sets x 2 ways = 128 blocks, LRU): a block's set is
 ``(by mod 8) * 8 + (bx mod 8)`` of its block coordinates (an 8x8 tile of blocks maps onto the 64
 sets, the usual texture-cache tiling; different textures and levels share the sets). It starts empty
-at every frame. Two ways with LRU are computed without a loop: in each set's access sequence, the
-two most recently used blocks are the block of the previous access and the block of the run of
-equal accesses before it (consecutive runs differ), so an access hits when its block equals one of
-those two. One way is a direct-mapped cache (hit when the previous access of the set was the block).
+at every frame. The LRU itself is the memory system's (:func:`golden.memory.cache.classify`, the
+one cache model of the project): this module chooses only what a "line" is here (a block, or a raw
+texel) and its set; the cycle-exact caches of the cached unit (:mod:`golden.memory.timing`) use the
+same classification over memory lines.
 
 Requests must be valid for ``ts`` (:func:`~vqtex.golden.fetch.check_requests`).
 
@@ -47,6 +47,7 @@ import numpy as np
 from ..constants import COLORS, MAX_LEVELS
 from ..fetch import block_address, read_index, straddles
 from ..format import TextureSet
+from ..memory.cache import classify
 
 __all__ = ["CacheSpec", "FrameNeed", "Need", "RequestBlocks", "analyse", "request_blocks", "buffer_hits",
            "cache_hits", "scene_streams", "scene_level_shapes", "row_grids", "NeedCounter", "heat_image",
@@ -56,15 +57,15 @@ __all__ = ["CacheSpec", "FrameNeed", "Need", "RequestBlocks", "analyse", "reques
 @dataclass(frozen=True)
 class CacheSpec:
     """A small set-associative block cache with LRU replacement: ``tile[0] * tile[1]`` sets, each of
-    ``ways`` blocks (1: direct-mapped; 2: two-way LRU). A block at block coordinates (bx, by) is in
-    set ``(by mod tile[1]) * tile[0] + (bx mod tile[0])``; ``tile`` sides are powers of two."""
+    ``ways`` blocks (1: direct-mapped; a power of two up to 16). A block at block coordinates (bx,
+    by) is in set ``(by mod tile[1]) * tile[0] + (bx mod tile[0])``; ``tile`` sides are powers of two."""
     tile: tuple = (8, 8)
     ways: int = 2
 
     def __post_init__(self):
         tx, ty = self.tile
-        if self.ways not in (1, 2):
-            raise ValueError(f"cache ways must be 1 or 2, not {self.ways}")
+        if self.ways not in (1, 2, 4, 8, 16):
+            raise ValueError(f"cache ways must be 1, 2, 4, 8 or 16, not {self.ways}")
         if tx < 1 or ty < 1 or tx & (tx - 1) or ty & (ty - 1):
             raise ValueError(f"cache tile {tx}x{ty}: sides must be powers of two")
 
@@ -169,33 +170,15 @@ def buffer_hits(keys: np.ndarray) -> np.ndarray:
 
 
 def cache_hits(keys: np.ndarray, sets: np.ndarray, ways: int = 2) -> np.ndarray:
-    """True where a request hits a ``ways``-way (1 or 2) LRU cache, initially empty, whose set for
-    each request is ``sets``. Vectorised (see the module docstring for why two ways need no loop)."""
+    """True where a request hits a ``ways``-way LRU cache, initially empty, whose set for each
+    request is ``sets`` (a function of the key): :func:`golden.memory.cache.classify`."""
     keys = np.asarray(keys, np.int64)
     sets = np.asarray(sets, np.int64)
-    n = len(keys)
-    hit = np.zeros(n, bool)
-    if n == 0:
-        return hit
-    order = np.argsort(sets, kind="stable")
-    s, k = sets[order], keys[order]
-    new_set = np.ones(n, bool)
-    new_set[1:] = s[1:] != s[:-1]
-    run_start = new_set.copy()
-    run_start[1:] |= k[1:] != k[:-1]
-    h = ~run_start                                   # the previous access of the set was this block
-    if ways == 2:
-        run_id = np.cumsum(run_start) - 1
-        run_key, run_set = k[run_start], s[run_start]
-        p = np.flatnonzero(run_start & ~new_set)     # a new run, not the set's first: look two runs back
-        back = run_id[p] - 2
-        ok = back >= 0
-        p, back = p[ok], back[ok]
-        h[p] = (run_set[back] == s[p]) & (run_key[back] == k[p])
-    elif ways != 1:
-        raise ValueError(f"ways must be 1 or 2, not {ways}")
-    hit[order] = h
-    return hit
+    if ways < 1 or ways & (ways - 1):
+        raise ValueError(f"ways must be a power of two, not {ways}")
+    if not len(keys):
+        return np.zeros(0, bool)
+    return classify(keys, sets, int(sets.max()) + 1, ways).hit
 
 
 @dataclass

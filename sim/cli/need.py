@@ -148,8 +148,9 @@ def add_parser(sub) -> None:
     p.add_argument("--cache-tile", type=limits.CACHE_TILE, default=(8, 8),
                    help=number_help("the block cache's sets as a WxH tile of block coordinates (8x8 is 64 sets)",
                                     limits.CACHE_TILE, "8x8"))
-    p.add_argument("--cache-ways", type=int, choices=[1, 2], default=2,
-                   help=with_default("blocks per cache set: 1 direct-mapped, 2 two-way LRU", 2))
+    p.add_argument("--cache-ways", type=int, choices=[1, 2, 4, 8, 16], default=2,
+                   help=with_default("blocks per cache set: 1 direct-mapped, more LRU (the memory system's "
+                                     "cache model, docs/memory.md)", 2))
     p.add_argument("--heatmap", metavar="DIR",
                    help=with_default("write a PNG per stored texture level of the blocks touched into this folder "
                                      "(created; its parent must exist)", "none"))
