@@ -30,7 +30,7 @@ from .cache import CacheShape
 from .dram import PARTS, DramMemory
 from .external import FixedMemory, beat_interval
 
-__all__ = ["MemoryConfig", "Layout", "References", "references", "MEMORY_KINDS", "RAW_WORD_BYTES"]
+__all__ = ["MemoryConfig", "Layout", "References", "references", "request_words", "MEMORY_KINDS", "RAW_WORD_BYTES"]
 
 #: ``--memory-model``: a fixed latency and bandwidth, or a DRAM part.
 MEMORY_KINDS = ("fixed", "dram")
@@ -140,10 +140,10 @@ class References:
     line: np.ndarray
 
 
-def references(ts: TextureSet, requests: np.ndarray, config: MemoryConfig, layout: Layout | None = None) -> References:
-    """The references ``requests`` ((N, 4) texture, level, i, j; valid for ``ts``) make, vectorised."""
+def request_words(ts: TextureSet, requests: np.ndarray):
+    """What each request reads, vectorised: (compressed bool, index word ``w``, straddle bool, raw
+    word ``r``), all (N,); ``w`` and ``straddle`` are 0 for raw requests, ``r`` is 0 for compressed."""
     req = np.asarray(requests, np.int64).reshape(-1, 4)
-    layout = layout or Layout.of(ts)
     n = len(req)
     comp = np.zeros(n, bool)
     word = np.zeros(n, np.int64)
@@ -162,6 +162,14 @@ def references(ts: TextureSet, requests: np.ndarray, config: MemoryConfig, layou
         if r.any():
             dr = d[r]
             raw[r] = dr["base"].astype(np.int64) + (req[r, 3] << dr["log2w"].astype(np.int64)) + req[r, 2]
+    return comp, word, strad, raw
+
+
+def references(ts: TextureSet, requests: np.ndarray, config: MemoryConfig, layout: Layout | None = None) -> References:
+    """The references ``requests`` ((N, 4) texture, level, i, j; valid for ``ts``) make, vectorised."""
+    layout = layout or Layout.of(ts)
+    comp, word, strad, raw = request_words(ts, requests)
+    n = len(comp)
     il, rl = config.index_cache.line, config.raw_cache.line
     first = np.where(comp, (layout.index_base + word * layout.word_bytes) // il,
                      (layout.raw_base + raw * RAW_WORD_BYTES) // rl)

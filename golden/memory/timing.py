@@ -72,7 +72,7 @@ from ..format import TextureSet
 from .cache import classify
 from .system import Layout, MemoryConfig, references
 
-__all__ = ["ADDRESS_STAGES", "FRONT_LATENCY", "Plan", "plan", "run", "run_requests", "TexelPipeline"]
+__all__ = ["ADDRESS_STAGES", "FRONT_LATENCY", "Plan", "plan", "run", "run_requests", "TexelPipeline", "StreamSink"]
 
 #: Stages before the tag check (descriptor, block address).
 ADDRESS_STAGES = 2
@@ -200,19 +200,41 @@ class TexelPipeline:
         return e
 
 
-def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_hint: int = 0) -> dict:
+class StreamSink:
+    """A consumer that takes the offered item in the first cycle >= s with its ``ready`` high (a
+    plain stream sink; what the cache block alone is tested against, ``hw.memory``). ``transfer``
+    lists the cycles it took each item."""
+
+    def __init__(self, ready_pattern, length: int = 1024):
+        self.ready = _Ready(ready_pattern, length)
+        self.transfer = []
+        self.backpressure = [0]
+
+    def take(self, s: int) -> int:
+        t = self.ready(s)
+        self.transfer.append(t)
+        self.backpressure.append(self.backpressure[-1] + t - s)
+        return t
+
+
+def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_hint: int = 0,
+        address_stages: int = ADDRESS_STAGES, consumer=None) -> dict:
     """Walk the rules of the module docstring over a :class:`Plan`.
 
     ``ready_pattern(length)`` gives ``o.ready`` for cycles ``0 .. length-1`` (bool array, every
-    length a prefix of one sequence). Returns a dict: ``cycles``, ``transfer`` (int64 (N,)),
+    length a prefix of one sequence). ``address_stages`` = 0 is the cache block alone
+    (``hw.memory``): the input handshake is the tag check (``a[n] = g[n]``, ``g[n] >= g[n-1] + ...``).
+    ``consumer`` (default the texel pipeline, :class:`TexelPipeline`) takes each item from the
+    output register (``take(s) -> e``; :class:`StreamSink` for the cache block alone, whose
+    ``transfer`` are then the output's transfers). Returns a dict: ``cycles``, ``transfer`` (int64 (N,)),
     ``stall_cycles`` (cause -> cycles), ``bursts``, ``memory_bytes`` (per cache), ``burst_first``
     (int64 (B,), the first beat of each burst) and the per-stage event times ``accept``, ``tag``,
     ``read``, ``enter`` (int64 (N,))."""
     n = len(p.misses)
-    La, Q, L = ADDRESS_STAGES, config.prefetch, int(pipeline_latency)
+    La, Q, L = int(address_stages), config.prefetch, int(pipeline_latency)
     mem = config.make_memory()
     d = mem.beat_interval
-    pipe = TexelPipeline(L, ready_pattern, max(64, 2 * n + L + 64, n_hint))
+    pipe = consumer if consumer is not None else TexelPipeline(L, ready_pattern, max(64, 2 * n + L + 64, n_hint))
     misses, victim = p.misses.tolist(), p.victim.tolist()
     fa, fb = p.fills[:, 0].tolist(), p.fills[:, 1].tolist()
     address, beats = p.address.tolist(), p.beats.tolist()
@@ -227,9 +249,8 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
     for i in range(n):
         # accept and tag check
         ai = a[i - 1] + 1 if i else 0
-        if i >= La and g[i - La] > ai:
+        if La and i >= La and g[i - La] > ai:
             ai = g[i - La]
-        a[i] = ai
         gi = ai + La
         if i and g[i - 1] + max(1, misses[i - 1]) > gi:
             gi = g[i - 1] + max(1, misses[i - 1])
@@ -241,6 +262,7 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
             victim_c += pr[v] + 1 - gi
             gi = pr[v] + 1
         g[i] = gi
+        a[i] = gi - La if La == 0 else ai
         for j in range(misses[i]):
             f = mem.read(gi + 1 + j, address[burst], beats[burst])
             first_beat[burst] = f

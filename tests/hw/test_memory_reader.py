@@ -1,0 +1,147 @@
+"""hw.memory.reader.CachedReader on pysim: its AXI master answered by the golden memory models
+(golden.memory.external, dram), its responses equal to what memory holds (the texture set's index and
+raw words), its cycles equal to golden.memory.timing's (address_stages=0, a stream sink behind it):
+input acceptance, every AR, every response transfer."""
+
+import numpy as np
+import pytest
+from amaranth import Module
+from amaranth.sim import Simulator
+
+from vqtex.golden.fetch import random_requests
+from vqtex.golden.memory.cache import CacheShape
+from vqtex.golden.memory.system import Layout, MemoryConfig, request_words
+from vqtex.golden.memory.timing import StreamSink, plan, run
+from vqtex.hw.memory.reader import CachedReader
+from vqtex.sim.streams import ready_pattern
+
+from tests.support import texture_set
+
+
+def memory_image(ts, layout: Layout) -> bytes:
+    img = bytearray(layout.end + 4096)
+    idx = np.asarray(ts.index_words).astype(f"<u{layout.word_bytes}").tobytes()
+    img[layout.index_base: layout.index_base + len(idx)] = idx
+    raw = np.asarray(ts.raw_words).astype("<u4").tobytes()
+    img[layout.raw_base: layout.raw_base + len(raw)] = raw
+    return bytes(img)
+
+
+def simulate(ts, req, cfg, stall, seed):
+    layout = Layout.of(ts)
+    comp, word, strad, raw = request_words(ts, req)
+    n = len(req)
+    dut = CachedReader(cfg, word_bits=ts.word_bits, raw_base=layout.raw_base, word_addr_bits=24, tag_width=8)
+    image = memory_image(ts, layout)
+    mem = cfg.make_memory()
+    bus = cfg.bus_bytes
+    ready = ready_pattern(seed, stall, 200000).tolist()
+    rows = [(int(not c), int(w if c else r), int(s), k & 255) for k, (c, w, s, r) in
+            enumerate(zip(comp.tolist(), word.tolist(), strad.tolist(), raw.tolist()))]
+    lay = dut.i.p.shape()
+    packed = [sum(v << lay[f].offset for f, v in zip(("raw", "word", "straddle", "tag"), row)) for row in rows]
+    olay = dut.o.p.shape()
+    got = {"accept": [], "transfer": [], "ar": [], "words": []}
+    top = Module()
+    top.submodules.dut = dut
+
+    async def bench(ctx):
+        beats = []                  # (cycle, address, last) scheduled R beats, in order
+        n_in = n_out = cycle = 0
+        ctx.set(dut.axi.arready, 1)
+        while n_out < n:
+            assert cycle < 20 * n + 4000, (cycle, n_in, n_out, got)
+            if n_in < n:
+                ctx.set(dut.i.valid, 1)
+                ctx.set(dut.i.p.as_value(), packed[n_in])
+            else:
+                ctx.set(dut.i.valid, 0)
+            ctx.set(dut.o.ready, int(ready[cycle]))
+            if beats and beats[0][0] == cycle:
+                _, addr, last = beats.pop(0)
+                ctx.set(dut.axi.rvalid, 1)
+                ctx.set(dut.axi.rdata, int.from_bytes(image[addr: addr + bus], "little"))
+                ctx.set(dut.axi.rlast, int(last))
+            else:
+                ctx.set(dut.axi.rvalid, 0)
+                ctx.set(dut.axi.rlast, 0)
+            if ctx.get(dut.axi.arvalid):
+                addr = ctx.get(dut.axi.araddr)
+                nb = ctx.get(dut.axi.arlen) + 1
+                assert ctx.get(dut.axi.arburst) == 1 and 1 << ctx.get(dut.axi.arsize) == bus
+                assert addr // 4096 == (addr + nb * bus - 1) // 4096          # never across 4 KB
+                first = mem.read(cycle, addr, nb)
+                assert not beats or first > beats[-1][0]
+                beats += [(first + k * mem.beat_interval, addr + k * bus, k == nb - 1) for k in range(nb)]
+                got["ar"].append(cycle)
+            if ctx.get(dut.o.valid) and ready[cycle]:
+                p = ctx.get(dut.o.p.as_value())
+                f = {name: (p >> olay[name].offset) & ((1 << olay[name].width) - 1) for name in ("raw", "word0", "word1", "tag")}
+                assert f["tag"] == n_out & 255
+                got["words"].append((f["raw"], f["word0"], f["word1"]))
+                got["transfer"].append(cycle)
+                n_out += 1
+            if n_in < n and ctx.get(dut.i.ready):
+                got["accept"].append(cycle)
+                n_in += 1
+            cycle += 1
+            await ctx.tick()
+
+    sim = Simulator(top)
+    sim.add_clock(1e-6)
+    sim.add_testbench(bench)
+    sim.run()
+    return got
+
+
+def check(ts, req, cfg, stall, seed):
+    got = simulate(ts, req, cfg, stall, seed)
+    comp, word, strad, raw = request_words(ts, req)
+    idx = np.asarray(ts.index_words).astype(np.int64)
+    rw = np.asarray(ts.raw_words).astype(np.int64)
+    for k, (r, w0, w1) in enumerate(got["words"]):
+        if comp[k]:
+            assert (r, w0) == (0, idx[word[k]]), k
+            if strad[k]:
+                assert w1 == idx[word[k] + 1], k
+        else:
+            assert (r, w0) == (1, rw[raw[k]]), k
+    sink = StreamSink(lambda m: ready_pattern(seed, stall, m))
+    p = plan(ts, req, cfg)
+    model = run(p, cfg, 0, None, address_stages=0, consumer=sink)
+    assert got["accept"] == model["tag"].tolist()
+    assert len(got["ar"]) == model["bursts"]
+    ar = [g + 1 + j for g, m in zip(model["tag"].tolist(), p.misses.tolist()) for j in range(m)]
+    assert got["ar"] == ar
+    assert got["transfer"] == sink.transfer
+    return model
+
+
+SHAPES = [
+    (CacheShape(128, 16, 1), CacheShape(64, 16, 2), 16),
+    (CacheShape(256, 32, 2), CacheShape(128, 32, 2), 16),
+    (CacheShape(256, 16, 4), CacheShape(64, 16, 1), 4),
+]
+
+
+@pytest.mark.parametrize("shape", range(len(SHAPES)))
+@pytest.mark.parametrize("prefetch", [1, 4])
+def test_reader_equals_golden(shape, prefetch):
+    ic, rc, bus = SHAPES[shape]
+    ts = texture_set("yuv_4x4_b12_mip")
+    rng = np.random.default_rng(shape * 10 + prefetch)
+    req = random_requests(ts, 40, seed=shape)
+    req = np.repeat(req, rng.integers(1, 4, len(req)), axis=0)
+    for latency, stall in ((1, 0.0), (9, 0.4), (40, 0.2)):
+        cfg = MemoryConfig(index_cache=ic, raw_cache=rc, prefetch=prefetch, latency=latency, bandwidth=bus // 2,
+                           bus_bytes=bus)
+        model = check(ts, req, cfg, stall, seed=latency)
+        assert model["bursts"] > 0
+
+
+def test_reader_long_latency_and_dram():
+    ts = texture_set("rgba_2x2_b7_mip_w16")          # 16-bit index words
+    req = random_requests(ts, 50, seed=3)
+    ic, rc = CacheShape(128, 16, 2), CacheShape(64, 16, 2)
+    check(ts, req, MemoryConfig(index_cache=ic, raw_cache=rc, prefetch=8, latency=300, bus_bytes=16), 0.3, 5)
+    check(ts, req, MemoryConfig(index_cache=ic, raw_cache=rc, prefetch=4, kind="dram", bus_bytes=16), 0.3, 6)
