@@ -64,8 +64,10 @@ class BackEnd(wiring.Component):
     """
 
     def __init__(self, texture_set: TextureSet | None = None, *, bank_depth: int = BANK_DEPTH,
-                 features: Features | None = None, geometry: Geometry | None = None, load=None):
+                 features: Features | None = None, geometry: Geometry | None = None, load=None,
+                 raw_port: bool = False):
         self._ts = texture_set
+        self._raw_port = bool(raw_port)
         self._geometry = geometry if geometry is not None else as_geometry(texture_set)
         self._load = load
         self._bank_depth = bank_depth
@@ -74,6 +76,7 @@ class BackEnd(wiring.Component):
             "link": In(LinkLayout(self._geometry, self._features)),
             "rgba": Out(RGBALayout),
             **({} if load is None else {"load": In(load), "load_data": Out(DATA_WIDTH)}),
+            **({"raw_in": In(32)} if self._raw_port else {}),
         })
 
     def elaborate(self, platform):
@@ -89,7 +92,9 @@ class BackEnd(wiring.Component):
             ts.raw_words if ts is not None else (), cb_bits=widths["cb_base"], raw_bits=addr_bits(g.raw_words),
             off_bits=widths["texel_off"], bank_depth=self._bank_depth, features=feat,
             color_bits=widths["color"], entries=g.codebook_entries, entry_bytes=g.entry_bytes,
-            raw_depth=g.raw_words, load=load)
+            raw_depth=g.raw_words, load=load, raw_port=self._raw_port)
+        if self._raw_port:
+            m.d.comb += rom.raw_in.eq(self.raw_in)
         m.submodules.color_matrix = cm = ColorMatrix(
             ts.matrix if ts is not None else JFIF_BT601,
             colors=sorted(feat.output_codes) if feat.specialised else None, load=load)

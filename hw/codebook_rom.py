@@ -69,6 +69,22 @@ def _entry_ints(codebook: np.ndarray) -> list:
     return [int.from_bytes(bytes(row), "little") for row in np.asarray(codebook, dtype=np.uint8)]
 
 
+class _RawPort(wiring.Component):
+    """The raw word of a unit whose raw memory is outside it (``raw_port``): ``data`` registered
+    twice on ``en``, the latency of the raw memory it replaces (``word``, as
+    :class:`hw.banked_rom.BankedROM` gives it)."""
+
+    def __init__(self):
+        super().__init__({"data": In(32), "en": In(1), "word": Out(32)})
+
+    def elaborate(self, platform):
+        m = Module()
+        first = Signal(32)
+        with m.If(self.en):
+            m.d.sync += [first.eq(self.data), self.word.eq(first)]
+        return m
+
+
 class CodebookROM(wiring.Component):
     """Codebook memory and raw memory, with the texel select.
 
@@ -148,7 +164,7 @@ class CodebookROM(wiring.Component):
     def __init__(self, codebook, raw_words, *, cb_bits: int, raw_bits: int, off_bits: int,
                  bank_depth: int = BANK_DEPTH, features: Features | None = None, color_bits: int = 2,
                  entries: int | None = None, entry_bytes: int | None = None, raw_depth: int | None = None,
-                 load=None):
+                 load=None, raw_port: bool = False):
         codebook = np.asarray(codebook, dtype=np.uint8)
         if codebook.ndim != 2:
             raise ValueError("codebook memory must be a 2-D uint8 array")
@@ -159,6 +175,8 @@ class CodebookROM(wiring.Component):
         self._raw = [int(v) for v in np.asarray(raw_words, dtype=np.uint32).tolist()] or [0]
         self._depths = (entries, raw_depth)
         self._load = load
+        # External memory (hw.memory): the raw word comes in on ``raw_in`` beside ``raw_addr``.
+        self._raw_port = bool(raw_port)
         self._bank_depth = bank_depth
         if color_bits not in (2, 3):
             raise ValueError(f"color_bits must be 2 (the paper's formats) or 3 (with PowerVR2's), not {color_bits!r}")
@@ -181,6 +199,7 @@ class CodebookROM(wiring.Component):
             "samples": Out(SamplesLayout),
             "color_out": Out(2),
             **({} if load is None else {"load": In(load), "load_data": Out(DATA_WIDTH)}),
+            **({"raw_in": In(32)} if self._raw_port else {}),
         })
 
     @property
@@ -222,7 +241,10 @@ class CodebookROM(wiring.Component):
             if load is not None:
                 m.d.comb += codebook.load.eq(self.load)
                 answers.append(codebook.load_data)
-        if feat.raw:
+        if feat.raw and self._raw_port:     # the raw word from outside, as late as the memory's
+            m.submodules.raw = raw = _RawPort()
+            m.d.comb += [raw.data.eq(self.raw_in), raw.en.eq(self.en)]
+        elif feat.raw:
             m.submodules.raw = raw = BankedROM(self._raw, width=32, bank_depth=self._bank_depth,
                                                depth=self._depths[1], load=target("raw", 1))
             m.d.comb += [raw.addr.eq(self.raw_addr), raw.en.eq(self.en)]

@@ -104,6 +104,10 @@ class TexelFetch(wiring.Component):
         the full unit, every path present (what any texture set with memories of these shapes
         needs). Both are bit-exact against the golden model on valid requests, with the same
         latency, throughput and cycle counts.
+    raw_port : bool
+        The raw memory is outside the unit (external memory, :mod:`hw.memory`): member ``raw_in``,
+        the raw word of the request whose index the front end hands the back end in this cycle
+        (the request at stage 7, as ``index_response`` is); ignored without raw levels.
     index_port : bool
         The index reader is outside the unit (the lanes of a texture filter share index memories
         banked by block parity, :mod:`hw.filter.index_banks`): members ``index_request`` and
@@ -145,7 +149,8 @@ class TexelFetch(wiring.Component):
 
     def __init__(self, texture_set: TextureSet | None = None, *, one_port: bool = False, tag_width: int = 8,
                  bank_depth: int = BANK_DEPTH, specialise: bool = True, index_port: bool = False,
-                 geometry: Geometry | None = None, loadable: bool = False, bus_port: bool = True):
+                 geometry: Geometry | None = None, loadable: bool = False, bus_port: bool = True,
+                 raw_port: bool = False):
         if texture_set is not None and not isinstance(texture_set, TextureSet):
             raise TypeError(f"texture_set must be a TextureSet, not {type(texture_set).__name__}")
         if texture_set is None and not (loadable and isinstance(geometry, Geometry)):
@@ -187,6 +192,9 @@ class TexelFetch(wiring.Component):
         members["valid"] = Out(len(REGISTERS))
         if self._index_port:
             members.update(index_port_members(self._geometry, self._features))
+        self._raw_port = bool(raw_port) and self._features.raw
+        if self._raw_port:
+            members["raw_in"] = In(32)
         self._bus_port = self._loadable and bool(bus_port)
         if self._bus_port:
             members["bus"] = In(wishbone_signature(RegisterMap(self._geometry).addr_bits))
@@ -251,7 +259,9 @@ class TexelFetch(wiring.Component):
         if self._index_port:
             m.d.comb += [self.index_request.eq(front.index_request), front.index_response.eq(self.index_response)]
         m.submodules.back = back = BackEnd(self._ts, bank_depth=self._bank_depth, features=self._features,
-                                           geometry=self._geometry, load=load)
+                                           geometry=self._geometry, load=load, raw_port=self._raw_port)
+        if self._raw_port:
+            m.d.comb += back.raw_in.eq(self.raw_in)
         if load is not None and not self._bus_port:     # the parent's port (a filter's lanes)
             m.d.comb += [front.pause.eq(0), front.load.eq(self.load), back.load.eq(self.load),
                          self.load_data.eq(front.load_data | back.load_data)]

@@ -121,6 +121,16 @@ class Layout:
     word_bytes: int
     end: int
 
+    def image(self, ts: TextureSet) -> bytes:
+        """The external memory's bytes for ``ts``: what a host writes there, zero-padded to a whole
+        number of 4 KB pages (a cache line past ``end`` reads zeros)."""
+        img = bytearray(-(-self.end // 4096) * 4096)
+        idx = np.asarray(ts.index_words).astype(f"<u{self.word_bytes}").tobytes()
+        img[self.index_base: self.index_base + len(idx)] = idx
+        raw = np.asarray(ts.raw_words).astype("<u4").tobytes()
+        img[self.raw_base: self.raw_base + len(raw)] = raw
+        return bytes(img)
+
     @classmethod
     def of(cls, ts: TextureSet) -> "Layout":
         wb = ts.word_bits // 8

@@ -13,18 +13,10 @@ from vqtex.golden.memory.cache import CacheShape
 from vqtex.golden.memory.system import Layout, MemoryConfig, request_words
 from vqtex.golden.memory.timing import StreamSink, plan, run
 from vqtex.hw.memory.reader import CachedReader
+from vqtex.sim.backends.axi_memory import AxiMemory
 from vqtex.sim.streams import ready_pattern
 
 from tests.support import texture_set
-
-
-def memory_image(ts, layout: Layout) -> bytes:
-    img = bytearray(layout.end + 4096)
-    idx = np.asarray(ts.index_words).astype(f"<u{layout.word_bytes}").tobytes()
-    img[layout.index_base: layout.index_base + len(idx)] = idx
-    raw = np.asarray(ts.raw_words).astype("<u4").tobytes()
-    img[layout.raw_base: layout.raw_base + len(raw)] = raw
-    return bytes(img)
 
 
 def simulate(ts, req, cfg, stall, seed):
@@ -32,9 +24,7 @@ def simulate(ts, req, cfg, stall, seed):
     comp, word, strad, raw = request_words(ts, req)
     n = len(req)
     dut = CachedReader(cfg, word_bits=ts.word_bits, raw_base=layout.raw_base, word_addr_bits=24, tag_width=8)
-    image = memory_image(ts, layout)
-    mem = cfg.make_memory()
-    bus = cfg.bus_bytes
+    slave = AxiMemory(layout.image(ts), cfg.make_memory(), cfg.bus_bytes)
     ready = ready_pattern(seed, stall, 200000).tolist()
     rows = [(int(not c), int(w if c else r), int(s), k & 255) for k, (c, w, s, r) in
             enumerate(zip(comp.tolist(), word.tolist(), strad.tolist(), raw.tolist()))]
@@ -46,9 +36,8 @@ def simulate(ts, req, cfg, stall, seed):
     top.submodules.dut = dut
 
     async def bench(ctx):
-        beats = []                  # (cycle, address, last) scheduled R beats, in order
         n_in = n_out = cycle = 0
-        ctx.set(dut.axi.arready, 1)
+        slave.start(ctx, dut.axi)
         while n_out < n:
             assert cycle < 20 * n + 4000, (cycle, n_in, n_out, got)
             if n_in < n:
@@ -57,23 +46,7 @@ def simulate(ts, req, cfg, stall, seed):
             else:
                 ctx.set(dut.i.valid, 0)
             ctx.set(dut.o.ready, int(ready[cycle]))
-            if beats and beats[0][0] == cycle:
-                _, addr, last = beats.pop(0)
-                ctx.set(dut.axi.rvalid, 1)
-                ctx.set(dut.axi.rdata, int.from_bytes(image[addr: addr + bus], "little"))
-                ctx.set(dut.axi.rlast, int(last))
-            else:
-                ctx.set(dut.axi.rvalid, 0)
-                ctx.set(dut.axi.rlast, 0)
-            if ctx.get(dut.axi.arvalid):
-                addr = ctx.get(dut.axi.araddr)
-                nb = ctx.get(dut.axi.arlen) + 1
-                assert ctx.get(dut.axi.arburst) == 1 and 1 << ctx.get(dut.axi.arsize) == bus
-                assert addr // 4096 == (addr + nb * bus - 1) // 4096          # never across 4 KB
-                first = mem.read(cycle, addr, nb)
-                assert not beats or first > beats[-1][0]
-                beats += [(first + k * mem.beat_interval, addr + k * bus, k == nb - 1) for k in range(nb)]
-                got["ar"].append(cycle)
+            slave.step(ctx, dut.axi, cycle)
             if ctx.get(dut.o.valid) and ready[cycle]:
                 p = ctx.get(dut.o.p.as_value())
                 f = {name: (p >> olay[name].offset) & ((1 << olay[name].width) - 1) for name in ("raw", "word0", "word1", "tag")}
@@ -91,6 +64,7 @@ def simulate(ts, req, cfg, stall, seed):
     sim.add_clock(1e-6)
     sim.add_testbench(bench)
     sim.run()
+    got["ar"] = slave.ar
     return got
 
 
