@@ -54,6 +54,9 @@ i : In(stream.Signature(RequestLayout))
     ``raw``, ``word`` (index word number, or raw word number), ``straddle``, ``tag``.
 o : Out(stream.Signature(ResponseLayout))
     ``raw``, ``word0`` (the index word, or the raw word), ``word1`` (word ``w + 1``), ``tag``.
+stall_fill : Out(1)
+    Strobe: a cycle in which the FIFO's head could be read but for a line not yet filled (the
+    memory's share of the stalls: ``miss + bandwidth`` of the golden model).
 axi : Out(hw.memory.axi.axi4_read_signature(addr_width, 8 * bus_bytes))
 """
 
@@ -158,6 +161,7 @@ class CachedReader(wiring.Component):
         super().__init__({
             "i": In(stream.Signature(self.request_layout)),
             "o": Out(stream.Signature(self.response_layout)),
+            "stall_fill": Out(1),
             "axi": Out(axi4_read_signature(addr_width, 8 * self._bus)),
         })
 
@@ -231,6 +235,7 @@ class CachedReader(wiring.Component):
         head_filled = Mux(headv.raw, rc.filled_at(headv.slot0[:rslot]),
                           ic.filled_at(headv.slot0[:islot]) & ic.filled_at(headv.slot1))
         m.d.comb += pop.eq((level != 0) & head_filled & o_free)
+        m.d.comb += self.stall_fill.eq((level != 0) & ~head_filled & o_free)
 
         take = Signal()
         m.d.comb += [

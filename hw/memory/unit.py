@@ -31,6 +31,10 @@ Members
 -------
 i : In(stream.Signature(hw.pipeline.RequestLayout))
 o : Out(stream.Signature(hw.pipeline.ResponseLayout))
+stall_memory : Out(1)
+    Strobe: the cache block's data read waits for a line fill (:class:`hw.memory.reader.CachedReader`).
+stall_output : Out(1)
+    ``o.valid & ~o.ready``.
 axi : Out(hw.memory.axi.axi4_read_signature(32, 8 * bus_bytes))
 """
 
@@ -71,6 +75,7 @@ class CachedTexelFetch(wiring.Component):
         super().__init__({
             "i": In(stream.Signature(RequestLayout(tb, tag_width))),
             "o": Out(stream.Signature(ResponseLayout(tag_width))),
+            "stall_memory": Out(1), "stall_output": Out(1),
             "axi": Out(axi4_read_signature(32, 8 * config.bus_bytes)),
         })
 
@@ -153,6 +158,7 @@ class CachedTexelFetch(wiring.Component):
             tf.i.valid.eq(reader.o.valid), tf.i.p.as_value().eq(out.request), reader.o.ready.eq(tf.i.ready),
         ]
         wiring.connect(m, tf.o, wiring.flipped(self.o))
+        m.d.comb += [self.stall_memory.eq(reader.stall_fill), self.stall_output.eq(tf.stall_output)]
         # The words ride beside the texel pipeline's first seven stages (its advance: no output stall
         # in the previous cycle), to arrive with the request at the index stage.
         advance = Signal(init=1)

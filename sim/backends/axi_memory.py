@@ -18,12 +18,14 @@ class AxiError(AssertionError):
 
 
 class AxiMemory:
-    """See the module docstring. ``ar`` lists the cycles of every AR handshake, in order."""
+    """See the module docstring. ``ar`` lists the cycles of every AR handshake, in order, and
+    ``addresses`` their byte addresses."""
 
     def __init__(self, image: bytes, model, bus_bytes: int):
         self.image, self.model, self.bus = image, model, bus_bytes
         self.beats = []                 # scheduled R beats: (cycle, address, last), in order
         self.ar = []
+        self.addresses = []             # the byte address of every burst, in order
 
     def start(self, ctx, axi):
         ctx.set(axi.arready, 1)
@@ -53,3 +55,4 @@ class AxiMemory:
                 raise AxiError(f"cycle {cycle}: the memory model answered out of order")
             self.beats += [(first + k * d, addr + k * self.bus, k == n - 1) for k in range(n)]
             self.ar.append(cycle)
+            self.addresses.append(addr)

@@ -63,6 +63,9 @@ class SimResult:
     load_cycles : int or None
         The loadable unit only: cycles the bus writes that loaded the set took before the requests
         (:func:`golden.register_map.load_cycles`); not part of ``cycles``.
+    memory : dict or None
+        The cached unit only (textures in external memory, :mod:`sim.backends.memory`): bursts,
+        bytes read, hit rates.
     """
     responses: np.ndarray
     cycles: int
@@ -72,6 +75,7 @@ class SimResult:
     straddles: int
     occupancy: dict | None = None
     load_cycles: int | None = None
+    memory: dict | None = None
 
 
 def _as_requests(requests) -> np.ndarray:
@@ -96,12 +100,14 @@ def _golden(ts: TextureSet, req: np.ndarray, *, stall: float, seed: int, one_por
 
 
 def simulate(ts: TextureSet, requests, *, backend: str = "golden", stall: float = 0.0, seed: int = 0,
-             one_port: bool = False, specialise: bool = True, geometry=None) -> SimResult:
+             one_port: bool = False, specialise: bool = True, geometry=None, memory=None) -> SimResult:
     """Run ``requests`` ((N, 4) int: texture, level, i, j) through ``backend`` (an RTL backend
     simulates ``TexelFetch(ts, specialise=specialise)``: the specialised unit by default). With
     ``geometry`` (:class:`golden.geometry.Geometry`), the loadable unit of that geometry: ``ts`` is
     loaded over its bus port first and ``load_cycles`` reports the load (the golden backend gives
-    :func:`golden.register_map.load_cycles`); the requests' cycles are the baked unit's.
+    :func:`golden.register_map.load_cycles`); the requests' cycles are the baked unit's. With
+    ``memory`` (:class:`golden.memory.system.MemoryConfig`), the cached unit, its index map and raw
+    levels in external memory (:mod:`sim.backends.memory`: golden and pysim).
 
     Raises
     ------
@@ -118,6 +124,11 @@ def simulate(ts: TextureSet, requests, *, backend: str = "golden", stall: float 
     req = _as_requests(requests)
     if len(req):
         check_requests(ts, req[:, 0], req[:, 1], req[:, 2], req[:, 3])
+    if memory is not None:
+        if geometry is not None or one_port or not specialise:
+            raise ValueError("the cached unit is the specialised baked unit: no geometry, one-port or full unit")
+        from . import memory as cached
+        return cached.run(ts, req, memory, backend=backend, stall=stall, seed=seed)
     load = None
     if geometry is not None:
         from vqtex.golden.register_map import load_cycles, load_writes
