@@ -127,7 +127,7 @@ def simulate(ts: TextureSet, requests, *, backend: str = "golden", stall: float 
     if memory is not None:
         if geometry is not None or one_port or not specialise:
             raise ValueError("the cached unit is the specialised baked unit: no geometry, one-port or full unit")
-        from . import memory as cached
+        cached = importlib.import_module("vqtex.sim.backends.memory")     # a backend module, like the others
         return cached.run(ts, req, memory, backend=backend, stall=stall, seed=seed)
     load = None
     if geometry is not None:
