@@ -216,6 +216,77 @@ def stall_seed(args, stall_applies: bool = True) -> int:
     return 0 if args.seed is None else args.seed
 
 
+#: ``--memory``: every memory on chip (the unit of docs/hardware.md), or the index map and raw levels
+#: in external memory behind caches (docs/memory.md).
+MEMORIES = ("on-chip", "external")
+#: The external memory's options: (attribute, option, limits type, default, help).
+_MEMORY_OPTIONS = (
+    ("cache_size", "--cache-size", "CACHE_BYTES", 16384, "the index cache's bytes"),
+    ("raw_cache_size", "--raw-cache-size", "CACHE_BYTES", 4096, "the raw cache's bytes"),
+    ("cache_line", "--cache-line", "CACHE_LINE", 32, "bytes per cache line (both caches; one AXI burst)"),
+    ("cache_ways", "--cache-ways", None, 4, "ways per set (both caches), LRU"),
+    ("prefetch", "--prefetch", "PREFETCH", 16, "entries of the FIFO of references between tag check and data "
+                                               "read; 1 is the blocking cache"),
+    ("memory_latency", "--memory-latency", "MEMORY_LATENCY", 100, "fixed memory: cycles from AR to the first beat"),
+    ("memory_bandwidth", "--memory-bandwidth", "MEMORY_BANDWIDTH", 16, "fixed memory: bytes per clock"),
+    ("bus_bytes", "--bus-bytes", "BUS_BYTES", 16, "AXI data width in bytes"),
+    ("dram_clock", "--dram-clock", "DRAM_CLOCK", 200.0, "DRAM: the controller's (and unit's) clock"),
+    ("controller_cycles", "--controller-cycles", "CONTROLLER_CYCLES", 0, "DRAM: the controller's own latency "
+                                                                        "beyond CL"),
+)
+
+
+def add_memory_options(p) -> None:
+    """``--memory on-chip|external`` and the external memory's caches and timing (docs/memory.md)."""
+    p.add_argument("--memory", choices=MEMORIES, default="on-chip",
+                   help=with_default("where the index map and raw levels live: on chip, or in external memory "
+                                     "read over AXI4 behind caches (golden and pysim backends)", "on-chip"))
+    for attr, opt, kind, default, text in _MEMORY_OPTIONS:
+        if kind is None:                    # --cache-ways: as vqtex need spells it
+            p.add_argument(opt, dest=attr, type=int, choices=[1, 2, 4, 8, 16], default=None,
+                           help=with_default(text + " (--memory external)", default))
+            continue
+        p.add_argument(opt, dest=attr, type=getattr(limits, kind), default=None,
+                       help=number_help(text + " (--memory external)", getattr(limits, kind), default))
+    p.add_argument("--memory-model", choices=("fixed", "dram"), default=None,
+                   help=with_default("the external memory: a fixed latency and bandwidth, or a DRAM part "
+                                     "(--dram-part)", "fixed"))
+    from vqtex.golden.memory.dram import PARTS
+    p.add_argument("--dram-part", choices=sorted(PARTS), default=None,
+                   help=with_default("the DRAM part (--memory-model dram)", "MT41K256M16-125"))
+
+
+def memory_config(args):
+    """The :class:`golden.memory.system.MemoryConfig` of ``--memory external`` and its options, or
+    None for ``--memory on-chip`` (then every external-memory option is refused); a configuration
+    the memory system refuses (a line wider than the cache, a bandwidth that does not divide the bus,
+    ...) is a one-line CliError."""
+    from vqtex.golden.memory.cache import CacheShape
+    from vqtex.golden.memory.system import MemoryConfig
+    names = [a for a, *_ in _MEMORY_OPTIONS] + ["memory_model", "dram_part"]
+    if args.memory != "external":
+        for a in names:
+            if getattr(args, a) is not None:
+                raise CliError(f"--{a.replace('_', '-')} needs --memory external")
+        return None
+    v = {a: (getattr(args, a) if getattr(args, a) is not None else d) for a, _, _, d, _ in _MEMORY_OPTIONS}
+    kind = args.memory_model or "fixed"
+    for a, applies in (("memory_latency", kind == "fixed"), ("memory_bandwidth", kind == "fixed"),
+                       ("dram_clock", kind == "dram"), ("controller_cycles", kind == "dram"),
+                       ("dram_part", kind == "dram")):
+        if getattr(args, a) is not None and not applies:
+            raise CliError(f"--{a.replace('_', '-')} does not apply to --memory-model {kind}")
+    try:
+        return MemoryConfig(
+            index_cache=CacheShape(v["cache_size"], v["cache_line"], v["cache_ways"]),
+            raw_cache=CacheShape(v["raw_cache_size"], v["cache_line"], v["cache_ways"]),
+            prefetch=v["prefetch"], kind=kind, latency=v["memory_latency"], bandwidth=v["memory_bandwidth"],
+            bus_bytes=v["bus_bytes"], dram_part=args.dram_part or "MT41K256M16-125", clock_mhz=v["dram_clock"],
+            controller_cycles=v["controller_cycles"])
+    except ValueError as e:
+        raise CliError(f"--memory external: {e}") from None
+
+
 #: ``--unit`` choices: the texel-fetch unit specialised to the texture set, the full one (both
 #: with the set baked into ROMs), or the loadable one (a geometry; the set loaded over its bus port).
 UNITS = ("specialised", "full", "loadable")

@@ -28,7 +28,9 @@ import re
 __all__ = ["Number", "Pair", "ListOf", "Address", "number_help", "INT32_MAX", "INT63_MAX",
            "STALL", "SEED", "PLACER_SEED", "TAG_WIDTH", "CODEBOOK_SIZE", "INDEX_BITS", "BLOCK", "BLOCK_SIDE",
            "CACHE_TILE", "TEXTURE", "LEVEL", "FOVEA_RADIUS", "FOVEA_FALLOFF", "DIFF_SCALE", "FREQ", "TIMEOUT",
-           "KEEP_MB", "THREADS", "WORKERS", "FRAME_STEP", "SCHEDULER", "BENCH_SIZES", "BENCH_BLOCKS"]
+           "KEEP_MB", "THREADS", "WORKERS", "FRAME_STEP", "SCHEDULER", "BENCH_SIZES", "BENCH_BLOCKS",
+           "CACHE_BYTES", "CACHE_LINE", "PREFETCH", "MEMORY_LATENCY", "MEMORY_BANDWIDTH", "BUS_BYTES",
+           "DRAM_CLOCK", "CONTROLLER_CYCLES"]
 
 INT32_MAX = 2**31 - 1
 INT63_MAX = 2**63 - 1
@@ -225,6 +227,18 @@ CACHE_TILE = Pair(Number(int, 1, 4096, powers_of_two=True), "cache tile")
 #: ``decode --texture``, ``--level``: numbers in a file (int32); the file says which exist.
 TEXTURE = Number(int, 0, INT32_MAX)
 LEVEL = Number(int, 0, INT32_MAX)
+#: ``--memory external`` (docs/memory.md): a cache's bytes and its line (its ways: ``--cache-ways``, a
+#: choice, as ``vqtex need`` has it); the reference FIFO's
+#: depth (1: blocking); the fixed memory's latency and bandwidth; the AXI data width; the DRAM
+#: controller's clock and its own latency.
+CACHE_BYTES = Number(int, 64, 2**24, powers_of_two=True, unit="bytes")
+CACHE_LINE = Number(int, 4, 4096, powers_of_two=True, unit="bytes")
+PREFETCH = Number(int, 1, 4096)
+MEMORY_LATENCY = Number(int, 1, 100000, unit="cycles")
+MEMORY_BANDWIDTH = Number(int, 1, 1024, unit="bytes/clock")
+BUS_BYTES = Number(int, 1, 128, powers_of_two=True, unit="bytes")
+DRAM_CLOCK = Number(float, 1.0, 2000.0, unit="MHz")
+CONTROLLER_CYCLES = Number(int, 0, 1000, unit="cycles")
 #: ``render --fovea-radius`` (pixels) and ``--fovea-falloff`` (levels per radius).
 FOVEA_RADIUS = Number(float, 0.0, 1e9, lo_open=True, unit="pixels")
 FOVEA_FALLOFF = Number(float, 0.0, 1e9)

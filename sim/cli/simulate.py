@@ -7,8 +7,9 @@ import os
 
 import numpy as np
 
-from .common import (CliError, Outputs, add_backend, add_hardware_options, add_json, add_texture_set, add_unit,
-                     emit, load_set, resolve, stall_seed, unit_geometry, warn_slow, with_default, write_bytes)
+from .common import (CliError, Outputs, add_backend, add_hardware_options, add_json, add_memory_options,
+                     add_texture_set, add_unit, emit, load_set, memory_config, resolve, stall_seed, unit_geometry,
+                     warn_slow, with_default, write_bytes)
 
 __all__ = ["add_parser", "cmd_sim", "read_requests", "run_trace", "plot_output", "add_trace_arguments"]
 
@@ -44,16 +45,24 @@ def run_trace(args):
     from vqtex.sim.backends.interface import simulate
     from vqtex.sim.reports.cycles import cycle_report
     args.seed = stall_seed(args)
+    memory = memory_config(args)
+    if memory is not None:
+        if args.backend not in ("golden", "pysim"):
+            raise CliError(f"--memory external runs on --backend golden or pysim, not yet {args.backend}")
+        if args.one_port or args.unit is not None:
+            raise CliError("--memory external is the specialised baked unit: no --one-port or --unit")
     resolve(args, "unit", "specialised", args.backend != "golden",
             "chooses the RTL unit: it does not apply to --backend golden (the cycle model)")
     ts = load_set(args.file)
-    geometry = unit_geometry(args, ts, args.file)
+    geometry = None if memory is not None else unit_geometry(args, ts, args.file)
     req = read_requests(args.requests)
     check_requests(ts, req[:, 0], req[:, 1], req[:, 2], req[:, 3])
     warn_slow(args.backend, len(req))
     res = simulate(ts, req, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port,
-                   specialise=args.unit == "specialised", geometry=geometry)
+                   specialise=args.unit == "specialised", geometry=geometry, memory=memory)
     extra = {"unit": args.unit}
+    if res.memory is not None:
+        extra.update(memory=res.memory)
     if geometry is not None:
         extra.update(geometry=args.geometry or "the set's own", load_cycles=res.load_cycles)
     return res, cycle_report(res, backend=args.backend, one_port=args.one_port, stall=args.stall, extra=extra)
@@ -82,6 +91,7 @@ def add_trace_arguments(s) -> None:
     add_backend(s, ["golden", "pysim", "cxxrtl", "verilator"], "golden")
     add_hardware_options(s)
     add_unit(s)
+    add_memory_options(s)
 
 
 def add_parser(sub) -> None:

@@ -38,8 +38,24 @@ def cycle_text(rep: dict) -> str:
     if rep.get("load_cycles") is not None:
         lines.insert(1, f"unit               loadable, geometry {rep['geometry']}")
         lines.append(f"load (bus writes)  {rep['load_cycles']} cycles, before the requests")
+    mem = rep.get("memory")
+    if mem:
+        lines.append(f"memory             {mem['configuration']}")
+        for name in ("index", "raw"):
+            hr = mem["hit_rate"][name]
+            lines.append(f"{name + ' cache':<18} {mem['references'][name]} references"
+                         + (f", hit rate {100 * hr:.2f}%" if hr is not None else ""))
+        lines.append(f"memory read        {mem['bursts']} bursts, {sum(mem['memory_bytes'].values())} bytes, "
+                     f"{mem['bytes_per_texel']:.4f} bytes per texel")
+        if "of_zero_latency" in mem:
+            lines.append(f"zero latency       {mem['zero_latency_cycles']} cycles "
+                         f"({mem['of_zero_latency']:.4f} of its texels per clock)")
     for cause, n in rep["stall_cycles"].items():
         lines.append(f"stalls: {cause:<11} {n}")
+    detail = (mem or {}).get("stall_detail")
+    if detail:
+        lines.append(f"memory stall split data read waited: miss {detail['miss']}, bandwidth {detail['bandwidth']}; "
+                     f"tag check waited: FIFO full {detail['fifo_full']}, victim in use {detail['victim']}")
     for stage, occ in rep.get("occupancy", {}).items():
         lines.append(f"occupancy {stage:<8} {occ:.3f}")
     return "\n".join(lines)

@@ -20,6 +20,7 @@ CYCLE_PARTS = (
     ("latency", "pipeline fill: the latency of the first response", "#7878dc"),
     ("output_backpressure", "stall: the consumer held ready low (--stall)", "#dc5a3c"),
     ("one_port_straddle", "stall: a straddling index on a one-port index memory", "#e6b428"),
+    ("memory", "stall: the cache waited for a line from memory (--memory external)", "#3c8cc8"),
 )
 
 
