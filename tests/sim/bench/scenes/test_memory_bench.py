@@ -1,0 +1,35 @@
+"""sim.bench.scenes.memory on a small scene: the uncompressed set is the same textures with every
+level raw; the benchmark's rows hold what it prints, VQ against uncompressed through the same caches."""
+
+import numpy as np
+
+from vqtex.golden.fetch import decode
+from vqtex.golden.render.scene import build_texture_set, parse_scene
+from vqtex.sim.bench.scenes.memory import scene_memory, uncompressed_set
+
+from tests.golden.test_need import SMALL
+
+
+def test_uncompressed_set_is_every_level_raw():
+    scene = parse_scene(SMALL, "small.toml")
+    vq = build_texture_set(scene)
+    raw = uncompressed_set(scene)
+    assert not raw.descriptors["compressed"][raw.descriptors["valid"].astype(bool)].any()
+    images = [img for img, _ in scene.load_textures()]
+    for t in range(vq.n_textures):
+        assert raw.level_shapes(t) == vq.level_shapes(t)
+        top = decode(raw, t, 0)
+        assert (top[..., :images[t].shape[2]] == images[t]).all()       # level 0 is the image itself
+
+
+def test_rows_compare_vq_and_uncompressed():
+    scene = parse_scene(SMALL, "small.toml")
+    r = scene_memory(scene, frame=1, latency=50, sizes=(1,), prefetch=8, dram=False)
+    rows = {(x["textures"], x["prefetch"]): x for x in r["rows"]}
+    assert set(rows) == {("vq", 1), ("vq", 8), ("uncompressed", 1), ("uncompressed", 8)}
+    assert r["pixels"] > 0 and r["requests"] > 0
+    for x in r["rows"]:
+        assert x["cycles"] >= x["zero_latency_cycles"] and 0 < x["of_zero_latency"] <= 1
+        assert np.isclose(x["cycles_per_pixel"] * r["pixels"], x["cycles"])
+    assert rows[("uncompressed", 8)]["hit_rate"]["index"] is None       # nothing compressed: no index reads
+    assert rows[("vq", 8)]["cycles"] <= rows[("vq", 1)]["cycles"]
