@@ -11,7 +11,8 @@
 Both report the same ``cycles``, ``stall_cycles`` (``output_backpressure``: ``o.valid & ~o.ready``;
 ``memory``: cycles the cache block's data read waited for a line fill, which the golden model splits
 into ``miss`` and ``bandwidth`` in ``memory["stall_detail"]``), and ``memory``: ``bursts``,
-``memory_bytes`` (index, raw), ``bytes_per_texel``, ``references`` and ``hit_rate`` per cache. The
+``memory_bytes`` (index, raw), ``bytes_per_texel``, ``references``, ``misses`` and ``hit_rate`` per
+cache. The
 compiled backends do not run the cached unit yet.
 """
 
@@ -42,6 +43,7 @@ def _memory_report(p, config, bursts_by_cache, n) -> dict:
         "memory_bytes": mem_bytes,
         "bytes_per_texel": (sum(mem_bytes.values()) / n) if n else 0.0,
         "references": refs,
+        "misses": {k: int(bursts_by_cache[c]) for c, k in enumerate(("index", "raw"))},
         "hit_rate": {k: (1 - int(bursts_by_cache[c]) / refs[k]) if refs[k] else None
                      for c, k in enumerate(("index", "raw"))},
     }

@@ -16,8 +16,8 @@ import numpy as np
 
 from . import limits
 from .common import (IMAGE_SUFFIXES, CliError, Outputs, add_backend, add_hardware_options, add_index_banks, add_json, add_unit,
-                     emit, load_set, number_help, progress_enabled, resolve, stall_seed, unit_geometry, warn, warn_slow,
-                     with_default, write_json)
+                     add_memory_options, emit, load_set, memory_config, number_help, progress_enabled, resolve,
+                     stall_seed, unit_geometry, warn, warn_slow, with_default, write_json)
 
 __all__ = ["add_parser", "cmd_render", "render_scene", "render_to_files", "encode_scene", "parse_frames", "parse_fovea",
            "Progress"]
@@ -92,7 +92,7 @@ def _frame_path(pattern: str, frame: int, many: bool) -> str:
 def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall=0.0, seed=0,
                  one_port=False, reference=True, images=None, progress=None, cycle_model=False,
                  stream="sparse", fovea=None, compare_fixed=False, filter_in_rtl=False, lanes=4,
-                 index_banks="parity", unit="specialised", geometry=None):
+                 index_banks="parity", unit="specialised", geometry=None, memory=None):
     """Render ``frames`` of ``scene`` from TextureSet ``ts``; yields one dict per frame with the frame,
     the golden frame when the backend is RTL (for comparison), cycle results and the reference MSE.
     With the golden backend and ``cycle_model``, the cycles come from the exact cycle model (no RTL).
@@ -110,8 +110,13 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
     texel-fetch unit's exact cycle model.
     ``unit`` is the RTL texel-fetch unit (``specialised`` or ``full``); with ``geometry`` it is the
     loadable unit of that geometry (or, with ``filter_in_rtl``, the loadable texture filter),
-    ``ts`` loaded over its bus port before each frame (``"sim"`` holds the load's cycles too)."""
+    ``ts`` loaded over its bus port before each frame (``"sim"`` holds the load's cycles too).
+    With ``memory`` (:class:`golden.memory.system.MemoryConfig`) the unit is the cached one, its
+    textures in external memory (golden: its cycle model, always run; pysim: its RTL); ``"sim"``
+    holds its cycles and ``memory`` figures."""
     unit_kw = {"specialise": unit != "full", "geometry": geometry}
+    if memory is not None:
+        unit_kw = {"memory": memory}
     if filter_in_rtl and compare_fixed:
         raise ValueError("compare_fixed runs request streams through the texel-fetch unit, not the RTL filter")
     from vqtex.golden.fetch import check_requests, fetch
@@ -136,6 +141,7 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
         golden_frame = sampler.resolve(golden_texels)
         out["golden_seconds"] = time.perf_counter() - t0
         out["requests"] = int(len(reqs))
+        out["pixels_textured"] = int(len(sampler.fragments))
         out["skipped"] = sampler.skipped
         out["request_stream"] = reqs                    # for the need analysis of --report
         if filter_in_rtl:
@@ -152,9 +158,10 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
             out["filter"] = res
         elif backend == "golden":
             out["image"] = golden_frame
-            if (cycle_model or compare_fixed) and len(reqs):
+            if (cycle_model or compare_fixed or memory is not None) and len(reqs):
                 from vqtex.sim.backends import simulate
-                out["sim"] = simulate(ts, reqs, backend="golden", stall=stall, seed=seed, one_port=one_port)
+                out["sim"] = simulate(ts, reqs, backend="golden", stall=stall, seed=seed, one_port=one_port,
+                                      memory=memory)
                 out["rtl_seconds"] = 0.0
         else:
             from vqtex.sim.backends import simulate
@@ -276,6 +283,8 @@ class _NeedReport:
 
 def _frame_report(r: dict) -> dict:
     d = {"frame": r["frame"], "requests": r["requests"], "golden_seconds": round(r["golden_seconds"], 4)}
+    if "pixels_textured" in r:
+        d["pixels_textured"] = r["pixels_textured"]
     if "skipped" in r:
         k = r["skipped"]
         d.update(requests_fixed=k.fixed, skipped_zero_weight=k.zero_weight, skipped_repeats=k.repeats)
@@ -298,6 +307,8 @@ def _frame_report(r: dict) -> dict:
                  stall_cycles={k: int(v) for k, v in s.stall_cycles.items()})
         if s.load_cycles is not None:
             d["load_cycles"] = int(s.load_cycles)
+        if s.memory is not None:
+            d["memory"] = s.memory
         if "identical_to_golden" in r:
             d["identical_to_golden"] = r["identical_to_golden"]
     return d
@@ -321,7 +332,16 @@ def cmd_render(args) -> int:
         if args.filter_in_rtl and args.encode_needed:
             raise CliError("--filter-in-rtl fetches every texel of a footprint, zero weights too: it does not go "
                            "with --encode-needed (a pruned texture set)")
-        _options_that_apply(args, fovea)
+        memory = memory_config(args)
+        if memory is not None:
+            bad = [opt for opt, on in (("--filter-in-rtl", args.filter_in_rtl), ("--compare-fixed", args.compare_fixed),
+                                       ("--fovea", fovea is not None), ("--one-port", args.one_port),
+                                       ("--unit", args.unit is not None)) if on]
+            if bad:
+                raise CliError(f"--memory external renders with the cached texel-fetch unit: not with {bad[0]}")
+            if args.backend not in ("golden", "pysim"):
+                raise CliError(f"--memory external runs on --backend golden or pysim, not yet {args.backend}")
+        _options_that_apply(args, fovea, memory is not None)
         frame_paths = {f: _frame_path(args.output, f, len(frames) > 1) for f in frames}
         for path in frame_paths.values():
             outs.add(path)
@@ -357,7 +377,7 @@ def cmd_render(args) -> int:
             mode=args.mode, backend=args.backend, stall=args.stall, seed=args.seed, one_port=args.one_port,
             stream=args.requests, fovea=fovea, compare_fixed=args.compare_fixed,
             filter_in_rtl=args.filter_in_rtl, lanes=args.lanes, index_banks=args.index_banks,
-            unit=args.unit, geometry=geometry)
+            unit=args.unit, geometry=geometry, memory=memory)
         report = {
             "scene": scene.name, "mode": args.mode, "backend": args.backend, "frames": per_frame,
             "overall_rate": round(ts.rates()["overall"], 4),
@@ -376,6 +396,9 @@ def cmd_render(args) -> int:
         if args.backend != "golden" or args.filter_in_rtl:
             report["identical_to_golden"] = not mismatches
             report["cycles_per_frame"] = round(float(np.mean([f["cycles"] for f in per_frame])), 1)
+        if memory is not None:
+            report["cycles_per_frame"] = round(float(np.mean([f.get("cycles", 0) for f in per_frame])), 1)
+            report["memory"] = _memory_summary(memory, per_frame)
         stream_mismatches = []
         if args.compare_fixed:
             report["cycles_per_frame"] = round(float(np.mean([f.get("cycles", 0) for f in per_frame])), 1)
@@ -405,6 +428,13 @@ def cmd_render(args) -> int:
     elif args.backend != "golden":
         text.append(f"RTL frames identical to golden: {'yes' if not mismatches else 'NO, frames ' + str(mismatches)}; "
                     f"{report['cycles_per_frame']:.0f} cycles per frame")
+    if memory is not None:
+        m = report["memory"]
+        text.append(f"external memory ({m['configuration']}): {report['cycles_per_frame']:,.0f} cycles per frame, "
+                    f"{m['bytes_per_texel']:.4f} bytes read per texel, {m['bytes_per_pixel']:.4f} per pixel, "
+                    f"hit rates index {_pct(m['hit_rate']['index'])}, raw {_pct(m['hit_rate']['raw'])}"
+                    + (f", {m['of_zero_latency']:.3f} of the zero-latency texels per clock" if "of_zero_latency" in m
+                       else ""))
     if args.compare_fixed:
         text.append(f"fixed stream: {report['fixed_requests_per_frame']:,.0f} requests and "
                     f"{report['fixed_cycles_per_frame']:,.0f} cycles per frame; sparse: "
@@ -422,7 +452,30 @@ def cmd_render(args) -> int:
     return 0
 
 
-def _options_that_apply(args, fovea) -> None:
+def _pct(v) -> str:
+    return "-" if v is None else f"{100 * v:.2f}%"
+
+
+def _memory_summary(memory, per_frame) -> dict:
+    """The external memory's figures over the frames: bytes per texel and per textured pixel, hit
+    rates (over all references), cycles against zero latency (golden)."""
+    frames = [f for f in per_frame if "memory" in f]
+    refs = {k: sum(f["memory"]["references"][k] for f in frames) for k in ("index", "raw")}
+    misses = {k: sum(f["memory"]["misses"][k] for f in frames) for k in ("index", "raw")}
+    nbytes = sum(sum(f["memory"]["memory_bytes"].values()) for f in frames)
+    texels = sum(f["requests"] for f in frames)
+    pixels = sum(f.get("pixels_textured", 0) for f in frames)
+    out = {"configuration": frames[0]["memory"]["configuration"] if frames else memory.describe(),
+           "bytes": nbytes, "bytes_per_texel": nbytes / texels if texels else 0.0,
+           "bytes_per_pixel": nbytes / pixels if pixels else 0.0,
+           "hit_rate": {k: (1 - misses[k] / refs[k]) if refs[k] else None for k in refs}}
+    if frames and "zero_latency_cycles" in frames[0]["memory"]:
+        zero = sum(f["memory"]["zero_latency_cycles"] for f in frames)
+        out["of_zero_latency"] = zero / sum(f["cycles"] for f in frames)
+    return out
+
+
+def _options_that_apply(args, fovea, memory: bool = False) -> None:
     """Refuse an option given where it changes nothing, whatever its value (their argparse defaults
     are None), then fill in the defaults: ``--lanes`` and ``--index-banks`` need ``--filter-in-rtl``;
     ``--train-on`` needs ``--encode-needed``; ``--diff-scale`` needs ``--diff``; ``--stall`` above 0,
@@ -434,7 +487,7 @@ def _options_that_apply(args, fovea) -> None:
             "is how the RTL filter's lanes hold the index memory: it needs --filter-in-rtl")
     resolve(args, "train_on", "levels", args.encode_needed, "goes with --encode-needed")
     resolve(args, "diff_scale", 32, bool(args.diff), "is the top of the --diff heat map: it needs --diff")
-    cycles = args.backend != "golden" or args.compare_fixed or fovea is not None
+    cycles = args.backend != "golden" or args.compare_fixed or fovea is not None or memory
     args.seed = stall_seed(args, stall_applies=bool(cycles or filt))
     if args.one_port and not cycles:
         raise CliError("--one-port does not apply: nothing runs the unit's cycles here (an RTL backend, "
@@ -510,6 +563,7 @@ def add_parser(sub) -> None:
                                      "groups, or on the touched blocks only", "levels"))
     add_hardware_options(r)
     add_unit(r)
+    add_memory_options(r)
     r.add_argument("--filter-in-rtl", action="store_true",
                    help="run the texture filter in the RTL (hw.filter: per-pixel (s, t, lod) in, filtered colour "
                         "out) instead of the texel-fetch unit with the filtering in numpy (default: off)")

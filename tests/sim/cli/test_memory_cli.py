@@ -18,7 +18,7 @@ def trace(tmp_path_factory):
     d = tmp_path_factory.mktemp("memory_cli")
     ts = texture_set("yuv_4x4_b12_mip")
     ts.save(d / "t.vqt")
-    req = random_requests(ts, 120, seed=1)
+    req = random_requests(ts, 60, seed=1)
     np.save(d / "r.npy", req)
     return d, ts, req
 
@@ -57,3 +57,33 @@ def test_bad_memory_configurations(capsys, trace, argv, pattern):
     d, _, _ = trace
     assert_one_error(capsys, ["sim", d / "t.vqt", d / "r.npy", "-o", d / "x.npy", *argv], pattern)
     assert not (d / "x.npy").exists()
+
+
+def test_render_with_external_memory(capsys, tmp_path):
+    """render --memory external: the frame is golden's, the cycles and memory figures are the cached
+    unit's cycle model on the frame's requests."""
+    from vqtex.golden.memory.cache import CacheShape
+    from vqtex.golden.memory.system import MemoryConfig
+    from vqtex.golden.render.frame import frame_requests
+    from vqtex.golden.render.scene import build_texture_set, parse_scene
+    from vqtex.sim.backends.cycle_model import run_cached
+    from tests.golden.test_need import SMALL
+    scene_file = tmp_path / "small.toml"
+    scene_file.write_text(SMALL)
+    code, text, err = run_cli(capsys, "render", scene_file, "--frames", "1", "-o", tmp_path / "f.png", "--memory",
+                              "external", "--cache-size", "512", "--raw-cache-size", "256", "--prefetch", "4",
+                              "--json")
+    assert code == 0, err
+    rep = json.loads(text)
+    scene = parse_scene(SMALL, str(scene_file))
+    ts = build_texture_set(scene)
+    req, sampler = frame_requests(scene, 1, ts, "trilinear")
+    cfg = MemoryConfig(index_cache=CacheShape(512, 32, 4), raw_cache=CacheShape(256, 32, 4), prefetch=4)
+    model = run_cached(ts, req, cfg)
+    frame = rep["frames"][0]
+    assert frame["cycles"] == model["cycles"] and rep["cycles_per_frame"] == model["cycles"]
+    assert rep["memory"]["bytes_per_texel"] == model["bytes_per_texel"]
+    assert rep["memory"]["bytes_per_pixel"] == sum(model["memory_bytes"].values()) / len(sampler.fragments)
+    assert rep["memory"]["of_zero_latency"] == model["of_zero_latency"]
+    assert_one_error(capsys, ["render", scene_file, "--frames", "1", "-o", tmp_path / "g.png", "--memory", "external",
+                              "--compare-fixed"], "not with --compare-fixed")
