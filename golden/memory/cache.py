@@ -114,7 +114,6 @@ def classify(lines, sets, n_sets: int, ways: int) -> Classified:
     h_hit = np.zeros(len(hpos), bool)
     h_way = np.zeros(len(hpos), np.int64)
     h_victim = np.full(len(hpos), -1, np.int64)
-    wcols = np.arange(ways)
     for k in range(len(bounds) - 1):
         hs = by_step[bounds[k]: bounds[k + 1]]          # one head per set
         if not len(hs):
@@ -131,7 +130,6 @@ def classify(lines, sets, n_sets: int, ways: int) -> Classified:
         tags[S, w] = L
         used[S, w] = k
         last[S, w] = order[run_end[hs]]
-    del wcols
     # Back to stream order: the folded repeats hit in their head's way.
     run_of = np.cumsum(head) - 1
     hit[order] = np.where(head, h_hit[run_of], True)

@@ -89,8 +89,9 @@ class MemoryConfig:
                 raise ValueError(f"{name} cache line {c.line} bytes is narrower than the {b}-byte bus")
             if c.line // b > 256:
                 raise ValueError(f"{name} cache line {c.line} bytes is more than 256 beats of {b} bytes")
-            if c.sets == 1 and c.ways == 1:
-                raise ValueError(f"{name} cache of one line: a straddling index needs two")
+        if self.index_cache.sets < 2:
+            raise ValueError("the index cache needs at least two sets: the two lines of a straddling index "
+                             "are looked up together, in two sets")
         if self.kind == "fixed":
             if not isinstance(self.latency, int) or not 1 <= self.latency <= 100000:
                 raise ValueError(f"memory latency {self.latency!r} must be 1 to 100000 cycles")

@@ -143,8 +143,7 @@ class CachedReader(wiring.Component):
                  tag_width: int = 8, addr_width: int = 32):
         if word_bits not in (16, 32, 64):
             raise ValueError(f"index word of {word_bits} bits: 16, 32 or 64")
-        ic, rc = config.index_cache, config.raw_cache
-        if ic.sets < 2:
+        if config.index_cache.sets < 2:
             raise ValueError("the index cache needs at least two sets (the two lines of a straddling index)")
         if raw_base % 4096:
             raise ValueError(f"raw_base {raw_base:#x} must be 4 KB aligned")
@@ -218,7 +217,6 @@ class CachedReader(wiring.Component):
         # -- the reference FIFO (Q entries) ------------------------------------------------------------
         islot = max(1, ic.slot_bits())
         rslot = max(1, rc.slot_bits())
-        bpl = max(1, _log2(beats[0]) if beats[0] > 1 else 1)
         entry = data.StructLayout({
             "raw": 1, "slot0": max(islot, rslot), "slot1": islot, "beat0": max(1, _log2(max(beats))),
             "beat1": max(1, _log2(max(beats))), "off0": max(1, _log2(bus // min(wb, 4)) or 1),
@@ -291,8 +289,7 @@ class CachedReader(wiring.Component):
         flight = [Signal(1 + max(islot, rslot), name=f"flight_{q}") for q in range(depth)]
         f_head = Signal(range(depth))
         f_tail = Signal(range(depth))
-        # the burst leaving on AR in this cycle is the one loaded first: queue them in tag-check order
-        pending = Signal(1 + max(islot, rslot))
+        # bursts are queued in tag-check order, the order they leave on AR and come back on R
         with m.If(take & (nmiss != 0)):
             sw = max(islot, rslot)
 
@@ -305,7 +302,6 @@ class CachedReader(wiring.Component):
                 m.d.sync += f_tail.eq(f_tail + 2)
             with m.Else():
                 m.d.sync += f_tail.eq(f_tail + 1)
-        del pending
         cur = Signal(1 + max(islot, rslot))
         m.d.comb += cur.eq(Array(flight)[f_head])
         beat = Signal(range(max(beats) + 1))

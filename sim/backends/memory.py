@@ -137,7 +137,6 @@ def run_pysim(ts, req, config, stall, seed) -> dict:
     sim.add_testbench(bench)
     sim.run()
     got["ar"] = slave.ar
-    lines = (config.index_cache.line, config.raw_cache.line)
     raw_base = layout.raw_base
     got["bursts"] = np.bincount([int(a >= raw_base) for a in slave.addresses], minlength=2)
     return got

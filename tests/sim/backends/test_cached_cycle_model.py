@@ -5,7 +5,7 @@ taking requests offered with gaps, under random backpressure)."""
 
 import numpy as np
 import pytest
-from amaranth import Module, Signal
+from amaranth import Module
 from amaranth.sim import Simulator
 
 from vqtex.golden.fetch import fetch, random_requests
