@@ -27,7 +27,7 @@ from amaranth.lib.wiring import In, Out
 
 from .toolchain import ToolchainError, texture_set_digest
 
-__all__ = ["TOP_NAME", "FILTER_TOP_NAME", "STROBES", "HALVES", "COLUMNS", "FIELDS", "TexelFetchTop", "FilterTop",
+__all__ = ["TOP_NAME", "FILTER_TOP_NAME", "STROBES", "HALVES", "COLUMNS", "FIELDS", "TexelFetchTop", "FilterTop", "CachedTexelFetchTop",
            "port_map", "request_ports", "response_ports", "MemoryImage", "DesignInfo", "design_info",
            "filter_design_info", "pack_requests", "MAX_PAYLOAD_WORDS"]
 
@@ -359,3 +359,50 @@ def pack_requests(info: DesignInfo, requests: np.ndarray, *, block: int = 1 << 1
                 np.left_shift(t, off, out=t)
             np.bitwise_or(o, t, out=o)
     return out
+
+
+class CachedTexelFetchTop(wiring.Component):
+    """:class:`hw.memory.unit.CachedTexelFetch` with one port per stream member, as
+    :class:`TexelFetchTop` (``i_valid``, ``i_ready``, ``i_texture``, ..., ``o_r``, ..., ``o_tag``), the
+    strobes ``stall_memory`` and ``stall_output``, and the AXI4 read master as ``axi_araddr``,
+    ``axi_arlen``, ..., ``axi_rready`` (AMBA's names after ``axi_``, what bus models such as
+    cocotbext-axi find by prefix), with ``axi_arid`` tied to 0 and ``axi_rid`` ignored (one ID).
+
+    Arguments
+    ---------
+    texture_set : TextureSet
+    config : golden.memory.system.MemoryConfig
+    tag_width : int
+    """
+
+    def __init__(self, texture_set, config, *, tag_width: int = 8):
+        from vqtex.hw.memory.unit import CachedTexelFetch
+        self._unit = CachedTexelFetch(texture_set, config, tag_width=tag_width)
+        u = self._unit
+        members = {"i_valid": In(1), "i_ready": Out(1), "o_valid": Out(1), "o_ready": In(1),
+                   "stall_memory": Out(1), "stall_output": Out(1), "axi_arid": Out(1), "axi_rid": In(1)}
+        members.update({f"i_{n}": In(f.width) for n, f in u.i.p.shape() if f.width})
+        members.update({f"o_{n}": Out(f.width) for n, f in u.o.p.shape() if f.width})
+        for name, member in u.axi.signature.members.items():
+            members[f"axi_{name}"] = Out(member.shape) if member.flow == wiring.Out else In(member.shape)
+        super().__init__(members)
+
+    @property
+    def unit(self):
+        return self._unit
+
+    def elaborate(self, platform):
+        m = Module()
+        m.submodules.unit = u = self._unit
+        m.d.comb += [u.i.valid.eq(self.i_valid), self.i_ready.eq(u.i.ready),
+                     self.o_valid.eq(u.o.valid), u.o.ready.eq(self.o_ready),
+                     self.stall_memory.eq(u.stall_memory), self.stall_output.eq(u.stall_output),
+                     self.axi_arid.eq(0)]
+        m.d.comb += [getattr(u.i.p, n).eq(getattr(self, f"i_{n}")) for n, f in u.i.p.shape() if f.width]
+        m.d.comb += [getattr(self, f"o_{n}").eq(getattr(u.o.p, n)) for n, f in u.o.p.shape() if f.width]
+        for name, member in u.axi.signature.members.items():
+            if member.flow == wiring.Out:
+                m.d.comb += getattr(self, f"axi_{name}").eq(getattr(u.axi, name))
+            else:
+                m.d.comb += getattr(u.axi, name).eq(getattr(self, f"axi_{name}"))
+        return m
