@@ -52,9 +52,11 @@ def _memory_report(p, config, bursts_by_cache, n) -> dict:
 def run(ts, requests, config, *, backend: str = "golden", stall: float = 0.0, seed: int = 0) -> SimResult:
     """See the module docstring. Raises ValueError for a backend that does not run the cached unit."""
     from vqtex.hw.texel_fetch import LATENCY
+    from .cycle_model import straddle_flags
     req = np.asarray(requests, np.int64).reshape(-1, 4)
     n = len(req)
     p = plan(ts, req, config)
+    straddles = int(straddle_flags(ts, req).sum())          # a property of the stream (both words read)
     if backend == "golden":
         from .cycle_model import run_cached
         model = run_cached(ts, req, config, stall=stall, seed=seed)
@@ -69,14 +71,15 @@ def run(ts, requests, config, *, backend: str = "golden", stall: float = 0.0, se
         memory["of_zero_latency"] = model["of_zero_latency"]
         return SimResult(responses, model["cycles"], n, LATENCY + 4,
                          {"output_backpressure": int(sc["output_backpressure"]),
-                          "memory": int(sc["miss"] + sc["bandwidth"])}, 0, memory=memory)
+                          "memory": int(sc["miss"] + sc["bandwidth"])}, straddles, memory=memory)
     if backend != "pysim":
         raise ValueError(f"the cached unit (--memory external) runs on {' and '.join(BACKENDS)}, "
                          f"not yet on {backend}")
     out = run_pysim(ts, req, config, stall, seed)
     memory = _memory_report(p, config, out["bursts"], n)
     return SimResult(out["responses"], out["cycles"], n, LATENCY + 4,
-                     {"output_backpressure": out["backpressure"], "memory": out["fill_waits"]}, 0, memory=memory)
+                     {"output_backpressure": out["backpressure"], "memory": out["fill_waits"]}, straddles,
+                     memory=memory)
 
 
 def run_pysim(ts, req, config, stall, seed) -> dict:
