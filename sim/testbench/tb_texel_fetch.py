@@ -168,7 +168,7 @@ class Bench:
         n, held, last = 0, False, None
         while n < len(req):
             want = force[n]
-            ready = (not held) if want is True else True if want is False else self.rng.random() >= self.cfg["stall"]
+            ready = held if want is True else True if want is False else self.rng.random() >= self.cfg["stall"]
             dut.o_ready.value = int(ready)
             await ReadOnly()
             if dut.o_valid.value == 1:
