@@ -1,6 +1,10 @@
 """``vqtex export FILE.vqt -o OUT.v [--one-port] [--tag-width N] [--name NAME] [--dialect sv|v2005] [--testbench DIR]
 [--lint] [--json]``; ``vqtex export [FILE.vqt] --unit loadable [--geometry NAME|FILE.toml] -o OUT.v``.
 
+``--testbench DIR`` (with FILE.vqt, the texel-fetch unit) also writes a cocotb testbench of the
+unit into DIR (:mod:`vqtex.sim.testbench.write`: ``tb_texel_fetch.py``, ``run_tb.py``,
+``tb_config.json``, ``tb_set.vqt``; docs/verification.md), staged with the other outputs.
+
 The loadable unit (``--unit loadable``) holds no texture data: its Verilog is the geometry's (the
 named one, or the smallest that holds FILE), and beside it go its register map, ``OUT.regs.md``,
 and the C header a CPU driver includes, ``OUT.h`` (:mod:`golden.register_map`).

