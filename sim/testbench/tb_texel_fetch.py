@@ -110,7 +110,6 @@ class Coverage:
             sample = point(sample)
         self.sample = sample
         self.cross = coverage_db["vqtex.cross"]
-        self.first_phase: dict = {}
 
     def hit(self) -> set:
         return {key for key, count in self.cross.detailed_coverage.items() if count > 0}
@@ -161,7 +160,7 @@ class Bench:
         dut.i_valid.value = 0
         self.sent += len(req)
 
-    async def collect(self, req: np.ndarray, force: list, phase: str):
+    async def collect(self, req: np.ndarray, force: list):
         """Take ``len(req)`` responses; ``o_ready`` random (``stall``) or forced per response
         (``force[n]``: True hold it one cycle, False never hold it); check each against golden."""
         dut, base = self.dut, self.received
@@ -183,7 +182,6 @@ class Bench:
                         self.mismatches.append(f"response {base + n} to request {req[n].tolist()}: got {payload}, "
                                                f"expected {want_payload} (golden.fetch)")
                     self.coverage.sample(*keys[n], held)
-                    self.coverage.first_phase.setdefault((*keys[n], held), phase)
                     n, held, last = n + 1, False, None
                 else:
                     held, last = True, payload
@@ -193,11 +191,11 @@ class Bench:
             await RisingEdge(dut.clk)
         self.received += len(req)
 
-    async def run(self, req: np.ndarray, force: list, phase: str):
+    async def run(self, req: np.ndarray, force: list):
         """Drive ``req`` and collect its responses (a timeout fails the test: a lost response)."""
         budget = (len(req) + 64) * 8 / max(0.05, 1.0 - max(self.cfg["stall"], self.cfg["gap"]))
         task = cocotb.start_soon(self.drive(req))
-        await with_timeout(self.collect(req, force, phase), int(budget * PERIOD_NS), "ns")
+        await with_timeout(self.collect(req, force), int(budget * PERIOD_NS), "ns")
         await task
 
     async def quiet(self, cycles: int):
@@ -283,7 +281,7 @@ async def texel_fetch_against_golden(dut):
     bench = Bench(dut, ts, cfg, coverage, rng)
 
     req = random_phase(ts, cands, cfg["requests"], cfg["per_bin"], rng)
-    await bench.run(req, [None] * len(req), "random")
+    await bench.run(req, [None] * len(req))
     after_random = coverage.hit() & reachable
     # Closure: one request per missed bin, its backpressure forced to the bin's stall value.
     holes = sorted(reachable - coverage.hit(), key=str)
@@ -291,7 +289,7 @@ async def texel_fetch_against_golden(dut):
                for key in holes]
     if closure:
         creq = np.array([c[0] for c in closure], np.int64)
-        await bench.run(creq, [c[1] for c in closure], "closure")
+        await bench.run(creq, [c[1] for c in closure])
     await bench.quiet(cfg["latency"] + 8)
 
     phases = {"requests": {"random": int(len(req)), "closure": len(closure)},
