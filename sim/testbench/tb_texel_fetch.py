@@ -43,6 +43,7 @@ import cocotb
 import numpy as np
 from cocotb.clock import Clock
 from cocotb.triggers import ReadOnly, RisingEdge, Timer, with_timeout
+from cocotb.utils import get_sim_time
 from cocotb_coverage.coverage import CoverCross, CoverPoint, coverage_db
 
 from vqtex.golden.fetch import fetch, random_requests
@@ -141,6 +142,9 @@ class Bench:
         self.received = 0
         self.straddling = 0                 # golden: requests whose index straddles a word
         self.strobes = {"straddle": 0}
+        self.accepted: list = []            # cycle each request was taken (i_valid & i_ready)
+        self.presented: list = []           # cycle its response first showed o_valid
+        self.stalls: set = set()            # cycles of output backpressure or a one-port bubble
 
     async def drive(self, req: np.ndarray):
         """Offer ``req`` on ``i_*``: valid and payload held until ``i_ready``, random idle cycles between."""
@@ -157,6 +161,8 @@ class Bench:
                 dut.i_valid.value = 1
             await ReadOnly()
             fire = offering and dut.i_ready.value == 1
+            if fire:
+                self.accepted.append(_cycle())
             await RisingEdge(dut.clk)
             if fire:
                 n, offering = n + 1, False
@@ -180,6 +186,10 @@ class Bench:
             if hasattr(dut, "stall_output") and (dut.stall_output.value == 1) != (valid and not ready):
                 self.mismatches.append(f"cycle with response {base + n} at the head: stall_output "
                                        f"{dut.stall_output.value}, o_valid {int(valid)}, o_ready {int(ready)}")
+            if valid and not ready:
+                self.stalls.add(_cycle())
+            if valid and len(self.presented) == base + n:
+                self.presented.append(_cycle())
             if valid:
                 payload = tuple(_int(getattr(dut, p).value) for p in self.fields)
                 if last is not None and payload != last:
@@ -211,12 +221,31 @@ class Bench:
         while True:
             await ReadOnly()
             self.strobes["straddle"] += int(self.dut.straddle.value == 1)
+            if self.dut.stall_one_port.value == 1:
+                self.stalls.add(_cycle())
             await RisingEdge(self.dut.clk)
 
     def check_strobes(self):
         if self.strobes["straddle"] != self.straddling:
             self.mismatches.append(f"straddle strobe: {self.strobes['straddle']} pulses, golden has "
                                    f"{self.straddling} straddling requests")
+
+    def check_latency(self, latency: int) -> dict:
+        """A response shows ``latency`` cycles after its request was taken when no output stall or
+        one-port bubble came between (hw.texel_fetch: "presented on o in cycle t + 14"), and never sooner."""
+        taken, shown = np.array(self.accepted, np.int64), np.array(self.presented, np.int64)
+        if len(taken) != len(shown):
+            self.mismatches.append(f"{len(taken)} requests taken, {len(shown)} responses shown")
+            return {}
+        stalls = np.array(sorted(self.stalls), np.int64)
+        between = np.searchsorted(stalls, shown) - np.searchsorted(stalls, taken)
+        lat = shown - taken
+        free = between == 0
+        for n in np.flatnonzero((lat < latency) | (free & (lat != latency)))[:10]:
+            self.mismatches.append(f"response {n}: shown {lat[n]} cycles after its request was taken, latency "
+                                   f"{latency}{' (no stall between)' if free[n] else ''}")
+        return {"unstalled_responses": int(free.sum()), "latency_min": int(lat.min()) if len(lat) else None,
+                "latency_max": int(lat.max()) if len(lat) else None}
 
     async def quiet(self, cycles: int):
         """No response may appear after the last one (``o_ready`` high, ``cycles`` cycles)."""
@@ -227,6 +256,11 @@ class Bench:
                 self.mismatches.append("an extra response after the last request's")
                 return
             await RisingEdge(self.dut.clk)
+
+
+def _cycle() -> int:
+    """The current clock cycle (rising edges at 1 + PERIOD_NS * k ns): one count for every coroutine."""
+    return int(get_sim_time("ns") // PERIOD_NS)
 
 
 def _int(value):
@@ -315,11 +349,12 @@ async def texel_fetch_against_golden(dut):
     if strobes is not None:
         strobes.cancel()
         bench.check_strobes()
+    timing = bench.check_latency(cfg["latency"])
 
     phases = {"requests": {"random": int(len(req)), "closure": len(closure)},
               "hit_by_random": len(after_random), "hit_by_closure": len((coverage.hit() & reachable) - after_random),
               "mismatches": len(bench.mismatches), "responses": bench.received,
-              "straddling_requests": bench.straddling, "straddle_strobes": bench.strobes["straddle"],
+              "straddling_requests": bench.straddling, "straddle_strobes": bench.strobes["straddle"], **timing,
               "set": os.path.basename(cfg["set_path"]), "unit": cfg["unit"], "seed": cfg["seed"],
               "stall": cfg["stall"], "simulator": cocotb.SIM_NAME}
     summary = coverage.report(dut._log, cfg["report"], phases)

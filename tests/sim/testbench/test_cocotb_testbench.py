@@ -28,6 +28,7 @@ import pytest
 
 from tests.support import need, need_python, pvr2_small_sets, run_cli, texture_set
 from vqtex.golden.geometry import Geometry
+from vqtex.hw.texel_fetch import LATENCY
 from vqtex.sim.testbench import run_tb, tb_texel_fetch
 from vqtex.sim.testbench.bins import reachable
 from vqtex.sim.testbench.write import FILES
@@ -81,6 +82,8 @@ def _assert_passed(ts, folder, sim, *args):
     # the unit's straddle strobe pulsed once per straddling request (golden's count)
     assert cov["straddle_strobes"] == cov["straddling_requests"]
     assert (cov["straddling_requests"] > 0) == any(b.split("/")[2] == "straddle" for b in cov["bins"])
+    # the fixed latency: never sooner, exactly LATENCY with no stall between request and response
+    assert cov["latency_min"] == LATENCY <= cov["latency_max"] and cov["unstalled_responses"] > 0
     return cov
 
 
@@ -155,6 +158,7 @@ def test_closure_hits_what_the_random_phase_cannot(capsys, tmp_path):
     stall_bins = [b for b in cov["bins"] if b.endswith("/stall")]
     assert cov["requests"]["closure"] >= len(stall_bins) == len(reachable(ts)) // 2
     assert cov["hit_by_closure"] >= len(stall_bins)
+    assert cov["unstalled_responses"] >= cov["requests"]["random"]      # each at exactly LATENCY
 
 
 def test_scoreboard_catches_swapped_colour_outputs(capsys, tmp_path):
@@ -225,3 +229,18 @@ def test_strobe_check_catches_a_disconnected_straddle(capsys, tmp_path):
     code, out, cov = _run(folder, "icarus")
     assert code == 1 and "straddle strobe: 0 pulses, golden has" in out, out[-4000:]
     assert cov["mismatches"] == 1 and cov["straddling_requests"] > 0
+
+
+def test_latency_check_can_fail(capsys, tmp_path):
+    """Negative control of the latency check: the bench told the unit's latency is one more than it
+    is fails on the responses that no stall delayed."""
+    _need("icarus")
+    folder = _export(capsys, tmp_path, "rgb8")
+    path = os.path.join(folder, "tb_config.json")
+    with open(path) as f:
+        cfg = json.load(f)
+    cfg["latency"] = LATENCY + 1
+    with open(path, "w") as f:
+        json.dump(cfg, f)
+    code, out, cov = _run(folder, "icarus", "--stall", 0)
+    assert code == 1 and f"cycles after its request was taken, latency {LATENCY + 1}" in out, out[-4000:]
