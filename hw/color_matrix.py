@@ -20,6 +20,8 @@ from vqtex.golden.color import ColorMatrix as ColorMatrixSpec
 from vqtex.golden.format import COLOR_CODES
 from vqtex.golden.register_map import COEFF_BITS, CONTROL, REGIONS
 
+from .bus_port import ANSWER_LATENCY, delayed
+
 from .codebook_rom import SamplesLayout
 
 __all__ = ["ColorMatrix", "LATENCY"]
@@ -132,7 +134,7 @@ class ColorMatrix(wiring.Component):
                 m.d.sync += reg.eq(load.data[:len(reg)])
             with m.If(load.read & here):                # coefficients read back sign-extended
                 m.d.sync += answer.eq(reg.as_signed() if reg.shape().signed else reg)
-        m.d.comb += self.load_data.eq(answer)
+        m.d.comb += self.load_data.eq(delayed(m, answer, ANSWER_LATENCY - 2, name="matrix_answer"))
         return regs
 
     def _loaded_sums(self, m, regs) -> list:

@@ -86,6 +86,7 @@ def test_loadable_matrix_reloaded(before, after):
     every register equals what was written."""
     from amaranth.sim import Simulator
     from vqtex.golden.register_map import CONTROL, REGIONS
+    from vqtex.hw.bus_port import ANSWER_LATENCY
     dut = _loadable(before)
     writes = []
     for c in range(3):
@@ -106,11 +107,12 @@ def test_loadable_matrix_reloaded(before, after):
             ctx.set(dut.load.data, value)
             await ctx.tick()
         ctx.set(dut.load.write, 0)
-        for off, _ in writes:
+        for off, _ in writes:               # the answer is on load_data ANSWER_LATENCY - 1 cycles after the command
             ctx.set(dut.load.read, 1)
             ctx.set(dut.load.offset, off)
             await ctx.tick()
             ctx.set(dut.load.read, 0)
+            await ctx.tick().repeat(ANSWER_LATENCY - 2)
             readback.append(ctx.get(dut.load_data) & 0xFFFFFFFF)
         await ctx.tick().repeat(3)
         ctx.set(dut.en, 1)
