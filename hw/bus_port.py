@@ -22,7 +22,11 @@ colour matrix watch (:func:`attach_memory`). The rule that keeps requests and lo
 Timing: a write accepted in cycle ``t`` is acknowledged (or refused with ``err``) in cycle
 ``t + 1`` and is in the memory from cycle ``t + 2``; writes go back to back. A read accepted in
 cycle ``t`` is answered in cycle ``t + READ_LATENCY`` with ``dat_r``; the port stalls during a
-read, so answers come in order. ``err`` answers (one cycle after acceptance) an address the
+read, so answers come in order. A read's path is registered at every step, so that it is never the
+unit's critical path (150 MHz on the ECP5-8): the command (``t + 1``), the memory's read (``t + 2``),
+a fabric register of the read data (``t + 3``: a block RAM's clock-to-output leaves no time for
+logic behind it), the lane select and the answer register (``t + 4``: ``load_data``), then the OR
+of every answer into ``dat_r`` (``t + 5``). ``err`` answers (one cycle after acceptance) an address the
 geometry does not map and a write to a read-only register.
 """
 
@@ -38,13 +42,15 @@ from vqtex.golden.geometry import Geometry
 from vqtex.golden.register_map import (CONTROL, REGION_BITS, REGIONS, RegisterMap, geometry_words)
 
 __all__ = ["wishbone_signature", "load_layout", "BusPort", "LoadTarget", "load_decode", "attach_memory", "or_all",
-           "READ_LATENCY",
+           "READ_LATENCY", "ANSWER_LATENCY", "delayed",
            "DATA_WIDTH"]
 
 #: Bus data width.
 DATA_WIDTH = 32
 #: Cycles from a read's acceptance to its ``ack`` and ``dat_r``.
-READ_LATENCY = 3
+READ_LATENCY = 5
+#: Cycles from a read's acceptance to its answer on ``load_data`` (one register before ``dat_r``).
+ANSWER_LATENCY = READ_LATENCY - 1
 
 
 def or_all(values):
@@ -173,6 +179,7 @@ class BusPort(wiring.Component):
         mine = self.load.read & (self.load.region == REGIONS["control"])
         m.d.sync += own.eq(or_all(Mux(mine & (self.load.offset == CONTROL[name][0]), C(value, DATA_WIDTH), 0)
                                for name, value in values.items()))
+        own = delayed(m, own, ANSWER_LATENCY - 2, name="own_data")
         dat_r = Signal(DATA_WIDTH, name="dat_r_reg")
         ack_read = Signal()
         m.d.sync += [dat_r.eq(self.load_data | own), ack_read.eq(reading[-1])]
@@ -218,8 +225,17 @@ def load_decode(m, load, *, region: int, lanes: int = 1, stride: int = 1, phase:
     return hit, row, lane
 
 
+def delayed(m, value, cycles: int, *, name: str):
+    """``value`` through ``cycles`` registers (a read answer brought to ``ANSWER_LATENCY``)."""
+    for n in range(cycles):
+        r = Signal.like(value, name=f"{name}_d{n + 1}")
+        m.d.sync += r.eq(value)
+        value = r
+    return value
+
+
 def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int | None = None, pack=None,
-                  unpack=None, name: str, read_addr, read_en):
+                  unpack=None, name: str, read_addr, read_en, data_r=None):
     """Give ``mem`` (an ``amaranth.lib.memory.Memory``, not yet elaborated) a write port for the load
     command ``load``, and its one read port, shared: the pipeline reads at ``read_addr`` when
     ``read_en``; a bus read takes the port in the cycle of its command (the pipeline is empty then:
@@ -227,8 +243,13 @@ def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int
     ``row`` and ``lane`` say whether the command addresses this memory, which row, which 32-bit
     lane of it (:func:`load_decode`, then narrowed to a bank by the caller). Returns
     ``(read_port, answer)``: the read port (the pipeline takes ``read_port.data``) and the memory's
-    read answer (32 bits, 0 unless this memory was addressed by the read ``READ_LATENCY - 1`` cycles
-    after its acceptance).
+    read answer (32 bits, registered, 0 unless this memory was addressed by the read
+    ``ANSWER_LATENCY`` cycles after its acceptance).
+
+    The read data goes through a fabric register before the lane select: ``data_r``, a register
+    the caller already has for the pipeline (:class:`hw.banked_rom.BankedROM`'s per-bank data
+    register, as wide as the memory), which this function makes load the read data in the cycle
+    after a bus read as well; without ``data_r``, a register of its own.
 
     With ``only_lane=None`` a row is the entry's lanes side by side (width ``32 * lanes`` or less,
     written 32 bits at a time); with ``only_lane=k`` the memory holds lane ``k`` of each entry only
@@ -250,14 +271,20 @@ def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int
     bus_read = Signal(name=f"{name}_bus_read")
     m.d.comb += [bus_read.eq(load.read & mine),
                  rp.addr.eq(Mux(bus_read, row, read_addr)), rp.en.eq(read_en | bus_read)]
-    hit_r = Signal(name=f"{name}_hit_r")
-    m.d.sync += hit_r.eq(bus_read)
+    hit_r = Signal(name=f"{name}_hit_r")            # the read data is on the port
+    hit_rr = Signal(name=f"{name}_hit_rr")          # ... and in data_r
+    m.d.sync += [hit_r.eq(bus_read), hit_rr.eq(hit_r)]
+    if data_r is None:
+        data_r = Signal.like(rp.data, name=f"{name}_data_r")
+    with m.If(hit_r):
+        m.d.sync += Value.cast(data_r).eq(rp.data)
     if wide:
         lane_r = Signal(len(lane), name=f"{name}_lane_r")
-        m.d.sync += lane_r.eq(lane)
-        word = Value.cast(rp.data).word_select(lane_r, DATA_WIDTH)
+        lane_rr = Signal(len(lane), name=f"{name}_lane_rr")
+        m.d.sync += [lane_r.eq(lane), lane_rr.eq(lane_r)]
+        word = Value.cast(data_r).word_select(lane_rr, DATA_WIDTH)
     else:
-        word = unpack(rp.data) if unpack is not None else Value.cast(rp.data)
+        word = unpack(data_r) if unpack is not None else Value.cast(data_r)
     answer = Signal(DATA_WIDTH, name=f"{name}_answer")
-    m.d.comb += answer.eq(Mux(hit_r, word, 0))
+    m.d.sync += answer.eq(Mux(hit_rr, word, 0))
     return rp, answer

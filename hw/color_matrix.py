@@ -20,6 +20,8 @@ from vqtex.golden.color import ColorMatrix as ColorMatrixSpec
 from vqtex.golden.format import COLOR_CODES
 from vqtex.golden.register_map import COEFF_BITS, CONTROL, REGIONS
 
+from .bus_port import ANSWER_LATENCY, delayed
+
 from .codebook_rom import SamplesLayout
 
 __all__ = ["ColorMatrix", "LATENCY"]
@@ -132,8 +134,55 @@ class ColorMatrix(wiring.Component):
                 m.d.sync += reg.eq(load.data[:len(reg)])
             with m.If(load.read & here):                # coefficients read back sign-extended
                 m.d.sync += answer.eq(reg.as_signed() if reg.shape().signed else reg)
-        m.d.comb += self.load_data.eq(answer)
+        m.d.comb += self.load_data.eq(delayed(m, answer, ANSWER_LATENCY - 2, name="matrix_answer"))
         return regs
+
+    def _loaded_sums(self, m, regs) -> list:
+        """Stages 1 and 2 of the loaded matrix: the three sums, registered (``sum_r``, ``sum_g``,
+        ``sum_b``, ``COEFF_BITS + 12`` signed bits, bias included).
+
+        The sum is rearranged so that no stage holds more than one multiplication or one addition
+        of four terms (150 MHz on an ECP5 with the shift by a loaded ``F`` in stage 3)::
+
+            sum_k M[c][k] * (in_k - off_k) + bias  ==  sum_k M[c][k] * in_k + K[c],
+            K[c] = bias - sum_k M[c][k] * off_k
+
+        an identity of integers, so the result equals the offset-first order bit for bit.
+
+        1. the nine products ``M[c][k] * in_k`` (8-bit unsigned samples, 18-bit signed
+           coefficients), registered;
+        2. per output, the three products plus ``K[c]``, registered.
+
+        ``K`` depends only on the loaded registers: its own two-stage pipeline (the nine
+        ``M * off`` registered, then ``bias - sum`` registered) runs every cycle, so it holds the new
+        value 3 cycles after the host's last write of a matrix register. The bus port's drain rule
+        (no request is accepted while a transfer is under way) and the 11 stages in front of the
+        colour matrix put every request after the load well behind that.
+        """
+        mat, load = self._matrix, regs
+        coeff, offset, frac, rounding = load["coeff"], load["offset"], load["frac"], load["rounding"]
+        pbits, sbits = COEFF_BITS + 8, COEFF_BITS + 9 + 3
+        # K's pipeline, initialised to the initial matrix's K (a unit that is never loaded is right
+        # from the first cycle).
+        q = [[Signal(signed(pbits), name=f"q_{'rgb'[c]}{'yuv'[k]}", reset_less=True,
+                     init=mat.coeffs[c][k] * mat.offsets[k]) for k in range(3)] for c in range(3)]
+        bias = Signal(17, name="bias", reset_less=True, init=mat.bias)
+        konst = [Signal(signed(sbits), name=f"k_{'rgb'[c]}", reset_less=True,
+                        init=mat.bias - sum(mat.coeffs[c][k] * mat.offsets[k] for k in range(3))) for c in range(3)]
+        # bias 2^(F-1) when rounding and F > 0
+        m.d.sync += bias.eq(Mux(rounding & (frac != 0), C(1, 17) << (frac - 1)[:4], 0))
+        for c in range(3):
+            for k in range(3):
+                m.d.sync += q[c][k].eq(coeff[c][k] * offset[k])
+            m.d.sync += konst[c].eq(bias - q[c][0] - q[c][1] - q[c][2])
+        prod = [[Signal(signed(pbits), name=f"p_{'rgb'[c]}{'yuv'[k]}") for k in range(3)] for c in range(3)]
+        acc = [Signal(signed(sbits), name=f"sum_{'rgb'[c]}") for c in range(3)]
+        with m.If(self.en):
+            for c in range(3):
+                for k in range(3):
+                    m.d.sync += prod[c][k].eq(self.samples[k] * coeff[c][k])
+                m.d.sync += acc[c].eq(prod[c][0] + prod[c][1] + prod[c][2] + konst[c])
+        return acc
 
     def elaborate(self, platform):
         m = Module()
@@ -159,15 +208,17 @@ class ColorMatrix(wiring.Component):
                 if not used[k]:
                     continue
                 sample, off = self.samples[k], mat.offsets[k]
-                if regs is not None:
-                    m.d.sync += x[k].eq(sample - regs["offset"][k])
-                elif off == 0:
+                if regs is not None:    # the loaded matrix multiplies here (see _loaded_sums)
+                    continue
+                if off == 0:
                     m.d.sync += x[k].eq(sample)
                 elif off == 128:        # in - 128: the top bit inverted, read as signed (no adder)
                     m.d.sync += x[k].eq(Cat(sample[:7], ~sample[7]).as_signed())
                 else:
                     m.d.sync += x[k].eq(sample - off)
             m.d.sync += carried_r.eq(Cat(self.samples, self.color if not one else C(0, 0)))
+        if regs is not None and matrix:
+            loaded_sums = self._loaded_sums(m, regs)
 
         # Stage 2: constant multiplications (the full unit: all nine, the synthesis tool folds the
         # constants; specialised: only the non-zero ones, powers of two as shifts).
@@ -177,9 +228,7 @@ class ColorMatrix(wiring.Component):
             for c in range(3):
                 for k in range(3):
                     coeff = mat.coeffs[c][k]
-                    if regs is not None:
-                        if matrix:
-                            m.d.sync += prod[c][k].eq(x[k] * regs["coeff"][c][k])
+                    if regs is not None:    # the loaded matrix sums here (see _loaded_sums)
                         continue
                     if not matrix or (coeff == 0 and not self._all):
                         continue                # no product
@@ -200,19 +249,20 @@ class ColorMatrix(wiring.Component):
         # (at least 10 bits: the clamp tests bits 8 and up; a matrix whose sums are that narrow after
         # the shift is rare)
         swidth = max(sbits, 10) if regs is not None else max(sbits - F, 10)
+        if regs is not None and matrix:
+            acc = loaded_sums
         shifted = [Signal(signed(swidth), name=f"shifted_{'rgb'[c]}") for c in range(3)]
         conv = [Signal(8, name=f"conv_{'rgb'[c]}") for c in range(3)]
         for c in range(3):
             if not matrix:
                 break
-            terms = [prod[c][k] for k in range(3) if self._all or regs is not None or mat.coeffs[c][k]]
-            total = terms[0] if terms else C(0, 1)
-            for term in terms[1:]:
-                total = total + term
-            if regs is not None:            # bias 2^(F-1) when rounding (and F > 0), shift by F
-                bias = Mux(regs["rounding"] & (regs["frac"] != 0), C(1, 17) << (regs["frac"] - 1)[:4], 0)
-                m.d.comb += [acc[c].eq(total + bias), shifted[c].eq(acc[c] >> regs["frac"])]
+            if regs is not None:            # the registered sum (bias included), shift by F
+                m.d.comb += shifted[c].eq(acc[c] >> regs["frac"])
             else:
+                terms = [prod[c][k] for k in range(3) if self._all or mat.coeffs[c][k]]
+                total = terms[0] if terms else C(0, 1)
+                for term in terms[1:]:
+                    total = total + term
                 m.d.comb += [
                     acc[c].eq(total + mat.bias),
                     shifted[c].eq(acc[c] >> F),

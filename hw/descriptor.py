@@ -210,7 +210,11 @@ class DescriptorTable(wiring.Component):
             layout = data.StructLayout({name: unsigned(widths[name]) for name, _ in present})
             init = [] if contents is None else [{name: int(r[name]) & ((1 << widths[name]) - 1)
                                                   for name, _ in present} for r in contents]
-            m.submodules[f"word{w}"] = mem = memory.Memory(shape=layout, depth=depth, init=init)
+            # In LUTs (distributed RAM), as the baked PowerVR2 table: a block RAM's clock-to-output
+            # (4.3 ns on the ECP5-8) left too little of the cycle for the shifter behind it (town's
+            # 512-row table: 104-112 MHz, docs/area.md).
+            m.submodules[f"word{w}"] = mem = memory.Memory(shape=layout, depth=depth, init=init,
+                                                           attrs={"ram_style": "distributed"})
 
             def pack(bus_word, present=present, layout=layout):     # noqa: E306
                 return Cat(*(bus_word[lsb:lsb + layout.members[name].width] for name, lsb in present))

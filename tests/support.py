@@ -23,7 +23,7 @@ from vqtex.hw.texel_fetch import LATENCY, REGISTERS
 from vqtex.sim.backends import simulate
 from vqtex.sim.backends.toolchain import using_cache
 
-__all__ = ["REPO", "need", "shared_cache", "need_synth_tools", "builtin_set", "run_cli", "assert_one_error", "shared_cache_dir", "image", "CONFIGS", "texture_set", "combined_set", "texture_sets",
+__all__ = ["REPO", "need", "need_python", "shared_cache", "need_synth_tools", "builtin_set", "run_cli", "assert_one_error", "shared_cache_dir", "image", "CONFIGS", "texture_set", "combined_set", "texture_sets",
            "levels", "random_requests", "random_dt", "adversarial_requests", "back_to_back_requests", "straddle_offsets",
            "assert_same", "compare_with_golden", "stream_put", "stream_get", "run_lockstep", "JFIF_BT601"]
 
@@ -35,6 +35,23 @@ def need(*tools):
     missing = [t for t in tools if shutil.which(os.environ.get("CXX", t) if t == "g++" else t) is None]
     if missing:
         msg = f"needs {', '.join(missing)} (scripts/install-sim-tools)"
+        if os.environ.get("VQTEX_REQUIRE_TOOLS") == "1":
+            pytest.fail(msg + " and VQTEX_REQUIRE_TOOLS=1")
+        pytest.skip(msg)
+
+
+def need_python(*modules):
+    """Skip (or, with VQTEX_REQUIRE_TOOLS=1, fail) unless the Python modules import (the ``test``
+    extra installs them)."""
+    import importlib
+    missing = []
+    for name in modules:
+        try:
+            importlib.import_module(name)
+        except ImportError as e:
+            missing.append(f"{name} ({e})")
+    if missing:
+        msg = f"needs {', '.join(missing)} (pip install '.[test]')"
         if os.environ.get("VQTEX_REQUIRE_TOOLS") == "1":
             pytest.fail(msg + " and VQTEX_REQUIRE_TOOLS=1")
         pytest.skip(msg)

@@ -25,8 +25,9 @@ MAY_IMPORT = {
     "vqtex.sim.reports": {"vqtex.golden", "vqtex.hw", "vqtex.sim.streams", "vqtex.sim.backends"},
     "vqtex.sim.bench": {"vqtex.golden", "vqtex.hw", "vqtex.sim.streams", "vqtex.sim.backends",
                         "vqtex.sim.reports"},
+    "vqtex.sim.testbench": {"vqtex.golden", "vqtex.sim.streams", "vqtex.sim.backends"},
     "vqtex.sim.cli": {"vqtex.golden", "vqtex.hw", "vqtex.sim.streams", "vqtex.sim.backends",
-                      "vqtex.sim.reports", "vqtex.sim.bench"},
+                      "vqtex.sim.reports", "vqtex.sim.bench", "vqtex.sim.testbench"},
 }
 
 

