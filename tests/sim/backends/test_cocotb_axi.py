@@ -14,11 +14,11 @@ import os
 import numpy as np
 import pytest
 
-from tests.sim.backends.test_cocotb_bus import _need_python
-from tests.support import need, texture_set
+from tests.support import need, need_python, texture_set
 from vqtex.golden.fetch import fetch, random_requests
 from vqtex.golden.memory.cache import CacheShape
 from vqtex.golden.memory.system import Layout, MemoryConfig, references
+from vqtex.golden.memory.timing import plan as golden_plan
 from vqtex.sim.backends.verilog import export_cached_verilog
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -28,7 +28,7 @@ HOST = "vqtex_axi_host"                     # tests/sim/backends/cocotb_axi/vqte
 @pytest.mark.parametrize("prefetch", [1, 4])
 def test_cocotbext_axi_ram_icarus(tmp_path, monkeypatch, prefetch):
     need("iverilog", "vvp")
-    _need_python("cocotb", "cocotb_tools.runner", "cocotbext.axi")
+    need_python("cocotb", "cocotb_tools.runner", "cocotbext.axi")
     from cocotb_tools.runner import get_runner
     from cocotb_tools.check_results import get_results
 
@@ -64,7 +64,6 @@ def test_cocotbext_axi_ram_icarus(tmp_path, monkeypatch, prefetch):
     # Every line the stream needs was read, and none twice while it stayed: the bursts are the
     # golden classification's misses (which depend on the stream only), in order.
     refs = references(ts, req, cfg)
-    from vqtex.golden.memory.timing import plan as golden_plan
     p = golden_plan(ts, req, cfg)
     assert [a for a, _ in observed["bursts"]] == p.address.tolist()
     assert all(b == 1 for _, b in observed["bursts"]) and len(refs.line) > len(observed["bursts"])
