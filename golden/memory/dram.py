@@ -9,8 +9,9 @@ tCK 1.25 ns, CL 11 tCK, tRCD 13.75 ns, tRP 13.75 ns, tRAS 35 ns, tRC 48.75 ns, t
 tREFI 7.8 us (case temperature up to 85 C), tRRD max(4 tCK, 7.5 ns) and tFAW 40 ns (2 KB page),
 tRTP max(4 tCK, 7.5 ns), tCCD 4 tCK, burst length 8. LiteDRAM's module table (litedram/modules.py,
 class MT41J256M16, which MT41K256M16 subclasses; speed grade "1600") gives the same tRP, tRCD, tRAS
-and tFAW, tRFC as 208 tCK (= 260 ns) and tREFI as 64 ms / 8192 = 7.8125 us; its tRRD is the
-1 KB-page value (10 ns), ours the x16 part's.
+and tFAW, tRFC as 208 tCK (= 260 ns) and tREFI as 64 ms / 8192 = 7.8125 us; its tRRD is
+max(4 tCK, 10 ns), ours the x16 part's 7.5 ns (2 cycles at 200 MHz either way). CL, tRC, tRRD and tRTP
+are the datasheet's as given here, not cross-checked against a second source.
 
 The controller
 --------------
