@@ -5,12 +5,14 @@ a unit, in one place, as one :class:`DesignInfo` per unit: the top-level port ma
 signature member, named as Amaranth names them), the payload field offsets and widths and the
 columns of a request row packed into them, the observability strobes (summed in the batch API's
 counter slots, in order), the valid bits of the registers, the memories and their contents, the
-ports of the unit's Verilog top, and what names a build in the cache. Two units:
+ports of the unit's Verilog top, and what names a build in the cache. Three units:
 
 - the texel-fetch unit (:func:`design_info`; its Verilog top :class:`TexelFetchTop`, one port per
   stream member), with the two halves the CXXRTL backend runs on two threads;
 - the texture filter (:func:`filter_design_info`; its Verilog top :class:`FilterTop`, the payloads
-  whole), one model.
+  whole), one model;
+- the cached unit, textures in external memory (:func:`cached_design_info`; its Verilog top
+  :class:`CachedTexelFetchTop`), one model with an AXI4 read master the drivers answer.
 
 The CXXRTL backend, the Verilator backend, the filter's backends and the Icarus cross-check import
 it; it imports none of them.
@@ -29,7 +31,7 @@ from .toolchain import ToolchainError, texture_set_digest
 
 __all__ = ["TOP_NAME", "FILTER_TOP_NAME", "STROBES", "HALVES", "COLUMNS", "FIELDS", "TexelFetchTop", "FilterTop", "CachedTexelFetchTop",
            "port_map", "request_ports", "response_ports", "MemoryImage", "DesignInfo", "design_info",
-           "filter_design_info", "pack_requests", "MAX_PAYLOAD_WORDS"]
+           "filter_design_info", "cached_design_info", "CACHED_STROBES", "pack_requests", "MAX_PAYLOAD_WORDS"]
 
 TOP_NAME = "texel_fetch"
 FILTER_TOP_NAME = "texture_filter"
@@ -239,6 +241,7 @@ class DesignInfo:
     verilog_request: list = field(default_factory=list)     # (Verilog top port, offset in i.payload, width)
     verilog_response: list = field(default_factory=list)    # (Verilog top port, offset in o.payload, width)
     options: tuple = ()         # what, besides the sources, names the build (the quick key): options, contents
+    axi_bytes: int = 0          # the AXI4 read master's data bytes (``axi__*`` ports; 0: none)
 
     @property
     def payload_words(self) -> int:
@@ -324,6 +327,39 @@ def filter_design_info(ts, *, lanes: int = 1, frac: int | None = None, tag_width
         geometry=geometry,
         options=(lanes, index_banks, top.frac, tag_width, bank_depth,
                  texture_set_digest(ts) if geometry is None else ("loadable", geometry.dumps())))
+    return _checked(info)
+
+
+#: The cached unit's strobes, in the order of their counter slots.
+CACHED_STROBES = ("stall_memory", "stall_output")
+
+
+def cached_design_info(ts, config, *, tag_width: int = 8) -> DesignInfo:
+    """Elaborate :class:`hw.memory.unit.CachedTexelFetch` (``ts`` baked; its index map and raw
+    levels in the external memory of ``config``, :class:`golden.memory.system.MemoryConfig`) and
+    describe it as :func:`design_info` does the texel-fetch unit: one model (no halves), a request
+    row is (texture, level, i, j), the strobes :data:`CACHED_STROBES`, ``o.valid`` as its one
+    stage's valid bit ("output"), and the AXI4 read master as ``axi__*`` (``axi_bytes``; the
+    drivers answer it, drivers/axi_slave.h). Its Verilog top is :class:`CachedTexelFetchTop`. What
+    names the build: the cache shapes, the FIFO depth and the bus width (the RTL's structure) and
+    the set's contents; the memory model is the driver's, set per run."""
+    from vqtex.hw.memories import elaborate, memories
+    from vqtex.hw.memory.unit import CachedTexelFetch
+    top = CachedTexelFetch(ts, config, tag_width=tag_width)
+    frag = elaborate(top)
+    req, resp = top.i.p.shape(), top.o.p.shape()
+    info = DesignInfo(
+        top=top, fragment=frag, ports=port_map(top),
+        request_fields=_fields(req), response_fields=_fields(resp),
+        request_width=req.size, response_width=resp.size, tag_width=tag_width,
+        stages=["output"], strobes=list(CACHED_STROBES),
+        memories=[MemoryImage(" ".join(m.path), m.width, m.depth, m.words) for m in memories(frag)],
+        latency=int(top.latency), unit="cached_texel_fetch", valid="o__valid", verilog_name="cached_texel_fetch",
+        verilog_request=[(f"i_{n}", off, w) for n, (off, w) in _fields(req).items() if w],
+        verilog_response=[(f"o_{n}", off, w) for n, (off, w) in _fields(resp).items() if w],
+        options=(tag_width, config.index_cache, config.raw_cache, config.prefetch, config.bus_bytes,
+                 texture_set_digest(ts)),
+        axi_bytes=config.bus_bytes)
     return _checked(info)
 
 

@@ -6,14 +6,17 @@
   :func:`sim.backends.cycle_model.run_cached` (:mod:`golden.memory.timing`);
 - ``pysim``: :class:`hw.memory.unit.CachedTexelFetch` in Amaranth's simulator, its AXI master
   answered by :class:`sim.backends.axi_memory.AxiMemory` from the same memory model; about 2e3
-  cycles per second, for small traces.
+  cycles per second, for small traces;
+- ``cxxrtl`` and ``verilator``: the same unit compiled (:func:`sim.backends.design.cached_design_info`,
+  built by the backends' one ``build_design`` and run by their batch API), its AXI master answered by
+  the drivers' slave (``drivers/axi_slave.h``) from the C++ twin of the same memory model
+  (``drivers/memory_model.h``), for long streams and scene frames.
 
 Both report the same ``cycles``, ``stall_cycles`` (``output_backpressure``: ``o.valid & ~o.ready``;
 ``memory``: cycles the cache block's data read waited for a line fill, which the golden model splits
 into ``miss`` and ``bandwidth`` in ``memory["stall_detail"]``), and ``memory``: ``bursts``,
 ``memory_bytes`` (index, raw), ``bytes_per_texel``, ``references``, ``misses`` and ``hit_rate`` per
-cache. The
-compiled backends do not run the cached unit yet.
+cache.
 """
 
 from __future__ import annotations
@@ -27,10 +30,10 @@ from vqtex.golden.memory.timing import plan
 from ..streams import ready_pattern
 from .interface import GOLDEN_CHUNK, SimResult
 
-__all__ = ["run", "run_pysim", "BACKENDS"]
+__all__ = ["run", "run_pysim", "run_compiled", "build_cached", "BACKENDS"]
 
 #: Backends that run the cached unit.
-BACKENDS = ("golden", "pysim")
+BACKENDS = ("golden", "pysim", "cxxrtl", "verilator")
 
 
 def _memory_report(p, config, bursts_by_cache, n) -> dict:
@@ -72,10 +75,10 @@ def run(ts, requests, config, *, backend: str = "golden", stall: float = 0.0, se
         return SimResult(responses, model["cycles"], n, LATENCY + 4,
                          {"output_backpressure": int(sc["output_backpressure"]),
                           "memory": int(sc["miss"] + sc["bandwidth"])}, straddles, memory=memory)
-    if backend != "pysim":
-        raise ValueError(f"the cached unit (--memory external) runs on {' and '.join(BACKENDS)}, "
-                         f"not yet on {backend}")
-    out = run_pysim(ts, req, config, stall, seed)
+    if backend not in BACKENDS:
+        raise ValueError(f"the cached unit (--memory external) runs on {', '.join(BACKENDS)}, not on {backend}")
+    out = run_pysim(ts, req, config, stall, seed) if backend == "pysim" else run_compiled(ts, req, config, backend,
+                                                                                          stall, seed)
     memory = _memory_report(p, config, out["bursts"], n)
     return SimResult(out["responses"], out["cycles"], n, LATENCY + 4,
                      {"output_backpressure": out["backpressure"], "memory": out["fill_waits"]}, straddles,
@@ -143,3 +146,67 @@ def run_pysim(ts, req, config, stall, seed) -> dict:
     raw_base = layout.raw_base
     got["bursts"] = np.bincount([int(a >= raw_base) for a in slave.addresses], minlength=2)
     return got
+
+
+def build_cached(ts, config, backend: str, *, tag_width: int = 8):
+    """The compiled library (``sim.backends.cxxrtl.Build``) of the cached unit on ``backend``
+    (``cxxrtl`` or ``verilator``), built or from the cache: one build per cache shape, FIFO depth,
+    bus width and texture set (the memory model is the driver's, chosen per run)."""
+    from .design import cached_design_info
+    info = cached_design_info(ts, config, tag_width=tag_width)
+    if backend == "cxxrtl":
+        from .cxxrtl import build_design
+        return build_design(info)
+    if backend == "verilator":
+        from .verilator import build_design
+        from .verilog import export_cached_verilog
+        return build_design(info, lambda: export_cached_verilog(ts, config, tag_width=tag_width))
+    raise ValueError(f"no compiled backend {backend!r} (cxxrtl, verilator)")
+
+
+def _worst_cycles(n: int, config) -> int:
+    """A bound on the cycles of ``n`` requests without backpressure (a hang detector, not a
+    figure): every request two bursts, each waiting a whole memory access."""
+    mem = config.make_memory()
+    access = (config.latency if config.kind == "fixed" else 4096) + 256 * mem.beat_interval
+    return (n + 64) * (2 * access + 64)
+
+
+def run_compiled(ts, req, config, backend: str, stall: float, seed: int, *, trace: bool = False) -> dict:
+    """Run the cached unit on a compiled backend (see the module docstring): the dict of
+    :func:`run_pysim` (responses, cycles, ``backpressure``, ``fill_waits``, bursts per cache, and
+    ``ar``, the cycle of every AR, with its byte ``addresses``); with ``trace`` also ``accept`` and
+    ``transfer``, the cycle of every input acceptance and response transfer (int64 arrays)."""
+    from .cxxrtl import batch_layout, open_design, run_checked, strobe_sums, C_CYCLES
+    from .memory_model_cxx import model_params
+    req = np.asarray(req, np.int64).reshape(-1, 4)
+    n = len(req)
+    lib, info, _ = open_design(build_cached(ts, config, backend))
+    try:
+        layout = Layout.of(ts)
+        kind, params = model_params(config.make_memory())
+        lib.configure_axi(layout.image(ts), config.bus_bytes, kind, params)
+        accept = transfer = None
+        if trace:
+            accept, transfer = np.zeros(n, np.uint64), np.zeros(n, np.uint64)
+        lib.set_trace(accept, transfer)
+        if n == 0:
+            return {"responses": np.zeros((0, 4), np.uint8), "cycles": 0, "backpressure": 0, "fill_waits": 0,
+                    "bursts": np.zeros(2, np.int64), "ar": [], "addresses": np.zeros(0, np.int64),
+                    **({"accept": np.zeros(0, np.int64), "transfer": np.zeros(0, np.int64)} if trace else {})}
+        rgba, counters = run_checked(lib, req, batch_layout(info), n=n, transfers=n, latency=info.latency,
+                                     worst=_worst_cycles(n, config), stall=stall, seed=seed,
+                                     tag_width=info.tag_width)
+        lib.set_trace(None, None)
+        strobes = strobe_sums(info, counters)
+        ar, addresses = lib.axi_bursts()
+        addresses = addresses.astype(np.int64)
+        out = {"responses": rgba.copy(), "cycles": int(counters[C_CYCLES]),
+               "backpressure": strobes["stall_output"], "fill_waits": strobes["stall_memory"],
+               "bursts": np.bincount((addresses >= layout.raw_base).astype(np.int64), minlength=2),
+               "ar": ar.astype(np.int64).tolist(), "addresses": addresses}
+        if trace:
+            out["accept"], out["transfer"] = accept.astype(np.int64), transfer.astype(np.int64)
+        return out
+    finally:
+        lib.close()

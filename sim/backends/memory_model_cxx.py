@@ -19,7 +19,7 @@ from vqtex.golden.memory.external import FixedMemory
 from .cxxrtl import DRIVER_DIR
 from .toolchain import cached_build, digest, find_cxx, run_tool, tool_version
 
-__all__ = ["reads", "library"]
+__all__ = ["reads", "library", "model_params"]
 
 CXXFLAGS = ["-std=c++17", "-O2", "-fPIC", "-shared", "-fvisibility=hidden", "-DNDEBUG"]
 _TIMINGS = ("CL", "tRCD", "tRP", "tRAS", "tRC", "tRFC", "tREFI", "tRRD", "tFAW", "tRTP")
@@ -46,7 +46,9 @@ def library() -> ctypes.CDLL:
     return lib
 
 
-def _params(model) -> tuple[int, list]:
+def model_params(model) -> tuple[int, list]:
+    """(kind, parameters) of a golden memory model as memory_model.cc and drivers/axi_slave.h take
+    them: 0 and (latency, beat_interval) for FixedMemory, 1 and fourteen integers for DramMemory."""
     if isinstance(model, FixedMemory):
         return 0, [model.latency, model.beat_interval]
     if isinstance(model, DramMemory):
@@ -58,7 +60,7 @@ def _params(model) -> tuple[int, list]:
 
 def reads(model, t, address, beats):
     """(first, queued), int64 arrays: the C++ model of ``model``'s kind and parameters, from reset."""
-    kind, params = _params(model)
+    kind, params = model_params(model)
     arrays = [np.ascontiguousarray(a, np.int64) for a in (t, address, beats)]
     n = len(arrays[0])
     first, queued = np.zeros(n, np.int64), np.zeros(n, np.int64)

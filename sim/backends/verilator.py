@@ -20,7 +20,7 @@ from __future__ import annotations
 import os
 import time
 
-from .cxxrtl import DRIVER_DIR, Build, batch_header, driver_sources, open_design, run_unit
+from .cxxrtl import DRIVER_DIR, SHARED_DRIVER_SOURCES, Build, batch_header, driver_sources, open_design, run_unit
 from .design import DesignInfo, design_info
 from .toolchain import (ToolchainError, cache_dir, cached_build, digest, find_cxx, find_tool, index_get, index_put,
                         run_tool, source_stamp, tool_version)
@@ -79,6 +79,15 @@ def ports_header(info: DesignInfo) -> str:
               f"#define VQ_STROBES(top, c) {strobes}"]
     if info.bus:                            # the loadable unit's Wishbone port (bus_* ports)
         lines.append("#define VQ_BUS 1")
+    if info.axi_bytes:                      # the AXI4 read master's rdata from 32-bit words
+        bits = 8 * info.axi_bytes
+        if bits <= 32:
+            rdata = "top->axi_rdata = w[0];"
+        elif bits <= 64:
+            rdata = "top->axi_rdata = uint64_t(w[0]) | (uint64_t(w[1]) << 32);"
+        else:
+            rdata = f"for (int k = 0; k < {bits // 32}; k++) top->axi_rdata[k] = w[k];"
+        lines.append(f"#define VQ_AXI_SET_RDATA(top, w) {rdata}")
     return "\n".join(lines) + "\n"
 
 
@@ -149,7 +158,7 @@ def build_design(info: DesignInfo, verilog, *, elaborated: float | None = None) 
     cxx = find_cxx()
     t0 = time.perf_counter() if elaborated is None else elaborated
     steps = {"elaborate": time.perf_counter() - t0}
-    drivers = driver_sources("verilator_driver.cc", "batch.h")
+    drivers = driver_sources("verilator_driver.cc", *SHARED_DRIVER_SOURCES)
     flags = VERILATOR_FLAGS + CXXFLAGS + [MAKE_OPT]
     this = b""
     for mod in (__file__, _verilog_file()):     # (ports_header is part of the build; so is the export)

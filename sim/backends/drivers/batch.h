@@ -22,6 +22,19 @@
 //                  const uint8_t *ready, uint64_t n_ready, uint64_t max_cycles, uint32_t *rgba,
 //                  uint64_t *counters);
 //
+//   int     vq_set_trace(void *h, uint64_t *accept, uint64_t *transfer);
+//           the next vq_run (and every later one, until called again with NULLs) writes the cycle of
+//           request k's acceptance to accept[k] and of response k's transfer to transfer[k] (n each)
+//
+// A unit with an AXI4 read master (VQ_AXI: the cached unit) is answered by axi_slave.h's slave:
+//   int     vq_axi_configure(void *h, const uint8_t *image, uint64_t bytes, uint64_t bus_bytes, int kind,
+//                            const int64_t *params, int n_params);
+//           the external memory's bytes and the memory model (axi_slave.h); 0 ok, -1 refused, -3 no AXI
+//   int64_t vq_axi_bursts(void *h);             ARs accepted in the last vq_run (-3: no AXI)
+//   void    vq_axi_trace(void *h, uint64_t *cycles, uint64_t *addresses);   their cycles, byte addresses
+//   const char *vq_axi_error(void *h);          the protocol violation that stopped vq_run ("" none)
+// vq_run returns 3 when the master broke the protocol, 4 when no memory was configured.
+//
 //   int64_t vq_bus(void *h, uint64_t n, const uint32_t *ops, uint32_t *answers, uint64_t max_cycles);
 //           the loadable unit's Wishbone port: n transfers, ops[3k..3k+2] = (word address, data,
 //           write), issued back to back in one bus cycle (golden.register_map.load_cycles); answers
@@ -56,7 +69,11 @@
 #include <string>
 #include <vector>
 
-#define VQ_API_VERSION 4
+#ifdef VQ_AXI
+#include "axi_slave.h"
+#endif
+
+#define VQ_API_VERSION 5
 #define VQ_EXPORT extern "C" __attribute__((visibility("default")))
 enum { VQ_C_CYCLES = 0, VQ_C_ACCEPTED, VQ_C_RESPONSES, VQ_C_BAD_TAG, VQ_C_BAD_TAG_VALUE, VQ_C_STROBES };
 enum { VQ_C_OCCUPANCY = VQ_C_STROBES + VQ_STROBE_COUNT };
@@ -143,8 +160,13 @@ struct vq_occupancy {
 // What a driver's per-cycle hook reports: a response transferred (took) with o.payload (out), and
 // whether the request on i.payload was accepted.
 struct vq_cycle_out {
-    bool took = false, accepted = false;
+    bool took = false, accepted = false, stop = false;     // stop: end the run with rc 3
     uint64_t out = 0;
+};
+
+// vq_set_trace's buffers (a member ``trace`` of every driver's adapter): NULL, no trace.
+struct vq_trace {
+    uint64_t *accept = nullptr, *transfer = nullptr;
 };
 
 // The run loop of vq_run, resumable: state in the struct, ``run(limit, cycle, respond)`` advances
@@ -165,11 +187,12 @@ struct alignas(64) vq_run_state {
     uint64_t sent = 0, got = 0, c = 0, bad = 0, bad_tag = 0;
     vq_payload payload{};
     vq_occupancy occ;
+    vq_trace trace;
     int rc = -1;                        // -1 running, else vq_run's return code
 
     vq_run_state(uint64_t n, const int64_t *req, const uint32_t *layout, const uint8_t *ready,
-                 uint64_t n_ready, uint64_t max_cycles)
-        : n(n), req(req), ready(ready), n_ready(n_ready), max_cycles(max_cycles), lay(layout) {
+                 uint64_t n_ready, uint64_t max_cycles, vq_trace trace = {})
+        : n(n), req(req), ready(ready), n_ready(n_ready), max_cycles(max_cycles), lay(layout), trace(trace) {
         if (n)
             payload = lay.pack(req, 0);
         if (n == 0)
@@ -197,7 +220,10 @@ struct alignas(64) vq_run_state {
             }
             bool i_valid = sent < n;
             const vq_cycle_out r = cycle(c, i_valid, payload, o_ready, strobes, occ, occ_sums);
+            if (r.stop) { rc = 3; c++; break; }
             if (r.took) {
+                if (trace.transfer)
+                    trace.transfer[got] = c;
                 uint64_t tag = lay.tag(r.out);
                 if (tag != (got & lay.mask[VQ_L_RESPONSE_TAG]) && !bad) {
                     bad = got + 1;
@@ -207,6 +233,8 @@ struct alignas(64) vq_run_state {
                 got++;
             }
             if (r.accepted) {
+                if (trace.accept)
+                    trace.accept[sent] = c;
                 sent++;
                 payload = sent < n ? lay.pack(req + VQ_REQUEST_FIELDS * sent, sent) : vq_payload{};
             }
@@ -237,12 +265,23 @@ struct alignas(64) vq_run_state {
 template<bool AlwaysReady, class A>
 static int vq_run_loop(A &a, uint64_t n, const int64_t *req, const uint32_t *layout, const uint8_t *ready,
                        uint64_t n_ready, uint64_t max_cycles, uint32_t *rgba, uint64_t *counters) {
-    vq_run_state<AlwaysReady> s(n, req, layout, ready, n_ready, max_cycles);
+    vq_run_state<AlwaysReady> s(n, req, layout, ready, n_ready, max_cycles, a.trace);
+#ifdef VQ_AXI
+    if (!a.axi.configured())
+        return 4;
+    a.axi.reset();
+    a.axi_set_r(false, a.axi.data, false);      // (nothing on R through the reset)
+#endif
     a.reset();
     s.run(max_cycles + 1,
-          [&](uint64_t, bool i_valid, const vq_payload &payload, bool o_ready, uint64_t *strobes, vq_occupancy &occ,
+          [&](uint64_t c, bool i_valid, const vq_payload &payload, bool o_ready, uint64_t *strobes, vq_occupancy &occ,
               uint64_t *occ_sums) {
               a.set_inputs(i_valid, payload, o_ready);
+#ifdef VQ_AXI
+              a.axi.drive(c, a);
+#else
+              (void)c;
+#endif
               // sample() reads the ports into locals; the response is stored after the clock edge.
               vq_cycle_out r;
               a.cycle([&]() {
@@ -251,6 +290,9 @@ static int vq_run_loop(A &a, uint64_t n, const int64_t *req, const uint32_t *lay
                   r.accepted = i_valid && a.i_ready();
                   a.strobes(strobes);
                   occ.add(a.valid(), occ_sums);
+#ifdef VQ_AXI
+                  r.stop = !a.axi.sample(c, a);
+#endif
               });
               return r;
           },
@@ -301,6 +343,29 @@ static int64_t vq_bus_loop(A &a, uint64_t n, const uint32_t *ops, uint32_t *answ
     return int64_t(c + 1);
 }
 
+#ifdef VQ_AXI
+#define VQ_AXI_EXPORT(A)                                                                            \
+    VQ_EXPORT int vq_axi_configure(void *h, const uint8_t *image, uint64_t bytes, uint64_t bus_bytes, int kind, \
+                                   const int64_t *params, int n_params) {                          \
+        return static_cast<A *>(h)->axi.configure(image, bytes, bus_bytes, kind, params, n_params); \
+    }                                                                                               \
+    VQ_EXPORT int64_t vq_axi_bursts(void *h) { return int64_t(static_cast<A *>(h)->axi.ar.size()); } \
+    VQ_EXPORT void vq_axi_trace(void *h, uint64_t *cycles, uint64_t *addresses) {                  \
+        const auto &s = static_cast<A *>(h)->axi;                                                   \
+        std::copy(s.ar.begin(), s.ar.end(), cycles);                                                \
+        std::copy(s.addresses.begin(), s.addresses.end(), addresses);                               \
+    }                                                                                               \
+    VQ_EXPORT const char *vq_axi_error(void *h) { return static_cast<A *>(h)->axi.error.c_str(); }
+#else
+#define VQ_AXI_EXPORT(A)                                                                            \
+    VQ_EXPORT int vq_axi_configure(void *, const uint8_t *, uint64_t, uint64_t, int, const int64_t *, int) { \
+        return -3;                                                                                  \
+    }                                                                                               \
+    VQ_EXPORT int64_t vq_axi_bursts(void *) { return -3; }                                          \
+    VQ_EXPORT void vq_axi_trace(void *, uint64_t *, uint64_t *) {}                                  \
+    VQ_EXPORT const char *vq_axi_error(void *) { return ""; }
+#endif
+
 #ifdef VQ_BUS
 #define VQ_BUS_EXPORT(A)                                                                            \
     VQ_EXPORT int64_t vq_bus(void *h, uint64_t n, const uint32_t *ops, uint32_t *answers, uint64_t max_cycles) { \
@@ -327,4 +392,9 @@ static int64_t vq_bus_loop(A &a, uint64_t n, const uint32_t *ops, uint32_t *answ
         return vq_run_batch(*static_cast<A *>(h), n, req, layout, ready, n_ready, max_cycles, rgba, \
                             counters);                                                              \
     }                                                                                               \
-    VQ_BUS_EXPORT(A)
+    VQ_EXPORT int vq_set_trace(void *h, uint64_t *accept, uint64_t *transfer) {                   \
+        static_cast<A *>(h)->trace = vq_trace{accept, transfer};                                    \
+        return 0;                                                                                   \
+    }                                                                                               \
+    VQ_BUS_EXPORT(A)                                                                                \
+    VQ_AXI_EXPORT(A)

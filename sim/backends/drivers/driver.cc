@@ -25,6 +25,7 @@
 #include <cxxrtl/cxxrtl.h>
 
 #include <atomic>
+#include <type_traits>
 #include <thread>
 
 #include "vq_ops.h"
@@ -115,6 +116,7 @@ struct Half {
 struct Sim {
     Half<vq_top::p_top, VQ_TOP_INPLACE, VQ_TOP_EXACT_STEP> whole;
     bool initialised = false;
+    vq_trace trace;
     void reset() {
         auto &top = whole.top;
         if (!initialised || whole.loaded) {     // the model's initial values, the memories' images
@@ -150,6 +152,23 @@ struct Sim {
     bool bus_err() { return vq_get(whole.top.VQ_BUS_ERR); }
     bool bus_stall() { return vq_get(whole.top.VQ_BUS_STALL); }
     uint32_t bus_dat_r() { return uint32_t(vq_get(whole.top.VQ_BUS_DAT_R)); }
+#endif
+#ifdef VQ_AXI
+    // The AXI4 read master's slave (axi_slave.h) and the ports it drives and reads.
+    vq_axi_slave axi;
+    void axi_set_r(bool valid, const uint32_t *words, bool last) {
+        auto &top = whole.top;
+        vq_put(top.VQ_AXI_RVALID, valid); vq_put(top.VQ_AXI_RLAST, last);
+        auto &d = top.VQ_AXI_RDATA;
+        for (size_t k = 0; k < std::remove_reference_t<decltype(d)>::chunks; k++)
+            d.data[k] = words[k];
+    }
+    void axi_set_arready(bool ready) { vq_put(whole.top.VQ_AXI_ARREADY, ready); }
+    bool axi_arvalid() { return vq_get(whole.top.VQ_AXI_ARVALID); }
+    uint64_t axi_araddr() { return vq_get(whole.top.VQ_AXI_ARADDR); }
+    uint64_t axi_arlen() { return vq_get(whole.top.VQ_AXI_ARLEN); }
+    uint64_t axi_arsize() { return vq_get(whole.top.VQ_AXI_ARSIZE); }
+    uint64_t axi_arburst() { return vq_get(whole.top.VQ_AXI_ARBURST); }
 #endif
     template<class F> void cycle(F &&sample) { whole.cycle(sample); }
     bool i_ready() { return vq_get(whole.top.VQ_I_READY); }
@@ -195,6 +214,7 @@ struct Sim {
     Half<vq_back::p_top, VQ_BACK_INPLACE, VQ_BACK_EXACT_STEP> back;
     std::vector<Record> ring = std::vector<Record>(VQ_RING);
     int threads = 1;
+    vq_trace trace;
 
     void reset() { front.reset(); back.reset(); }
 };
@@ -207,7 +227,7 @@ struct FrontRun : vq_run_state<AlwaysReady> {
     Sim &s;
     FrontRun(Sim &s, uint64_t n, const int64_t *req, const uint32_t *layout, const uint8_t *ready,
              uint64_t n_ready, uint64_t max_cycles)
-        : vq_run_state<AlwaysReady>(n, req, layout, ready, n_ready, max_cycles), s(s) {}
+        : vq_run_state<AlwaysReady>(n, req, layout, ready, n_ready, max_cycles, s.trace), s(s) {}
     uint64_t run(uint64_t limit) {
         // Locals captured by the hook (the model's stores could alias members, not these).
         auto &front = s.front;

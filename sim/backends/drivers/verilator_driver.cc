@@ -22,6 +22,7 @@ namespace {
 struct Sim {
     std::unique_ptr<VerilatedContext> ctx;
     std::unique_ptr<Vtop> top;
+    vq_trace trace;
     Sim() : ctx(new VerilatedContext) {
         ctx->randReset(0);
         top.reset(new Vtop{ctx.get(), "top"});
@@ -49,6 +50,21 @@ struct Sim {
     uint64_t o_payload() { return VQ_GET_RESPONSE(top); }
     void strobes(uint64_t *c) { VQ_STROBES(top, c) }
     uint32_t valid() { return VQ_GET_VALID(top); }
+#ifdef VQ_AXI
+    // The AXI4 read master's slave (axi_slave.h) and the top's axi_* ports (VQ_AXI_SET_RDATA: rdata
+    // from 32-bit words, whatever Verilator's type for its width).
+    vq_axi_slave axi;
+    void axi_set_r(bool valid, const uint32_t *words, bool last) {
+        top->axi_rvalid = valid; top->axi_rlast = last;
+        VQ_AXI_SET_RDATA(top, words)
+    }
+    void axi_set_arready(bool ready) { top->axi_arready = ready; }
+    bool axi_arvalid() { return top->axi_arvalid; }
+    uint64_t axi_araddr() { return top->axi_araddr; }
+    uint64_t axi_arlen() { return top->axi_arlen; }
+    uint64_t axi_arsize() { return top->axi_arsize; }
+    uint64_t axi_arburst() { return top->axi_arburst; }
+#endif
 #ifdef VQ_BUS
     // The loadable unit's Wishbone port (batch.h's vq_bus_loop).
     void set_bus(bool cyc, bool stb, bool we, uint32_t adr, uint32_t dat) {
