@@ -107,7 +107,7 @@ def simulate(ts: TextureSet, requests, *, backend: str = "golden", stall: float 
     loaded over its bus port first and ``load_cycles`` reports the load (the golden backend gives
     :func:`golden.register_map.load_cycles`); the requests' cycles are the baked unit's. With
     ``memory`` (:class:`golden.memory.system.MemoryConfig`), the cached unit, its index map and raw
-    levels in external memory (:mod:`sim.backends.memory`: golden and pysim).
+    levels in external memory (:mod:`sim.backends.memory`: every backend).
 
     Raises
     ------

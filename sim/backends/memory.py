@@ -1,4 +1,4 @@
-"""The cached unit (textures in external memory, docs/memory.md) on the golden and pysim backends.
+"""The cached unit (textures in external memory, docs/memory.md) on every backend.
 
 ``run(ts, requests, config, backend, stall, seed) -> SimResult`` with ``memory`` filled in:
 

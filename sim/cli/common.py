@@ -240,7 +240,7 @@ def add_memory_options(p) -> None:
     """``--memory on-chip|external`` and the external memory's caches and timing (docs/memory.md)."""
     p.add_argument("--memory", choices=MEMORIES, default="on-chip",
                    help=with_default("where the index map and raw levels live: on chip, or in external memory "
-                                     "read over AXI4 behind caches (golden and pysim backends)", "on-chip"))
+                                     "read over AXI4 behind caches (every backend)", "on-chip"))
     for attr, opt, kind, default, text in _MEMORY_OPTIONS:
         if kind is None:                    # --cache-ways: as vqtex need spells it
             p.add_argument(opt, dest=attr, type=int, choices=[1, 2, 4, 8, 16], default=None,

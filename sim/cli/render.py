@@ -112,7 +112,7 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
     loadable unit of that geometry (or, with ``filter_in_rtl``, the loadable texture filter),
     ``ts`` loaded over its bus port before each frame (``"sim"`` holds the load's cycles too).
     With ``memory`` (:class:`golden.memory.system.MemoryConfig`) the unit is the cached one, its
-    textures in external memory (golden: its cycle model, always run; pysim: its RTL); ``"sim"``
+    textures in external memory (golden: its cycle model, always run; pysim, cxxrtl, verilator: its RTL); ``"sim"``
     holds its cycles and ``memory`` figures."""
     unit_kw = {"specialise": unit != "full", "geometry": geometry}
     if memory is not None:
@@ -339,8 +339,6 @@ def cmd_render(args) -> int:
                                        ("--unit", args.unit is not None)) if on]
             if bad:
                 raise CliError(f"--memory external renders with the cached texel-fetch unit: not with {bad[0]}")
-            if args.backend not in ("golden", "pysim"):
-                raise CliError(f"--memory external runs on --backend golden or pysim, not yet {args.backend}")
         _options_that_apply(args, fovea, memory is not None)
         frame_paths = {f: _frame_path(args.output, f, len(frames) > 1) for f in frames}
         for path in frame_paths.values():

@@ -47,8 +47,6 @@ def run_trace(args):
     args.seed = stall_seed(args)
     memory = memory_config(args)
     if memory is not None:
-        if args.backend not in ("golden", "pysim"):
-            raise CliError(f"--memory external runs on --backend golden or pysim, not yet {args.backend}")
         if args.one_port or args.unit is not None:
             raise CliError("--memory external is the specialised baked unit: no --one-port or --unit")
     resolve(args, "unit", "specialised", args.backend != "golden",

@@ -18,7 +18,7 @@ import os
 
 import cocotb
 from cocotb.clock import Clock
-from cocotb.triggers import RisingEdge, Timer
+from cocotb.triggers import ReadOnly, RisingEdge, Timer
 from cocotbext.axi import AxiRamRead, AxiReadBus
 
 
@@ -26,14 +26,20 @@ def _int(value):
     return int(value) if value.is_resolvable else str(value)
 
 
+# Every loop drives its inputs after a rising edge and samples the handshakes in that cycle's
+# ReadOnly phase, before the next edge: the same values whichever the simulator (Icarus shows the
+# values before the edge's updates at RisingEdge, Verilator those after them).
+
 async def _requests(dut, requests):
     for n, (tex, level, i, j) in enumerate(requests):
         dut.i_texture.value, dut.i_level.value, dut.i_i.value, dut.i_j.value = tex, level, i, j
         dut.i_tag.value = n % 256
         dut.i_valid.value = 1
         while True:
+            await ReadOnly()
+            fire = dut.i_ready.value == 1
             await RisingEdge(dut.clk)
-            if dut.i_ready.value == 1:
+            if fire:
                 break
     dut.i_valid.value = 0
 
@@ -41,21 +47,27 @@ async def _requests(dut, requests):
 async def _responses(dut, n, ready, out):
     cycle = 0
     while len(out) < n:
-        dut.o_ready.value = ready[cycle % len(ready)]
-        await RisingEdge(dut.clk)
-        if dut.o_valid.value == 1 and dut.o_ready.value == 1:
+        r = ready[cycle % len(ready)]
+        dut.o_ready.value = r
+        await ReadOnly()
+        if dut.o_valid.value == 1 and r == 1:
             out.append([_int(dut.o_r.value), _int(dut.o_g.value), _int(dut.o_b.value), _int(dut.o_a.value),
                         _int(dut.o_tag.value)])
+        await RisingEdge(dut.clk)
         cycle += 1
 
 
 async def _watch_ar(dut, size, bus_bytes, bursts, problems):
     while True:
-        await RisingEdge(dut.clk)
-        if dut.axi_arvalid.value == 1 and dut.axi_arready.value == 1:
+        await ReadOnly()
+        fire = dut.axi_arvalid.value == 1 and dut.axi_arready.value == 1
+        if fire:
             addr, beats = int(dut.axi_araddr.value), int(dut.axi_arlen.value) + 1
+            burst, beat_size = int(dut.axi_arburst.value), int(dut.axi_arsize.value)
+        await RisingEdge(dut.clk)
+        if fire:
             bursts.append([addr, beats])
-            if int(dut.axi_arburst.value) != 1 or 1 << int(dut.axi_arsize.value) != bus_bytes:
+            if burst != 1 or 1 << beat_size != bus_bytes:
                 problems.append(f"burst at 0x{addr:x}: not INCR of {bus_bytes}-byte beats")
             if addr // 4096 != (addr + beats * bus_bytes - 1) // 4096:
                 problems.append(f"burst at 0x{addr:x} of {beats} beats crosses 4 KB")
