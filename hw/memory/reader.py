@@ -75,6 +75,19 @@ def _log2(v: int) -> int:
     return v.bit_length() - 1
 
 
+class _Fields:
+    """A struct's fields as separate signals (attributes by field name); ``value(layout)`` is their
+    concatenation in the layout's bit order."""
+
+    def __init__(self, signals: dict):
+        self.__dict__.update(signals)
+        self._signals = signals
+
+    def value(self, layout):
+        parts = sorted(((f.offset, self._signals[name]) for name, f in layout), key=lambda x: x[0])
+        return Cat(*(sig for _, sig in parts))
+
+
 class _Cache:
     """One cache's state and its tag check: ``ports`` lookups per cycle into different sets."""
 
@@ -241,7 +254,11 @@ class CachedReader(wiring.Component):
             take.eq(self.i.valid & self.i.ready),
         ]
         # the entry of the request being checked
-        new = Signal(entry)
+        # The entry's fields as separate signals, joined only where the FIFO stores them: one packed
+        # ``new`` wire would hold both bits of ``a1`` (beat1, off1) and bits computed from them through
+        # the tag check (slot1), and Verilator, which orders a wire as a whole, would see a
+        # combinational cycle through it (UNOPTFLAT) where there is none.
+        new = _Fields({name: Signal(f.shape, name=f"new_{name}") for name, f in entry})
         slot0 = Signal(islot)
         slot1 = Signal(islot)
         slotr = Signal(rslot)
@@ -261,7 +278,7 @@ class CachedReader(wiring.Component):
             new.tag.eq(req.tag),
         ]
         with m.If(take):
-            m.d.sync += Array(fifo)[tail].eq(new) if Q > 1 else fifo[0].eq(new)
+            m.d.sync += Array(fifo)[tail].eq(new.value(entry)) if Q > 1 else fifo[0].eq(new.value(entry))
             m.d.sync += tail.eq(Mux(tail == Q - 1, 0, tail + 1))
         with m.If(pop):
             m.d.sync += head.eq(Mux(head == Q - 1, 0, head + 1))

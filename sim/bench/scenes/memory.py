@@ -7,6 +7,16 @@ part (docs/memory.md). Also how fast the golden cycle model runs.
 ``python -m vqtex.sim.bench.scenes.memory [--scene topspin] [--frame 0] [--latency 100]
 [--sizes 1,4,16,64] [--prefetch 16] [--no-uncompressed] [--no-dram] [--json]``.
 
+``--claim`` prints the paper's claim instead (issue 25, item 7; docs/memory.md): for each scene of
+``--scenes`` (default topspin,town) and each cache size of ``--sizes`` (default 1 to 64 KB in powers
+of two), the VQ set against the same textures uncompressed through the same caches and fixed memory
+(prefetching, ``--prefetch`` entries, ``--latency`` cycles): memory bytes per textured pixel, cycles
+per textured pixel, hit rates, texels per clock against zero latency; ``--plot PATH`` draws them.
+The hit rates and bytes are the caches' classification (numpy, :func:`golden.memory.timing.plan`);
+the cycles are the golden cycle model's loop over requests, the slow part (about 1e5 requests per
+second on a free core, a few times less on a shared one), run once per row; the zero-latency
+cycles do not depend on the cache, so they are run once per set. ``--no-cycles`` skips the loop.
+
 Golden only (the cycle model of golden.memory.timing with this pipeline's LATENCY); no RTL runs.
 Both caches have the size in the row; 32-byte lines, 4 ways, 16-byte bus.
 """
@@ -17,7 +27,9 @@ import argparse
 import json
 import time
 
-__all__ = ["scene_memory", "uncompressed_set", "main"]
+import numpy as np
+
+__all__ = ["scene_memory", "uncompressed_set", "claim", "plot_claim", "main"]
 
 
 def uncompressed_set(scene, images=None):
@@ -81,6 +93,114 @@ def scene_memory(scene_name="topspin", frame: int = 0, latency: int = 100, sizes
             "latency": latency, "line": line, "ways": ways, "encode_seconds": encode_s, "rows": rows}
 
 
+def claim(scene_name="topspin", frame: int = 0, sizes=(1, 2, 4, 8, 16, 32, 64), latency: int = 100,
+          prefetch: int = 16, line: int = 32, ways: int = 4, cycles: bool = True, progress=None) -> dict:
+    """The paper's claim on one scene's frame (see the module docstring): rows of (cache_kb,
+    textures "vq" or "uncompressed", hit_rate per cache, bytes_per_pixel, bytes_per_texel and, with
+    ``cycles``, cycles_per_pixel and of_zero_latency)."""
+    from vqtex.golden.memory.cache import CacheShape
+    from vqtex.golden.memory.system import MemoryConfig
+    from vqtex.golden.memory.timing import plan, run_requests
+    from vqtex.golden.render.frame import frame_requests
+    from vqtex.golden.render.scene import build_texture_set, load_scene
+    from vqtex.hw.texel_fetch import LATENCY
+    from vqtex.sim.streams import ready_pattern
+
+    scene = load_scene(scene_name)
+    images = [img for img, _ in scene.load_textures()]
+    sets = {"vq": build_texture_set(scene, images), "uncompressed": uncompressed_set(scene, images)}
+    req, sampler = frame_requests(scene, frame, sets["vq"], "trilinear")
+    pixels, n = len(sampler.fragments), len(req)
+
+    def always(m):
+        return ready_pattern(0, 0.0, m)
+    zero, seconds = {}, 0.0
+    rows = []
+    for name, ts in sets.items():
+        for kb in sizes:
+            shape = CacheShape(kb * 1024, line, ways)
+            cfg = MemoryConfig(index_cache=shape, raw_cache=shape, prefetch=prefetch, latency=latency)
+            p = plan(ts, req, cfg)
+            misses = np.bincount(p.cache, minlength=2)
+            total = int(misses[0]) * line + int(misses[1]) * line
+            row = {"cache_kb": kb, "textures": name, "references": {"index": p.references[0], "raw": p.references[1]},
+                   "hit_rate": {k: (p.hits[c] / p.references[c] if p.references[c] else None)
+                                for c, k in enumerate(("index", "raw"))},
+                   "bytes_per_pixel": total / pixels, "bytes_per_texel": total / n}
+            if cycles:
+                if name not in zero:
+                    zero[name] = run_requests(ts, req, cfg, LATENCY, always, ideal=True)["cycles"]
+                t0 = time.perf_counter()
+                out = run_requests(ts, req, cfg, LATENCY, always)
+                seconds += time.perf_counter() - t0
+                assert sum(out["memory_bytes"].values()) == total
+                row.update(cycles=out["cycles"], cycles_per_pixel=out["cycles"] / pixels,
+                           zero_latency_cycles=zero[name], of_zero_latency=zero[name] / out["cycles"])
+            rows.append(row)
+            if progress:
+                progress(row)
+    return {"scene": scene_name, "frame": frame, "requests": int(n), "pixels": int(pixels), "latency": latency,
+            "prefetch": prefetch, "line": line, "ways": ways, "rows": rows,
+            "model_requests_per_second": (len(rows) * n / seconds) if seconds else None}
+
+
+def plot_claim(results: list, path: str) -> None:
+    """Bytes per pixel, cycles per pixel and hit rate against cache size, VQ and uncompressed, one
+    line per scene and set (matplotlib; ``path`` PNG)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    with_cycles = all("cycles_per_pixel" in row for r in results for row in r["rows"])
+    panels = [("bytes_per_pixel", "memory bytes per textured pixel", True)]
+    if with_cycles:
+        panels.append(("cycles_per_pixel", "cycles per textured pixel", False))
+    panels.append(("hit", "hit rate (index cache for VQ, raw for uncompressed)", False))
+    fig, axes = plt.subplots(1, len(panels), figsize=(5 * len(panels), 4))
+    for ax, (key, label, log) in zip(axes, panels):
+        for r in results:
+            for name, style in (("vq", "-o"), ("uncompressed", "--s")):
+                rows = [x for x in r["rows"] if x["textures"] == name]
+                kb = [x["cache_kb"] for x in rows]
+                if key == "hit":
+                    y = [x["hit_rate"]["index" if name == "vq" else "raw"] for x in rows]
+                else:
+                    y = [x[key] for x in rows]
+                ax.plot(kb, y, style, label=f"{r['scene']} {'VQ' if name == 'vq' else 'uncompressed'}")
+        ax.set_xscale("log", base=2)
+        if log:
+            ax.set_yscale("log")
+        ax.set_xlabel("cache size per cache (KB)")
+        ax.set_title(label, fontsize=10)
+        ax.grid(True, alpha=0.3)
+    axes[0].legend(fontsize=8)
+    r0 = results[0]
+    fig.suptitle(f"frame {r0['frame']}, trilinear; {r0['line']}-byte lines, {r0['ways']} ways; memory latency "
+                 f"{r0['latency']} cycles, {r0['prefetch']}-entry prefetch FIFO", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def _print_claim(r: dict) -> None:
+    print(f"{r['scene']} frame {r['frame']}: {r['requests']} requests (trilinear), {r['pixels']} textured pixels; "
+          f"fixed memory, latency {r['latency']} cycles, {r['prefetch']}-entry FIFO, {r['line']}-byte lines, "
+          f"{r['ways']} ways")
+    print(f"{'cache':>6} {'textures':>12} {'index hit':>9} {'raw hit':>7} {'B/pixel':>8} {'VQ gain':>7} "
+          f"{'cyc/pixel':>9} {'of 0-lat':>8}")
+    vq = {x["cache_kb"]: x["bytes_per_pixel"] for x in r["rows"] if x["textures"] == "vq"}
+    for x in r["rows"]:
+        hr = x["hit_rate"]
+
+        def pct(v):
+            return "-" if v is None else f"{100 * v:.2f}%"
+        gain = f"{x['bytes_per_pixel'] / vq[x['cache_kb']]:.1f}x" if x["textures"] == "uncompressed" and vq[x["cache_kb"]] else ""
+        cyc = f"{x['cycles_per_pixel']:>9.3f} {x['of_zero_latency']:>8.3f}" if "cycles_per_pixel" in x else ""
+        print(f"{x['cache_kb']:>4}KB {x['textures']:>12} {pct(hr['index']):>9} {pct(hr['raw']):>7} "
+              f"{x['bytes_per_pixel']:>8.3f} {gain:>7} {cyc}")
+    if r["model_requests_per_second"]:
+        print(f"golden cycle model: {r['model_requests_per_second']:.0f} requests per second")
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scene", default="topspin")
@@ -91,7 +211,23 @@ def main(argv=None) -> None:
     ap.add_argument("--no-uncompressed", action="store_true", help="the VQ set only")
     ap.add_argument("--no-dram", action="store_true", help="the fixed-latency memory only")
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--claim", action="store_true", help="the paper's claim table (VQ against uncompressed)")
+    ap.add_argument("--scenes", default="topspin,town", help="--claim: scenes, comma-separated")
+    ap.add_argument("--no-cycles", action="store_true", help="--claim: bytes and hit rates only (no cycle loop)")
+    ap.add_argument("--plot", default=None, help="--claim: draw the table into this PNG")
     a = ap.parse_args(argv)
+    if a.claim:
+        sizes = (1, 2, 4, 8, 16, 32, 64) if a.sizes == "1,4,16,64" else tuple(int(s) for s in a.sizes.split(","))
+        results = [claim(name, a.frame, sizes, a.latency, a.prefetch, cycles=not a.no_cycles)
+                   for name in a.scenes.split(",")]
+        if a.plot:
+            plot_claim(results, a.plot)
+        if a.json:
+            print(json.dumps(results, indent=1))
+            return
+        for r in results:
+            _print_claim(r)
+        return
     r = scene_memory(a.scene, a.frame, a.latency, tuple(int(s) for s in a.sizes.split(",")), a.prefetch,
                      uncompressed=not a.no_uncompressed, dram=not a.no_dram)
     if a.json:

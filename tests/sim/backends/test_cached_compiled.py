@@ -130,3 +130,21 @@ def test_axi_slave_refuses_what_it_does_not_hold():
                         worst=100000, stall=0.0, seed=0, tag_width=8)
     finally:
         lib.close()
+
+
+def test_verilator_sees_no_combinational_cycle(tmp_path):
+    """Verilator lints the exported cached unit without UNOPTFLAT (a combinational cycle as it orders
+    wires: hw.memory.reader once packed the FIFO entry, with bits of ``a1`` and bits computed from
+    them, into one wire)."""
+    need("verilator")
+    import subprocess
+    from vqtex.sim.backends.toolchain import find_tool
+    from vqtex.sim.backends.verilog import export_cached_verilog
+    ts = texture_set("yuv_4x4_b12_mip")
+    for prefetch in (1, 16):
+        src = tmp_path / f"cached{prefetch}.v"
+        src.write_text(export_cached_verilog(ts, MemoryConfig(**SMALL, prefetch=prefetch)))
+        out = subprocess.run([find_tool("verilator"), "--lint-only", "-Wno-fatal", "-Wno-lint", "-Wno-style",
+                              "--top-module", "cached_texel_fetch", str(src)], capture_output=True, text=True)
+        assert out.returncode == 0, out.stderr[-2000:]
+        assert "UNOPTFLAT" not in out.stderr and "%Warning" not in out.stderr, out.stderr[-2000:]
