@@ -106,7 +106,8 @@ def claim(scene_name="topspin", frame: int = 0, sizes=(1, 2, 4, 8, 16, 32, 64), 
     from vqtex.hw.texel_fetch import LATENCY
     from vqtex.sim.streams import ready_pattern
 
-    scene = load_scene(scene_name)
+    scene = load_scene(scene_name) if isinstance(scene_name, str) else scene_name     # a name, or a Scene
+    scene_name = scene_name if isinstance(scene_name, str) else str(scene.path)
     images = [img for img, _ in scene.load_textures()]
     sets = {"vq": build_texture_set(scene, images), "uncompressed": uncompressed_set(scene, images)}
     req, sampler = frame_requests(scene, frame, sets["vq"], "trilinear")

@@ -5,7 +5,7 @@ import numpy as np
 
 from vqtex.golden.fetch import decode
 from vqtex.golden.render.scene import build_texture_set, parse_scene
-from vqtex.sim.bench.scenes.memory import scene_memory, uncompressed_set
+from vqtex.sim.bench.scenes.memory import claim, plot_claim, scene_memory, uncompressed_set
 
 from tests.golden.test_need import SMALL
 
@@ -33,3 +33,28 @@ def test_rows_compare_vq_and_uncompressed():
         assert np.isclose(x["cycles_per_pixel"] * r["pixels"], x["cycles"])
     assert rows[("uncompressed", 8)]["hit_rate"]["index"] is None       # nothing compressed: no index reads
     assert rows[("vq", 8)]["cycles"] <= rows[("vq", 1)]["cycles"]
+
+
+def test_claim_rows_are_the_cycle_model(tmp_path):
+    """--claim's rows: per set and cache size, the bytes, hit rates and cycles of run_cached on the
+    same frame (the zero-latency cycles run once per set are the same stream's); the plot is written."""
+    from vqtex.golden.memory.cache import CacheShape
+    from vqtex.golden.memory.system import MemoryConfig
+    from vqtex.golden.render.frame import frame_requests
+    from vqtex.sim.backends.cycle_model import run_cached
+    scene = parse_scene(SMALL, "small.toml")
+    r = claim(scene, frame=1, sizes=(1, 4), latency=40, prefetch=4)
+    assert [(x["textures"], x["cache_kb"]) for x in r["rows"]] == [("vq", 1), ("vq", 4), ("uncompressed", 1),
+                                                                    ("uncompressed", 4)]
+    sets = {"vq": build_texture_set(scene), "uncompressed": uncompressed_set(scene)}
+    req, sampler = frame_requests(scene, 1, sets["vq"], "trilinear")
+    for x in r["rows"]:
+        shape = CacheShape(x["cache_kb"] * 1024, 32, 4)
+        model = run_cached(sets[x["textures"]], req, MemoryConfig(index_cache=shape, raw_cache=shape, prefetch=4,
+                                                                  latency=40))
+        assert x["cycles"] == model["cycles"] and x["of_zero_latency"] == model["of_zero_latency"]
+        assert x["hit_rate"] == model["hit_rate"]
+        assert x["bytes_per_pixel"] == sum(model["memory_bytes"].values()) / len(sampler.fragments)
+    assert r["rows"][2]["bytes_per_pixel"] > r["rows"][0]["bytes_per_pixel"] > 0
+    plot_claim([r], str(tmp_path / "claim.png"))
+    assert (tmp_path / "claim.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
