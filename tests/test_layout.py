@@ -23,10 +23,11 @@ MAY_IMPORT = {
     "vqtex.sim.streams": set(),
     "vqtex.sim.backends": {"vqtex.golden", "vqtex.hw", "vqtex.sim.streams"},
     "vqtex.sim.reports": {"vqtex.golden", "vqtex.hw", "vqtex.sim.streams", "vqtex.sim.backends"},
+    "vqtex.sim.formal": {"vqtex.golden", "vqtex.hw"},
     "vqtex.sim.bench": {"vqtex.golden", "vqtex.hw", "vqtex.sim.streams", "vqtex.sim.backends",
                         "vqtex.sim.reports"},
     "vqtex.sim.cli": {"vqtex.golden", "vqtex.hw", "vqtex.sim.streams", "vqtex.sim.backends",
-                      "vqtex.sim.reports", "vqtex.sim.bench"},
+                      "vqtex.sim.reports", "vqtex.sim.bench", "vqtex.sim.formal"},
 }
 
 
