@@ -26,15 +26,28 @@ from .toolchain import (ToolchainError, cache_dir, cached_build, digest, find_cx
                         run_tool, source_stamp, tool_version)
 
 __all__ = ["run", "build_verilator", "build_design", "open_verilator", "build_library", "VERILATOR_FLAGS",
-           "CXXFLAGS", "MAKE_OPT", "verilator_include_dir", "verilator_runtime"]
+           "CXXFLAGS", "MODEL_OPT", "SLOW_OPT", "MODEL_CXXFLAGS", "verilator_include_dir", "verilator_runtime",
+           "model_sources"]
 
 VERILATOR_FLAGS = ["--cc", "--prefix", "Vtop", "-O3", "--x-assign", "fast", "--x-initial", "fast",
                    "--noassert", "-Wno-fatal", "-Wno-lint", "-Wno-style"]
+#: Verilator's runtime (verilated.cpp, verilated_threads.cpp), compiled once per Verilator and compiler.
 CXXFLAGS = ["-std=c++17", "-O2", "-fPIC", "-DNDEBUG"]
-#: Verilator's makefile optimisation levels: the model at -O2, its "slow" (run-once) code at -O0.
-#: The slow code holds the memories' initial blocks (one statement per word): at -O2 g++ spends
-#: about two minutes on the default unit's, at -O0 seven seconds.
-MAKE_OPT = "OPT_FAST=-O2 OPT_SLOW=-O0 OPT_GLOBAL=-O2"
+#: The model's per-cycle ("fast") C++ is compiled in one translation unit with the driver, at -O3, so
+#: that the compiler sees ``eval()`` and the clocked region beside the run loop of batch.h (measured
+#: on the default unit, one run: the model and the driver as separate objects at -O2, Verilator's
+#: makefile, 105-112 ns a cycle; one unit at -O2 103-109; one unit at -O3 96-100: docs/simulation.md).
+MODEL_OPT = "-O3"
+#: The model's run-once ("slow") C++ holds the memories' initial blocks (one statement per word): at
+#: -O2 g++ spends about two minutes on the default unit's, at -O0 seven seconds.
+SLOW_OPT = "-O0"
+#: What Verilator's makefile (verilated.mk) defines for a model without coverage, SystemC or tracing,
+#: and the warnings it silences in generated code; hidden symbols, so that the model's functions bind
+#: inside the library (no calls through the PLT).
+MODEL_CXXFLAGS = ["-fvisibility=hidden", "-DVERILATOR=1", "-DVM_COVERAGE=0", "-DVM_SC=0", "-DVM_TIMING=0", "-DVM_TRACE=0",
+                 "-DVM_TRACE_FST=0", "-DVM_TRACE_VCD=0", "-faligned-new", "-Wno-bool-operation",
+                 "-Wno-sign-compare", "-Wno-uninitialized", "-Wno-unused-but-set-variable",
+                 "-Wno-unused-parameter", "-Wno-unused-variable", "-Wno-shadow"]
 
 
 def verilator_include_dir(verilator: str) -> str:
@@ -97,29 +110,65 @@ def verilator_runtime(verilator: str, cxx: str, inc: str) -> str:
     return os.path.dirname(path)
 
 
+def model_sources(obj: str) -> tuple[list[str], list[str]]:
+    """The C++ files Verilator wrote into ``obj``, as (fast, slow) by its own classification
+    (``Vtop_classes.mk``: ``VM_CLASSES_FAST``/``VM_SUPPORT_FAST`` run every cycle,
+    ``VM_CLASSES_SLOW``/``VM_SUPPORT_SLOW`` once: construction, initial blocks, constant pool)."""
+    lists = {"FAST": [], "SLOW": []}
+    with open(os.path.join(obj, "Vtop_classes.mk")) as f:
+        kind = None
+        for line in f:
+            words = line.replace("\\", " ").split()
+            if len(words) >= 2 and words[1] == "+=" and words[0].startswith("VM_"):
+                name = words[0]
+                kind = ("FAST" if name in ("VM_CLASSES_FAST", "VM_SUPPORT_FAST") else
+                        "SLOW" if name in ("VM_CLASSES_SLOW", "VM_SUPPORT_SLOW") else None)
+                words = words[2:]
+            elif not line.startswith(("\t", " ")):
+                kind = None
+                continue
+            if kind:
+                lists[kind] += [w + ".cpp" for w in words]
+    if not lists["FAST"]:
+        raise ToolchainError(f"Verilator wrote no model classes into {obj} (Vtop_classes.mk)")
+    return lists["FAST"], lists["SLOW"]
+
+
 def build_library(folder: str, verilog: str, header: str, *, verilator: str, cxx: str, inc: str, runtime: str,
-                  top_name: str, what: str) -> dict:
-    """In ``folder``: write ``top.v`` and ``ports.h``, verilate ``top_name`` and link it with
-    drivers/verilator_driver.cc and Verilator's runtime into ``libvq.so``. Returns the seconds of
-    each step, ``{"verilate": s, "link": s}``."""
+                  top_name: str, what: str, extra_flags=()) -> dict:
+    """In ``folder``: write ``top.v`` and ``ports.h``, verilate ``top_name`` (C++ only, Verilator's
+    makefile is not used) and build ``libvq.so``: the model's run-once C++ at ``SLOW_OPT``, its
+    per-cycle C++ and drivers/verilator_driver.cc as one translation unit (``model.cc``) at
+    ``MODEL_OPT``, linked with Verilator's runtime. Returns the seconds of each step,
+    ``{"verilate": s, "link": s}``."""
+    import concurrent.futures
     with open(os.path.join(folder, "top.v"), "w") as f:
         f.write(verilog)
     with open(os.path.join(folder, "ports.h"), "w") as f:
         f.write(header)
-    jobs = str(max(1, min(4, os.cpu_count() or 1)))
     t = time.perf_counter()
-    run_tool([verilator, *VERILATOR_FLAGS, "--top-module", top_name, "--Mdir", "obj",
-              "-CFLAGS", " ".join(f for f in CXXFLAGS if not f.startswith("-O")),
-              "-MAKEFLAGS", f"{MAKE_OPT} CXX={cxx} LINK={cxx}", "--build", "-j", jobs, "top.v"],
+    run_tool([verilator, *VERILATOR_FLAGS, *extra_flags, "--top-module", top_name, "--Mdir", "obj", "top.v"],
              folder, "Verilator", "build.log")
     t_verilate = time.perf_counter() - t
+    fast, slow = model_sources(os.path.join(folder, "obj"))
+    for name, files in (("model.cc", fast), ("slow.cc", slow)):
+        with open(os.path.join(folder, name), "w") as f:
+            f.writelines(f'#include "{src}"\n' for src in files)
+            if name == "model.cc":
+                f.write(f'#include "{os.path.join(DRIVER_DIR, "verilator_driver.cc")}"\n')
+    common = [cxx, *[f for f in CXXFLAGS if not f.startswith("-O")], *MODEL_CXXFLAGS, "-I", "obj", "-I", inc,
+              "-I", os.path.join(inc, "vltstd"), "-I", DRIVER_DIR, "-I", folder]
     t = time.perf_counter()
-    run_tool([cxx, *CXXFLAGS, "-shared", "-fvisibility=hidden", "-I", "obj", "-I", inc,
-              "-I", os.path.join(inc, "vltstd"), "-I", DRIVER_DIR, "-I", folder,
-              os.path.join(DRIVER_DIR, "verilator_driver.cc"), "obj/Vtop__ALL.a",
+    with concurrent.futures.ThreadPoolExecutor(2) as pool:     # the two compilers side by side
+        slow_job = pool.submit(run_tool, [*common, SLOW_OPT, "-c", "slow.cc", "-o", "slow.o"], folder,
+                               f"C++ compilation of {what} (run-once code)", "slow.log")
+        run_tool([*common, MODEL_OPT, "-c", "model.cc", "-o", "model.o"], folder,
+                 f"C++ compilation of {what}", "build.log")
+        slow_job.result()
+    run_tool([cxx, "-shared", "-fvisibility=hidden", "model.o", "slow.o",
               os.path.join(runtime, "verilated.o"), os.path.join(runtime, "verilated_threads.o"),
               "-pthread", "-o", "libvq.so"],
-             folder, f"C++ compilation of {what}", "build.log")
+             folder, f"linking {what}", "build.log")
     return {"verilate": t_verilate, "link": time.perf_counter() - t}
 
 
@@ -150,7 +199,7 @@ def build_design(info: DesignInfo, verilog, *, elaborated: float | None = None) 
     t0 = time.perf_counter() if elaborated is None else elaborated
     steps = {"elaborate": time.perf_counter() - t0}
     drivers = driver_sources("verilator_driver.cc", "batch.h")
-    flags = VERILATOR_FLAGS + CXXFLAGS + [MAKE_OPT]
+    flags = VERILATOR_FLAGS + CXXFLAGS + [MODEL_OPT, SLOW_OPT] + MODEL_CXXFLAGS
     this = b""
     for mod in (__file__, _verilog_file()):     # (ports_header is part of the build; so is the export)
         with open(os.path.abspath(mod), "rb") as f:
