@@ -233,7 +233,7 @@ def build_verilator(ts, *, one_port: bool = False, tag_width: int = 8, specialis
                     geometry=None, threads: int = 1) -> Build:
     """The Verilator library of the texel-fetch unit's exported Verilog for ``ts`` (built or from the
     cache); with ``geometry``, of the loadable unit of that geometry (one build per geometry); with
-    ``threads`` > 1, verilated with ``--threads`` (measured only: sim.bench.simulators.verilator_threads)."""
+    ``threads`` > 1, verilated with ``--threads`` (measured only: sim.bench.simulators.verilator_speed)."""
     from .verilog import export_verilog
     t0 = time.perf_counter()
     info = design_info(ts, one_port=one_port, tag_width=tag_width, specialise=specialise, geometry=geometry)
