@@ -13,6 +13,10 @@ machine has two CPUs (``VQTEX_SIM_THREADS``); the same library on one thread is 
 run and printed as ``cxxrtl 1t``, and the Verilator library's speed as a ratio to it
 (``verilator_vs_cxxrtl_1t``: both end to end, best of three, in this run).
 Responses and cycle counts of every backend are checked against the golden model on the way.
+
+``filter`` (in the default backends): a second table, the RTL texture filter (four lanes) on CXXRTL
+on the pixels of topspin frames 0-2 in bilinear mode, as ``vqtex render --filter-in-rtl`` runs it:
+cycles per second end to end and in the library, wall and CPU (:mod:`.filter`).
 """
 
 from __future__ import annotations
@@ -52,7 +56,7 @@ def _library_seconds(lib, info, req, repeats: int = 3) -> float:
 
 
 def run(json_out: bool = False, *, n_compiled: int = 4_000_000, n_pysim: int = 3000, stall: float = 0.0,
-        backends=("pysim", "cxxrtl", "verilator")) -> dict:
+        backends=("pysim", "cxxrtl", "verilator", "filter")) -> dict:
     """Run the benchmark, print a table (or one JSON object) and return the numbers."""
     from vqtex.sim.backends.interface import simulate
     from vqtex.sim.backends.toolchain import ToolchainError, using_cache
@@ -124,6 +128,12 @@ def run(json_out: bool = False, *, n_compiled: int = 4_000_000, n_pysim: int = 3
         for name in list(rows):
             if name != "pysim" and "cycles_per_s" in rows[name]:
                 rows[name]["speedup_vs_pysim"] = rows[name]["cycles_per_s"] / rows["pysim"]["cycles_per_s"]
+    if "filter" in backends:
+        from . import filter as filter_bench
+        try:
+            report["filter"] = filter_bench.filter_speeds(ts, filter_bench.scene_pixels(ts))
+        except ToolchainError as e:
+            report["filter"] = {"error": str(e)}
     if json_out:
         print(json.dumps(report, sort_keys=True))
     else:
@@ -139,8 +149,17 @@ def run(json_out: bool = False, *, n_compiled: int = 4_000_000, n_pysim: int = 3
                   f"{(f'{lib_rate:.3g}' if lib_rate else '-'):>11} "
                   f"{r.get('speedup_vs_pysim', 1.0):>9.0f} {r['build_first_s']:>11.2f} "
                   f"{r['build_cached_s']:>9.2f} {str(r['agrees_with_golden']):>7}")
+<<<<<<< HEAD
         if "verilator_vs_cxxrtl_1t" in report:
             print(f"verilator / cxxrtl on one thread (end to end, this run): {report['verilator_vs_cxxrtl_1t']:.2f}")
+=======
+        if "filter" in report:
+            if "error" in report["filter"]:
+                print(f"\nRTL texture filter: {report['filter']['error']}")
+            else:
+                from .filter import print_table
+                print_table(report["filter"], "topspin frames 0-2, bilinear")
+>>>>>>> filter-speed
     return report
 
 
