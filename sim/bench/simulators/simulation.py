@@ -149,17 +149,14 @@ def run(json_out: bool = False, *, n_compiled: int = 4_000_000, n_pysim: int = 3
                   f"{(f'{lib_rate:.3g}' if lib_rate else '-'):>11} "
                   f"{r.get('speedup_vs_pysim', 1.0):>9.0f} {r['build_first_s']:>11.2f} "
                   f"{r['build_cached_s']:>9.2f} {str(r['agrees_with_golden']):>7}")
-<<<<<<< HEAD
         if "verilator_vs_cxxrtl_1t" in report:
             print(f"verilator / cxxrtl on one thread (end to end, this run): {report['verilator_vs_cxxrtl_1t']:.2f}")
-=======
         if "filter" in report:
             if "error" in report["filter"]:
                 print(f"\nRTL texture filter: {report['filter']['error']}")
             else:
                 from .filter import print_table
                 print_table(report["filter"], "topspin frames 0-2, bilinear")
->>>>>>> filter-speed
     return report
 
 
