@@ -147,8 +147,8 @@ class BankedROM(wiring.Component):
         # whole bus words (the padding is never read by the pipeline).
         stored = self._width if load is None or self._width <= DATA_WIDTH else -(-self._width // DATA_WIDTH) * DATA_WIDTH
         if load is not None:                # the command decoded once, then a bank compare each
-            hit, row, lane = load_decode(m, self.load, region=load.region, lanes=load.lanes, stride=load.stride,
-                                         phase=load.phase, depth=self._depth, name="load")
+            hit, row, lane, command = load_decode(m, self.load, region=load.region, lanes=load.lanes,
+                                                  stride=load.stride, phase=load.phase, depth=self._depth, name="load")
             if len(row) < offset_bits:
                 row = Cat(row, C(0, offset_bits - len(row)))
         for k in range(self._banks):
@@ -160,7 +160,7 @@ class BankedROM(wiring.Component):
             q = Signal(stored if load is not None else self._width, name=f"data{k}")
             if load is not None:
                 bank_hit = hit if self._banks == 1 else hit & (row[offset_bits:] == k)
-                rd, answer = attach_memory(m, mem, self.load, hit=bank_hit, row=row[:offset_bits], lane=lane,
+                rd, answer = attach_memory(m, mem, command, hit=bank_hit, row=row[:offset_bits], lane=lane,
                                            name=f"bank{k}_load", read_addr=self.addr[:offset_bits], read_en=self.en,
                                            data_r=q)
                 answers.append(answer)

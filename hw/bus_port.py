@@ -23,10 +23,12 @@ Timing: a write accepted in cycle ``t`` is acknowledged (or refused with ``err``
 ``t + 1`` and is in the memory from cycle ``t + 2``; writes go back to back. A read accepted in
 cycle ``t`` is answered in cycle ``t + READ_LATENCY`` with ``dat_r``; the port stalls during a
 read, so answers come in order. A read's path is registered at every step, so that it is never the
-unit's critical path (150 MHz on the ECP5-8): the command (``t + 1``), the memory's read (``t + 2``),
-a fabric register of the read data (``t + 3``: a block RAM's clock-to-output leaves no time for
-logic behind it), the lane select and the answer register (``t + 4``: ``load_data``), then the OR
-of every answer into ``dat_r`` (``t + 5``). ``err`` answers (one cycle after acceptance) an address the
+unit's critical path (150 MHz on the ECP5-8): the command (``t + 1``), each memory's decoded copy
+of it (``t + 2``, :func:`load_decode`), the memory's read (``t + 3``), a fabric register of the read
+data (``t + 4``: a block RAM's clock-to-output leaves no time for logic behind it), the lane select
+and the answer register (``t + 5``: ``load_data``), then the OR of every answer into ``dat_r``
+(``t + 6``). A write reaches the memories in ``t + 2`` (they hold it from ``t + 3``), before any
+request can follow it (the drain rule's ``pause`` falls in ``t + 3`` at the earliest). ``err`` answers (one cycle after acceptance) an address the
 geometry does not map and a write to a read-only register.
 """
 
@@ -48,7 +50,7 @@ __all__ = ["wishbone_signature", "load_layout", "BusPort", "LoadTarget", "load_d
 #: Bus data width.
 DATA_WIDTH = 32
 #: Cycles from a read's acceptance to its ``ack`` and ``dat_r``.
-READ_LATENCY = 5
+READ_LATENCY = 6
 #: Cycles from a read's acceptance to its answer on ``load_data`` (one register before ``dat_r``).
 ANSWER_LATENCY = READ_LATENCY - 1
 
@@ -206,23 +208,27 @@ class LoadTarget:
 def load_decode(m, load, *, region: int, lanes: int = 1, stride: int = 1, phase: int = 0, depth: int,
                 name: str) -> tuple:
     """Which word of a memory of ``depth`` words the load command addresses, decoded once for all
-    of that memory's banks: ``(hit, row, lane)`` (combinational). Entry ``e`` of ``region`` spans bus
-    words ``e * lanes .. e * lanes + lanes - 1``; the memory holds the entries with ``e % stride ==
-    phase`` (even and odd index banks), entry ``e`` in row ``e // stride``; ``hit`` is high when the
-    command's region is ``region`` and its entry is one of them, ``lane`` is the bus word in the
-    entry."""
+    of that memory's banks and registered: ``(hit, row, lane, command)``, one cycle after ``load``
+    (``command`` is ``load`` registered beside them: a memory takes its write data and its read and
+    write strobes from it). Entry ``e`` of ``region`` spans bus words ``e * lanes .. e * lanes +
+    lanes - 1``; the memory holds the entries with ``e % stride == phase`` (even and odd index
+    banks), entry ``e`` in row ``e // stride``; ``hit`` is high when the command's region is
+    ``region`` and its entry is one of them, ``lane`` is the bus word in the entry.
+
+    The register is each memory's own copy of the command, next to it: the compare and the fan-out
+    to the memory's address and enable inputs start from flip-flops (150 MHz on the ECP5-8)."""
     lane_bits = (lanes - 1).bit_length()
     stride_bits = (stride - 1).bit_length()
     entry = load.offset[lane_bits:]
     row = Signal(max(1, len(entry) - stride_bits), name=f"{name}_row")
-    m.d.comb += row.eq(entry[stride_bits:])
-    hit = Signal(name=f"{name}_hit")
-    cond = (load.region == region) & (row < depth)
+    cond = (load.region == region) & (entry[stride_bits:] < depth)
     if stride > 1:
         cond &= entry[:stride_bits] == phase
-    m.d.comb += hit.eq(cond)
-    lane = load.offset[:lane_bits] if lane_bits else C(0, 1)
-    return hit, row, lane
+    hit = Signal(name=f"{name}_hit")
+    command = Signal.like(load, name=f"{name}_command")
+    m.d.sync += [hit.eq(cond), row.eq(entry[stride_bits:]), command.eq(load)]
+    lane = Value.cast(command.offset)[:lane_bits] if lane_bits else C(0, 1)
+    return hit, row, lane, command
 
 
 def delayed(m, value, cycles: int, *, name: str):

@@ -200,8 +200,8 @@ class DescriptorTable(wiring.Component):
         m.d.comb += addr.eq(Cat(self.level, self.texture))
         row = {}
         answers = []
-        hit, row_of, lane = load_decode(m, self.load, region=REGIONS["descriptors"], lanes=len(DESCRIPTOR_WORDS),
-                                        depth=depth, name="load")
+        hit, row_of, lane, command = load_decode(m, self.load, region=REGIONS["descriptors"],
+                                                 lanes=len(DESCRIPTOR_WORDS), depth=depth, name="load")
         contents = self._rows(LEVEL_BITS, g.texture_bits)[:depth] if self._ts is not None else None
         for w, word in enumerate(DESCRIPTOR_WORDS):
             present = [(name, lsb) for name, lsb, _ in word if widths[name]]
@@ -225,7 +225,7 @@ class DescriptorTable(wiring.Component):
                     out = out | (Value.cast(getattr(view, name)) << lsb)
                 return out[:DATA_WIDTH]
 
-            port, answer = attach_memory(m, mem, self.load, hit=hit, row=row_of, lane=lane, only_lane=w,
+            port, answer = attach_memory(m, mem, command, hit=hit, row=row_of, lane=lane, only_lane=w,
                                          pack=pack, unpack=unpack, name=f"word{w}_load", read_addr=addr,
                                          read_en=self.en)
             answers.append(answer)

@@ -23,11 +23,12 @@ MAY_IMPORT = {
     "vqtex.sim.streams": set(),
     "vqtex.sim.backends": {"vqtex.golden", "vqtex.hw", "vqtex.sim.streams"},
     "vqtex.sim.reports": {"vqtex.golden", "vqtex.hw", "vqtex.sim.streams", "vqtex.sim.backends"},
+    "vqtex.sim.formal": {"vqtex.golden", "vqtex.hw"},
     "vqtex.sim.bench": {"vqtex.golden", "vqtex.hw", "vqtex.sim.streams", "vqtex.sim.backends",
                         "vqtex.sim.reports"},
     "vqtex.sim.testbench": {"vqtex.golden", "vqtex.sim.streams", "vqtex.sim.backends"},
     "vqtex.sim.cli": {"vqtex.golden", "vqtex.hw", "vqtex.sim.streams", "vqtex.sim.backends",
-                      "vqtex.sim.reports", "vqtex.sim.bench", "vqtex.sim.testbench"},
+                      "vqtex.sim.reports", "vqtex.sim.bench", "vqtex.sim.testbench", "vqtex.sim.formal"},
 }
 
 

@@ -212,7 +212,10 @@ class TextureFilter(wiring.Component):
         m = Module()
         lanes = self._lanes
         tw = self._tag_width
-        lane_tag = WEIGHT_WIDTH + 2 + tw          # weight, first, last, pixel tag
+        # Lane 0's tag is its slot's weight, the pixel's first and last marks and the pixel tag; the
+        # other lanes run in lock step with it and carry their weight only (the blend reads the
+        # marks and the tag from lane 0).
+        lane_tag = [WEIGHT_WIDTH + 2 + tw if k == 0 else WEIGHT_WIDTH for k in range(lanes)]
 
         loadable = self._loadable
         if loadable:
@@ -227,10 +230,10 @@ class TextureFilter(wiring.Component):
         lane_set = banked_image.view(self._ts) if banked else self._ts
         for k in range(lanes):
             if loadable:                    # the filter's port loads every lane's copy
-                f = TexelFetch(self._contents, tag_width=lane_tag, bank_depth=self._bank_depth, geometry=self._geometry,
+                f = TexelFetch(self._contents, tag_width=lane_tag[k], bank_depth=self._bank_depth, geometry=self._geometry,
                                loadable=True, bus_port=False)
             else:
-                f = TexelFetch(lane_set, tag_width=lane_tag, bank_depth=self._bank_depth, index_port=banked)
+                f = TexelFetch(lane_set, tag_width=lane_tag[k], bank_depth=self._bank_depth, index_port=banked)
             m.submodules[f"lane{k}"] = f
             fetch.append(f)
         if loadable:
@@ -292,7 +295,7 @@ class TextureFilter(wiring.Component):
                 f.i.p.level.eq(texel.level),
                 f.i.p.i.eq(texel.i),
                 f.i.p.j.eq(texel.j),
-                f.i.p.tag.eq(Cat(weight, group == 0, last, fpp.tag)),
+                f.i.p.tag.eq(Cat(weight, group == 0, last, fpp.tag) if k == 0 else weight),
             ]
 
         # -- the lanes' responses, one group per cycle, into the blend ---------------------------

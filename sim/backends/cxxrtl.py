@@ -34,7 +34,9 @@ import ctypes
 import os
 import re
 import sys
+import threading
 import time
+import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -95,12 +97,27 @@ def memory_initialisers(src: str) -> int:
 WRITE_CXXRTL = "write_cxxrtl -g1"
 
 
+#: write_cxxrtl's output per fragment (and port names): see write_cxxrtl.
+_written: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+_writing = threading.Lock()
+
+
 def write_cxxrtl(fragment, ports) -> str:
     """The fragment's RTLIL (``amaranth.back.rtlil``) through Yosys ``write_cxxrtl`` with our options
-    (:data:`WRITE_CXXRTL`), as ``amaranth.back.cxxrtl`` does with its own."""
-    from amaranth.back import rtlil
-    text, _ = rtlil.convert_fragment(fragment, ports, "top", emit_src=False)
-    return run_yosys(rtlil_script(text, WRITE_CXXRTL))
+    (:data:`WRITE_CXXRTL`), as ``amaranth.back.cxxrtl`` does with its own. Written once per fragment
+    and kept: Amaranth's conversion prepares a fragment in place, so a second conversion of the same
+    one fails, and a unit's description (with its fragment) is elaborated once per process
+    (:mod:`sim.backends.design`) while its C++ may be asked for again (a build with other flags, a
+    library evicted from the cache, the rewrite tests)."""
+    names = tuple(ports)
+    with _writing:                          # (one conversion of a fragment at a time)
+        kept = _written.get(fragment, {})
+        if names not in kept:
+            from amaranth.back import rtlil
+            text, _ = rtlil.convert_fragment(fragment, ports, "top", emit_src=False)
+            kept[names] = run_yosys(rtlil_script(text, WRITE_CXXRTL))
+            _written[fragment] = kept
+        return kept[names]
 
 
 _MEM_INIT = re.compile(r"\tstatic const value<\d+> (mem_init_\d+)\[\d+\] \{\n.*?\n\t\};\n"
@@ -261,9 +278,31 @@ def guarded_writes(src: str) -> tuple[str, int]:
             return m.group(0)
         count += 1
         ind = m.group("ind")
-        return (f"{ind}{{ const auto vq_mask = {args[2]};\n"
-                f"{ind}if (!vq_mask.is_zero()) {m.group('mem')}.update({args[0]}, {args[1]}, vq_mask, {args[3]}); }}")
+        update = (f"{{ const auto vq_mask = {args[2]};\n"
+                  f"{ind}if (!vq_mask.is_zero()) {m.group('mem')}.update({args[0]}, {args[1]}, vq_mask, {args[3]}); }}")
+        enable = _mask_source(args[2])
+        if enable is not None:              # the mask is the enable's bits spread: test the enable first
+            return f"{ind}if (!{enable}.is_zero()) {update}"
+        return f"{ind}{update}"
     return _MEM_WRITE.sub(guard, src), count
+
+
+_MASK_VALUE = re.compile(r"\b[pi]_\w+(?:\.curr)?")
+_MASK_SPREAD = re.compile(r"(?:vq_slice<\d+(?:,\d+)?>\(|\.slice<\d+(?:,\d+)?>\(\)|\)|\.repeat<\d+>\(\)|\.concat\(|"
+                          r"\.val\(\)|\s|@)*")
+
+
+def _mask_source(mask: str):
+    """The one value a write port's mask is spread from, or None: a mask made only of that value's
+    slices, repeated and concatenated, no constant (a wide memory's per-bit mask, as Yosys writes
+    the write port's per-word enables: 504 bits from 16 enable bits, about 30 shifts of the whole
+    mask every cycle). Such a mask is zero exactly when the value's bits in it are; when the value
+    is zero, so is the mask."""
+    values = set(_MASK_VALUE.findall(mask))
+    if len(values) != 1:
+        return None
+    value = values.pop()
+    return value if _MASK_SPREAD.fullmatch(mask.replace(value, "@")) else None
 
 
 #: The passes of :func:`rewrite`, in their order: name -> function of the C++ returning (C++,

@@ -20,6 +20,8 @@ it; it imports none of them.
 
 from __future__ import annotations
 
+import threading
+from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -199,9 +201,17 @@ class MemoryImage:
     width: int
     depth: int
     init: list
+    _rows: np.ndarray | None = field(default=None, init=False, repr=False, compare=False)
 
     def rows(self) -> np.ndarray:
-        """Contents as (depth, ceil(width/32)) uint32 little-endian chunks."""
+        """Contents as (depth, ceil(width/32)) uint32 little-endian chunks (made once, read-only: a
+        library opened for every frame loads the same rows)."""
+        if self._rows is None:
+            self._rows = self._make_rows()
+            self._rows.flags.writeable = False
+        return self._rows
+
+    def _make_rows(self) -> np.ndarray:
         cpr = max(1, -(-self.width // 32))
         vals = list(self.init) + [0] * (self.depth - len(self.init))
         if self.width <= 64:
@@ -258,11 +268,50 @@ def _fields(layout) -> dict:
     return {name: (f.offset, f.width) for name, f in layout}
 
 
+#: How many elaborated units :func:`design_info` and :func:`filter_design_info` keep (least recently
+#: used first out): a texel-fetch unit's description is about 1.5 MB, a four-lane filter's about 6 MB.
+DESIGNS_KEPT = 8
+_designs: OrderedDict = OrderedDict()
+_designs_lock = threading.Lock()
+
+
+def _memoised(key: tuple, make) -> DesignInfo:
+    """The unit of ``key`` elaborated once per process (``make()``), then the same :class:`DesignInfo`.
+    ``key`` holds everything the elaboration depends on: the unit, its options and its contents'
+    digest (:func:`sim.backends.toolchain.texture_set_digest`, as the build cache's quick key), or
+    the loadable unit's geometry. Elaborating is most of what a repeated run of a cached build costs
+    (0.45 s for the four-lane filter of ``topspin``, 3.5x the simulation of one of its frames), and
+    a renderer asks for the same unit every frame."""
+    with _designs_lock:
+        info = _designs.get(key)
+        if info is not None:
+            _designs.move_to_end(key)
+            return info
+    info = make()                           # (two threads may both elaborate one unit: the same result)
+    with _designs_lock:
+        info = _designs.setdefault(key, info)
+        _designs.move_to_end(key)
+        while len(_designs) > DESIGNS_KEPT:
+            _designs.popitem(last=False)
+    return info
+
+
+def _contents(ts, geometry):
+    return texture_set_digest(ts) if geometry is None else ("loadable", geometry.dumps())
+
+
 def design_info(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True,
                 geometry=None) -> DesignInfo:
     """Elaborate ``TexelFetch(ts)`` (with ``geometry``: the loadable unit of that geometry, no
     contents: ``ts`` is loaded later, over the bus) and collect ports, payload layouts, stages and
-    memory images."""
+    memory images. Elaborated once per process for the same options and contents (the same
+    :class:`DesignInfo` is returned again: treat it as read-only)."""
+    key = ("texel_fetch", one_port, tag_width, specialise or geometry is not None, _contents(ts, geometry))
+    return _memoised(key, lambda: _design_info(ts, one_port=one_port, tag_width=tag_width, specialise=specialise,
+                                               geometry=geometry, contents=key[-1]))
+
+
+def _design_info(ts, *, one_port, tag_width, specialise, geometry, contents) -> DesignInfo:
     from vqtex.hw.memories import elaborate, memories
     from vqtex.hw.texel_fetch import REGISTERS, TexelFetch
 
@@ -285,7 +334,6 @@ def design_info(ts, *, one_port: bool = False, tag_width: int = 8, specialise: b
     req = top.i.p.shape()
     resp = top.o.p.shape()
     names = list(top.signature.members.keys())
-    contents = texture_set_digest(ts) if geometry is None else ("loadable", geometry.dumps())
     info = DesignInfo(
         top=top, fragment=frag, ports=ports,
         request_fields=_fields(req), response_fields=_fields(resp),
@@ -305,7 +353,15 @@ def filter_design_info(ts, *, lanes: int = 1, frac: int | None = None, tag_width
     texel-fetch unit: one model (no halves), a request row is the pixel's :data:`FIELDS`, the
     strobes (``stall_output``, ``busy``, ``bank_conflict``) in the filter's signature order, and
     ``o.valid`` as its one stage's valid bit ("output"). With ``geometry``, the loadable filter of
-    that geometry (no contents: ``ts`` is loaded over its bus)."""
+    that geometry (no contents: ``ts`` is loaded over its bus). Elaborated once per process, as
+    :func:`design_info`."""
+    key = ("filter", lanes, frac, tag_width, index_banks, bank_depth, _contents(ts, geometry))
+    return _memoised(key, lambda: _filter_design_info(ts, lanes=lanes, frac=frac, tag_width=tag_width,
+                                                      index_banks=index_banks, bank_depth=bank_depth,
+                                                      geometry=geometry, contents=key[-1]))
+
+
+def _filter_design_info(ts, *, lanes, frac, tag_width, index_banks, bank_depth, geometry, contents) -> DesignInfo:
     from vqtex.hw.filter import TextureFilter
     from vqtex.hw.memories import elaborate, memories
     unit = {} if bank_depth is None else {"bank_depth": bank_depth}
@@ -325,8 +381,7 @@ def filter_design_info(ts, *, lanes: int = 1, frac: int | None = None, tag_width
         verilog_name=FILTER_TOP_NAME,
         verilog_request=[("i_payload", 0, req.size)], verilog_response=[("o_payload", 0, resp.size)],
         geometry=geometry,
-        options=(lanes, index_banks, top.frac, tag_width, bank_depth,
-                 texture_set_digest(ts) if geometry is None else ("loadable", geometry.dumps())))
+        options=(lanes, index_banks, top.frac, tag_width, bank_depth, contents))
     return _checked(info)
 
 
@@ -343,6 +398,12 @@ def cached_design_info(ts, config, *, tag_width: int = 8) -> DesignInfo:
     drivers answer it, drivers/axi_slave.h). Its Verilog top is :class:`CachedTexelFetchTop`. What
     names the build: the cache shapes, the FIFO depth and the bus width (the RTL's structure) and
     the set's contents; the memory model is the driver's, set per run."""
+    key = ("cached_texel_fetch", tag_width, config.index_cache, config.raw_cache, config.prefetch, config.bus_bytes,
+           texture_set_digest(ts))
+    return _memoised(key, lambda: _cached_design_info(ts, config, tag_width))
+
+
+def _cached_design_info(ts, config, tag_width: int) -> DesignInfo:
     from vqtex.hw.memories import elaborate, memories
     from vqtex.hw.memory.unit import CachedTexelFetch
     top = CachedTexelFetch(ts, config, tag_width=tag_width)

@@ -25,6 +25,7 @@ transfers; it checks every response's tag (in order, none lost or duplicated).
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,7 +37,8 @@ from vqtex.golden.format import TextureSet
 from .design import FIELDS, FilterTop, filter_design_info     # (FilterTop: re-exported, its home is design.py)
 
 __all__ = ["FilterResult", "simulate_filter", "golden_colors", "check_pixels", "FIELDS", "FILTER_BACKENDS",
-           "FilterTop", "texel_slots", "run_pysim", "run_compiled", "TAG_WIDTH"]
+           "FilterTop", "texel_slots", "run_pysim", "run_compiled", "compiled_build", "prepare_filter", "default_frac",
+           "TAG_WIDTH"]
 
 FILTER_BACKENDS = ("golden", "pysim", "cxxrtl", "verilator")
 #: Tag width of the simulated filter: pixel n carries tag ``n mod 2**TAG_WIDTH``.
@@ -95,7 +97,7 @@ def check_pixels(ts: TextureSet, pixels: dict, frac: int) -> dict:
     missing = [f for f in FIELDS if f not in pixels]
     if missing:
         raise ValueError(f"filter inputs lack {', '.join(missing)}")
-    p = {f: np.asarray(pixels[f]).astype(np.int64).reshape(-1) for f in FIELDS}
+    p = {f: np.asarray(pixels[f], dtype=np.int64).reshape(-1) for f in FIELDS}     # (no copy of int64)
     n = len(p["texture"])
     if any(len(v) != n for v in p.values()):
         raise ValueError("filter inputs of different lengths")
@@ -157,8 +159,7 @@ def simulate_filter(ts: TextureSet, pixels: dict, *, backend: str = "golden", la
     if not 0.0 <= stall < 1.0:
         raise ValueError(f"stall probability {stall} must be in [0, 1)")
     if frac is None:
-        table = spec.LevelTable([ts.level_shapes(t) for t in range(ts.n_textures)])
-        frac = spec.coordinate_frac_bits(table.max_log2)
+        frac = default_frac(ts)
     p = check_pixels(ts, pixels, frac)
     if geometry is not None:
         from vqtex.golden.register_map import load_writes
@@ -173,8 +174,7 @@ def simulate_filter(ts: TextureSet, pixels: dict, *, backend: str = "golden", la
     if backend not in FILTER_BACKENDS:
         raise ValueError(f"unknown filter backend {backend!r} (known: {', '.join(FILTER_BACKENDS)})")
     if geometry is not None:                # the loadable filter's coordinates: widened, exactly
-        from vqtex.hw.address import COORD_BITS
-        unit_frac = spec.coordinate_frac_bits(COORD_BITS)
+        unit_frac = _unit_frac(ts, frac, geometry)
         p = {**p, "s": p["s"] << (unit_frac - frac), "t": p["t"] << (unit_frac - frac)}
         frac = unit_frac
     if backend == "pysim":
@@ -182,6 +182,21 @@ def simulate_filter(ts: TextureSet, pixels: dict, *, backend: str = "golden", la
                          geometry=geometry)
     return run_compiled(backend, ts, p, lanes=lanes, frac=frac, stall=stall, seed=seed, index_banks=index_banks,
                         geometry=geometry)
+
+
+def default_frac(ts: TextureSet) -> int:
+    """The filter's fractional bits of ``s`` and ``t`` for ``ts``: ``golden.filter.coordinate_frac_bits``
+    of the set's largest level 0."""
+    return spec.coordinate_frac_bits(spec.LevelTable([ts.level_shapes(t) for t in range(ts.n_textures)]).max_log2)
+
+
+def _unit_frac(ts: TextureSet, frac: int | None, geometry) -> int:
+    """The fractional bits the RTL filter is built with: ``frac`` (default :func:`default_frac`), or
+    for the loadable filter those of the largest level it can address."""
+    if geometry is not None:
+        from vqtex.hw.address import COORD_BITS
+        return spec.coordinate_frac_bits(COORD_BITS)
+    return default_frac(ts) if frac is None else frac
 
 
 def golden_conflicts(ts: TextureSet, pixels: dict, frac: int, lanes: int) -> int:
@@ -196,8 +211,9 @@ def golden_conflicts(ts: TextureSet, pixels: dict, frac: int, lanes: int) -> int
 
 def texel_slots(mode: np.ndarray, lanes: int) -> int:
     """Texel slots the lanes fetch for these modes: per pixel ``ceil(used / lanes) * lanes``."""
-    used = np.asarray([1, 4, 8])[np.asarray(mode, np.int64)]
-    return int((-(-used // lanes) * lanes).sum())
+    per_mode = np.bincount(np.asarray(mode, np.int64).reshape(-1), minlength=3)     # (a mode code past 2 fails below)
+    used = np.array([1, 4, 8])
+    return int((per_mode * (-(-used // lanes) * lanes)).sum())
 
 
 def _result(info, pixels: dict, lanes: int, rgba, cycles: int, strobes: dict) -> FilterResult:
@@ -237,26 +253,50 @@ def run_pysim(ts, pixels: dict, *, lanes: int = 1, frac: int | None = None, stal
     return _result(dut, pixels, lanes, ph["responses"], ph["cycles"], ph["strobes"])
 
 
-def run_compiled(backend: str, ts, pixels: dict, *, lanes: int = 1, frac: int | None = None, stall: float = 0.0,
-                 seed: int = 0, index_banks: str = "parity", geometry=None) -> FilterResult:
-    """Filter ``pixels`` (checked int64 arrays) on a compiled backend (``cxxrtl``, ``verilator``): the
-    filter's description (:func:`sim.backends.design.filter_design_info`) built by that backend's
-    ``build_design``, as the texel-fetch unit is, and run by :func:`sim.backends.cxxrtl.run_checked`."""
+def compiled_build(backend: str, ts, *, lanes: int = 1, frac: int | None = None, index_banks: str = "parity",
+                   geometry=None):
+    """The compiled library of the filter (``cxxrtl`` or ``verilator``): its description
+    (:func:`sim.backends.design.filter_design_info`, elaborated once per process) built by that
+    backend's ``build_design``, as the texel-fetch unit is, or found in the build cache. Returns the
+    backend's ``Build`` (its ``info`` the description)."""
     from . import cxxrtl
     info = filter_design_info(ts, lanes=lanes, frac=frac, tag_width=TAG_WIDTH, index_banks=index_banks,
                               geometry=geometry)
+    if backend == "cxxrtl":
+        return cxxrtl.build_design(info)
+    from . import verilator
+    from .verilog import export_filter_verilog
+    return verilator.build_design(info, lambda: export_filter_verilog(
+        ts, lanes=lanes, tag_width=TAG_WIDTH, frac=frac, index_banks=index_banks, name=info.verilog_name,
+        geometry=geometry)[0])
+
+
+def prepare_filter(backend: str, ts, *, lanes: int = 1, frac: int | None = None, index_banks: str = "parity",
+                   geometry=None) -> float:
+    """Elaborate the filter and build its library (or find it in the cache) before a series of
+    :func:`simulate_filter` calls with these arguments, so that each of them then costs its
+    simulation and not the set-up (a renderer calls this once, before its first frame). Returns the
+    seconds it took; nothing to do (0.0) for the golden and pysim backends."""
+    if backend not in ("cxxrtl", "verilator"):
+        return 0.0
+    t0 = time.perf_counter()
+    compiled_build(backend, ts, lanes=lanes, frac=_unit_frac(ts, frac, geometry), index_banks=index_banks,
+                   geometry=geometry)
+    return time.perf_counter() - t0
+
+
+def run_compiled(backend: str, ts, pixels: dict, *, lanes: int = 1, frac: int | None = None, stall: float = 0.0,
+                 seed: int = 0, index_banks: str = "parity", geometry=None) -> FilterResult:
+    """Filter ``pixels`` (checked int64 arrays) on a compiled backend (``cxxrtl``, ``verilator``): the
+    library of :func:`compiled_build`, run by :func:`sim.backends.cxxrtl.run_checked`."""
+    from . import cxxrtl
     n = len(pixels["texture"])
     if n == 0:
+        info = filter_design_info(ts, lanes=lanes, frac=frac, tag_width=TAG_WIDTH, index_banks=index_banks,
+                                  geometry=geometry)
         return _result(info, pixels, lanes, np.zeros((0, 4), np.uint8), 0, dict.fromkeys(info.strobes, 0))
-    if backend == "cxxrtl":
-        build = cxxrtl.build_design(info)
-    else:
-        from . import verilator
-        from .verilog import export_filter_verilog
-        build = verilator.build_design(info, lambda: export_filter_verilog(
-            ts, lanes=lanes, tag_width=TAG_WIDTH, frac=frac, index_banks=index_banks, name=info.verilog_name,
-            geometry=geometry)[0])
-    lib, info, _ = cxxrtl.open_design(build)
+    lib, info, _ = cxxrtl.open_design(compiled_build(backend, ts, lanes=lanes, frac=frac, index_banks=index_banks,
+                                                     geometry=geometry))
     try:
         if geometry is not None:
             cxxrtl.load_set(lib, ts, geometry)

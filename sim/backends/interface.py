@@ -30,7 +30,7 @@ import numpy as np
 from vqtex.golden.fetch import check_requests, fetch
 from vqtex.golden.format import TextureSet
 
-__all__ = ["SimResult", "simulate", "BACKENDS"]
+__all__ = ["SimResult", "simulate", "prepare", "BACKENDS"]
 
 #: Backend names known here (others are looked up as ``vqtex.sim.backends.<name>``).
 BACKENDS = ("golden", "pysim", "cxxrtl", "verilator")
@@ -147,3 +147,17 @@ def simulate(ts: TextureSet, requests, *, backend: str = "golden", stall: float 
     if geometry is not None:
         unit["geometry"] = geometry
     return module.run(ts, req, stall=stall, seed=seed, one_port=one_port, **unit)
+
+
+def prepare(ts: TextureSet, *, backend: str, one_port: bool = False, specialise: bool = True, geometry=None) -> float:
+    """Elaborate the unit that :func:`simulate` with these arguments runs and build its library (or
+    find it in the build cache), so that a series of runs then costs the simulations only (a renderer
+    calls this once, before its first frame; :func:`sim.backends.filter.prepare_filter` is the
+    filter's). Returns the seconds it took; nothing to do (0.0) for the golden and pysim backends."""
+    import time
+    if backend not in ("cxxrtl", "verilator"):
+        return 0.0
+    t0 = time.perf_counter()
+    build = getattr(importlib.import_module(f"vqtex.sim.backends.{backend}"), f"build_{backend}")  # (as simulate)
+    build(ts, one_port=one_port, specialise=specialise, geometry=geometry)
+    return time.perf_counter() - t0

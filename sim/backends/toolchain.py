@@ -321,8 +321,19 @@ def index_put(kind: str, key: str, value: str) -> None:
     os.replace(tmp, os.path.join(folder, key))
 
 
+_stamp: list = []
+
+
 def source_stamp() -> str:
-    """Hash of the sources the design depends on (hw/ and golden/ modules)."""
+    """Hash of the sources the design depends on (hw/ and golden/ modules), read once per process:
+    the designs a process elaborates come from the modules it imported, and reading the files again
+    cost 2-12 ms a build lookup (a frame of ``vqtex render --backend cxxrtl`` makes one)."""
+    if not _stamp:
+        _stamp.append(_source_stamp())
+    return _stamp[0]
+
+
+def _source_stamp() -> str:
     import glob
 
     import amaranth

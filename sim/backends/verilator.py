@@ -18,6 +18,7 @@ Verilator version into its own cache entry and linked into every model.
 from __future__ import annotations
 
 import os
+import re
 import time
 
 from .cxxrtl import DRIVER_DIR, SHARED_DRIVER_SOURCES, Build, batch_header, driver_sources, open_design, run_unit
@@ -26,15 +27,28 @@ from .toolchain import (ToolchainError, cache_dir, cached_build, digest, find_cx
                         run_tool, source_stamp, tool_version)
 
 __all__ = ["run", "build_verilator", "build_design", "open_verilator", "build_library", "VERILATOR_FLAGS",
-           "CXXFLAGS", "MAKE_OPT", "verilator_include_dir", "verilator_runtime"]
+           "CXXFLAGS", "MODEL_OPT", "SLOW_OPT", "MODEL_CXXFLAGS", "verilator_include_dir", "verilator_runtime",
+           "model_sources", "harness_verilog", "top_ports", "HARNESS_NAME"]
 
 VERILATOR_FLAGS = ["--cc", "--prefix", "Vtop", "-O3", "--x-assign", "fast", "--x-initial", "fast",
                    "--noassert", "-Wno-fatal", "-Wno-lint", "-Wno-style"]
+#: Verilator's runtime (verilated.cpp, verilated_threads.cpp), compiled once per Verilator and compiler.
 CXXFLAGS = ["-std=c++17", "-O2", "-fPIC", "-DNDEBUG"]
-#: Verilator's makefile optimisation levels: the model at -O2, its "slow" (run-once) code at -O0.
-#: The slow code holds the memories' initial blocks (one statement per word): at -O2 g++ spends
-#: about two minutes on the default unit's, at -O0 seven seconds.
-MAKE_OPT = "OPT_FAST=-O2 OPT_SLOW=-O0 OPT_GLOBAL=-O2"
+#: The model's per-cycle ("fast") C++ is compiled in one translation unit with the driver, at -O3, so
+#: that the compiler sees ``eval()`` and the clocked region beside the run loop of batch.h (measured
+#: on the default unit, one run: the model and the driver as separate objects at -O2, Verilator's
+#: makefile, 105-112 ns a cycle; one unit at -O2 103-109; one unit at -O3 96-100: docs/simulation.md).
+MODEL_OPT = "-O3"
+#: The model's run-once ("slow") C++ holds the memories' initial blocks (one statement per word): at
+#: -O2 g++ spends about two minutes on the default unit's, at -O0 seven seconds.
+SLOW_OPT = "-O0"
+#: What Verilator's makefile (verilated.mk) defines for a model without coverage, SystemC or tracing,
+#: and the warnings it silences in generated code; hidden symbols, so that the model's functions bind
+#: inside the library (no calls through the PLT).
+MODEL_CXXFLAGS = ["-fvisibility=hidden", "-DVERILATOR=1", "-DVM_COVERAGE=0", "-DVM_SC=0", "-DVM_TIMING=0", "-DVM_TRACE=0",
+                 "-DVM_TRACE_FST=0", "-DVM_TRACE_VCD=0", "-faligned-new", "-Wno-bool-operation",
+                 "-Wno-sign-compare", "-Wno-uninitialized", "-Wno-unused-but-set-variable",
+                 "-Wno-unused-parameter", "-Wno-unused-variable", "-Wno-shadow"]
 
 
 def verilator_include_dir(verilator: str) -> str:
@@ -106,41 +120,135 @@ def verilator_runtime(verilator: str, cxx: str, inc: str) -> str:
     return os.path.dirname(path)
 
 
+#: The module :func:`harness_verilog` wraps around a unit's exported top (the model's top module).
+HARNESS_NAME = "vqtex_verilator_harness"
+_PORT = re.compile(r"^\s*(input|output)\s+(?:wire\s+|reg\s+)?(?:signed\s+)?(?:\[(\d+):(\d+)\]\s*)?([A-Za-z_][A-Za-z0-9_$]*)\s*;",
+                   re.M)
+
+
+def top_ports(verilog: str, top_name: str) -> list[tuple[str, str, int]]:
+    """(direction, name, width) of every port of module ``top_name`` in ``verilog`` (Yosys's
+    ``write_verilog``: one ``input [h:l] name;`` declaration per port)."""
+    m = re.search(rf"^module\s+{re.escape(top_name)}\s*\(", verilog, re.M)
+    if not m:
+        raise ToolchainError(f"module {top_name} not found in the exported Verilog")
+    body = verilog[m.end():verilog.index("endmodule", m.end())]
+    return [(d, name, abs(int(hi) - int(lo)) + 1 if hi else 1) for d, hi, lo, name in _PORT.findall(body)]
+
+
+def harness_verilog(verilog: str, top_name: str) -> str:
+    """A simulation-only wrapper around the unit's exported top ``top_name`` (which stays byte for
+    byte what ``vqtex export`` writes): one clock edge per ``eval()`` of the Verilated model.
+
+    Its input ``tick`` replaces ``clk``: each toggle of ``tick`` is one rising edge of the unit's
+    clock (``clk = tick ^ phase``, and ``phase`` follows ``tick`` at that edge, so ``clk`` falls
+    again within the same ``eval()``), and every output of the unit is captured at that edge into
+    the harness's output of the same name: after ``eval()`` the driver reads what the outputs were
+    in the cycle that edge ended (with that cycle's inputs), which is what a sample between a
+    clock-low ``eval()`` and the rising edge read before. Verilator otherwise needs two ``eval()``
+    per cycle (clock low, to settle the inputs and to see the clock fall; clock high), and the
+    scheduling of each costs as much as a tenth of the default unit's cycle (docs/simulation.md,
+    Verilator section)."""
+    ports = top_ports(verilog, top_name)
+    names = [n for _, n, _ in ports]
+    if "clk" not in names:
+        raise ToolchainError(f"module {top_name} has no clk port")
+
+    def rng(width):
+        return f"[{width - 1}:0] " if width > 1 else ""
+    ins = [(n, w) for d, n, w in ports if d == "input" and n != "clk"]
+    outs = [(n, w) for d, n, w in ports if d == "output"]
+    lines = [f"// generated by sim/backends/verilator.py: the Verilator backend's harness around {top_name}",
+             f"module {HARNESS_NAME}(tick, {', '.join(n for n in names if n != 'clk')});",
+             "  input tick;"]
+    lines += [f"  input {rng(w)}{n};" for n, w in ins]
+    lines += [f"  output reg {rng(w)}{n};" for n, w in outs]
+    lines += ["  reg phase = 1'b0;", "  wire clk = tick ^ phase;"]
+    lines += [f"  wire {rng(w)}unit_{n};" for n, w in outs]
+    conns = ["    .clk(clk)"] + [f"    .{n}({n})" for n, _ in ins] + [f"    .{n}(unit_{n})" for n, _ in outs]
+    lines += [f"  {top_name} unit (", ",\n".join(conns), "  );", "  always_ff @(posedge clk) begin",
+              "    phase <= tick;"]
+    lines += [f"    {n} <= unit_{n};" for n, _ in outs]
+    lines += ["  end", "endmodule", ""]
+    return "\n".join(lines)
+
+
+def model_sources(obj: str) -> tuple[list[str], list[str]]:
+    """The C++ files Verilator wrote into ``obj``, as (fast, slow) by its own classification
+    (``Vtop_classes.mk``: ``VM_CLASSES_FAST``/``VM_SUPPORT_FAST`` run every cycle,
+    ``VM_CLASSES_SLOW``/``VM_SUPPORT_SLOW`` once: construction, initial blocks, constant pool)."""
+    lists = {"FAST": [], "SLOW": []}
+    with open(os.path.join(obj, "Vtop_classes.mk")) as f:
+        kind = None
+        for line in f:
+            words = line.replace("\\", " ").split()
+            if len(words) >= 2 and words[1] == "+=" and words[0].startswith("VM_"):
+                name = words[0]
+                kind = ("FAST" if name in ("VM_CLASSES_FAST", "VM_SUPPORT_FAST") else
+                        "SLOW" if name in ("VM_CLASSES_SLOW", "VM_SUPPORT_SLOW") else None)
+                words = words[2:]
+            elif not line.startswith(("\t", " ")):
+                kind = None
+                continue
+            if kind:
+                lists[kind] += [w + ".cpp" for w in words]
+    if not lists["FAST"]:
+        raise ToolchainError(f"Verilator wrote no model classes into {obj} (Vtop_classes.mk)")
+    return lists["FAST"], lists["SLOW"]
+
+
 def build_library(folder: str, verilog: str, header: str, *, verilator: str, cxx: str, inc: str, runtime: str,
-                  top_name: str, what: str) -> dict:
-    """In ``folder``: write ``top.v`` and ``ports.h``, verilate ``top_name`` and link it with
-    drivers/verilator_driver.cc and Verilator's runtime into ``libvq.so``. Returns the seconds of
-    each step, ``{"verilate": s, "link": s}``."""
+                  top_name: str, what: str, extra_flags=()) -> dict:
+    """In ``folder``: write ``top.v`` (the unit's export), ``harness.v`` (:func:`harness_verilog`
+    around its module ``top_name``) and ``ports.h``, verilate the harness (C++ only, Verilator's
+    makefile is not used) and build ``libvq.so``: the model's run-once C++ at ``SLOW_OPT``, its
+    per-cycle C++ and drivers/verilator_driver.cc as one translation unit (``model.cc``) at
+    ``MODEL_OPT``, linked with Verilator's runtime. Returns the seconds of each step,
+    ``{"verilate": s, "link": s}``."""
+    import concurrent.futures
     with open(os.path.join(folder, "top.v"), "w") as f:
         f.write(verilog)
+    with open(os.path.join(folder, "harness.v"), "w") as f:
+        f.write(harness_verilog(verilog, top_name))
     with open(os.path.join(folder, "ports.h"), "w") as f:
         f.write(header)
-    jobs = str(max(1, min(4, os.cpu_count() or 1)))
     t = time.perf_counter()
-    run_tool([verilator, *VERILATOR_FLAGS, "--top-module", top_name, "--Mdir", "obj",
-              "-CFLAGS", " ".join(f for f in CXXFLAGS if not f.startswith("-O")),
-              "-MAKEFLAGS", f"{MAKE_OPT} CXX={cxx} LINK={cxx}", "--build", "-j", jobs, "top.v"],
-             folder, "Verilator", "build.log")
+    run_tool([verilator, *VERILATOR_FLAGS, *extra_flags, "--top-module", HARNESS_NAME, "--Mdir", "obj",
+              "top.v", "harness.v"], folder, "Verilator", "build.log")
     t_verilate = time.perf_counter() - t
+    fast, slow = model_sources(os.path.join(folder, "obj"))
+    for name, files in (("model.cc", fast), ("slow.cc", slow)):
+        with open(os.path.join(folder, name), "w") as f:
+            f.writelines(f'#include "{src}"\n' for src in files)
+            if name == "model.cc":
+                f.write(f'#include "{os.path.join(DRIVER_DIR, "verilator_driver.cc")}"\n')
+    common = [cxx, *[f for f in CXXFLAGS if not f.startswith("-O")], *MODEL_CXXFLAGS, "-I", "obj", "-I", inc,
+              "-I", os.path.join(inc, "vltstd"), "-I", DRIVER_DIR, "-I", folder]
     t = time.perf_counter()
-    run_tool([cxx, *CXXFLAGS, "-shared", "-fvisibility=hidden", "-I", "obj", "-I", inc,
-              "-I", os.path.join(inc, "vltstd"), "-I", DRIVER_DIR, "-I", folder,
-              os.path.join(DRIVER_DIR, "verilator_driver.cc"), "obj/Vtop__ALL.a",
+    with concurrent.futures.ThreadPoolExecutor(2) as pool:     # the two compilers side by side
+        slow_job = pool.submit(run_tool, [*common, SLOW_OPT, "-c", "slow.cc", "-o", "slow.o"], folder,
+                               f"C++ compilation of {what} (run-once code)", "slow.log")
+        run_tool([*common, MODEL_OPT, "-c", "model.cc", "-o", "model.o"], folder,
+                 f"C++ compilation of {what}", "build.log")
+        slow_job.result()
+    run_tool([cxx, "-shared", "-fvisibility=hidden", "model.o", "slow.o",
               os.path.join(runtime, "verilated.o"), os.path.join(runtime, "verilated_threads.o"),
               "-pthread", "-o", "libvq.so"],
-             folder, f"C++ compilation of {what}", "build.log")
+             folder, f"linking {what}", "build.log")
     return {"verilate": t_verilate, "link": time.perf_counter() - t}
 
 
 def build_verilator(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True,
-                    geometry=None) -> Build:
+                    geometry=None, threads: int = 1) -> Build:
     """The Verilator library of the texel-fetch unit's exported Verilog for ``ts`` (built or from the
-    cache); with ``geometry``, of the loadable unit of that geometry (one build per geometry)."""
+    cache); with ``geometry``, of the loadable unit of that geometry (one build per geometry); with
+    ``threads`` > 1, verilated with ``--threads`` (measured only: sim.bench.simulators.verilator_speed)."""
     from .verilog import export_verilog
     t0 = time.perf_counter()
     info = design_info(ts, one_port=one_port, tag_width=tag_width, specialise=specialise, geometry=geometry)
     return build_design(info, lambda: export_verilog(ts, one_port=one_port, tag_width=tag_width,
-                                                     specialise=specialise, geometry=geometry), elaborated=t0)
+                                                     specialise=specialise, geometry=geometry), elaborated=t0,
+                        threads=threads)
 
 
 def _verilog_file() -> str:
@@ -148,9 +256,10 @@ def _verilog_file() -> str:
     return verilog.__file__
 
 
-def build_design(info: DesignInfo, verilog, *, elaborated: float | None = None) -> Build:
+def build_design(info: DesignInfo, verilog, *, elaborated: float | None = None, threads: int = 1) -> Build:
     """The Verilator library of any unit (built or from the cache): ``verilog()`` gives the unit's
-    exported Verilog (module ``info.verilog_name``), called only when the library must be built."""
+    exported Verilog (module ``info.verilog_name``), called only when the library must be built;
+    ``threads`` > 1: Verilator's multi-threaded model (``--threads``)."""
     verilator = find_tool("verilator")
     # The CXXRTL backend's compiler (clang++ when installed, else g++; $CXX overrides), so that the
     # two backends are compared with the same compiler; on the default unit clang++'s model is also
@@ -159,7 +268,8 @@ def build_design(info: DesignInfo, verilog, *, elaborated: float | None = None) 
     t0 = time.perf_counter() if elaborated is None else elaborated
     steps = {"elaborate": time.perf_counter() - t0}
     drivers = driver_sources("verilator_driver.cc", *SHARED_DRIVER_SOURCES)
-    flags = VERILATOR_FLAGS + CXXFLAGS + [MAKE_OPT]
+    extra = ["--threads", str(threads)] if threads > 1 else []
+    flags = VERILATOR_FLAGS + extra + CXXFLAGS + [MODEL_OPT, SLOW_OPT] + MODEL_CXXFLAGS
     this = b""
     for mod in (__file__, _verilog_file()):     # (ports_header is part of the build; so is the export)
         with open(os.path.abspath(mod), "rb") as f:
@@ -174,7 +284,8 @@ def build_design(info: DesignInfo, verilog, *, elaborated: float | None = None) 
     text = verilog()
     header = ports_header(info)
     steps["export"] = time.perf_counter() - t1
-    key = digest("verilator", text, header, *drivers, flags, tool_version(verilator), tool_version(cxx))
+    key = digest("verilator", text, harness_verilog(text, info.verilog_name), header, *drivers, flags,
+                 tool_version(verilator), tool_version(cxx))
     inc = verilator_include_dir(verilator)
     t2 = time.perf_counter()
     runtime = verilator_runtime(verilator, cxx, inc)
@@ -182,16 +293,18 @@ def build_design(info: DesignInfo, verilog, *, elaborated: float | None = None) 
 
     def build(folder):
         steps.update(build_library(folder, text, header, verilator=verilator, cxx=cxx, inc=inc, runtime=runtime,
-                                   top_name=info.verilog_name, what=f"the Verilator model ({info.unit})"))
+                                   top_name=info.verilog_name, what=f"the Verilator model ({info.unit})",
+                                   extra_flags=extra))
     lib, secs, cached = cached_build("verilator", key, build, "libvq.so")
     index_put("verilator", quick, key)
     return Build(lib, 0.0 if cached else time.perf_counter() - t0, cached, info, key, steps)
 
 
-def open_verilator(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True, geometry=None):
+def open_verilator(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True, geometry=None,
+                   threads: int = 1):
     """(BatchLibrary, DesignInfo, Build) of the texel-fetch unit's Verilator library."""
     return open_design(build_verilator(ts, one_port=one_port, tag_width=tag_width, specialise=specialise,
-                                       geometry=geometry))
+                                       geometry=geometry, threads=threads))
 
 
 def run(ts, requests, *, stall: float = 0.0, seed: int = 0, one_port: bool = False, tag_width: int = 8,

@@ -1,7 +1,7 @@
 """The ``vqtex`` command line (see ``docs/usage.md``): the parser and the entry point.
 
 One module per subcommand (``encode``, ``info``, ``decode``, ``simulate`` for ``sim``, ``render``,
-``need``, ``prune``, ``demo``, ``export``, ``report``, ``bench``, ``experiments``, ``cache``), each with ``add_parser(sub)``; the
+``need``, ``prune``, ``demo``, ``export``, ``report``, ``verify``, ``bench``, ``experiments``, ``cache``), each with ``add_parser(sub)``; the
 helpers they share are in :mod:`vqtex.sim.cli.common`. This module imports the subcommands, never the
 other way round.
 
@@ -16,13 +16,15 @@ from __future__ import annotations
 
 import sys
 
-from . import bench, cache, decode, demo, encode, experiments, export, import_dt, info, need, prune, render, report, simulate
+from . import (bench, cache, decode, demo, encode, experiments, export, import_dt, info, need, prune, render, report,
+               simulate, verify)
 from .common import CliError, Parser, check_ended, ending_message, ending_signals, exit_status
 
 __all__ = ["main", "build_parser", "version", "memory_message", "COMMANDS"]
 
 #: The subcommand modules, in the order ``vqtex --help`` lists them.
-COMMANDS = (encode, import_dt, info, decode, simulate, render, need, prune, demo, export, report, bench, experiments, cache)
+COMMANDS = (encode, import_dt, info, decode, simulate, render, need, prune, demo, export, report, verify, bench,
+            experiments, cache)
 
 
 def build_parser() -> Parser:

@@ -5,6 +5,10 @@
 //              (sim/backends/design.py): request fields, payload words, stages, strobes, and the
 //              request words spread over the top's ports (VQ_SET_REQUEST, whatever Verilator's type
 //              for a port's width), the response gathered back (VQ_GET_RESPONSE), the valid bits
+// The Verilated top is sim/backends/verilator.py's harness around the unit (harness_verilog): each
+// toggle of its ``tick`` input is one rising edge of the unit's clock, and its outputs are the
+// unit's, captured at that edge. One eval() per cycle therefore clocks the cycle with the inputs
+// set before it, and the ports read after it are that cycle's (what they were before the edge).
 // Memory contents are compiled in (the initial blocks of the exported Verilog), so
 // vq_load_memory reports "not supported" and vq_runtime_memories() is 0.
 #include <memory>
@@ -16,9 +20,9 @@
 double sc_time_stamp() { return 0; }
 
 namespace {
-// The Verilated model: its context (2-state: anything uninitialised starts at 0), the reset, one
-// clock cycle (inputs settle with clk low, ``sample`` reads the outputs, then the rising edge), and
-// batch.h's adapter.
+// The Verilated model: its context (2-state: anything uninitialised starts at 0), the reset (rst
+// high for one edge), one clock cycle (one eval() with tick toggled: the edge; then ``sample`` reads
+// the outputs the harness captured at it), and batch.h's adapter.
 struct Sim {
     std::unique_ptr<VerilatedContext> ctx;
     std::unique_ptr<Vtop> top;
@@ -26,19 +30,18 @@ struct Sim {
     Sim() : ctx(new VerilatedContext) {
         ctx->randReset(0);
         top.reset(new Vtop{ctx.get(), "top"});
-        top->clk = 0; top->rst = 0; top->i_valid = 0; top->o_ready = 0;
+        top->tick = 0; top->rst = 0; top->i_valid = 0; top->o_ready = 0;
         top->eval();
     }
     ~Sim() { top->final(); }
     void reset() {
-        top->rst = 1; top->clk = 0; top->i_valid = 0; top->o_ready = 0; top->eval();
-        top->clk = 1; top->eval();
-        top->clk = 0; top->rst = 0; top->eval();
+        top->rst = 1; top->i_valid = 0; top->o_ready = 0;
+        top->tick ^= 1; top->eval();
+        top->rst = 0;
     }
     template<class F> void cycle(F &&sample) {
-        top->clk = 0; top->eval();
+        top->tick ^= 1; top->eval();
         sample();
-        top->clk = 1; top->eval();
     }
     void set_inputs(bool i_valid, const vq_payload &p, bool ready) {
         top->i_valid = i_valid;

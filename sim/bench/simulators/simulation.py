@@ -10,8 +10,13 @@ packs the requests and checks the response tags itself), and the build times of 
 fresh, temporary cache: Yosys or Verilator plus the C++ compiler) and of a cached build (a second
 process would see the same). The CXXRTL library runs the unit's two halves on two threads when the
 machine has two CPUs (``VQTEX_SIM_THREADS``); the same library on one thread is measured in the same
-run and printed as ``cxxrtl 1t``.
+run and printed as ``cxxrtl 1t``, and the Verilator library's speed as a ratio to it
+(``verilator_vs_cxxrtl_1t``: both end to end, best of three, in this run).
 Responses and cycle counts of every backend are checked against the golden model on the way.
+
+``filter`` (in the default backends): a second table, the RTL texture filter (four lanes) on CXXRTL
+on the pixels of topspin frames 0-2 in bilinear mode, as ``vqtex render --filter-in-rtl`` runs it:
+cycles per second end to end and in the library, wall and CPU (:mod:`.filter`).
 """
 
 from __future__ import annotations
@@ -51,7 +56,7 @@ def _library_seconds(lib, info, req, repeats: int = 3) -> float:
 
 
 def run(json_out: bool = False, *, n_compiled: int = 4_000_000, n_pysim: int = 3000, stall: float = 0.0,
-        backends=("pysim", "cxxrtl", "verilator")) -> dict:
+        backends=("pysim", "cxxrtl", "verilator", "filter")) -> dict:
     """Run the benchmark, print a table (or one JSON object) and return the numbers."""
     from vqtex.sim.backends.interface import simulate
     from vqtex.sim.backends.toolchain import ToolchainError, using_cache
@@ -115,10 +120,20 @@ def run(json_out: bool = False, *, n_compiled: int = 4_000_000, n_pysim: int = 3
             rows[f"{name} 1t"] = {"cycles": r1.cycles, "run_s": one, "cycles_per_s": r1.cycles / one,
                                   "cycles_per_s_in_library": None, "build_first_s": t_first,
                                   "build_cached_s": t_cached, "threads": 1, "agrees_with_golden": one_ok}
+    one_thread = rows.get("cxxrtl 1t", rows.get("cxxrtl", {})).get("cycles_per_s")
+    if one_thread and "cycles_per_s" in rows.get("verilator", {}):
+        # the issue-26 target: Verilator at least as fast as CXXRTL on one thread, same stream, one run
+        report["verilator_vs_cxxrtl_1t"] = rows["verilator"]["cycles_per_s"] / one_thread
     if "pysim" in rows:
         for name in list(rows):
             if name != "pysim" and "cycles_per_s" in rows[name]:
                 rows[name]["speedup_vs_pysim"] = rows[name]["cycles_per_s"] / rows["pysim"]["cycles_per_s"]
+    if "filter" in backends:
+        from . import filter as filter_bench
+        try:
+            report["filter"] = filter_bench.filter_speeds(ts, filter_bench.scene_pixels(ts))
+        except ToolchainError as e:
+            report["filter"] = {"error": str(e)}
     if json_out:
         print(json.dumps(report, sort_keys=True))
     else:
@@ -134,6 +149,14 @@ def run(json_out: bool = False, *, n_compiled: int = 4_000_000, n_pysim: int = 3
                   f"{(f'{lib_rate:.3g}' if lib_rate else '-'):>11} "
                   f"{r.get('speedup_vs_pysim', 1.0):>9.0f} {r['build_first_s']:>11.2f} "
                   f"{r['build_cached_s']:>9.2f} {str(r['agrees_with_golden']):>7}")
+        if "verilator_vs_cxxrtl_1t" in report:
+            print(f"verilator / cxxrtl on one thread (end to end, this run): {report['verilator_vs_cxxrtl_1t']:.2f}")
+        if "filter" in report:
+            if "error" in report["filter"]:
+                print(f"\nRTL texture filter: {report['filter']['error']}")
+            else:
+                from .filter import print_table
+                print_table(report["filter"], "topspin frames 0-2, bilinear")
     return report
 
 

@@ -100,3 +100,42 @@ def test_loadable_filter_compiled(backend):
     baked = simulate_filter(ts, px, backend=backend, lanes=2, stall=0.3, seed=4, index_banks="lane")
     assert (loaded.colors == golden_colors(ts, px, frac)).all()
     assert (loaded.cycles, loaded.stall_cycles) == (baked.cycles, baked.stall_cycles)
+
+
+def test_filter_elaborated_once_per_process(monkeypatch):
+    """A series of runs of one filter (a renderer's frames) elaborates it once: filter_design_info
+    gives the same description for the same options and contents, another for other contents; after
+    prepare_filter, simulate_filter elaborates nothing (issue 26: 0.45 s a frame of topspin)."""
+    need("g++")
+    from vqtex.sim.backends import design
+    from vqtex.sim.backends.filter import prepare_filter
+    ts, frac, px = _pixels(200, 3)
+    made = []
+    real = design._filter_design_info
+    monkeypatch.setattr(design, "_filter_design_info", lambda *a, **k: made.append(k) or real(*a, **k))
+    monkeypatch.setattr(design, "_designs", type(design._designs)())
+    assert prepare_filter("cxxrtl", ts, lanes=2, frac=frac) > 0
+    assert len(made) == 1
+    first = simulate_filter(ts, px, backend="cxxrtl", lanes=2, frac=frac)
+    again = simulate_filter(ts, px, backend="cxxrtl", lanes=2, frac=frac)
+    assert len(made) == 1
+    assert (first.colors == again.colors).all() and first.cycles == again.cycles
+    assert design.filter_design_info(ts, lanes=2, frac=frac, tag_width=16) is design.filter_design_info(
+        ts, lanes=2, frac=frac, tag_width=16)
+    assert design.filter_design_info(ts, lanes=1, frac=frac, tag_width=16) is not design.filter_design_info(
+        ts, lanes=2, frac=frac, tag_width=16)
+    assert prepare_filter("golden", ts, lanes=2) == 0.0
+
+
+def test_design_info_keyed_by_contents():
+    """The texel-fetch unit's description is kept the same way, by its contents: a set with other
+    texels is another description (other memory images), the same set the same one."""
+    from vqtex.golden.encode import encode
+    from tests.support import image
+    from vqtex.sim.backends.design import design_info
+    a = encode([image((16, 16), 0, 3)], codebook_size=8, index_bits=12)
+    b = encode([image((16, 16), 5, 3)], codebook_size=8, index_bits=12)
+    assert design_info(a) is design_info(a)
+    assert design_info(b) is not design_info(a)
+    assert [m.init for m in design_info(b).memories] != [m.init for m in design_info(a).memories]
+    assert design_info(a, one_port=True) is not design_info(a)

@@ -119,6 +119,24 @@ def test_guarded_writes_match_every_write_port(geometry):
     assert all(cxxrtl.guarded_writes(cxxrtl.write_cxxrtl(*baked.halves[h]))[1] == 0 for h in baked.halves)
 
 
+def test_guarded_writes_test_the_enable_first(geometry):
+    """A write port's mask spread from its enables (Yosys writes a wide memory's per-bit mask as the
+    per-word enable bits repeated and concatenated: 504 bits from 16 enables, some thirty shifts of the
+    whole mask a cycle) is built only when an enable is set: every write port of the loadable unit is
+    guarded by its enable value (2.2x the loadable unit's speed, docs/simulation.md); a mask with a
+    constant, or from two values, keeps the mask test alone."""
+    import re
+    from vqtex.sim.backends.design import design_info
+    info = design_info(None, geometry=geometry)
+    out, count = cxxrtl.guarded_writes(cxxrtl.write_cxxrtl(info.fragment, info.ports))
+    assert len(re.findall(r"if \(!([\w.]+)\.is_zero\(\)\) \{ const auto vq_mask = ", out)) == count
+    assert cxxrtl._mask_source("vq_slice<3>(p_en).repeat<31>().concat(vq_slice<3,2>(p_en)).val()") == "p_en"
+    assert cxxrtl._mask_source("p_en_24_7.curr.repeat<32>().val()") == "p_en_24_7.curr"
+    assert cxxrtl._mask_source("i_en.slice<3>().val().repeat<31>().concat(i_en.slice<3,2>())") == "i_en"
+    for other in ("p_en.repeat<31>().concat(value<1>{1u})", "p_en.concat(p_we)", "not_u<8>(p_en)"):
+        assert cxxrtl._mask_source(other) is None
+
+
 def test_loadable_model_runs_in_place(geometry):
     """The loadable unit's CXXRTL model gets the in-place cycle (write ports queued, then committed
     after the register updates): its generated code keeps the shape the pass needs (whole-register

@@ -99,3 +99,23 @@ def test_verilator_build_has_no_warnings(sets):
     with open(os.path.join(os.path.dirname(build.library), "build.log")) as f:
         log = f.read()
     assert "%Warning" not in log, [ln for ln in log.splitlines() if "%Warning" in ln][:5]
+
+
+def test_verilator_harness_wraps_every_port(mixed_file, tmp_path, capsys):
+    """The Verilator backend's harness (one eval() per cycle) around the exported unit: its ports are
+    the unit's with clk replaced by tick, at the unit's widths, and every output of the unit is
+    registered into the harness output of the same name at the unit's clock edge."""
+    from vqtex.sim.backends.verilator import HARNESS_NAME, harness_verilog, top_ports
+    out = tmp_path / "tf.v"
+    assert main(["export", mixed_file, "-o", str(out), "--json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    text = out.read_text()
+    ports = top_ports(text, "texel_fetch")
+    assert {n: w for _, n, w in ports} == {**rep["ports"], "clk": 1, "rst": 1}    # the export's own report
+    harness = harness_verilog(text, "texel_fetch")
+    assert top_ports(harness, HARNESS_NAME) == [("input", "tick", 1)] + [
+        (d, n, w) for d, n, w in sorted(ports, key=lambda p: p[0] != "input") if n != "clk"]
+    for d, n, _ in ports:
+        if d == "output":
+            assert f"    {n} <= unit_{n};" in harness, n
+    assert "wire clk = tick ^ phase;" in harness and "phase <= tick;" in harness

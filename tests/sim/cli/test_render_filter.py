@@ -58,6 +58,9 @@ def test_cxxrtl_filter_frames_identical_to_golden(tmp_path, scene_file, capsys, 
     per_pixel = {"point": 1, "bilinear": 1, "trilinear": 2}[mode]
     for f in rep["frames"]:
         assert f["cycles"] == f["pixels"] * per_pixel + f["latency"]
+    # the filter is elaborated and built once, before the first frame: its set-up is reported there
+    assert [f["rtl_setup_seconds"] > 0 for f in rep["frames"] if "rtl_setup_seconds" in f] == [True]
+    assert "rtl_setup_seconds" in rep["frames"][0]
     assert rep["pixels_per_clock"] > 0
 
 
