@@ -149,15 +149,20 @@ def simulate(ts: TextureSet, requests, *, backend: str = "golden", stall: float 
     return module.run(ts, req, stall=stall, seed=seed, one_port=one_port, **unit)
 
 
-def prepare(ts: TextureSet, *, backend: str, one_port: bool = False, specialise: bool = True, geometry=None) -> float:
+def prepare(ts: TextureSet, *, backend: str, one_port: bool = False, specialise: bool = True, geometry=None,
+            memory=None) -> float:
     """Elaborate the unit that :func:`simulate` with these arguments runs and build its library (or
     find it in the build cache), so that a series of runs then costs the simulations only (a renderer
     calls this once, before its first frame; :func:`sim.backends.filter.prepare_filter` is the
-    filter's). Returns the seconds it took; nothing to do (0.0) for the golden and pysim backends."""
+    filter's; with ``memory``, the cached unit's). Returns the seconds it took; nothing to do (0.0) for
+    the golden and pysim backends."""
     import time
     if backend not in ("cxxrtl", "verilator"):
         return 0.0
     t0 = time.perf_counter()
+    if memory is not None:                  # the cached unit (sim.backends.memory)
+        importlib.import_module("vqtex.sim.backends.memory").build_cached(ts, memory, backend)
+        return time.perf_counter() - t0
     build = getattr(importlib.import_module(f"vqtex.sim.backends.{backend}"), f"build_{backend}")  # (as simulate)
     build(ts, one_port=one_port, specialise=specialise, geometry=geometry)
     return time.perf_counter() - t0
