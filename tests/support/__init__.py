@@ -27,7 +27,7 @@ __all__ = ["REPO", "need", "need_python", "shared_cache", "need_synth_tools", "b
            "levels", "random_requests", "random_dt", "adversarial_requests", "back_to_back_requests", "straddle_offsets",
            "assert_same", "compare_with_golden", "stream_put", "stream_get", "run_lockstep", "JFIF_BT601"]
 
-REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
 def need(*tools):
@@ -377,7 +377,7 @@ def random_dt(width: int, height: int, fmt: int, n: int, seed: int) -> bytes:
             + height.to_bytes(2, "little") + control.to_bytes(4, "little") + bytes(12) + body)
 
 
-PVRTEX_DATA = os.path.join(os.path.dirname(os.path.abspath(__file__)), "data", "pvrtex")
+PVRTEX_DATA = os.path.join(REPO, "tests", "data", "pvrtex")
 
 
 @functools.lru_cache(maxsize=None)
