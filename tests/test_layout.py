@@ -1,5 +1,6 @@
 """The shape of the code (docs/architecture.md): layers import only downwards, no import circles,
-no private names across modules, everything under the ``vqtex`` namespace.
+no private names across modules, everything under the ``vqtex`` namespace, and tests/ mirroring the
+packages (the rule is in :func:`test_tests_mirror_the_packages`).
 
 Read from the source with ``ast`` (every import statement, at module level or inside a function),
 so a lazy import that closes a circle counts as much as one at the top of a file.
@@ -171,3 +172,137 @@ def test_every_package_is_installed():
     found = {"vqtex." + ".".join(init.parent.relative_to(REPO).parts)
              for pkg in PACKAGES for init in (pathlib.Path(REPO) / pkg).rglob("__init__.py")}
     assert found == listed, f"not listed: {sorted(found - listed)}; listed but absent: {sorted(listed - found)}"
+
+
+# tests/ mirrors the packages
+
+TESTS = pathlib.Path(REPO) / "tests"
+
+
+def _test_imports(path: pathlib.Path) -> set:
+    """The project modules (``vqtex.X``) a test module imports, at module level or inside a function."""
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.module and not node.level:
+            names = [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+        else:
+            continue
+        out |= {n for n in names if n in MODULES}
+    return out
+
+
+def _mirror(module: str) -> str:
+    """The folder under tests/ that holds the tests of ``module``: a package's own folder
+    (``golden/render`` for ``vqtex.golden.render``), a module's package's folder (``golden/render`` for
+    ``vqtex.golden.render.frame``)."""
+    parts = module.split(".")[1:]
+    return "/".join(parts if MODULES[module][1] else parts[:-1])
+
+
+def misplaced(test: str, imported: set) -> list:
+    """What is wrong with where the test module ``test`` (its path under tests/, ``golden/test_x.py``)
+    sits, given the project modules it imports; an empty list when it sits where it belongs."""
+    folder = str(pathlib.PurePosixPath(test).parent).strip(".")
+    problems = []
+    if folder and not MODULES.get("vqtex." + folder.replace("/", "."), (None, False))[1]:
+        return [f"tests/{test}: tests/{folder}/ mirrors no package (there is no {folder}/__init__.py)"]
+    words = pathlib.PurePosixPath(test).stem.removeprefix("test_").split("_")
+    runs = {"_".join(words[i:j]) for i in range(len(words)) for j in range(i + 1, len(words) + 1)}
+    named = sorted(m for m in MODULES if m.count(".") > 1 and m.rpartition(".")[2] in runs
+                   and (_mirror(m) == folder or any(i == m or i.startswith(m + ".") for i in imported)))
+    if named and not any(_mirror(m) == folder for m in named):
+        homes = " or ".join(sorted({f"tests/{_mirror(m)}/" for m in named}))
+        problems.append(f"tests/{test} tests {', '.join(named)}: it belongs in {homes}")
+    return problems
+
+
+def test_tests_mirror_the_packages():
+    """tests/ mirrors the packages, so the tests of a module are found beside each other.
+
+    The rule: a test module ``tests/<folder>/test_<name>.py`` tests the package ``<folder>/``:
+    tests/golden/ tests the modules directly in golden/ (golden/fetch.py: tests/golden/test_fetch.py),
+    tests/golden/render/ tests golden/render/ (golden/render/frame.py: test_render_frame.py there),
+    tests/sim/backends/ tests sim/backends/; tests of the project as a whole (this file, the public
+    API, the README) sit in tests/ itself. ``<name>`` says what it tests, beginning with the module
+    (or sub-package) under test; more words may follow (``test_format_hostile.py``). Checked:
+
+    1. every folder under tests/ holding test modules mirrors a package of golden/, hw/ or sim/ (a
+       folder with an ``__init__.py``) and has an ``__init__.py`` itself;
+    2. if ``<name>`` contains (as whole ``_``-separated words) the name of a project module or
+       sub-package that the test imports, or of one in the folder's own package, then the folder
+       mirrors one of those: a module's package, or the sub-package itself. So a test named for
+       golden/render/frame.py fails in tests/golden/ and passes in tests/golden/render/; a test of
+       sim/backends/cycle_model.py fails in tests/hw/; ``golden``, ``hw`` and ``sim`` alone name
+       nothing (``test_hw_filter.py`` is named for hw/filter/).
+
+    A name that names no module (``test_bad_input.py``) is checked by rule 1 only: put it in the
+    folder of the package it tests. What tests share (fixtures, texture sets, request streams,
+    helpers) lives in tests/support/, imported as ``from tests.support import X``; data files live
+    in tests/data/ and are reached through ``tests.support`` (``PVRTEX_DATA``, ``REPO``), never
+    relative to a test's own file, so a test module can move with its package.
+    """
+    problems = []
+    for path in sorted(TESTS.rglob("test_*.py")):
+        rel = path.relative_to(TESTS)
+        if rel.parts[0] in ("data", "support"):
+            continue
+        for d in [TESTS.joinpath(*rel.parts[:k]) for k in range(1, len(rel.parts))]:
+            if not (d / "__init__.py").exists():
+                problems.append(f"tests/{rel}: tests/{d.relative_to(TESTS)}/ has no __init__.py")
+        problems += misplaced(rel.as_posix(), _test_imports(path))
+    assert not problems, "tests/ does not mirror the packages (tests/test_layout.py has the rule):\n" + \
+        "\n".join(sorted(set(problems)))
+
+
+MISPLACED = [
+    ("golden/test_render_frame.py", {"vqtex.golden.render.frame"}, "tests/golden/render/"),
+    ("golden/test_codebook.py", {"vqtex.golden.codebook"}, "tests/golden/codebook/"),
+    ("hw/test_hw_cycle_model.py", {"vqtex.sim.backends.cycle_model", "vqtex.hw.texel_fetch"},
+     "tests/sim/backends/"),
+    ("hw/test_hw_filter.py", {"vqtex.hw.filter", "vqtex.golden.filter"}, "tests/hw/filter/"),
+    ("golden/render/test_fetch.py", {"vqtex.golden.fetch"}, "tests/golden/"),
+    ("test_fetch.py", {"vqtex.golden.fetch"}, "tests/golden/"),
+    ("golden/renderer/test_frame.py", {"vqtex.golden.render.frame"}, "mirrors no package"),
+    ("hw/address/test_address.py", {"vqtex.hw.address"}, "mirrors no package"),
+]
+
+IN_PLACE = [
+    ("golden/render/test_render_frame.py", {"vqtex.golden.render.frame"}),
+    ("golden/codebook/test_codebook.py", {"vqtex.golden.codebook"}),
+    ("sim/backends/test_cycle_model.py", {"vqtex.sim.backends.cycle_model", "vqtex.hw.texel_fetch"}),
+    ("hw/filter/test_hw_filter.py", {"vqtex.hw.filter", "vqtex.golden.filter"}),
+    ("hw/memory/test_memory_unit.py", {"vqtex.golden.memory.cache", "vqtex.sim.backends.memory"}),
+    ("golden/test_fetch.py", {"vqtex.golden.fetch"}),
+    ("sim/cli/test_bad_input.py", set()),
+]
+
+
+@pytest.mark.parametrize("test, imported, where", MISPLACED, ids=[c[0] for c in MISPLACED])
+def test_the_mirror_check_finds_a_misplaced_test(test, imported, where):
+    """The check above can fail: a test named for a module but sitting elsewhere, or in a folder
+    that mirrors no package, is reported with where it belongs."""
+    problems = misplaced(test, imported)
+    assert problems and where in problems[0], problems
+
+
+@pytest.mark.parametrize("test, imported", IN_PLACE, ids=[c[0] for c in IN_PLACE])
+def test_the_mirror_check_passes_a_test_in_its_place(test, imported):
+    assert misplaced(test, imported) == []
+
+
+def test_the_mirror_check_reads_the_tree(tmp_path, monkeypatch):
+    """The whole-tree check fails on a tests/ folder holding a test named for a module elsewhere
+    and a test folder without an ``__init__.py``."""
+    for folder in ("golden", "hw", "hw/filter"):
+        (tmp_path / folder).mkdir()
+    for folder in ("golden", "hw"):
+        (tmp_path / folder / "__init__.py").write_text("")
+    (tmp_path / "golden" / "test_render_frame.py").write_text("from vqtex.golden.render.frame import render_frame\n")
+    (tmp_path / "hw" / "filter" / "test_hw_filter.py").write_text("from vqtex.hw.filter import TextureFilter\n")
+    monkeypatch.setattr(f"{__name__}.TESTS", tmp_path)
+    with pytest.raises(AssertionError) as e:
+        test_tests_mirror_the_packages()
+    assert "tests/golden/test_render_frame.py tests vqtex.golden.render" in str(e.value)
+    assert "tests/hw/filter/ has no __init__.py" in str(e.value)

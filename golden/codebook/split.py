@@ -6,7 +6,7 @@ second child, c0, c1, sse0, sse1)`` (children's weighted centroids and total squ
 one-row child's centroid is that row exactly) or None when the cell cannot be cut.  A cell's
 split depends only on its rows and its start vector ``v0`` (and the sample ``rng`` gives):
 deterministic for a seed.  ``split_padded`` computes what ``split_cell`` computes without a
-sample; the two differ only in the rounding of the sums (tests/golden/test_tsvq_batches.py).
+sample; the two differ only in the rounding of the sums (tests/golden/codebook/test_tsvq_batches.py).
 """
 from __future__ import annotations
 

@@ -33,7 +33,7 @@ Pixel formats (the 3-bit format field): 0 ARGB1555, 1 RGB565, 2 ARGB4444, 3 YUV4
 fewer than eight bits expand to eight by bit replication (``v << (8-n) | v >> (2n-8)``, 4 bits:
 ``v * 17``); RGB565 and YUV422 are opaque (alpha 255).
 
-YUV422 layout (established from pvrtex's previews, see tests/golden/test_pvrtex.py)
+YUV422 layout (established from pvrtex's previews, see tests/golden/pvr2/test_pvrtex.py)
 ---------------------------------------------------------------------------------
 Every texel holds its own Y in the high byte and one chroma sample in the low byte. The two
 horizontally adjacent texels of each row of a 2x2 codebook block -- twiddled texels 0 and 2 (top

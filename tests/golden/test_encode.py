@@ -8,6 +8,8 @@ from vqtex.golden.fetch import decode
 from vqtex.golden.render.imageio import read_image
 from pathlib import Path
 
+from tests.support import REPO
+
 
 def _psnr(a, b):
     mse = np.mean((a.astype(np.float64) - b.astype(np.float64)) ** 2)
@@ -16,7 +18,7 @@ def _psnr(a, b):
 
 def _photo():
     """A real photograph shipped with the renderer's textures (CC0), or a smooth synthetic."""
-    data = Path(__file__).resolve().parents[2] / "golden" / "data"
+    data = Path(REPO) / "golden" / "data"
     for name in ("brick", "coffee", "astronaut", "chelsea"):
         for p in data.glob(f"{name}*.png"):
             img = read_image(p)

@@ -7,7 +7,7 @@ import pytest
 from vqtex.golden import filter as fx
 from vqtex.golden.render.sampling import Sampler, fold_coordinate
 
-from .test_render_sampling import _frags
+from tests.golden.render.test_render_sampling import _frags
 
 SHAPES = [[(16, 4), (8, 2), (4, 1), (2, 1), (1, 1)], [(1, 8), (1, 4), (1, 2), (1, 1)], [(32, 32)]]
 

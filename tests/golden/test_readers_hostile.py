@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.support import PVRTEX_DATA
 from vqtex.golden.pvr2 import pvr
 from vqtex.golden.fetch import RequestError
 from vqtex.golden.render.frame import load_requests, save_requests
@@ -19,7 +20,7 @@ from vqtex.golden.requests import MAX_CSV_BYTES, read_request_file
 from vqtex.golden.render.imageio import ImageIOError, image_info, read_image, write_image
 from vqtex.golden.render.scene import SceneError, load_scene, parse_scene
 
-DT = Path(__file__).resolve().parent.parent / "data" / "pvrtex" / "generated"
+DT = Path(PVRTEX_DATA) / "generated"
 
 
 def _refused(error, call, *, seconds=1.0, mib=64):

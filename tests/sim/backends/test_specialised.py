@@ -78,7 +78,7 @@ def test_pruned_small_town_specialised_on_cxxrtl():
     renumbered narrower): its specialised unit is no wider than the unpruned set's, and answers
     those frames' requests on the compiled backend exactly as golden answers the unpruned set."""
     need("g++")
-    from tests.golden.test_prune import SMALL, small_scene
+    from tests.golden.need.test_prune import SMALL, small_scene
     from vqtex.golden.need.analysis import analyse, scene_streams
     from vqtex.golden.need.prune import prune
     from vqtex.golden.render.scene import build_texture_set

@@ -9,13 +9,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.support import need, shared_cache_dir
+from tests.support import PVRTEX_DATA, need, shared_cache_dir
 from vqtex.golden.pvr2 import pvr, pvr_set
 from vqtex.golden.format import TextureSet
 from vqtex.golden.render.imageio import read_image
 from tests.support import run_cli as _run, assert_one_error as _one_error
 
-DATA = Path(__file__).resolve().parents[2] / "data" / "pvrtex" / "generated"
+DATA = Path(PVRTEX_DATA) / "generated"
 YUV_MIP = DATA / "crate_yuv422_c_m.dt"
 ARGB = DATA / "crate_argb1555_c_64.dt"
 

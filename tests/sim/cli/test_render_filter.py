@@ -109,7 +109,7 @@ def test_export_filter_verilog_lint_clean(tmp_path, capsys, lanes, banks):
     banked index memory), Verilator lint clean with the export's waivers; its ports are the whole
     payloads and the strobes."""
     need("verilator")
-    from tests.hw.test_hw_filter import filter_set
+    from tests.hw.filter.test_hw_filter import filter_set
     vqt = tmp_path / "set.vqt"
     filter_set().save(str(vqt))
     out = tmp_path / "tf.sv"

@@ -73,7 +73,7 @@ def _fake_report(ts, *, specialise, **kw):
 
 def test_report_area_both_side_by_side(rgb8_file, capsys, monkeypatch):
     """``--unit both`` synthesizes the full unit, then the specialised one, and prints the table (the
-    tools are replaced by a stub here; tests/sim/reports/test_synth.py runs them)."""
+    tools are replaced by a stub here; tests/sim/reports/synth/test_synth.py runs them)."""
     calls = []
 
     def fake(ts, **kw):

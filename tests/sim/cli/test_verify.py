@@ -1,6 +1,6 @@
 """``vqtex verify``: the listing, one property proved and its negative control caught (text and JSON,
 with --keep), and bad options as one line and exit status 2. The proofs themselves are
-tests/hw/test_hw_formal.py's."""
+tests/hw/formal/test_hw_formal.py's."""
 
 import json
 import os

@@ -6,11 +6,12 @@ from pathlib import Path
 
 import numpy as np
 
+from tests.support import PVRTEX_DATA
 from vqtex.golden.pvr2 import pvr
 from vqtex.golden.render.imageio import read_image
 from vqtex.sim.bench.encoding import pvr2_quality
 
-DATA = Path(__file__).resolve().parents[3] / "data" / "pvrtex"
+DATA = Path(PVRTEX_DATA)
 
 
 def test_one_row_against_the_dt_itself(capsys):

@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from tests.sim.bench.scenes.tiny_scenes import TINY_TOWN, tiny_scene
+from tests.support.scenes import TINY_TOWN, tiny_scene
 from tests.support import need
 from vqtex.hw.texel_fetch import LATENCY
 from vqtex.sim.bench.scenes import hardware_tradeoff as ht

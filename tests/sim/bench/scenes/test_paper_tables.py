@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from tests.sim.bench.scenes.tiny_scenes import TINY_TOPSPIN, TINY_TOWN, tiny_scene
+from tests.support.scenes import TINY_TOPSPIN, TINY_TOWN, tiny_scene
 from vqtex.golden.render.scene import DATA_DIR, PAPER_SCENES, load_scene
 from vqtex.sim.bench.scenes import experiments, paper_configs
 from vqtex.sim.bench.scenes.paper_configs import Codebook

@@ -10,7 +10,7 @@ from amaranth.lib.wiring import In, Out
 from amaranth.sim import Simulator
 
 from tests import support
-from tests.hw.test_hw_filter import edge_pixels
+from tests.hw.filter.test_hw_filter import edge_pixels
 from vqtex.golden import filter as spec
 from vqtex.golden import index_banks as golden_banks
 from vqtex.golden.format import TextureSet
@@ -24,7 +24,7 @@ from vqtex.sim.backends.filter import golden_colors, simulate_filter
 
 def paper_and_pvr2(n: int, seed: int):
     """(set, frac, pixels): the paper's rgb12 set and tiny PowerVR2 rectangles and mip chain, and ``n``
-    edge-case pixels (tests.hw.test_hw_filter.edge_pixels)."""
+    edge-case pixels (tests.hw.filter.test_hw_filter.edge_pixels)."""
     ts = TextureSet.combine([support.texture_sets()["rgb12"], support.pvr2_small_sets()["rectangles_and_mip8"]])
     table = level_table(ts)
     frac = spec.coordinate_frac_bits(table.max_log2)

@@ -6,12 +6,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.support import PVRTEX_DATA
 from vqtex.golden.pvr2 import pvr, pvr_set
 from vqtex.golden.fetch import decode
 from vqtex.golden.pvr2.pvr_encode import PvrEncodeError, encode_pvr2, quantize_channel
 from vqtex.golden.render.imageio import read_image
 
-DATA = Path(__file__).resolve().parent.parent / "data" / "pvrtex"
+DATA = Path(PVRTEX_DATA)
 CRATE = read_image(DATA / "crate.png")
 
 

@@ -9,6 +9,7 @@ import pytest
 from amaranth.sim import Simulator
 
 from tests import support
+from tests.support import PVRTEX_DATA
 from vqtex.golden.pvr2 import pvr, pvr_set
 from vqtex.golden.fetch import block_address, expand_texels, fetch
 from vqtex.golden.format import COLOR_CODES, DESCRIPTOR_DTYPE, LAYOUT_CODES, PVR2_COLORS
@@ -18,7 +19,7 @@ from vqtex.hw.codebook_rom import expand_texel
 from vqtex.hw.descriptor import descriptor_widths
 from vqtex.sim.backends.interface import simulate
 
-DATA = Path(__file__).resolve().parent.parent / "data" / "pvrtex"
+DATA = Path(PVRTEX_DATA)
 GENERATED = sorted((DATA / "generated").glob("*.dt"))
 
 

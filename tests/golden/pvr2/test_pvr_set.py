@@ -13,10 +13,10 @@ from vqtex.golden.color import DREAMCAST_YUV422
 from vqtex.golden.fetch import block_address, decode, fetch, random_requests, twiddled_block
 from vqtex.golden.format import COLOR_CODES, DESCRIPTOR_FIELDS, FormatError, TextureSet
 from vqtex.golden.render.imageio import read_image
-from tests.support import random_dt
+from tests.support import PVRTEX_DATA, random_dt
 from vqtex.sim.bench.robustness.fuzz import join_vqt, mutate_vqt, split_vqt, try_file
 
-DATA = Path(__file__).resolve().parent.parent / "data" / "pvrtex"
+DATA = Path(PVRTEX_DATA)
 GENERATED = sorted((DATA / "generated").glob("*.dt"))
 APPROVED_VQ = DATA / "approved" / "texture_dt_-f_argb4444_-d_-c_64_-m_quality_-r_-R" / "texture.dt"
 

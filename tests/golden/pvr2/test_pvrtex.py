@@ -8,11 +8,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.support import PVRTEX_DATA
 from vqtex.golden.pvr2 import pvr
 from vqtex.golden.color import DREAMCAST_YUV422, ColorMatrix
 from vqtex.golden.render.imageio import read_image
 
-DATA = Path(__file__).resolve().parent.parent / "data" / "pvrtex"
+DATA = Path(PVRTEX_DATA)
 GENERATED = sorted((DATA / "generated").glob("*.dt"))
 APPROVED_VQ = DATA / "approved" / "texture_dt_-f_argb4444_-d_-c_64_-m_quality_-r_-R" / "texture.dt"
 FORMATS = {"argb1555": "ARGB1555", "rgb565": "RGB565", "argb4444": "ARGB4444", "yuv422": "YUV422"}
