@@ -283,25 +283,33 @@ def encode(images, *, block=(4, 4), codebook_size: int = 256, color: str = "rgb"
         if some is not None and not some.any():
             some = None                             # nothing touched: train on everything stored
         tv = allv if some is None else allv[some]
-        if encoder == "gla":
-            code, idx = vq.design(tv, codebook_size, method="gla", seed=seed, max_iter=max_iter, tol=tol)
-        else:                                       # the paper's TSVQ with tree-search encoding
-            tree = vq.tsvq_tree(tv, codebook_size, seed=seed)
-            code, idx = tree.codebook, tree.encode(allv)
-        del tv
-        code = np.asarray(code, dtype=np.float64)
-        if mip_training == "joint":
+        joint = mip_training == "joint"
+        if joint:
             ends = [layout.planes[s][0] for s in range(1, nsub)] + [layout.size]
             scale = np.concatenate([np.full(ends[s] - layout.planes[s][0], 1.0 / np.sqrt(weights_by_sub[s]))
                                     for s in range(nsub)])
-            cb_rows = np.clip(np.rint(code * scale), 0, 255).astype(np.uint8)
-            rounded = cb_rows.astype(np.float32) / scale.astype(np.float32)
-        else:
-            code0 = np.clip(np.rint(code), 0, 255).astype(np.uint8)
-            cb_rows = _extend(code0, layout).astype(np.uint8)
-            rounded = code0.astype(np.float32)
+
+        def stored_rows(code):
+            """The codewords' stored bytes (level 0's, or every sub-level's for "joint")."""
+            code = np.asarray(code, dtype=np.float64)
+            return np.clip(np.rint(code * scale if joint else code), 0, 255).astype(np.uint8)
+
+        def as_trained(rows):
+            """Stored codewords in the training vectors' form: what the indices are nearest to."""
+            return rows.astype(np.float32) / scale.astype(np.float32) if joint else rows.astype(np.float32)
+
         if encoder == "gla":
-            idx, _ = vq.nearest(allv, rounded)      # the map is optimal for what is stored
+            # the map is optimal for what is stored: every block's nearest stored codeword
+            code, idx = vq.design(tv, codebook_size, method="gla", seed=seed, max_iter=max_iter, tol=tol,
+                                  stored=lambda c: as_trained(stored_rows(c)))
+            rows = stored_rows(code)
+            if some is not None:                    # trained on some blocks: index every block
+                idx, _ = vq.nearest(allv, as_trained(rows))
+        else:                                       # the paper's TSVQ with tree-search encoding
+            tree = vq.tsvq_tree(tv, codebook_size, seed=seed)
+            rows, idx = stored_rows(tree.codebook), tree.encode(allv)
+        cb_rows = rows if joint else _extend(rows, layout).astype(np.uint8)
+        del tv
         idx = np.asarray(idx, dtype=np.int64)
         splits = np.cumsum(sizes)[:-1]
         indices_by_group = np.split(idx, splits)

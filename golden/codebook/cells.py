@@ -42,9 +42,11 @@ def update_centroids(u, wu, a_old, a_new, cnt, sums):
     np.add.at(sums, a_new[ch], wv)
     np.subtract.at(cnt, a_old[ch], wu[ch])
     np.add.at(cnt, a_new[ch], wu[ch])
-    # a cell that lost all its vectors is empty: clear the rounding residue exactly
-    gone = np.unique(a_old[ch])
-    gone = gone[np.bincount(a_new, minlength=cnt.shape[0])[gone] == 0]
+    # a cell that lost all its vectors is empty: clear the rounding residue exactly (a mask, not
+    # np.unique: numpy 2's np.unique imports numpy.ma, 17 ms of the encoder's process)
+    lost = np.zeros(cnt.shape[0], dtype=bool)
+    lost[a_old[ch]] = True
+    gone = np.flatnonzero(lost & (np.bincount(a_new, minlength=cnt.shape[0]) == 0))
     cnt[gone] = 0.0
     sums[gone] = 0.0
 

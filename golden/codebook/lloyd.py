@@ -28,7 +28,8 @@ class GlaResult:
     """Result of :func:`gla`.
 
     codebook: (k, d) float64.  indices: (N,) int64, exact full-search nearest codeword of every
-    input vector (``nearest(vectors, codebook)``).  distortion: weighted mean over vectors of the
+    input vector (``nearest(vectors, codebook)``; with ``gla(..., stored=f)``, of the stored
+    codebook: ``nearest(vectors, f(codebook))``).  distortion: weighted mean over vectors of the
     squared error ||x - c||^2 (per vector, not per component) of that final encoding.
     iterations: Lloyd iterations run (all phases and migration rounds).  converged: the stop
     rule fired (False: max_iter reached).  history: distortion (same definition, all vectors)
@@ -207,7 +208,7 @@ def _final_indices(u, st: State, scr, chunk=0):
 
 @one_blas_thread
 def gla(vectors, k, *, seed=0, weights=None, init=None, max_iter=100, tol=1e-3,
-        migrate=8, subsample=32) -> GlaResult:
+        migrate=8, subsample=32, stored=None) -> GlaResult:
     """Generalized Lloyd algorithm (full-search Lloyd / LBG) with TSVQ initialisation and
     ELBG-style codeword migration.
 
@@ -244,6 +245,13 @@ def gla(vectors, k, *, seed=0, weights=None, init=None, max_iter=100, tol=1e-3,
     them; ``converged`` is False iff the cap stopped the last descent.
     ``init``: None or "tsvq" (default: the paper's greedy TSVQ, :func:`tsvq`, with ``seed``), or
     a (k, d) array (then there is no coarse phase).
+    ``stored``: None, or a function from the designed codebook ((k, d) float64) to the codebook
+    the caller will store (rounded to its bytes, say; (k, d), exactly representable in float64).
+    The indices and the distortion are then those of the stored codebook: every vector's exact
+    nearest stored codeword, ties to the lowest index, as ``nearest(vectors, stored(codebook))``
+    gives them, found from the final state's bounds (the stored codewords are a small move of
+    the designed ones) instead of a second full search.  The codebook and the history stay
+    those of the design.
     Returns :class:`GlaResult`; ``history`` holds the distortion (all vectors) after the initial
     assignment, after each iteration of the first full-data descent, after each accepted
     migration round and after the last descent (non-increasing).  Indices are the exact
@@ -260,9 +268,14 @@ def gla(vectors, k, *, seed=0, weights=None, init=None, max_iter=100, tol=1e-3,
     del x  # only the distinct vectors are needed from here on
     if u.shape[0] <= k:
         cb = pad(u, k)  # row j < M is u[j]: the lowest index holding that vector
-        idx, d2 = inv.copy(), np.zeros(inv.size)
+        if stored is None:
+            idx, d2 = inv.copy(), np.zeros(inv.size)
+        else:
+            cb_s = _stored(stored, cb)
+            iu, du = nearest(u, cb_s)
+            idx, d2 = iu[np.maximum(inv, 0)], du[np.maximum(inv, 0)]
         if zero.size:
-            idx[zero], d2[zero] = nearest(xz, cb)
+            idx[zero], d2[zero] = nearest(xz, cb if stored is None else cb_s)
         return GlaResult(cb, idx, float(w @ d2) / w.sum(), 0, True, [0.0])
     it0 = 0
     mig_full = migrate
@@ -284,18 +297,30 @@ def gla(vectors, k, *, seed=0, weights=None, init=None, max_iter=100, tol=1e-3,
         if c0.shape != (k, u.shape[1]) or not np.all(np.isfinite(c0)):
             raise ValueError(f"init must be a finite ({k}, {u.shape[1]}) array")
     st, scr, hist, it, conv = _gla_core(u, wu, k, c0, max_iter, tol, mig_full)
+    code = st.c
+    if stored is not None:  # every vector to its nearest stored codeword, from the bounds
+        st = reassign(u, scr, st, _stored(stored, code))
     iu, du = _final_indices(u, st, scr)
     idx = iu[np.maximum(inv, 0)]
     d2 = du[np.maximum(inv, 0)]
     if zero.size:
         idx[zero], d2[zero] = nearest(xz, st.c)
-    return GlaResult(st.c, idx, float(w @ d2) / w.sum(), it0 + it, conv, hist)
+    return GlaResult(code, idx, float(w @ d2) / w.sum(), it0 + it, conv, hist)
+
+
+def _stored(stored, codebook):
+    """``stored(codebook)`` as a finite float64 array of the codebook's shape (ValueError otherwise)."""
+    c = np.array(stored(codebook.copy()), dtype=np.float64)
+    if c.shape != codebook.shape or not np.all(np.isfinite(c)):
+        raise ValueError(f"stored(codebook) must be a finite {codebook.shape} array")
+    return c
 
 
 def design(vectors, k, *, method="gla", seed=0, weights=None, **kw):
     """Design a k-codeword codebook and encode ``vectors`` with it.
 
-    method "gla" (default; ``kw`` goes to :func:`gla`: init, max_iter, tol, migrate, subsample)
+    method "gla" (default; ``kw`` goes to :func:`gla`: init, max_iter, tol, migrate, subsample,
+    stored: then the indices are those of the stored codebook)
     or "tsvq" (``kw``: criterion).
     Returns ``(codebook (k, d) float64, indices (N,) int64)``; indices are the exact full-search
     nearest codewords (for "tsvq" too; use ``tsvq_tree(...).encode`` for tree-search indices).

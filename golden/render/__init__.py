@@ -16,15 +16,32 @@ Modules, in pipeline order:
 - ``bench``: ``run()`` prints frame times and requests per frame.
 """
 
-from .frame import frame_requests, load_requests, plan_frame, render_frame, resolve_frame, save_requests
-from .metrics import frame_mse, frame_psnr
-from .pyramid import ReferenceSource, TextureSource, build_pyramid
-from .raster import Fragments, rasterize
-from .sampling import Sampler
-from .scene import BUILTIN_SCENES, Scene, SceneError, build_texture_set, load_scene, parse_scene
+import importlib
 
-__all__ = [
-    "BUILTIN_SCENES", "Fragments", "ReferenceSource", "Sampler", "Scene", "SceneError", "TextureSource",
-    "build_pyramid", "build_texture_set", "frame_mse", "frame_psnr", "frame_requests", "load_requests",
-    "load_scene", "parse_scene", "plan_frame", "rasterize", "render_frame", "resolve_frame", "save_requests",
-]
+#: Each name the package exports and the module that defines it. They are imported on first use
+#: (PEP 562), so that importing one module of the package (``imageio``, to read an image for
+#: ``vqtex encode``) does not import the whole renderer.
+_HOMES = {
+    "frame_requests": "frame", "load_requests": "frame", "plan_frame": "frame", "render_frame": "frame",
+    "resolve_frame": "frame", "save_requests": "frame",
+    "frame_mse": "metrics", "frame_psnr": "metrics",
+    "ReferenceSource": "pyramid", "TextureSource": "pyramid", "build_pyramid": "pyramid",
+    "Fragments": "raster", "rasterize": "raster",
+    "Sampler": "sampling",
+    "BUILTIN_SCENES": "scene", "Scene": "scene", "SceneError": "scene", "build_texture_set": "scene",
+    "load_scene": "scene", "parse_scene": "scene",
+}
+
+__all__ = sorted(_HOMES)
+
+
+def __getattr__(name):
+    if name not in _HOMES:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{_HOMES[name]}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

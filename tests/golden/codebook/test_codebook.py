@@ -306,3 +306,49 @@ def test_nearest_with_many_repeated_codewords():
     idx, d2 = cb.nearest(x, c)
     ref = cb.nearest(x, c[::700])[0] * 700  # lowest index of each repeated codeword
     np.testing.assert_array_equal(idx, ref)
+
+
+# ------------------------------------------------------------------------ the stored codebook
+def _rounded(c):
+    return np.clip(np.rint(c), 0, 255)
+
+
+@pytest.mark.parametrize("case", ["integers", "fractions", "coarse", "few-distinct", "zero-weights"])
+def test_gla_stored_indices_are_the_nearest_stored_codewords(case):
+    """gla(..., stored=f): the indices and distortion are those of f(codebook), exactly as
+    nearest(vectors, f(codebook)) gives them (ties to the lowest index: rounding makes duplicate
+    codewords), and the codebook and history are the design's, as without ``stored``."""
+    w = None
+    store = _rounded
+    if case == "integers":
+        x = _clusters(21, n=4000, d=12, centres=80, spread=9.0)
+    elif case == "fractions":                      # yuv411-like vectors: quarter values
+        x = np.rint(_clusters(22, n=4000, d=6, centres=50, spread=7.0) * 4) / 4
+    elif case == "coarse":                         # a coarse phase on a sample, and ties after storing
+        x = _clusters(23, n=20000, d=4, centres=300, spread=3.0)
+        store = lambda c: np.rint(c / 64) * 64    # noqa: E731  (5 values a component: duplicate codewords)
+    elif case == "few-distinct":
+        x = np.repeat(np.arange(10.0)[:, None] * 25.3, 3, axis=1)[np.arange(500) % 10]
+    else:
+        x = np.concatenate([_clusters(24, n=3000, d=12, centres=40), np.full((4, 12), 600.0)])
+        w = np.concatenate([np.ones(3000), np.zeros(4)])
+    k = {"few-distinct": 16, "coarse": 256}.get(case, 64)
+    plain = cb.gla(x, k, seed=3, weights=w)
+    r = cb.gla(x, k, seed=3, weights=w, stored=store)
+    np.testing.assert_array_equal(r.codebook, plain.codebook)
+    assert r.history == plain.history and r.iterations == plain.iterations
+    idx, d2 = cb.nearest(x, store(r.codebook))
+    np.testing.assert_array_equal(r.indices, idx)
+    assert r.distortion == pytest.approx(np.average(d2, weights=w), rel=1e-12)
+    code, idx_d = cb.design(x, k, seed=3, weights=w, stored=store)
+    np.testing.assert_array_equal(idx_d, idx)
+    if case == "coarse":
+        assert len(np.unique(store(r.codebook), axis=0)) < k   # the ties were there to settle
+
+
+def test_gla_stored_must_keep_the_shape():
+    x = _clusters(25, n=500, d=4, centres=10)
+    with pytest.raises(ValueError, match="stored"):
+        cb.gla(x, 8, stored=lambda c: c[:4])
+    with pytest.raises(ValueError, match="stored"):
+        cb.gla(x, 8, stored=lambda c: np.full_like(c, np.nan))

@@ -41,8 +41,31 @@ def test_one_thread_setting_is_undone():
     assert workers.threads() == before
 
 
-def test_only_runs_one_method(capsys):
-    eb.main(["--only", "gla", "--case", "1", "--image", "astronaut", "--size", "64"])
-    assert "gla case 1 astronaut:" in capsys.readouterr().out
-    eb.main(["--only", "load", "--case", "1", "--image", "astronaut", "--size", "64"])
-    assert "load case 1 astronaut: 1024 vectors" in capsys.readouterr().out
+def test_processes_report_every_field(capsys):
+    """The whole-process mode on 64x64 crops, one round: the four processes ran, the ratios are
+    the paired ones, both PSNRs were read from what the processes printed."""
+    out = eb.run_processes(True, cases=(1,), images=("astronaut",), repeats=1, warmup=0, size=64)
+    printed = json.loads(capsys.readouterr().out)
+    assert printed["benchmark"] == "encode-processes" and printed["target"] == eb.PROCESS_TARGET
+    (row,) = out["rows"]
+    assert (row["case"], row["threads"], row["image"], row["block"], row["k"]) == (1, "default", "astronaut", "2x2", 256)
+    for name in ("help", "encode", "kmeans", "kmeans_start"):
+        assert row[name]["wall_s"]["median"] > 0 and row[name]["cpu_s"]["median"] >= 0
+    h, e, m, s = (row[n]["wall_s"]["median"] for n in ("help", "encode", "kmeans", "kmeans_start"))
+    assert row["ratio"] == pytest.approx((m - h) / (e - h))
+    assert row["fit_ratio"] == pytest.approx((m - s) / (e - h))
+    assert row["net_s"] == pytest.approx({"ours": e - h, "kmeans": m - h, "kmeans_fit": m - s})
+    assert math.isfinite(row["psnr_db"]["ours"]) and math.isfinite(row["psnr_db"]["kmeans"])
+    assert row["psnr_loss_db"] == round(row["psnr_db"]["kmeans"] - row["psnr_db"]["ours"], 3)
+    (case,) = out["cases"]
+    assert case["min_ratio"] == row["ratio"] and case["min_fit_ratio"] == row["fit_ratio"]
+    assert case["ratio"] == pytest.approx((m - h) / (e - h)) and isinstance(case["met"], bool)
+
+
+def test_kmeans_process_is_standalone():
+    """The KMeans process imports no vqtex module (it stands for a user's own script)."""
+    import ast
+    tree = ast.parse(open(eb.KMEANS_PROCESS).read())
+    names = {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
+    names |= {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
+    assert names == {"sys", "numpy", "OpenImageIO", "sklearn.cluster"}
