@@ -157,7 +157,7 @@ class BankedROM(wiring.Component):
             m.submodules[f"bank{k}"] = mem = memory.Memory(shape=stored, depth=depth, init=part)
             # The fabric register behind the block RAM (stored bits: a bus read answers the padding
             # too); a bus read's answer goes through it as well (hw.bus_port.attach_memory).
-            q = Signal(stored if load is not None else self._width, name=f"data{k}")
+            q = Signal(stored, name=f"data{k}")
             if load is not None:
                 bank_hit = hit if self._banks == 1 else hit & (row[offset_bits:] == k)
                 rd, answer = attach_memory(m, mem, command, hit=bank_hit, row=row[:offset_bits], lane=lane,
@@ -168,8 +168,8 @@ class BankedROM(wiring.Component):
                 rd = mem.read_port(domain="sync")
                 m.d.comb += [rd.addr.eq(self.addr[:offset_bits]), rd.en.eq(self.en)]
             with m.If(self.en):
-                m.d.sync += q.eq(rd.data if stored == self._width or load is not None else rd.data[:self._width])
-            data.append(q[:self._width] if len(q) != self._width else q)
+                m.d.sync += q.eq(rd.data)
+            data.append(q if stored == self._width else q[:self._width])
         # A register of its own per bank, and ``data`` driven as one concatenation (pure wiring):
         # simulators (CXXRTL) then read each bank's register directly instead of assembling and
         # slicing one wide value every cycle.

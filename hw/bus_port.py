@@ -28,8 +28,9 @@ of it (``t + 2``, :func:`load_decode`), the memory's read (``t + 3``), a fabric 
 data (``t + 4``: a block RAM's clock-to-output leaves no time for logic behind it), the lane select
 and the answer register (``t + 5``: ``load_data``), then the OR of every answer into ``dat_r``
 (``t + 6``). A write reaches the memories in ``t + 2`` (they hold it from ``t + 3``), before any
-request can follow it (the drain rule's ``pause`` falls in ``t + 3`` at the earliest). ``err`` answers (one cycle after acceptance) an address the
-geometry does not map and a write to a read-only register.
+request can follow it (the drain rule's ``pause`` falls in ``t + 3`` at the earliest). ``err``
+answers (one cycle after acceptance) an address the geometry does not map and a write to a
+read-only register.
 """
 
 from __future__ import annotations

@@ -28,6 +28,10 @@ __all__ = ["ColorMatrix", "LATENCY"]
 
 #: Cycles from samples to RGBA.
 LATENCY = 3
+#: The loaded matrix's widths: a product of an 8-bit sample and an 18-bit coefficient, and the sum
+#: of three products and ``K`` (``ColorMatrix._loaded_sums``).
+_LOADED_PRODUCT_BITS = COEFF_BITS + 8
+_LOADED_SUM_BITS = COEFF_BITS + 12
 
 _RGB, _RGBA, _I8, _YUV = (COLOR_CODES[c] for c in ("rgb", "rgba", "intensity", "yuv411"))
 
@@ -159,9 +163,9 @@ class ColorMatrix(wiring.Component):
         (no request is accepted while a transfer is under way) and the 11 stages in front of the
         colour matrix put every request after the load well behind that.
         """
-        mat, load = self._matrix, regs
-        coeff, offset, frac, rounding = load["coeff"], load["offset"], load["frac"], load["rounding"]
-        pbits, sbits = COEFF_BITS + 8, COEFF_BITS + 9 + 3
+        mat = self._matrix
+        coeff, offset, frac, rounding = regs["coeff"], regs["offset"], regs["frac"], regs["rounding"]
+        pbits, sbits = _LOADED_PRODUCT_BITS, _LOADED_SUM_BITS
         # K's pipeline, initialised to the initial matrix's K (a unit that is never loaded is right
         # from the first cycle).
         q = [[Signal(signed(pbits), name=f"q_{'rgb'[c]}{'yuv'[k]}", reset_less=True,
@@ -196,8 +200,8 @@ class ColorMatrix(wiring.Component):
         regs = None
         if self._load is not None:          # registers: every product, every width at its largest
             regs = self._registers(m)
-            used = [matrix] * 3
-            pbits, sbits = COEFF_BITS + 9, COEFF_BITS + 9 + 3
+            used = [False] * 3              # the samples go straight into the multipliers (_loaded_sums)
+            sbits = _LOADED_SUM_BITS
 
         # Stage 1: offsets, registered (the multipliers' operands come straight from flip-flops).
         x = [Signal(signed(9), name=f"x{k}") for k in range(3)]
@@ -208,8 +212,6 @@ class ColorMatrix(wiring.Component):
                 if not used[k]:
                     continue
                 sample, off = self.samples[k], mat.offsets[k]
-                if regs is not None:    # the loaded matrix multiplies here (see _loaded_sums)
-                    continue
                 if off == 0:
                     m.d.sync += x[k].eq(sample)
                 elif off == 128:        # in - 128: the top bit inverted, read as signed (no adder)
@@ -228,10 +230,8 @@ class ColorMatrix(wiring.Component):
             for c in range(3):
                 for k in range(3):
                     coeff = mat.coeffs[c][k]
-                    if regs is not None:    # the loaded matrix sums here (see _loaded_sums)
-                        continue
-                    if not matrix or (coeff == 0 and not self._all):
-                        continue                # no product
+                    if regs is not None or not matrix or (coeff == 0 and not self._all):
+                        continue                # no product (the loaded matrix's are in _loaded_sums)
                     if not self._all and abs(coeff) & (abs(coeff) - 1) == 0:   # +-2^n: a shift
                         power = x[k] << (abs(coeff).bit_length() - 1)
                         m.d.sync += prod[c][k].eq(power if coeff > 0 else -power)
