@@ -272,44 +272,56 @@ class TextureFilter(wiring.Component):
             self.busy.eq(self.i.valid & ~self.i.ready),
         ]
 
-        # -- sequencer: the footprint's slots, ``lanes`` per cycle --------------------------------
-        groups = spec.SLOTS // lanes
-        group = Signal(range(max(groups, 2)), name="group")
-        last = Signal(name="last_group")
-        issue = Signal(name="issue")                 # the lanes take a group this cycle
-        fpp = fp.o.p
-        m.d.comb += [
-            last.eq((group + 1) * lanes >= fpp.used),
-            issue.eq(fp.o.valid & fetch[0].i.ready),
-            fp.o.ready.eq(fetch[0].i.ready & last),
-        ]
-        with m.If(issue):
-            m.d.sync += group.eq(Mux(last, 0, group + 1))
-        for k, f in enumerate(fetch):
-            slots = [k + lanes * g for g in range(groups)]
-            texel = TexelSlotLayout(pick([fpp.texels[n].as_value() for n in slots], group))
-            weight = pick([fpp.weights[n] for n in slots], group)
-            m.d.comb += [
-                f.i.valid.eq(fp.o.valid),
-                f.i.p.texture.eq(fpp.texture),
-                f.i.p.level.eq(texel.level),
-                f.i.p.i.eq(texel.i),
-                f.i.p.j.eq(texel.j),
-                f.i.p.tag.eq(Cat(weight, group == 0, last, fpp.tag) if k == 0 else weight),
-            ]
-
-        # -- the lanes' responses, one group per cycle, into the blend ---------------------------
-        head = fetch[0].o.p.tag
-        m.d.comb += [
-            bl.i.valid.eq(fetch[0].o.valid),
-            bl.i.p.first.eq(head[WEIGHT_WIDTH]),
-            bl.i.p.last.eq(head[WEIGHT_WIDTH + 1]),
-            bl.i.p.tag.eq(head[WEIGHT_WIDTH + 2:]),
-        ]
-        for k, f in enumerate(fetch):
-            m.d.comb += [
-                f.o.ready.eq(bl.i.ready),
-                bl.i.p.rgba[k].eq(Cat(f.o.p.r, f.o.p.g, f.o.p.b, f.o.p.a)),
-                bl.i.p.weight[k].eq(f.o.p.tag[:WEIGHT_WIDTH]),
-            ]
+        sequencer(m, fp, lanes, fetch[0].i.ready, [(f.i.valid, f.i.p) for f in fetch], tw)
+        gather(m, bl, [f.o for f in fetch])
         return m
+
+
+def sequencer(m, fp, lanes: int, ready, targets, tag_width: int):
+    """The sequencer, built into ``m``: the footprint ``fp``'s slots, ``lanes`` per cycle, in
+    ``ceil(used / lanes)`` groups, onto ``targets`` (per lane ``(valid, payload)``, the payload a
+    ``hw.pipeline.RequestLayout`` view whose tag is the slot's weight, and for lane 0 also the
+    pixel's first and last marks and tag); the lanes take a group when ``ready`` is high (all
+    together)."""
+    groups = spec.SLOTS // lanes
+    group = Signal(range(max(groups, 2)), name="group")
+    last = Signal(name="last_group")
+    issue = Signal(name="issue")                 # the lanes take a group this cycle
+    fpp = fp.o.p
+    m.d.comb += [
+        last.eq((group + 1) * lanes >= fpp.used),
+        issue.eq(fp.o.valid & ready),
+        fp.o.ready.eq(ready & last),
+    ]
+    with m.If(issue):
+        m.d.sync += group.eq(Mux(last, 0, group + 1))
+    for k, (valid, p) in enumerate(targets):
+        slots = [k + lanes * g for g in range(groups)]
+        texel = TexelSlotLayout(pick([fpp.texels[n].as_value() for n in slots], group))
+        weight = pick([fpp.weights[n] for n in slots], group)
+        m.d.comb += [
+            valid.eq(fp.o.valid),
+            p.texture.eq(fpp.texture),
+            p.level.eq(texel.level),
+            p.i.eq(texel.i),
+            p.j.eq(texel.j),
+            p.tag.eq(Cat(weight, group == 0, last, fpp.tag) if k == 0 else weight),
+        ]
+
+
+def gather(m, bl, outs):
+    """The lanes' responses (``outs``, their ``o`` streams, in lock step), one group per cycle, into
+    the blend ``bl`` (marks and pixel tag from lane 0's tag)."""
+    head = outs[0].p.tag
+    m.d.comb += [
+        bl.i.valid.eq(outs[0].valid),
+        bl.i.p.first.eq(head[WEIGHT_WIDTH]),
+        bl.i.p.last.eq(head[WEIGHT_WIDTH + 1]),
+        bl.i.p.tag.eq(head[WEIGHT_WIDTH + 2:]),
+    ]
+    for k, o in enumerate(outs):
+        m.d.comb += [
+            o.ready.eq(bl.i.ready),
+            bl.i.p.rgba[k].eq(Cat(o.p.r, o.p.g, o.p.b, o.p.a)),
+            bl.i.p.weight[k].eq(o.p.tag[:WEIGHT_WIDTH]),
+        ]

@@ -55,7 +55,7 @@ from ..texel_fetch import LATENCY, TexelFetch
 from .axi import axi4_read_signature
 from .reader import CachedReader
 
-__all__ = ["CachedTexelFetch", "ADDRESS_STAGES"]
+__all__ = ["CachedTexelFetch", "ADDRESS_STAGES", "cached_lane"]
 
 #: The unit's own address stages in front of the caches (descriptor, block address).
 ADDRESS_STAGES = 2
@@ -86,98 +86,111 @@ class CachedTexelFetch(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
-        ts, feat = self._ts, self._features
-        g = self._tf.geometry
-        widths = g.descriptor_widths()
-        W = ts.word_bits
-        req_bits = len(self.i.p.as_value())
-        # what rides through the reader beside the words: the request, the bit offset and width
-        ride = data.StructLayout({"request": req_bits, "off": max(1, (W - 1).bit_length()), "b": 5})
-        m.submodules.reader = reader = CachedReader(
-            self._config, word_bits=W, raw_base=self._layout.raw_base, word_addr_bits=32,
-            tag_width=len(Signal(ride).as_value()))
         m.submodules.texel = tf = self._tf
-        wiring.connect(m, reader.axi, wiring.flipped(self.axi))
-
-        # -- the address stages: two stream registers ---------------------------------------------
-        m.submodules.descriptor = desc = DescriptorTable(ts, features=feat, geometry=g)
-        m.submodules.address = addr = BlockAddress(
-            base_bits=widths["base"], k_bits=g.k_bits, raw_bits=addr_bits(g.raw_words), raw=feat.raw,
-            twiddle=feat.twiddled, linear=0 in feat.layouts)
-        v1, v2 = Signal(), Signal()
         en1, en2 = Signal(), Signal()
+        reader = cached_lane(m, "", self._ts, self._features, self._config, self._layout, tf, self.i.p, (en1, en2))
+        wiring.connect(m, reader.axi, wiring.flipped(self.axi))
+        # -- the address stages: two stream registers, moving as a chain ----------------------------
+        v1, v2 = Signal(), Signal()
         m.d.comb += [
             en2.eq(~v2 | reader.i.ready),
             en1.eq(~v1 | en2),
             self.i.ready.eq(en1),
+            reader.i.valid.eq(v2),
         ]
         with m.If(en1):
             m.d.sync += v1.eq(self.i.valid)
         with m.If(en2):
             m.d.sync += v2.eq(v1)
-        req1 = Signal.like(self.i.p.as_value(), name="request_descriptor")
-        req2 = Signal.like(self.i.p.as_value(), name="request_address")
-        with m.If(en1):
-            m.d.sync += req1.eq(self.i.p.as_value())
-        with m.If(en2):
-            m.d.sync += req2.eq(req1)
-        p1 = self.i.p.shape()(req1)
-        m.d.comb += [desc.texture.eq(self.i.p.texture), desc.level.eq(self.i.p.level), desc.en.eq(en1)]
-        row = desc.fields()
-        m.d.comb += [
-            addr.i.eq(p1.i), addr.j.eq(p1.j),
-            addr.log2w.eq(row.log2w), addr.log2bw.eq(row.log2bw), addr.log2bh.eq(row.log2bh),
-            addr.base.eq(row.base), addr.en.eq(en2),
-        ]
-        if addr.twiddle:
-            m.d.comb += [addr.layout.eq(row.layout), addr.log2h.eq(row.log2h)]
-        row2 = Signal.like(desc.row, name="row_address")
-        with m.If(en2):
-            m.d.sync += row2.eq(desc.row)
-        d2 = desc.fields(row2)
-        # the words: w = base + (k * b >> log2 W), off = k * b mod W; raw: the raw word
-        bit = Signal(g.k_bits + 5)
-        m.d.comb += bit.eq(addr.k * d2.index_bits)
-        lw = (W - 1).bit_length()
-        word = Signal(32)
-        m.d.comb += word.eq(Mux(d2.compressed, d2.base + (bit >> lw), addr.raw_addr if feat.raw else 0))
-        r = Signal(ride)
-        m.d.comb += [r.request.eq(req2), r.off.eq(bit[:lw]), r.b.eq(d2.index_bits)]
-        m.d.comb += [
-            reader.i.valid.eq(v2),
-            reader.i.p.raw.eq(~d2.compressed),
-            reader.i.p.word.eq(word),
-            reader.i.p.straddle.eq(d2.compressed & ((bit[:lw] + d2.index_bits) > W)),
-            reader.i.p.tag.eq(r.as_value()),
-        ]
-
         # -- the texel pipeline takes the reader's output when it advances --------------------------
-        out = Signal(ride)
-        m.d.comb += out.eq(reader.o.p.tag)
-        m.d.comb += [
-            tf.i.valid.eq(reader.o.valid), tf.i.p.as_value().eq(out.request), reader.o.ready.eq(tf.i.ready),
-        ]
+        m.d.comb += [tf.i.valid.eq(reader.o.valid), reader.o.ready.eq(tf.i.ready)]
         wiring.connect(m, tf.o, wiring.flipped(self.o))
         m.d.comb += [self.stall_memory.eq(reader.stall_fill), self.stall_output.eq(tf.stall_output)]
-        # The words ride beside the texel pipeline's first seven stages (its advance: no output stall
-        # in the previous cycle), to arrive with the request at the index stage.
-        advance = Signal(init=1)
-        m.d.sync += advance.eq(~tf.stall_output)
-        wide = len(reader.o.p.word0)
-        carry = data.StructLayout({"pair": wide + W, "off": len(out.off), "b": 5, "raw": 32})
-        shadow = [Signal(carry, name=f"words_{n + 1}") for n in range(7)]
-        first = Signal(carry)
-        m.d.comb += [first.pair.eq(Cat(reader.o.p.word0[:W], reader.o.p.word1)), first.off.eq(out.off),
-                     first.b.eq(out.b), first.raw.eq(reader.o.p.word0[:32])]
-        with m.If(advance):
-            m.d.sync += shadow[0].eq(first)
-            m.d.sync += [shadow[n].eq(shadow[n - 1]) for n in range(1, 7)]
-        last = shadow[-1]
-        if "index_response" in tf.signature.members:
-            ib = len(tf.index_response)
-            mask = Signal(16)
-            m.d.comb += mask.eq((1 << last.b) - 1)
-            m.d.comb += tf.index_response.eq(((last.pair >> last.off) & mask)[:ib])
-        if "raw_in" in tf.signature.members:
-            m.d.comb += tf.raw_in.eq(last.raw)
         return m
+
+
+def cached_lane(m, prefix: str, ts, feat, config, layout, tf, request, en):
+    """One lane of the cached unit, built into ``m``: the address stages' datapath (descriptor and
+    block address, loaded on ``en = (en1, en2)``, the enables of the two stream registers, which the
+    caller drives and whose valid bits it keeps), a :class:`hw.memory.reader.CachedReader` (returned;
+    the caller drives ``i.valid``, ``o.ready`` and connects ``axi``), and the texel pipeline ``tf``'s
+    payload, ``index_response`` and ``raw_in`` (the words riding beside its first seven stages). The
+    caller drives ``tf.i.valid``. ``request``: the payload entering the first address stage (a
+    ``hw.pipeline.RequestLayout`` view). Submodules are named with ``prefix``."""
+    g = tf.geometry
+    widths = g.descriptor_widths()
+    W = ts.word_bits
+    en1, en2 = en
+    req_bits = len(request.as_value())
+    # what rides through the reader beside the words: the request, the bit offset and width
+    ride = data.StructLayout({"request": req_bits, "off": max(1, (W - 1).bit_length()), "b": 5})
+    m.submodules[prefix + "reader"] = reader = CachedReader(
+        config, word_bits=W, raw_base=layout.raw_base, word_addr_bits=32,
+        tag_width=len(Signal(ride).as_value()))
+
+    # -- the address stages' datapath ------------------------------------------------------------------
+    m.submodules[prefix + "descriptor"] = desc = DescriptorTable(ts, features=feat, geometry=g)
+    m.submodules[prefix + "address"] = addr = BlockAddress(
+        base_bits=widths["base"], k_bits=g.k_bits, raw_bits=addr_bits(g.raw_words), raw=feat.raw,
+        twiddle=feat.twiddled, linear=0 in feat.layouts)
+    req1 = Signal.like(request.as_value(), name=prefix + "request_descriptor")
+    req2 = Signal.like(request.as_value(), name=prefix + "request_address")
+    with m.If(en1):
+        m.d.sync += req1.eq(request.as_value())
+    with m.If(en2):
+        m.d.sync += req2.eq(req1)
+    p1 = request.shape()(req1)
+    m.d.comb += [desc.texture.eq(request.texture), desc.level.eq(request.level), desc.en.eq(en1)]
+    row = desc.fields()
+    m.d.comb += [
+        addr.i.eq(p1.i), addr.j.eq(p1.j),
+        addr.log2w.eq(row.log2w), addr.log2bw.eq(row.log2bw), addr.log2bh.eq(row.log2bh),
+        addr.base.eq(row.base), addr.en.eq(en2),
+    ]
+    if addr.twiddle:
+        m.d.comb += [addr.layout.eq(row.layout), addr.log2h.eq(row.log2h)]
+    row2 = Signal.like(desc.row, name=prefix + "row_address")
+    with m.If(en2):
+        m.d.sync += row2.eq(desc.row)
+    d2 = desc.fields(row2)
+    # the words: w = base + (k * b >> log2 W), off = k * b mod W; raw: the raw word
+    bit = Signal(g.k_bits + 5, name=prefix + "bit")
+    m.d.comb += bit.eq(addr.k * d2.index_bits)
+    lw = (W - 1).bit_length()
+    word = Signal(32, name=prefix + "word")
+    m.d.comb += word.eq(Mux(d2.compressed, d2.base + (bit >> lw), addr.raw_addr if feat.raw else 0))
+    r = Signal(ride, name=prefix + "ride")
+    m.d.comb += [r.request.eq(req2), r.off.eq(bit[:lw]), r.b.eq(d2.index_bits)]
+    m.d.comb += [
+        reader.i.p.raw.eq(~d2.compressed),
+        reader.i.p.word.eq(word),
+        reader.i.p.straddle.eq(d2.compressed & ((bit[:lw] + d2.index_bits) > W)),
+        reader.i.p.tag.eq(r.as_value()),
+    ]
+
+    # -- the texel pipeline's payload, and the words beside it -------------------------------------
+    out = Signal(ride, name=prefix + "out")
+    m.d.comb += out.eq(reader.o.p.tag)
+    m.d.comb += tf.i.p.as_value().eq(out.request)
+    # The words ride beside the texel pipeline's first seven stages (its advance: no output stall
+    # in the previous cycle), to arrive with the request at the index stage.
+    advance = Signal(init=1, name=prefix + "advance")
+    m.d.sync += advance.eq(~tf.stall_output)
+    wide = len(reader.o.p.word0)
+    carry = data.StructLayout({"pair": wide + W, "off": len(out.off), "b": 5, "raw": 32})
+    shadow = [Signal(carry, name=f"{prefix}words_{n + 1}") for n in range(7)]
+    first = Signal(carry, name=prefix + "words_0")
+    m.d.comb += [first.pair.eq(Cat(reader.o.p.word0[:W], reader.o.p.word1)), first.off.eq(out.off),
+                 first.b.eq(out.b), first.raw.eq(reader.o.p.word0[:32])]
+    with m.If(advance):
+        m.d.sync += shadow[0].eq(first)
+        m.d.sync += [shadow[n].eq(shadow[n - 1]) for n in range(1, 7)]
+    last = shadow[-1]
+    if "index_response" in tf.signature.members:
+        ib = len(tf.index_response)
+        mask = Signal(16, name=prefix + "mask")
+        m.d.comb += mask.eq((1 << last.b) - 1)
+        m.d.comb += tf.index_response.eq(((last.pair >> last.off) & mask)[:ib])
+    if "raw_in" in tf.signature.members:
+        m.d.comb += tf.raw_in.eq(last.raw)
+    return reader

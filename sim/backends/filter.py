@@ -79,6 +79,8 @@ class FilterResult:
     latency: int
     stall_cycles: dict
     bank_conflicts: int = 0
+    #: Through the memory system (:mod:`sim.backends.filter_memory`): bursts, bytes, hit rates.
+    memory: dict | None = None
 
     @property
     def pixels_per_clock(self) -> float:

@@ -136,14 +136,16 @@ async def bus_transfers(ctx, bus, ops) -> tuple:
 
 
 def run_stream(dut, program, *, columns, tag_width: int, strobes, valid, stall: float, seed: int,
-               vcd: str | None = None, name: str = "dut") -> list:
+               vcd: str | None = None, name: str = "dut", step=None) -> list:
     """Run ``program`` on ``dut`` (a unit with ``i``/``o`` streams, ``i.payload`` holding the
     request fields ``columns`` and the tag, ``o.payload`` r, g, b, a and the tag, the 1-bit
     ``strobes`` as attributes, ``valid`` one bit per stage and, for bus phases, ``bus``) in one
     simulation: for each ``(bus writes or None, rows)``, the writes by :func:`bus_transfers`, then
     the request rows back to back. Returns a dict per phase: ``responses`` ((n, 4) uint8 RGBA),
     ``cycles``, ``strobes`` (name -> cycles high), ``occupancy`` (per-stage valid-bit sums, or None
-    for no requests), ``load_cycles`` (None without writes)."""
+    for no requests), ``load_cycles`` (None without writes). ``step(ctx, cycle)``, if given, is
+    called in every cycle of a request phase before the clock edge (an AXI slave's
+    :meth:`sim.backends.axi_memory.AxiMemory.step`), ``cycle`` counted from the phase's first."""
     nstages, nstrobes = len(valid), len(strobes)
     # Everything the testbench watches, gathered into one signal inside the simulated design so
     # that each cycle costs one signal read instead of an expression evaluation.
@@ -208,6 +210,8 @@ def run_stream(dut, program, *, columns, tag_width: int, strobes, valid, stall: 
                         occ[s] += 1
             if v & 1 and n_in < n:
                 n_in += 1
+            if step is not None:
+                step(ctx, cycle)
             cycle += 1
             await ctx.tick()
         ctx.set(i_valid, 0)

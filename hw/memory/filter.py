@@ -1,0 +1,180 @@
+"""CachedTextureFilter: the texture filter with its index map and raw levels in external memory.
+
+Twin of :mod:`golden.memory.filter` (its exact cycle model); the design: docs/memory.md, "The texture
+filter through the memory system"::
+
+    i -> Footprint -> sequencer -> lane k: address stages -> CachedReader k --join--> TexelFetch k -> Blend -> o
+                                                                  | AR/R
+                                       AxiArbiter (lanes -> one master, lane order) -> axi
+
+* the footprint, the sequencer and the blend are the on-chip filter's
+  (:mod:`hw.filter.texture_filter`: :class:`Footprint`, :func:`sequencer`, :func:`gather`,
+  :class:`Blend`);
+* each lane is one lane of the cached unit (:func:`hw.memory.unit.cached_lane`: descriptor and block
+  address stages, a :class:`hw.memory.reader.CachedReader` with its own index and raw caches, the
+  texel pipeline :class:`hw.texel_fetch.TexelFetch` with its index and raw words from outside). The
+  lanes' address stages move together (one valid chain); a group enters every lane's tag check in
+  the same cycle, when every reader is ready (the fork); the texel pipelines take a group when
+  every reader's output holds it (the join) and run in lock step;
+* the readers' AXI masters share one through :class:`hw.memory.arbiter.AxiArbiter`.
+
+Timing (``o.ready`` high): :func:`golden.memory.filter.run`, cycle for cycle; with every reference a
+hit, one group of ``lanes`` texel slots per clock (a bilinear pixel per clock with 4 lanes) and
+``LATENCY`` = 27 cycles from a one-group pixel's acceptance to its colour (the on-chip filter's 23,
+plus the address stages, the tag check and the data read). A miss in any lane holds the group
+(the pixel) until its line is filled; the hits behind it keep being checked, up to each reader's
+FIFO depth (``config.prefetch``; 1 is blocking). Colours leave in order, with stream backpressure
+throughout (not modelled by the cycle model).
+
+Arguments
+---------
+texture_set : TextureSet
+config : golden.memory.system.MemoryConfig
+    Every lane's cache shapes and FIFO depth, the bus width.
+lanes : int
+    1, 2, 4 or 8.
+tag_width : int
+frac : int or None
+    As for :class:`hw.filter.TextureFilter`.
+
+Members
+-------
+i, o : as :class:`hw.filter.TextureFilter`'s
+axi : Out(hw.memory.axi.axi4_read_signature(32, 8 * bus_bytes))
+stall_output : Out(1)
+    ``o.valid & ~o.ready``.
+stall_memory0 .. stall_memory{lanes-1} : Out(1)
+    Lane k's data read waits for a line fill (its reader's ``stall_fill``).
+overflow : Out(1)
+    The arbiter's queue overflowed (never: sized to the bursts that can be in flight).
+"""
+
+from __future__ import annotations
+
+from amaranth import *
+from amaranth.lib import stream, wiring
+from amaranth.lib.wiring import In, Out
+
+from vqtex.golden import filter as spec
+from vqtex.golden.format import TextureSet
+from vqtex.golden.memory.system import Layout
+
+from ..address import COORD_BITS  # noqa: F401  (the coordinate width the footprint addresses)
+from ..descriptor import texture_bits
+from ..features import Features
+from ..filter import blend, footprint
+from ..filter.blend import Blend
+from ..filter.footprint import WEIGHT_WIDTH, FilterRequestLayout, Footprint, level_table
+from ..filter.texture_filter import LANES, gather, sequencer
+from ..pipeline import RequestLayout, ResponseLayout
+from ..texel_fetch import LATENCY as FETCH_LATENCY
+from ..texel_fetch import TexelFetch
+from .arbiter import AxiArbiter
+from .axi import axi4_read_signature
+from .unit import ADDRESS_STAGES, cached_lane
+
+__all__ = ["CachedTextureFilter", "LATENCY"]
+
+#: Cycles from a one-group pixel's acceptance to its colour when every reference hits.
+LATENCY = footprint.LATENCY + ADDRESS_STAGES + 2 + FETCH_LATENCY + blend.LATENCY
+
+
+class CachedTextureFilter(wiring.Component):
+    __doc__ = __doc__
+
+    def __init__(self, texture_set, config, *, lanes: int = 4, tag_width: int = 8, frac: int | None = None):
+        if not isinstance(texture_set, TextureSet):
+            raise TypeError(f"texture_set must be a TextureSet, not {type(texture_set).__name__}")
+        if lanes not in LANES:
+            raise ValueError(f"lanes must be one of {LANES}, not {lanes!r}")
+        self._ts = texture_set
+        self._config = config
+        self._lanes = lanes
+        self._tag_width = tag_width
+        self._table = level_table(texture_set)
+        minimum = spec.coordinate_frac_bits(self._table.max_log2)
+        if frac is not None and frac < minimum:
+            raise ValueError(f"frac {frac} is below {minimum} for this texture set")
+        self._frac = minimum if frac is None else int(frac)
+        self._texture_bits = texture_bits(texture_set)
+        self._features = Features.for_set(texture_set, True)
+        # lane 0 carries the weight, the pixel's marks and its tag; the others their weight
+        self._lane_tag = [WEIGHT_WIDTH + 2 + tag_width if k == 0 else WEIGHT_WIDTH for k in range(lanes)]
+        self._tf = [TexelFetch(texture_set, tag_width=self._lane_tag[k], index_port=True, raw_port=True)
+                    for k in range(lanes)]
+        super().__init__({
+            "i": In(stream.Signature(FilterRequestLayout(self._texture_bits, spec.coordinate_bits(self._frac),
+                                                         tag_width))),
+            "o": Out(stream.Signature(ResponseLayout(tag_width))),
+            "axi": Out(axi4_read_signature(32, 8 * config.bus_bytes)),
+            "stall_output": Out(1),
+            **{f"stall_memory{k}": Out(1) for k in range(lanes)},
+            "overflow": Out(1),
+        })
+
+    @property
+    def latency(self) -> int:
+        return LATENCY
+
+    @property
+    def lanes(self) -> int:
+        return self._lanes
+
+    @property
+    def frac(self) -> int:
+        return self._frac
+
+    def arbiter_depth(self) -> int:
+        """The arbiter's queues: every lane's bursts in flight (two per FIFO entry, two in its AR
+        slots), rounded up to a power of two."""
+        need = self._lanes * (2 * self._config.prefetch + 2)
+        return 1 << max(1, (need - 1).bit_length())
+
+    def elaborate(self, platform):
+        m = Module()
+        lanes, tw, ts = self._lanes, self._tag_width, self._ts
+        layout = Layout.of(ts)
+        m.submodules.footprint = fp = Footprint(self._table, texture_bits=self._texture_bits, frac=self._frac,
+                                                tag_width=tw)
+        m.submodules.blend = bl = Blend(lanes, tw)
+        m.submodules.arbiter = arb = AxiArbiter(lanes, addr_width=32, data_width=8 * self._config.bus_bytes,
+                                                depth=self.arbiter_depth())
+        wiring.connect(m, arb.axi, wiring.flipped(self.axi))
+        en1, en2 = Signal(name="address_en1"), Signal(name="address_en2")
+        v1, v2 = Signal(name="address_valid1"), Signal(name="address_valid2")
+        front = [Signal(RequestLayout(self._texture_bits, self._lane_tag[k]), name=f"lane{k}_request")
+                 for k in range(lanes)]
+        readers = []
+        for k in range(lanes):
+            tf = self._tf[k]
+            m.submodules[f"lane{k}"] = tf
+            r = cached_lane(m, f"lane{k}_", ts, self._features, self._config, layout, tf, front[k], (en1, en2))
+            wiring.connect(m, r.axi, arb.ports[k])
+            readers.append(r)
+        # -- the fork: one valid chain for every lane's address stages; every tag check together ---------
+        all_in = Signal(name="readers_ready")
+        m.d.comb += [
+            all_in.eq(Cat(*(r.i.ready for r in readers)).all()),
+            en2.eq(~v2 | all_in),
+            en1.eq(~v1 | en2),
+        ]
+        front_valid = Signal(name="front_valid")
+        with m.If(en1):
+            m.d.sync += v1.eq(front_valid)
+        with m.If(en2):
+            m.d.sync += v2.eq(v1)
+        for r in readers:
+            m.d.comb += r.i.valid.eq(v2 & all_in)
+        sequencer(m, fp, lanes, en1, [(front_valid if k == 0 else Signal(name=f"lane{k}_valid"), front[k])
+                                      for k in range(lanes)], tw)
+        # -- the join: the texel pipelines take a group when every reader holds it ------------------------
+        all_out = Signal(name="readers_valid")
+        m.d.comb += all_out.eq(Cat(*(r.o.valid for r in readers)).all())
+        for k, r in enumerate(readers):
+            m.d.comb += [self._tf[k].i.valid.eq(all_out), r.o.ready.eq(self._tf[0].i.ready & all_out),
+                         getattr(self, f"stall_memory{k}").eq(r.stall_fill)]
+        gather(m, bl, [tf.o for tf in self._tf])
+        wiring.connect(m, wiring.flipped(self.i), fp.i)
+        wiring.connect(m, bl.o, wiring.flipped(self.o))
+        m.d.comb += [self.stall_output.eq(self.o.valid & ~self.o.ready), self.overflow.eq(arb.overflow)]
+        return m

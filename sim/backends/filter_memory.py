@@ -1,0 +1,95 @@
+"""The texture filter through the memory system (docs/memory.md) on the backends:
+``simulate_cached_filter(ts, pixels, config, backend=..., lanes=...) -> FilterResult`` with ``memory``.
+
+- ``golden``: colours from :func:`sim.backends.filter.golden_colors`, cycles from the exact cycle
+  model :func:`golden.memory.filter.run_pixels` (``stall`` must be 0: output backpressure is not
+  modelled);
+- ``pysim``: :class:`hw.memory.filter.CachedTextureFilter` in Amaranth's simulator through the
+  filter's test bench (:func:`sim.backends.pysim.run_stream`), its AXI master answered each cycle by
+  :class:`sim.backends.axi_memory.AxiMemory` from the same memory model: tiny cases.
+
+``memory`` holds ``bursts``, ``memory_bytes`` (index, raw), ``bytes_per_pixel``, ``fill_waits`` (the
+lanes' data reads waiting for fills, summed over the lanes: the model's ``miss + bandwidth``), and for
+the RTL ``ar`` (every AR's cycle); for golden the model's hit rates, stall detail and the on-chip
+filter's cycles on the same pixels.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vqtex.golden.memory.system import Layout
+
+from .filter import FIELDS, TAG_WIDTH, FilterResult, check_pixels, default_frac, golden_colors, texel_slots
+
+__all__ = ["simulate_cached_filter", "run_pysim", "BACKENDS"]
+
+BACKENDS = ("golden", "pysim")
+
+
+def simulate_cached_filter(ts, pixels: dict, config, *, backend: str = "golden", lanes: int = 4,
+                           frac: int | None = None, stall: float = 0.0, seed: int = 0) -> FilterResult:
+    """See the module docstring. Raises ValueError for bad pixels, lanes, stall or backend (one line)."""
+    from vqtex.hw.filter import LANES
+    from vqtex.hw.memory.filter import LATENCY
+    if lanes not in LANES:
+        raise ValueError(f"lanes must be one of {LANES}, not {lanes!r}")
+    stall = float(stall)
+    if not 0.0 <= stall < 1.0:
+        raise ValueError(f"stall probability {stall} must be in [0, 1)")
+    frac = default_frac(ts) if frac is None else frac
+    p = check_pixels(ts, pixels, frac)
+    if backend == "golden":
+        if stall:
+            raise ValueError("the filter's cycle model through memory has no output backpressure: stall 0")
+        from vqtex.golden.memory.filter import run_pixels
+        model = run_pixels(ts, p, config, lanes, frac)
+        sc = model["stall_cycles"]
+        memory = {k: model[k] for k in ("bursts", "memory_bytes", "bytes_per_pixel", "bytes_per_texel",
+                                        "references", "hit_rate", "on_chip_cycles", "ar")}
+        memory["fill_waits"] = int(sc["miss"] + sc["bandwidth"])
+        memory["stall_detail"] = dict(sc)
+        memory["configuration"] = config.describe()
+        return FilterResult(golden_colors(ts, p, frac), model["cycles"], model["pixels"],
+                            texel_slots(p["mode"], lanes), lanes, LATENCY,
+                            {"output_backpressure": 0, "memory": memory["fill_waits"]}, 0, memory)
+    if backend == "pysim":
+        return run_pysim(ts, p, config, lanes=lanes, frac=frac, stall=stall, seed=seed)
+    raise ValueError(f"the filter through memory runs on {', '.join(BACKENDS)}, not on {backend}")
+
+
+def run_pysim(ts, pixels: dict, config, *, lanes: int = 4, frac: int | None = None, stall: float = 0.0,
+              seed: int = 0) -> FilterResult:
+    """``CachedTextureFilter`` on pysim (about 2e3 cycles per second): the filter's test bench with
+    the AXI slave stepped every cycle. Raises ``sim.backends.pysim.SimulationError`` on a colour out
+    of order, ``sim.backends.axi_memory.AxiError`` on a protocol error, AssertionError if the
+    arbiter's queue overflowed."""
+    from vqtex.hw.memory.filter import CachedTextureFilter
+
+    from .axi_memory import AxiMemory
+    from .pysim import run_stream
+    dut = CachedTextureFilter(ts, config, lanes=lanes, tag_width=TAG_WIDTH, frac=frac)
+    layout = Layout.of(ts)
+    slave = AxiMemory(layout.image(ts), config.make_memory(), config.bus_bytes)
+
+    def step(ctx, cycle):
+        if cycle == 0:
+            slave.start(ctx, dut.axi)
+        slave.step(ctx, dut.axi, cycle)
+
+    strobes = ["stall_output", "overflow"] + [f"stall_memory{k}" for k in range(lanes)]
+    rows = np.stack([np.asarray(pixels[f], np.int64) for f in FIELDS], 1)
+    ph, = run_stream(dut, [(None, rows)], columns=FIELDS, tag_width=TAG_WIDTH, strobes=strobes,
+                     valid=dut.o.valid, stall=stall, seed=seed, name="filter", step=step)
+    st = ph["strobes"]
+    assert st["overflow"] == 0, "the arbiter's queue overflowed"
+    bursts = np.bincount([int(a >= layout.raw_base) for a in slave.addresses], minlength=2)
+    line = (config.index_cache.line, config.raw_cache.line)
+    mem_bytes = {"index": int(bursts[0]) * line[0], "raw": int(bursts[1]) * line[1]}
+    n = len(rows)
+    fill = sum(st[f"stall_memory{k}"] for k in range(lanes))
+    memory = {"bursts": int(bursts.sum()), "memory_bytes": mem_bytes,
+              "bytes_per_pixel": sum(mem_bytes.values()) / n if n else 0.0, "fill_waits": int(fill),
+              "ar": np.array(slave.ar, np.int64), "configuration": config.describe()}
+    return FilterResult(ph["responses"], ph["cycles"], n, texel_slots(pixels["mode"], lanes), lanes, dut.latency,
+                        {"output_backpressure": st["stall_output"], "memory": int(fill)}, 0, memory)
