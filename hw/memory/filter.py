@@ -82,11 +82,15 @@ LATENCY = footprint.LATENCY + ADDRESS_STAGES + 2 + FETCH_LATENCY + blend.LATENCY
 class CachedTextureFilter(wiring.Component):
     __doc__ = __doc__
 
-    def __init__(self, texture_set, config, *, lanes: int = 4, tag_width: int = 8, frac: int | None = None):
+    def __new__(cls, texture_set=None, config=None, *, lanes: int = 4, **kwargs):
+        # checked before the instance exists (a rejected one is never reported as unused)
         if not isinstance(texture_set, TextureSet):
             raise TypeError(f"texture_set must be a TextureSet, not {type(texture_set).__name__}")
         if lanes not in LANES:
             raise ValueError(f"lanes must be one of {LANES}, not {lanes!r}")
+        return super().__new__(cls)
+
+    def __init__(self, texture_set, config, *, lanes: int = 4, tag_width: int = 8, frac: int | None = None):
         self._ts = texture_set
         self._config = config
         self._lanes = lanes
