@@ -424,6 +424,37 @@ def _cached_design_info(ts, config, tag_width: int) -> DesignInfo:
     return _checked(info)
 
 
+def cached_filter_design_info(ts, config, *, lanes: int = 4, frac: int | None = None,
+                              tag_width: int = 16) -> DesignInfo:
+    """Elaborate :class:`hw.memory.filter.CachedTextureFilter` and describe it as
+    :func:`filter_design_info` does the filter (a request row is the pixel's :data:`FIELDS`) with the
+    AXI4 read master as ``axi__*`` (``axi_bytes``, as :func:`cached_design_info`) and the strobes in
+    the unit's signature order (``stall_output``, ``stall_memory0`` .. , ``overflow``). What names
+    the build: lanes, frac, tag width, cache shapes, FIFO depth, bus width and the set's contents."""
+    key = ("cached_filter", lanes, frac, tag_width, config.index_cache, config.raw_cache, config.prefetch,
+           config.bus_bytes, texture_set_digest(ts))
+    return _memoised(key, lambda: _cached_filter_design_info(ts, config, lanes, frac, tag_width, key))
+
+
+def _cached_filter_design_info(ts, config, lanes, frac, tag_width, key) -> DesignInfo:
+    from vqtex.hw.memories import elaborate, memories
+    from vqtex.hw.memory.filter import CachedTextureFilter
+    top = CachedTextureFilter(ts, config, lanes=lanes, tag_width=tag_width, frac=frac)
+    frag = elaborate(top)
+    req, resp = top.i.p.shape(), top.o.p.shape()
+    info = DesignInfo(
+        top=top, fragment=frag, ports=port_map(top),
+        request_fields=_fields(req), response_fields=_fields(resp),
+        request_width=req.size, response_width=resp.size, tag_width=tag_width,
+        stages=["output"], strobes=[n for n in top.signature.members if n not in ("i", "o", "axi")],
+        memories=[MemoryImage(" ".join(m.path), m.width, m.depth, m.words) for m in memories(frag)],
+        latency=int(top.latency), unit="cached_filter", columns=FIELDS, valid="o__valid",
+        verilog_name="cached_texture_filter",
+        verilog_request=[("i_payload", 0, req.size)], verilog_response=[("o_payload", 0, resp.size)],
+        options=key[1:], axi_bytes=config.bus_bytes)
+    return _checked(info)
+
+
 def _checked(info: DesignInfo) -> DesignInfo:
     if info.request_width > 64 * MAX_PAYLOAD_WORDS:
         raise ToolchainError(f"request payload of {info.request_width} bits: the compiled backends take at most "

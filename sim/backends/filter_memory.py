@@ -6,7 +6,10 @@
   modelled);
 - ``pysim``: :class:`hw.memory.filter.CachedTextureFilter` in Amaranth's simulator through the
   filter's test bench (:func:`sim.backends.pysim.run_stream`), its AXI master answered each cycle by
-  :class:`sim.backends.axi_memory.AxiMemory` from the same memory model: tiny cases.
+  :class:`sim.backends.axi_memory.AxiMemory` from the same memory model: tiny cases;
+- ``cxxrtl``: the same unit compiled (:func:`sim.backends.design.cached_filter_design_info`, built by
+  the backend's one ``build_design`` and run by its batch API), its AXI master answered by the
+  drivers' slave (``drivers/axi_slave.h``) from the C++ twin of the same memory model: scene frames.
 
 ``memory`` holds ``bursts``, ``memory_bytes`` (index, raw), ``bytes_per_pixel``, ``fill_waits`` (the
 lanes' data reads waiting for fills, summed over the lanes: the model's ``miss + bandwidth``), and for
@@ -24,7 +27,7 @@ from .filter import FIELDS, TAG_WIDTH, FilterResult, check_pixels, default_frac,
 
 __all__ = ["simulate_cached_filter", "run_pysim", "BACKENDS"]
 
-BACKENDS = ("golden", "pysim")
+BACKENDS = ("golden", "pysim", "cxxrtl")
 
 
 def simulate_cached_filter(ts, pixels: dict, config, *, backend: str = "golden", lanes: int = 4,
@@ -55,6 +58,8 @@ def simulate_cached_filter(ts, pixels: dict, config, *, backend: str = "golden",
                             {"output_backpressure": 0, "memory": memory["fill_waits"]}, 0, memory)
     if backend == "pysim":
         return run_pysim(ts, p, config, lanes=lanes, frac=frac, stall=stall, seed=seed)
+    if backend == "cxxrtl":
+        return run_compiled(ts, p, config, lanes=lanes, frac=frac, stall=stall, seed=seed)
     raise ValueError(f"the filter through memory runs on {', '.join(BACKENDS)}, not on {backend}")
 
 
@@ -93,3 +98,51 @@ def run_pysim(ts, pixels: dict, config, *, lanes: int = 4, frac: int | None = No
               "ar": np.array(slave.ar, np.int64), "configuration": config.describe()}
     return FilterResult(ph["responses"], ph["cycles"], n, texel_slots(pixels["mode"], lanes), lanes, dut.latency,
                         {"output_backpressure": st["stall_output"], "memory": int(fill)}, 0, memory)
+
+
+def compiled_build(ts, config, *, lanes: int = 4, frac: int | None = None):
+    """The CXXRTL library of the cached filter, built or from the build cache (one build per lanes,
+    cache shapes, FIFO depth, bus width and set; the memory model is the driver's, set per run)."""
+    from .design import cached_filter_design_info
+    from .memory import _cxx_flags
+    from .cxxrtl import build_design
+    return build_design(cached_filter_design_info(ts, config, lanes=lanes, frac=frac, tag_width=TAG_WIDTH),
+                        cxxflags=_cxx_flags())
+
+
+def run_compiled(ts, pixels: dict, config, *, lanes: int = 4, frac: int | None = None, stall: float = 0.0,
+                 seed: int = 0) -> FilterResult:
+    """The cached filter on CXXRTL: :func:`compiled_build`'s library, the external memory configured
+    (``Layout.image``, the memory model's parameters), run by :func:`sim.backends.cxxrtl.run_checked`.
+    Raises ``sim.backends.toolchain.ToolchainError`` on an AXI protocol error or a hang."""
+    from .cxxrtl import C_CYCLES, open_design, run_checked, strobe_sums
+    from .cxxrtl import batch_layout
+    from .memory_model_cxx import model_params
+    n = len(pixels["texture"])
+    lib, info, _ = open_design(compiled_build(ts, config, lanes=lanes, frac=frac))
+    try:
+        layout = Layout.of(ts)
+        kind, params = model_params(config.make_memory())
+        lib.configure_axi(layout.image(ts), config.bus_bytes, kind, params)
+        rows = np.stack([np.asarray(pixels[f], np.int64) for f in FIELDS], 1)
+        groups = int(texel_slots(pixels["mode"], lanes) // lanes)
+        mem = config.make_memory()
+        access = (config.latency if config.kind == "fixed" else 4096) + 256 * mem.beat_interval
+        worst = (groups + 64) * (2 * lanes * access + 64)
+        rgba, counters = run_checked(lib, rows, batch_layout(info), n=n, transfers=n, latency=info.latency,
+                                     worst=worst, stall=stall, seed=seed, tag_width=TAG_WIDTH, what="colour")
+        st = strobe_sums(info, counters)
+        ar, addresses = lib.axi_bursts()
+    finally:
+        lib.close()
+    assert st["overflow"] == 0, "the arbiter's queue overflowed"
+    addresses = np.asarray(addresses, np.int64)
+    bursts = np.bincount((addresses >= layout.raw_base).astype(np.int64), minlength=2)
+    line = (config.index_cache.line, config.raw_cache.line)
+    mem_bytes = {"index": int(bursts[0]) * line[0], "raw": int(bursts[1]) * line[1]}
+    fill = sum(st[f"stall_memory{k}"] for k in range(lanes))
+    memory = {"bursts": int(bursts.sum()), "memory_bytes": mem_bytes,
+              "bytes_per_pixel": sum(mem_bytes.values()) / n if n else 0.0, "fill_waits": int(fill),
+              "ar": np.asarray(ar, np.int64), "configuration": config.describe()}
+    return FilterResult(rgba.copy(), int(counters[C_CYCLES]), n, texel_slots(pixels["mode"], lanes), lanes,
+                        info.latency, {"output_backpressure": st["stall_output"], "memory": int(fill)}, 0, memory)
