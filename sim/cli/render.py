@@ -154,13 +154,25 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
             if f == frames[0]:
                 warn_slow(backend, int(len(pixels["mode"]) * 8 // lanes * len(frames)))
             if not prepared:                # elaborate and build once: each frame's rtl_seconds is its simulation
-                from vqtex.sim.backends.filter import prepare_filter
-                out["rtl_setup_seconds"] = prepare_filter(backend, ts, lanes=lanes, frac=sampler.frac,
-                                                          index_banks=index_banks, geometry=geometry)
+                t0 = time.perf_counter()
+                if memory is not None:
+                    if backend == "cxxrtl":
+                        from vqtex.sim.backends.filter_memory import compiled_build
+                        compiled_build(ts, memory, lanes=lanes, frac=sampler.frac)
+                    out["rtl_setup_seconds"] = time.perf_counter() - t0 if backend == "cxxrtl" else 0.0
+                else:
+                    from vqtex.sim.backends.filter import prepare_filter
+                    out["rtl_setup_seconds"] = prepare_filter(backend, ts, lanes=lanes, frac=sampler.frac,
+                                                              index_banks=index_banks, geometry=geometry)
                 prepared = True
             t0 = time.perf_counter()
-            res = simulate_filter(ts, pixels, backend=backend, lanes=lanes, frac=sampler.frac, stall=stall, seed=seed,
-                                  index_banks=index_banks, geometry=geometry)
+            if memory is not None:          # the filter's lanes through the memory system
+                from vqtex.sim.backends.filter_memory import simulate_cached_filter
+                res = simulate_cached_filter(ts, pixels, memory, backend=backend, lanes=lanes, frac=sampler.frac,
+                                             stall=stall, seed=seed)
+            else:
+                res = simulate_filter(ts, pixels, backend=backend, lanes=lanes, frac=sampler.frac, stall=stall,
+                                      seed=seed, index_banks=index_banks, geometry=geometry)
             out["rtl_seconds"] = time.perf_counter() - t0
             out["image"] = sampler.place(res.colors)
             out["identical_to_golden"] = bool(np.array_equal(out["image"], golden_frame))
@@ -315,6 +327,8 @@ def _frame_report(r: dict) -> dict:
                  pixels_per_clock=round(s.pixels_per_clock, 4), lanes=int(s.lanes), latency=int(s.latency),
                  texels_fetched=int(s.texels), stall_cycles={k: int(v) for k, v in s.stall_cycles.items()},
                  bank_conflicts=int(s.bank_conflicts), identical_to_golden=r["identical_to_golden"])
+        if s.memory is not None:            # (JSON: the AR cycles are for the tests)
+            d["memory"] = {k: v for k, v in s.memory.items() if k != "ar"}
     if "sim" in r and r["sim"] is not None:
         s = r["sim"]
         d.update(rtl_seconds=round(r["rtl_seconds"], 4), cycles=int(s.cycles), latency=int(s.latency),
@@ -348,7 +362,18 @@ def cmd_render(args) -> int:
             raise CliError("--filter-in-rtl fetches every texel of a footprint, zero weights too: it does not go "
                            "with --encode-needed (a pruned texture set)")
         memory = memory_config(args)
-        if memory is not None:
+        if memory is not None and args.filter_in_rtl:
+            bad = [opt for opt, on in (("--fovea", fovea is not None), ("--index-banks", args.index_banks is not None),
+                                       ("--unit", args.unit is not None)) if on]
+            if bad:
+                raise CliError(f"--filter-in-rtl --memory external: the filter's lanes read through their own caches, "
+                               f"not with {bad[0]}")
+            if args.backend not in ("golden", "pysim", "cxxrtl"):
+                raise CliError(f"--filter-in-rtl --memory external runs on golden, pysim and cxxrtl, not on {args.backend}")
+            if args.backend == "golden" and args.stall:
+                raise CliError("--filter-in-rtl --memory external: the golden cycle model has no output backpressure "
+                               "(--stall needs --backend pysim or cxxrtl)")
+        elif memory is not None:
             bad = [opt for opt, on in (("--filter-in-rtl", args.filter_in_rtl), ("--compare-fixed", args.compare_fixed),
                                        ("--fovea", fovea is not None), ("--one-port", args.one_port),
                                        ("--unit", args.unit is not None)) if on]
@@ -411,7 +436,8 @@ def cmd_render(args) -> int:
             report["cycles_per_frame"] = round(float(np.mean([f["cycles"] for f in per_frame])), 1)
         if memory is not None:
             report["cycles_per_frame"] = round(float(np.mean([f.get("cycles", 0) for f in per_frame])), 1)
-            report["memory"] = _memory_summary(memory, per_frame)
+            report["memory"] = (_filter_memory_summary(memory, per_frame) if args.filter_in_rtl
+                                else _memory_summary(memory, per_frame))
         stream_mismatches = []
         if args.compare_fixed:
             report["cycles_per_frame"] = round(float(np.mean([f.get("cycles", 0) for f in per_frame])), 1)
@@ -436,12 +462,19 @@ def cmd_render(args) -> int:
                     f"to golden: {'yes' if not mismatches else 'NO, frames ' + str(mismatches)}; "
                     f"{report['cycles_per_frame']:.0f} cycles per frame, {report['pixels_per_clock']:.3f} pixels "
                     f"per clock; stall cycles: " + ", ".join(f"{k} {v}" for k, v in stalls.items())
-                    + f"; index memory {'banked by block parity' if args.index_banks == 'parity' else 'per lane'}, "
-                    f"bank conflicts: {sum(f['bank_conflicts'] for f in per_frame)}")
+                    + ("; the index map and raw levels in external memory, a cache per lane" if memory is not None else
+                       f"; index memory {'banked by block parity' if args.index_banks == 'parity' else 'per lane'}, "
+                       f"bank conflicts: {sum(f['bank_conflicts'] for f in per_frame)}"))
     elif args.backend != "golden":
         text.append(f"RTL frames identical to golden: {'yes' if not mismatches else 'NO, frames ' + str(mismatches)}; "
                     f"{report['cycles_per_frame']:.0f} cycles per frame")
-    if memory is not None:
+    if memory is not None and args.filter_in_rtl:
+        m = report["memory"]
+        text.append(f"external memory ({m['configuration']}), a cache per lane: {m['bytes_per_pixel']:.4f} bytes read "
+                    f"per pixel" + (f", hit rates index {_pct(m['hit_rate']['index'])}, raw {_pct(m['hit_rate']['raw'])}"
+                                    if "hit_rate" in m else "")
+                    + f"; the on-chip filter: {m['on_chip_pixels_per_clock']:.3f} pixels per clock")
+    elif memory is not None:
         m = report["memory"]
         text.append(f"external memory ({m['configuration']}): {report['cycles_per_frame']:,.0f} cycles per frame, "
                     f"{m['bytes_per_texel']:.4f} bytes read per texel, {m['bytes_per_pixel']:.4f} per pixel, "
@@ -485,6 +518,23 @@ def _memory_summary(memory, per_frame) -> dict:
     if frames and "zero_latency_cycles" in frames[0]["memory"]:
         zero = sum(f["memory"]["zero_latency_cycles"] for f in frames)
         out["of_zero_latency"] = zero / sum(f["cycles"] for f in frames)
+    return out
+
+
+def _filter_memory_summary(memory, per_frame) -> dict:
+    """The filter's external-memory figures over the frames: bytes per pixel, hit rates (golden),
+    the on-chip filter's pixels per clock on the same pixels (``groups + 23`` cycles a frame)."""
+    from vqtex.hw.filter import LATENCY
+    nbytes = sum(sum(f["memory"]["memory_bytes"].values()) for f in per_frame)
+    pixels = sum(f["pixels"] for f in per_frame)
+    on_chip = sum(f["texels_fetched"] // f["lanes"] + LATENCY for f in per_frame if f["pixels"])
+    out = {"configuration": memory.describe(), "bytes": nbytes, "bytes_per_pixel": nbytes / pixels if pixels else 0.0,
+           "on_chip_pixels_per_clock": pixels / on_chip if on_chip else 0.0}
+    if all("references" in f["memory"] for f in per_frame):
+        refs = {k: sum(f["memory"]["references"][k] for f in per_frame) for k in ("index", "raw")}
+        hits = {k: sum(round(f["memory"]["hit_rate"][k] * f["memory"]["references"][k])
+                       for f in per_frame if f["memory"]["references"][k]) for k in refs}
+        out["hit_rate"] = {k: hits[k] / refs[k] if refs[k] else None for k in refs}
     return out
 
 
