@@ -1,0 +1,47 @@
+"""vqtex render --filter-in-rtl --memory external: the texture filter's lanes through the memory
+system render golden's frames, and the golden cycle model and pysim report the same cycles and
+bytes; the combinations it does not serve are one line, exit 2."""
+
+import json
+
+import pytest
+
+from tests.sim.cli.test_render_filter import MIRRORED
+from tests.support import assert_one_error
+from vqtex.sim.cli import main
+
+SMALL = ["--memory", "external", "--cache-size", "256", "--raw-cache-size", "128", "--cache-line", "16",
+         "--cache-ways", "2", "--prefetch", "4", "--memory-latency", "30"]
+
+
+@pytest.fixture
+def scene_file(tmp_path):
+    p = tmp_path / "tiny.toml"
+    p.write_text(MIRRORED)
+    return p
+
+
+def test_golden_and_pysim_agree(tmp_path, scene_file, capsys):
+    reps = {}
+    for backend in ("golden", "pysim"):
+        code = main(["render", str(scene_file), "-o", str(tmp_path / f"{backend}.png"), "--frames", "0",
+                     "--mode", "bilinear", "--filter-in-rtl", "--backend", backend, *SMALL, "--json"])
+        reps[backend] = json.loads(capsys.readouterr().out)
+        assert code == 0 and reps[backend]["identical_to_golden"] is True
+    g, p = reps["golden"]["frames"][0], reps["pysim"]["frames"][0]
+    assert g["cycles"] == p["cycles"] > g["pixels"] + 27
+    assert g["memory"]["memory_bytes"] == p["memory"]["memory_bytes"]
+    assert g["memory"]["fill_waits"] == p["memory"]["fill_waits"] > 0
+    assert reps["golden"]["memory"]["bytes_per_pixel"] == reps["pysim"]["memory"]["bytes_per_pixel"] > 0
+    assert reps["golden"]["memory"]["on_chip_pixels_per_clock"] > reps["golden"]["pixels_per_clock"]
+
+
+@pytest.mark.parametrize("extra,pattern", [
+    (["--index-banks", "lane"], "not with --index-banks"),
+    (["--backend", "verilator"], "runs on golden, pysim and cxxrtl"),
+    (["--stall", "0.2"], "no output backpressure"),
+])
+def test_refused(tmp_path, scene_file, capsys, extra, pattern):
+    assert_one_error(capsys, ["render", str(scene_file), "-o", str(tmp_path / "x.png"), "--frames", "0",
+                              "--filter-in-rtl", *SMALL, *extra], pattern)
+    assert not (tmp_path / "x.png").exists()
