@@ -534,3 +534,49 @@ class CachedTexelFetchTop(wiring.Component):
             else:
                 m.d.comb += getattr(u.axi, name).eq(getattr(self, f"axi_{name}"))
         return m
+
+
+class CachedFilterTop(wiring.Component):
+    """:class:`hw.memory.filter.CachedTextureFilter` with one port per stream member as
+    :class:`FilterTop` (``i_valid``, ``i_ready``, ``i_payload``, ``o_valid``, ``o_ready``,
+    ``o_payload``), its strobes, and the AXI4 read master as ``axi_*`` as :class:`CachedTexelFetchTop`
+    (``axi_arid`` tied to 0, ``axi_rid`` ignored).
+
+    Arguments
+    ---------
+    texture_set, config, lanes, tag_width, frac
+        As for :class:`hw.memory.filter.CachedTextureFilter`.
+    """
+
+    def __init__(self, texture_set, config, *, lanes: int = 4, tag_width: int = 16, frac: int | None = None):
+        from vqtex.hw.memory.filter import CachedTextureFilter
+        self._unit = u = CachedTextureFilter(texture_set, config, lanes=lanes, tag_width=tag_width, frac=frac)
+        self._strobes = [n for n in u.signature.members if n not in ("i", "o", "axi")]
+        members = {"i_valid": In(1), "i_ready": Out(1), "i_payload": In(len(u.i.p.as_value())),
+                   "o_valid": Out(1), "o_ready": In(1), "o_payload": Out(len(u.o.p.as_value())),
+                   **{n: Out(1) for n in self._strobes}, "axi_arid": Out(1), "axi_rid": In(1)}
+        for name, member in u.axi.signature.members.items():
+            members[f"axi_{name}"] = Out(member.shape) if member.flow == wiring.Out else In(member.shape)
+        super().__init__(members)
+
+    @property
+    def unit(self):
+        return self._unit
+
+    @property
+    def latency(self) -> int:
+        return self._unit.latency
+
+    def elaborate(self, platform):
+        m = Module()
+        m.submodules.unit = u = self._unit
+        m.d.comb += [u.i.valid.eq(self.i_valid), self.i_ready.eq(u.i.ready), u.i.p.eq(self.i_payload),
+                     self.o_valid.eq(u.o.valid), u.o.ready.eq(self.o_ready), self.o_payload.eq(u.o.p),
+                     self.axi_arid.eq(0)]
+        m.d.comb += [getattr(self, n).eq(getattr(u, n)) for n in self._strobes]
+        for name, member in u.axi.signature.members.items():
+            if member.flow == wiring.Out:
+                m.d.comb += getattr(self, f"axi_{name}").eq(getattr(u.axi, name))
+            else:
+                m.d.comb += getattr(u.axi, name).eq(getattr(self, f"axi_{name}"))
+        return m

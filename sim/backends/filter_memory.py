@@ -7,9 +7,10 @@
 - ``pysim``: :class:`hw.memory.filter.CachedTextureFilter` in Amaranth's simulator through the
   filter's test bench (:func:`sim.backends.pysim.run_stream`), its AXI master answered each cycle by
   :class:`sim.backends.axi_memory.AxiMemory` from the same memory model: tiny cases;
-- ``cxxrtl``: the same unit compiled (:func:`sim.backends.design.cached_filter_design_info`, built by
-  the backend's one ``build_design`` and run by its batch API), its AXI master answered by the
-  drivers' slave (``drivers/axi_slave.h``) from the C++ twin of the same memory model: scene frames.
+- ``cxxrtl``, ``verilator``: the same unit compiled (:func:`sim.backends.design.cached_filter_design_info`;
+  Verilator from its exported Verilog, :class:`sim.backends.design.CachedFilterTop`), built by the
+  backend's one ``build_design`` and run by its batch API, its AXI master answered by the drivers'
+  slave (``drivers/axi_slave.h``) from the C++ twin of the same memory model: scene frames.
 
 ``memory`` holds ``bursts``, ``memory_bytes`` (index, raw), ``bytes_per_pixel``, ``fill_waits`` (the
 lanes' data reads waiting for fills, summed over the lanes: the model's ``miss + bandwidth``), and for
@@ -27,7 +28,7 @@ from .filter import FIELDS, TAG_WIDTH, FilterResult, check_pixels, default_frac,
 
 __all__ = ["simulate_cached_filter", "run_pysim", "BACKENDS"]
 
-BACKENDS = ("golden", "pysim", "cxxrtl")
+BACKENDS = ("golden", "pysim", "cxxrtl", "verilator")
 
 
 def simulate_cached_filter(ts, pixels: dict, config, *, backend: str = "golden", lanes: int = 4,
@@ -58,8 +59,8 @@ def simulate_cached_filter(ts, pixels: dict, config, *, backend: str = "golden",
                             {"output_backpressure": 0, "memory": memory["fill_waits"]}, 0, memory)
     if backend == "pysim":
         return run_pysim(ts, p, config, lanes=lanes, frac=frac, stall=stall, seed=seed)
-    if backend == "cxxrtl":
-        return run_compiled(ts, p, config, lanes=lanes, frac=frac, stall=stall, seed=seed)
+    if backend in ("cxxrtl", "verilator"):
+        return run_compiled(ts, p, config, lanes=lanes, frac=frac, stall=stall, seed=seed, backend=backend)
     raise ValueError(f"the filter through memory runs on {', '.join(BACKENDS)}, not on {backend}")
 
 
@@ -100,26 +101,32 @@ def run_pysim(ts, pixels: dict, config, *, lanes: int = 4, frac: int | None = No
                         {"output_backpressure": st["stall_output"], "memory": int(fill)}, 0, memory)
 
 
-def compiled_build(ts, config, *, lanes: int = 4, frac: int | None = None):
-    """The CXXRTL library of the cached filter, built or from the build cache (one build per lanes,
-    cache shapes, FIFO depth, bus width and set; the memory model is the driver's, set per run)."""
+def compiled_build(ts, config, *, lanes: int = 4, frac: int | None = None, backend: str = "cxxrtl"):
+    """The compiled library of the cached filter on ``backend`` (``cxxrtl``, or ``verilator`` from
+    its exported Verilog), built or from the build cache (one build per lanes, cache shapes, FIFO
+    depth, bus width and set; the memory model is the driver's, set per run)."""
     from .design import cached_filter_design_info
-    from .memory import _cxx_flags
-    from .cxxrtl import build_design
-    return build_design(cached_filter_design_info(ts, config, lanes=lanes, frac=frac, tag_width=TAG_WIDTH),
-                        cxxflags=_cxx_flags())
+    info = cached_filter_design_info(ts, config, lanes=lanes, frac=frac, tag_width=TAG_WIDTH)
+    if backend == "cxxrtl":
+        from .cxxrtl import build_design
+        from .memory import _cxx_flags
+        return build_design(info, cxxflags=_cxx_flags())
+    from . import verilator
+    from .verilog import export_cached_filter_verilog
+    return verilator.build_design(info, lambda: export_cached_filter_verilog(
+        ts, config, lanes=lanes, tag_width=TAG_WIDTH, frac=frac, name=info.verilog_name))
 
 
 def run_compiled(ts, pixels: dict, config, *, lanes: int = 4, frac: int | None = None, stall: float = 0.0,
-                 seed: int = 0) -> FilterResult:
-    """The cached filter on CXXRTL: :func:`compiled_build`'s library, the external memory configured
+                 seed: int = 0, backend: str = "cxxrtl") -> FilterResult:
+    """The cached filter on CXXRTL or Verilator: :func:`compiled_build`'s library, the external memory configured
     (``Layout.image``, the memory model's parameters), run by :func:`sim.backends.cxxrtl.run_checked`.
     Raises ``sim.backends.toolchain.ToolchainError`` on an AXI protocol error or a hang."""
     from .cxxrtl import C_CYCLES, open_design, run_checked, strobe_sums
     from .cxxrtl import batch_layout
     from .memory_model_cxx import model_params
     n = len(pixels["texture"])
-    lib, info, _ = open_design(compiled_build(ts, config, lanes=lanes, frac=frac))
+    lib, info, _ = open_design(compiled_build(ts, config, lanes=lanes, frac=frac, backend=backend))
     try:
         layout = Layout.of(ts)
         kind, params = model_params(config.make_memory())

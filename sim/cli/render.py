@@ -156,10 +156,11 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
             if not prepared:                # elaborate and build once: each frame's rtl_seconds is its simulation
                 t0 = time.perf_counter()
                 if memory is not None:
-                    if backend == "cxxrtl":
+                    compiled = backend in ("cxxrtl", "verilator")
+                    if compiled:
                         from vqtex.sim.backends.filter_memory import compiled_build
-                        compiled_build(ts, memory, lanes=lanes, frac=sampler.frac)
-                    out["rtl_setup_seconds"] = time.perf_counter() - t0 if backend == "cxxrtl" else 0.0
+                        compiled_build(ts, memory, lanes=lanes, frac=sampler.frac, backend=backend)
+                    out["rtl_setup_seconds"] = time.perf_counter() - t0 if compiled else 0.0
                 else:
                     from vqtex.sim.backends.filter import prepare_filter
                     out["rtl_setup_seconds"] = prepare_filter(backend, ts, lanes=lanes, frac=sampler.frac,
@@ -368,8 +369,6 @@ def cmd_render(args) -> int:
             if bad:
                 raise CliError(f"--filter-in-rtl --memory external: the filter's lanes read through their own caches, "
                                f"not with {bad[0]}")
-            if args.backend not in ("golden", "pysim", "cxxrtl"):
-                raise CliError(f"--filter-in-rtl --memory external runs on golden, pysim and cxxrtl, not on {args.backend}")
             if args.backend == "golden" and args.stall:
                 raise CliError("--filter-in-rtl --memory external: the golden cycle model has no output backpressure "
                                "(--stall needs --backend pysim or cxxrtl)")

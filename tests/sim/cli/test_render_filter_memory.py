@@ -38,7 +38,7 @@ def test_golden_and_pysim_agree(tmp_path, scene_file, capsys):
 
 @pytest.mark.parametrize("extra,pattern", [
     (["--index-banks", "lane"], "not with --index-banks"),
-    (["--backend", "verilator"], "runs on golden, pysim and cxxrtl"),
+    (["--fovea", "10,10", "--mode", "bilinear"], "not with --fovea"),
     (["--stall", "0.2"], "no output backpressure"),
 ])
 def test_refused(tmp_path, scene_file, capsys, extra, pattern):
