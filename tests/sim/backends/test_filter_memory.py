@@ -1,6 +1,7 @@
 """The texture filter through the memory system (hw.memory.filter.CachedTextureFilter) compiled with
 CXXRTL, its AXI4 master answered by the drivers' slave (drivers/axi_slave.h) from the C++ twin of the
-golden memory models, on a scene frame: colours equal golden's frame bit for bit, and the cycles,
+golden memory models, on a scene frame (and on Verilator, from the exported Verilog, on random
+edge-case pixels of a small set with two lanes): colours equal golden's frame bit for bit, and the cycles,
 every AR's cycle, the bytes read and the lanes' fill waits equal the cycle model
 (golden.memory.filter) exactly; fixed latency and DDR3 from one build (the memory model is the
 driver's, chosen per run); with random output backpressure, colours and order only."""
@@ -55,3 +56,21 @@ def test_scene_frame_equals_the_cycle_model():
     rtl = simulate_cached_filter(ts, px, MemoryConfig(**SCENE, latency=13), backend="cxxrtl", lanes=4, stall=0.25,
                                  seed=2)
     assert (rtl.colors == want).all() and rtl.stall_cycles["output_backpressure"] > 0
+
+
+def test_verilator_equals_the_cycle_model():
+    need("g++", "verilator")
+    from tests.hw.filter.test_hw_filter import edge_pixels, filter_set
+    from vqtex.golden import filter as spec
+    from vqtex.hw.filter.footprint import level_table
+    ts = filter_set()
+    frac = spec.coordinate_frac_bits(level_table(ts).max_log2)
+    px = edge_pixels(level_table(ts), frac, 500, 4)
+    small = dict(index_cache=CacheShape(128, 16, 2), raw_cache=CacheShape(64, 16, 2), prefetch=4, bus_bytes=16)
+    for cfg in (MemoryConfig(**small, latency=20), MemoryConfig(**small, kind="dram")):
+        rtl = simulate_cached_filter(ts, px, cfg, backend="verilator", lanes=2)
+        model = simulate_cached_filter(ts, px, cfg, backend="golden", lanes=2)
+        assert (rtl.colors == golden_colors(ts, px, frac)).all()
+        assert rtl.cycles == model.cycles
+        assert rtl.memory["ar"].tolist() == model.memory["ar"].tolist()
+        assert rtl.memory["fill_waits"] == model.memory["fill_waits"] > 0
