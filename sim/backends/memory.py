@@ -30,7 +30,7 @@ from vqtex.golden.memory.timing import plan
 from ..streams import ready_pattern
 from .interface import GOLDEN_CHUNK, SimResult
 
-__all__ = ["run", "run_pysim", "run_compiled", "build_cached", "BACKENDS"]
+__all__ = ["run", "run_pysim", "run_compiled", "build_cached", "cached_cxx_flags", "BACKENDS"]
 
 #: Backends that run the cached unit.
 BACKENDS = ("golden", "pysim", "cxxrtl", "verilator")
@@ -156,7 +156,7 @@ def build_cached(ts, config, backend: str, *, tag_width: int = 8):
     info = cached_design_info(ts, config, tag_width=tag_width)
     if backend == "cxxrtl":
         from .cxxrtl import build_design
-        return build_design(info, cxxflags=_cxx_flags())
+        return build_design(info, cxxflags=cached_cxx_flags())
     if backend == "verilator":
         from .verilator import build_design
         from .verilog import export_cached_verilog
@@ -164,7 +164,7 @@ def build_cached(ts, config, backend: str, *, tag_width: int = 8):
     raise ValueError(f"no compiled backend {backend!r} (cxxrtl, verilator)")
 
 
-def _cxx_flags() -> list:
+def cached_cxx_flags() -> list:
     """The C++ flags of a cached design's CXXRTL build: the backend's, and with clang a deeper
     bracket limit (the caches' state is flip-flops read through set-indexed multiplexers, which
     CXXRTL writes as nested expressions: with the CLI's default caches, 16 + 4 KB of 32-byte lines,
