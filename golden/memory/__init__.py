@@ -10,7 +10,9 @@ simulator's AXI slave:
 - ``cache.py``: set-associative LRU caches of lines, classified over a reference stream;
 - ``system.py``: the unit's memory configuration (caches, memory, layout) and the references a
   request stream makes;
-- ``timing.py``: the exact cycle count of a request stream through the cached unit.
+- ``timing.py``: the exact cycle count of a request stream through the cached unit;
+- ``filter.py``: the exact cycle count of the texture filter's pixels through a cache per lane;
+- ``arbiter.py``: the order in which the lanes' bursts share one AXI master.
 
 Callers import the modules by name.
 """

@@ -59,7 +59,6 @@ from vqtex.golden import filter as spec
 from vqtex.golden.format import TextureSet
 from vqtex.golden.memory.system import Layout
 
-from ..address import COORD_BITS  # noqa: F401  (the coordinate width the footprint addresses)
 from ..descriptor import texture_bits
 from ..features import Features
 from ..filter import blend, footprint
