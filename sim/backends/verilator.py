@@ -8,7 +8,9 @@ CXXRTL backend, and run through the same ctypes code (:class:`sim.backends.cxxrt
 responses, cycles, stall counts, straddles and occupancy are comparable one for one. One build
 function serves both units (:func:`build_design`, from the unit's
 :class:`sim.backends.design.DesignInfo`); :func:`build_verilator`, :func:`open_verilator` and
-:func:`run` are the texel-fetch unit's entry points.
+:func:`run` are the texel-fetch unit's entry points. ``halves=True`` builds the baked texel-fetch
+unit instead as its two halves, two models run by drivers/halves.h as the CXXRTL backend runs its
+halves (measured, not the default: slower on one thread; docs/simulation.md).
 
 Builds are cached (:mod:`sim.backends.toolchain`) by a hash of the Verilog, the driver sources, the Verilator
 and compiler versions and the flags; Verilator's runtime (``verilated.cpp``) is compiled once per
