@@ -96,7 +96,7 @@ def test_scene_frame_equals_golden(backend):
     _need(backend)
     from vqtex.golden.render.frame import frame_requests
     from vqtex.golden.render.scene import build_texture_set, parse_scene
-    from tests.golden.need.test_need import SMALL as SCENE_TOML
+    from tests.support import NEED_SCENE as SCENE_TOML
     scene = parse_scene(SCENE_TOML, "small.toml")
     ts = build_texture_set(scene)
     req, _ = frame_requests(scene, 1, ts, "trilinear")

@@ -96,7 +96,7 @@ def test_render_with_external_memory(capsys, tmp_path, backend):
     from vqtex.golden.render.frame import frame_requests
     from vqtex.golden.render.scene import build_texture_set, parse_scene
     from vqtex.sim.backends.cycle_model import run_cached
-    from tests.golden.need.test_need import SMALL
+    from tests.support import NEED_SCENE as SMALL
     scene_file = tmp_path / "small.toml"
     scene_file.write_text(SMALL)
     with shared_cache():
