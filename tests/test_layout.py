@@ -372,7 +372,7 @@ def test_the_cross_import_check_passes_support_and_the_package():
     assert imports_of_test_modules("sim/cli/test_a.py", "from tests.support import TINY_SCENE, need\n"
                                                     "from tests import support\nimport tests.support.sets\n"
                                                     "from vqtex.golden.fetch import fetch\n"
-                                                    "from .cocotb_axi import host\n") == []
+                                                    "from .cocotb_bus import vqtex_bus_host\n") == []
 
 
 def test_the_cross_import_check_reads_the_tree(tmp_path, monkeypatch):

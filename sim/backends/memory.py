@@ -168,7 +168,7 @@ def build_cached(ts, config, backend: str, *, tag_width: int = 8):
     if backend == "verilator":
         from .verilator import build_design
         from .verilog import export_cached_verilog
-        return build_design(info, lambda: export_cached_verilog(ts, config, tag_width=tag_width))
+        return build_design(info, lambda: export_cached_verilog(ts, config, tag_width=tag_width)[0])
     raise ValueError(f"no compiled backend {backend!r} (cxxrtl, verilator)")
 
 

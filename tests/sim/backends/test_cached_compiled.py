@@ -143,7 +143,7 @@ def test_verilator_sees_no_combinational_cycle(tmp_path):
     ts = texture_set("yuv_4x4_b12_mip")
     for prefetch in (1, 16):
         src = tmp_path / f"cached{prefetch}.v"
-        src.write_text(export_cached_verilog(ts, MemoryConfig(**SMALL, prefetch=prefetch)))
+        src.write_text(export_cached_verilog(ts, MemoryConfig(**SMALL, prefetch=prefetch))[0])
         out = subprocess.run([find_tool("verilator"), "--lint-only", "-Wno-fatal", "-Wno-lint", "-Wno-style",
                               "--top-module", "cached_texel_fetch", str(src)], capture_output=True, text=True)
         assert out.returncode == 0, out.stderr[-2000:]
