@@ -35,8 +35,9 @@ model), not this one.
 Requests are free in every cycle (any word of the index map or of the raw memory, straddling or not,
 valid or not, held or not) and so is the output's ``ready``: the claims hold under every request
 stream and every backpressure. The only assumption on the requests is the address range the
-reader's configuration serves: index words below :data:`INDEX_WORDS` (the index map lies below the
-raw memory).
+harness's memory serves: index words (and ``w + 1`` of a straddling one) below :data:`INDEX_WORDS`,
+raw words below :data:`RAW_WORDS` (more lines than the caches hold; the index map lies below the raw
+memory at :data:`RAW_BASE`).
 
 Claims:
 
@@ -50,9 +51,9 @@ Claims:
 Method: bounded (BMC). k-induction would need invariants on the caches' internal state (a line's
 RAM rows hold the memory's words once its filled bit is set, the burst queue matches the slots
 waiting for it, the counts of waiting references match the FIFO), which would name the internal
-signals the property is written to avoid; the depth is chosen so that the bound covers several
-misses, replacements under waiting references and a straddle across two lines (the covers show
-each is reached).
+signals the property is written to avoid. The depth of each property is chosen from the covers:
+within it a line is replaced, read again and one of its words served from the second fill, and a
+straddling index is served from two lines (docs/verification.md has the steps and times).
 """
 
 from __future__ import annotations
