@@ -88,65 +88,199 @@ class _Fields:
         return Cat(*(sig for _, sig in parts))
 
 
-class _Cache:
-    """One cache's state and its tag check: ``ports`` lookups per cycle into different sets."""
+class _Rows:
+    """One per-set field of a cache in LUT RAM: a row per set, split into ``banks`` memories by set
+    parity when 2 (the index cache: the two lines of a straddling index lie in consecutive sets, so
+    each bank has at most one writer per party per cycle). Each memory has one write port (what a
+    LUT RAM has) and one asynchronous (combinational) read port per party that reads it."""
 
-    def __init__(self, m, name, shape, ports, count_bits):
+    def __init__(self, m, name, shape, sets, banks):
+        self.shape = shape
+        self.banks = banks
+        self.mems = []
+        for b in range(banks):
+            m.submodules[f"{name}{b}" if banks > 1 else name] = mem = memory.Memory(
+                shape=shape, depth=sets // banks, init=[], attrs={"ram_style": "distributed"})
+            self.mems.append(mem)
+
+    def _row(self, s):
+        return s >> _log2(self.banks)
+
+    def read(self, m, sets, name):
+        """Rows of ``sets`` (one set, or two of different parity or equal), combinational."""
+        ports = [mem.read_port(domain="comb") for mem in self.mems]
+        out = [Signal(self.shape, name=f"{name}{k}") for k in range(len(sets))]
+        if self.banks == 1:
+            m.d.comb += ports[0].addr.eq(self._row(sets[0]))
+            m.d.comb += [o.eq(ports[0].data) for o in out]
+            return out
+        p = sets[0][0]
+        for b, port in enumerate(ports):
+            m.d.comb += port.addr.eq(Mux(p == b, self._row(sets[0]), self._row(sets[-1])))
+        for o, s in zip(out, sets):
+            m.d.comb += o.eq(Mux(s[0], ports[1].data, ports[0].data))
+        return out
+
+    def write(self, m, writes):
+        """``writes``: (set, enable, row) per party port; two ports write sets of different parity."""
+        ports = [mem.write_port() for mem in self.mems]
+        if self.banks == 1:
+            (s, en, row), = writes
+            m.d.comb += [ports[0].addr.eq(self._row(s)), ports[0].en.eq(en), ports[0].data.eq(row)]
+            return
+        p = writes[0][0][0]
+        (s0, en0, row0), (s1, en1, row1) = writes
+        for b, port in enumerate(ports):
+            mine = p == b
+            m.d.comb += [port.addr.eq(Mux(mine, self._row(s0), self._row(s1))),
+                         port.en.eq(Mux(mine, en0, en1)),
+                         port.data.eq(Mux(mine, Value.cast(row0), Value.cast(row1)))]
+
+
+class _Cache:
+    """One cache's per-line state, its tag check, its fills and its reads.
+
+    Valid bits: flip-flops (``sets * ways``, cleared by reset: the cache starts empty at every reset).
+    Everything else in LUT RAM (:class:`_Rows`, a row per set, every way of the set in the row):
+    ``lines`` (tag and LRU age of each way), ``issued`` and ``retired`` (counts mod ``2^count_bits``
+    of the references checked into the FIFO and read out of it: the waiting references are their
+    difference, each count written by one side), ``alloc`` and ``fill`` (a bit per way: a line is
+    filled when the two are equal; an allocation writes ``alloc = ~fill``, a fill toggles ``fill``).
+    The counts and the alloc bit are rebased at every allocation, so what a reset leaves in the
+    memories (it clears only the valid bits) is never read."""
+
+    def __init__(self, m, name, shape, banks, count_bits, tag_bits):
         self.shape = shape
         self.sets, self.ways = shape.sets, shape.ways
         self.set_bits = _log2(self.sets)
-        self.age_bits = max(1, _log2(self.ways))
-        S, W = self.sets, self.ways
-        self.tag = [[Signal(32, name=f"{name}_tag_{s}_{w}") for w in range(W)] for s in range(S)]
-        self.valid = [[Signal(name=f"{name}_valid_{s}_{w}") for w in range(W)] for s in range(S)]
-        self.age = [[Signal(self.age_bits + 1, name=f"{name}_age_{s}_{w}") for w in range(W)] for s in range(S)]
-        self.filled = [[Signal(name=f"{name}_filled_{s}_{w}") for w in range(W)] for s in range(S)]
-        self.count = [[Signal(count_bits, name=f"{name}_count_{s}_{w}") for w in range(W)] for s in range(S)]
+        self.way_bits = _log2(self.ways)
+        self.age_bits = max(1, self.way_bits)
+        self.count_bits = count_bits
+        self.tag_bits = tag_bits
         self.name = name
-        self.ports = ports
+        S, W = self.sets, self.ways
+        self.valid = Signal(S * W, name=f"{name}_valid")
+        way = data.StructLayout({"tag": tag_bits, "age": self.age_bits})
+        self.lines = _Rows(m, f"{name}_tags", data.ArrayLayout(way, W), S, banks)
+        self.issued = _Rows(m, f"{name}_issued", data.ArrayLayout(count_bits, W), S, banks)
+        self.retired = _Rows(m, f"{name}_retired", data.ArrayLayout(count_bits, W), S, banks)
+        self.alloc = _Rows(m, f"{name}_alloc", W, S, banks)
+        self.fill = _Rows(m, f"{name}_fill", W, S, banks)
 
     def slot_bits(self):
         return max(1, _log2(self.sets * self.ways))
 
-    def lookup(self, m, line, k):
-        """Combinational lookup of ``line`` on port ``k``: (set, hit, way, busy victim)."""
-        S, W = self.sets, self.ways
-        s = Signal(max(1, self.set_bits), name=f"{self.name}_set{k}")
-        t = Signal(32, name=f"{self.name}_line_tag{k}")
-        m.d.comb += [s.eq(line[:self.set_bits] if self.set_bits else 0), t.eq(line >> self.set_bits)]
-        hit = Signal(name=f"{self.name}_hit{k}")
-        way = Signal(max(1, _log2(W)), name=f"{self.name}_way{k}")
-        busy = Signal(name=f"{self.name}_busy{k}")
-        ways = []
-        for w in range(W):
-            tw = Array(self.tag[x][w] for x in range(S))[s]
-            vw = Array(self.valid[x][w] for x in range(S))[s]
-            aw = Array(self.age[x][w] for x in range(S))[s]
-            cw = Array(self.count[x][w] for x in range(S))[s]
-            ways.append((tw, vw, aw, cw))
-        hits = [vw & (tw == t) for tw, vw, aw, cw in ways]
-        m.d.comb += hit.eq(Cat(*hits).any())
-        # The way: the hit's; else the lowest empty way; else the oldest (age W-1).
-        with m.If(hit):
-            for w in reversed(range(W)):
-                with m.If(hits[w]):
-                    m.d.comb += way.eq(w)
-        with m.Else():
-            for w in reversed(range(W)):
-                tw, vw, aw, cw = ways[w]
-                with m.If(vw & (aw == W - 1)):
-                    m.d.comb += way.eq(w)
-            for w in reversed(range(W)):
-                tw, vw, aw, cw = ways[w]
-                with m.If(~vw):
-                    m.d.comb += way.eq(w)
-        vway = Array(v for _, v, _, _ in ways)[way]
-        cway = Array(c for _, _, _, c in ways)[way]
-        m.d.comb += busy.eq(~hit & vway & (cway != 0))
-        return s, t, hit, way, busy
+    def set_of(self, slot):
+        return slot >> self.way_bits if self.set_bits else C(0, 1)
 
-    def filled_at(self, slot):
-        return Array(self.filled[x][w] for x in range(self.sets) for w in range(self.ways))[slot]
+    def way_of(self, slot):
+        return slot[:self.way_bits] if self.way_bits else C(0, 1)
+
+    def check(self, m, ports):
+        """The tag check: ``ports`` is (line, active) per lookup (two lookups: consecutive lines).
+        Returns (set, hit, way, busy victim) per port, combinational; updates the state of the active
+        ports' sets at the clock edge."""
+        S, W = self.sets, self.ways
+        sets, tags = [], []
+        for k, (line, act) in enumerate(ports):
+            s = Signal(max(1, self.set_bits), name=f"{self.name}_set{k}")
+            t = Signal(self.tag_bits, name=f"{self.name}_line_tag{k}")
+            m.d.comb += [s.eq(line[:self.set_bits] if self.set_bits else 0), t.eq(line >> self.set_bits)]
+            sets.append(s)
+            tags.append(t)
+        lines = self.lines.read(m, sets, f"{self.name}_row")
+        issued = self.issued.read(m, sets, f"{self.name}_issued_row")
+        retired = self.retired.read(m, sets, f"{self.name}_retired_check")
+        alloc = self.alloc.read(m, sets, f"{self.name}_alloc_check")
+        fill = self.fill.read(m, sets, f"{self.name}_fill_check")
+        out, writes = [], {f: [] for f in ("lines", "issued", "alloc")}
+        set_valid = 0
+        for k, ((line, act), s, t) in enumerate(zip(ports, sets, tags)):
+            valid = Signal(W, name=f"{self.name}_valid{k}")
+            m.d.comb += valid.eq(self.valid.word_select(s, W) if S > 1 else self.valid)
+            row = lines[k]
+            hits = [valid[w] & (row[w].tag == t) for w in range(W)]
+            hit = Signal(name=f"{self.name}_hit{k}")
+            way = Signal(max(1, self.way_bits), name=f"{self.name}_way{k}")
+            busy = Signal(name=f"{self.name}_busy{k}")
+            m.d.comb += hit.eq(Cat(*hits).any())
+            # The way: the hit's; else the lowest empty way; else the oldest (age W-1).
+            with m.If(hit):
+                for w in reversed(range(W)):
+                    with m.If(hits[w]):
+                        m.d.comb += way.eq(w)
+            with m.Else():
+                for w in reversed(range(W)):
+                    with m.If(valid[w] & (row[w].age == W - 1)):
+                        m.d.comb += way.eq(w)
+                for w in reversed(range(W)):
+                    with m.If(~valid[w]):
+                        m.d.comb += way.eq(w)
+            waiting = Signal(self.count_bits, name=f"{self.name}_waiting{k}")
+            m.d.comb += waiting.eq(issued[k][way] - retired[k][way])
+            m.d.comb += busy.eq(~hit & valid.bit_select(way, 1) & (waiting != 0))
+            # LRU: the accessed way becomes the youngest; younger valid ways age by one. A miss puts
+            # the line's tag in the way, rebases its count on what was read out, and clears its fill.
+            acc_age = Signal(self.age_bits + 1, name=f"{self.name}_acc_age{k}")
+            m.d.comb += acc_age.eq(Mux(valid.bit_select(way, 1), Array(row[w].age for w in range(W))[way], W))
+            new_row = Signal(self.lines.shape, name=f"{self.name}_new_row{k}")
+            new_issued = Signal(self.issued.shape, name=f"{self.name}_new_issued{k}")
+            new_alloc = Signal(W, name=f"{self.name}_new_alloc{k}")
+            ways, counts, allocs = [], [], []
+            for w in range(W):
+                here = way == w
+                old_age = row[w].age
+                ways.append(Cat(Mux(here & ~hit, t, row[w].tag)[:self.tag_bits],
+                                Mux(here, 0, Mux(valid[w] & (old_age < acc_age), old_age + 1, old_age))[:self.age_bits]))
+                counts.append((Mux(here, Mux(hit, issued[k][w], retired[k][w]) + 1, issued[k][w]))[:self.count_bits])
+                allocs.append(Mux(here & ~hit, ~fill[k][w], alloc[k][w]))
+            # each row assigned in one piece (CXXRTL would assemble a row written field by field)
+            m.d.comb += [new_row.eq(Cat(*ways)), new_issued.eq(Cat(*counts)), new_alloc.eq(Cat(*allocs))]
+            writes["lines"].append((s, act, new_row))
+            writes["issued"].append((s, act, new_issued))
+            writes["alloc"].append((s, act, new_alloc))
+            slot = Cat(way[:self.way_bits], s[:self.set_bits]) if self.way_bits else s[:max(1, self.set_bits)]
+            set_valid = set_valid | Mux(act & ~hit, C(1, S * W) << slot, 0)
+            out.append((s, hit, way, busy))
+        self.lines.write(m, writes["lines"])
+        self.issued.write(m, writes["issued"])
+        self.alloc.write(m, writes["alloc"])
+        m.d.sync += self.valid.eq(self.valid | set_valid)
+        return out
+
+    def read_out(self, m, slots, retire):
+        """The data read: whether every line of ``slots`` (one, or two in consecutive sets, or the
+        same twice) is filled, combinational; ``retire`` (one enable per slot) counts a reference
+        read out of each at the clock edge."""
+        sets = [Signal(max(1, self.set_bits), name=f"{self.name}_head_set{k}") for k in range(len(slots))]
+        m.d.comb += [s.eq(self.set_of(slot)) for s, slot in zip(sets, slots)]
+        alloc = self.alloc.read(m, sets, f"{self.name}_alloc_head")
+        fill = self.fill.read(m, sets, f"{self.name}_fill_head")
+        retired = self.retired.read(m, sets, f"{self.name}_retired_head")
+        filled = Signal(len(slots), name=f"{self.name}_head_filled")
+        writes = []
+        for k, (slot, s, en) in enumerate(zip(slots, sets, retire)):
+            w = self.way_of(slot)
+            m.d.comb += filled[k].eq(alloc[k].bit_select(w, 1) == fill[k].bit_select(w, 1))
+            new = Signal(self.retired.shape, name=f"{self.name}_new_retired{k}")
+            m.d.comb += new.eq(Cat(*(Mux(w == x, retired[k][x] + 1, retired[k][x])[:self.count_bits]
+                                     for x in range(self.ways))))
+            writes.append((s, en, new))
+        self.retired.write(m, writes)
+        return filled
+
+    def fill_line(self, m, slot, en):
+        """A burst's last beat fills the line of ``slot`` at the clock edge (``en``)."""
+        s = Signal(max(1, self.set_bits), name=f"{self.name}_fill_set")
+        m.d.comb += s.eq(self.set_of(slot))
+        row, = self.fill.read(m, [s], f"{self.name}_fill_row")
+        w = self.way_of(slot)
+        new = Signal(self.ways, name=f"{self.name}_new_fill")
+        m.d.comb += new.eq(row ^ (C(1, self.ways) << w))
+        if self.fill.banks == 1:
+            self.fill.write(m, [(s, en, new)])
+        else:
+            self.fill.write(m, [(s, en, new), (s, C(0, 1), new)])
 
 
 class CachedReader(wiring.Component):
@@ -190,10 +324,13 @@ class CachedReader(wiring.Component):
         bus_bits = 8 * bus
         wb = self._word_bits // 8
         count_bits = max(1, Q.bit_length()) + 1
-        caches = []
-        for c, (name, shape) in enumerate((("index", cfg.index_cache), ("raw", cfg.raw_cache))):
-            caches.append(_Cache(m, name, shape, 2 if c == 0 else 1, count_bits))
-        ic, rc = caches
+        aw = self._addr_width
+        # The index cache's rows in two banks by set parity (a straddling index checks two
+        # consecutive sets in one cycle); tags as wide as the AXI address leaves them.
+        ic = _Cache(m, "index", cfg.index_cache, 2, count_bits,
+                    max(1, aw - _log2(cfg.index_cache.line) - _log2(cfg.index_cache.sets)))
+        rc = _Cache(m, "raw", cfg.raw_cache, 1, count_bits,
+                    max(1, aw - _log2(cfg.raw_cache.line) - _log2(cfg.raw_cache.sets)))
         beats = [ic.shape.line // bus, rc.shape.line // bus]
         req = self.i.p
 
@@ -206,9 +343,11 @@ class CachedReader(wiring.Component):
         line0, line1, rline = a0 >> il, a1 >> il, ra >> rl
         two = Signal()
         m.d.comb += two.eq(~req.raw & req.straddle & (line1 != line0))
-        s0, t0, hit0, way0, busy0 = ic.lookup(m, line0, 0)
-        s1, t1, hit1, way1, busy1 = ic.lookup(m, line1, 1)
-        sr, tr, hitr, wayr, busyr = rc.lookup(m, rline, 0)
+        take = Signal()
+        # port 1 looks up the line after line0 (line1 when ``two``; unused otherwise)
+        (s0, hit0, way0, busy0), (s1, hit1, way1, busy1) = ic.check(
+            m, [(line0, take & ~req.raw), (line0 + 1, take & two)])
+        (sr, hitr, wayr, busyr), = rc.check(m, [(rline, take & req.raw)])
         miss0 = ~req.raw & ~hit0
         miss1 = two & ~hit1
         missr = req.raw & ~hitr
@@ -234,7 +373,10 @@ class CachedReader(wiring.Component):
             "raw": 1, "slot0": max(islot, rslot), "slot1": islot, "beat0": max(1, _log2(max(beats))),
             "beat1": max(1, _log2(max(beats))), "off0": max(1, _log2(bus // min(wb, 4)) or 1),
             "off1": max(1, _log2(bus // wb) or 1), "tag": max(1, self._tag_width)})
-        fifo = [Signal(entry, name=f"ref_{q}") for q in range(Q)]
+        # in LUT RAM: written at the tail by the tag check, read at the head by the data read
+        m.submodules.references = fifo = memory.Memory(shape=entry, depth=Q, init=[],
+                                                       attrs={"ram_style": "distributed"})
+        fifo_w, fifo_r = fifo.write_port(), fifo.read_port(domain="comb")
         level = Signal(range(Q + 1))
         head = Signal(range(max(Q, 2)))
         tail = Signal(range(max(Q, 2)))
@@ -242,22 +384,25 @@ class CachedReader(wiring.Component):
         o_free = Signal()
         m.d.comb += o_free.eq(~self.o.valid | self.o.ready)
         headv = Signal(entry)
-        m.d.comb += headv.eq(Array(fifo)[head] if Q > 1 else fifo[0])
-        head_filled = Mux(headv.raw, rc.filled_at(headv.slot0[:rslot]),
-                          ic.filled_at(headv.slot0[:islot]) & ic.filled_at(headv.slot1))
+        m.d.comb += [fifo_r.addr.eq(head), headv.eq(fifo_r.data)]
+        # the head's lines filled? (a read out of the index cache retires one reference per line)
+        i_filled = ic.read_out(m, [headv.slot0[:islot], headv.slot1],
+                               [pop & ~headv.raw, pop & ~headv.raw & (headv.slot1 != headv.slot0[:islot])])
+        r_filled = rc.read_out(m, [headv.slot0[:rslot]], [pop & headv.raw])
+        head_filled = Mux(headv.raw, r_filled, i_filled.all())
         m.d.comb += pop.eq((level != 0) & head_filled & o_free)
         m.d.comb += self.stall_fill.eq((level != 0) & ~head_filled & o_free)
 
-        take = Signal()
         m.d.comb += [
             self.i.ready.eq(~slot_v[1] & (~slot_v[0] | self.axi.arready) & ((level != Q) | pop) & ~busy),
             take.eq(self.i.valid & self.i.ready),
         ]
         # the entry of the request being checked
-        # The entry's fields as separate signals, joined only where the FIFO stores them: one packed
-        # ``new`` wire would hold both bits of ``a1`` (beat1, off1) and bits computed from them through
-        # the tag check (slot1), and Verilator, which orders a wire as a whole, would see a
-        # combinational cycle through it (UNOPTFLAT) where there is none.
+        # The entry's fields as separate signals, joined only where the FIFO stores them, and there
+        # through a gate (the write data is driven only when ``take``): one packed wire would hold
+        # both bits of ``a1`` (beat1, off1) and bits computed from them through the tag check
+        # (slot1), Yosys makes such a wire the driver of ``a1``'s bits, and Verilator, which orders a
+        # wire as a whole, would see a combinational cycle through it (UNOPTFLAT) where there is none.
         new = _Fields({name: Signal(f.shape, name=f"new_{name}") for name, f in entry})
         slot0 = Signal(islot)
         slot1 = Signal(islot)
@@ -277,8 +422,10 @@ class CachedReader(wiring.Component):
             new.off1.eq((a1 & (bus - 1)) >> _log2(wb)),
             new.tag.eq(req.tag),
         ]
+        m.d.comb += [fifo_w.addr.eq(tail), fifo_w.en.eq(take)]
+        with m.If(take):        # (a gate, not a plain wire: see ``new`` above)
+            m.d.comb += fifo_w.data.eq(new.value(entry))
         with m.If(take):
-            m.d.sync += Array(fifo)[tail].eq(new.value(entry)) if Q > 1 else fifo[0].eq(new.value(entry))
             m.d.sync += tail.eq(Mux(tail == Q - 1, 0, tail + 1))
         with m.If(pop):
             m.d.sync += head.eq(Mux(head == Q - 1, 0, head + 1))
@@ -303,24 +450,33 @@ class CachedReader(wiring.Component):
 
         # -- bursts in flight: which line each fills, in AR order ----------------------------------------
         depth = 1 << (2 * Q + 4).bit_length()
-        flight = [Signal(1 + max(islot, rslot), name=f"flight_{q}") for q in range(depth)]
         f_head = Signal(range(depth))
         f_tail = Signal(range(depth))
-        # bursts are queued in tag-check order, the order they leave on AR and come back on R
-        with m.If(take & (nmiss != 0)):
-            sw = max(islot, rslot)
+        sw = max(islot, rslot)
 
-            def fl(slot, raw):                      # a flight entry: the slot, zero-extended, then raw
-                return Cat(slot, C(0, sw - len(slot)), C(raw, 1))
-            first_slot = Mux(req.raw, fl(slotr, 1), Mux(miss0, fl(slot0, 0), fl(slot1, 0)))
-            m.d.sync += Array(flight)[f_tail].eq(first_slot)
-            with m.If(nmiss == 2):
-                m.d.sync += Array(flight)[(f_tail + 1)[:len(f_tail)]].eq(fl(slot1, 0))
-                m.d.sync += f_tail.eq(f_tail + 2)
-            with m.Else():
-                m.d.sync += f_tail.eq(f_tail + 1)
-        cur = Signal(1 + max(islot, rslot))
-        m.d.comb += cur.eq(Array(flight)[f_head])
+        def fl(slot, raw):                          # a flight entry: the slot, zero-extended, then raw
+            return Cat(slot, C(0, sw - len(slot)), C(raw, 1))
+        # in LUT RAM, two banks by position parity (a tag check queues up to two bursts: one each)
+        flight = []
+        for b in range(2):
+            m.submodules[f"flight{b}"] = mem = memory.Memory(shape=1 + sw, depth=depth // 2, init=[],
+                                                             attrs={"ram_style": "distributed"})
+            flight.append((mem.write_port(), mem.read_port(domain="comb")))
+        # bursts are queued in tag-check order, the order they leave on AR and come back on R
+        first = Signal(1 + sw)
+        second = Signal(1 + sw)
+        queue = take & (nmiss != 0)
+        m.d.comb += [first.eq(Mux(req.raw, fl(slotr, 1), Mux(miss0, fl(slot0, 0), fl(slot1, 0)))),
+                     second.eq(fl(slot1, 0))]
+        t1 = (f_tail + 1)[:len(f_tail)]
+        for b, (wp, rp) in enumerate(flight):
+            mine = f_tail[0] == b
+            m.d.comb += [wp.addr.eq(Mux(mine, f_tail >> 1, t1 >> 1)), wp.data.eq(Mux(mine, first, second)),
+                         wp.en.eq(queue & (mine | (nmiss == 2))), rp.addr.eq(f_head >> 1)]
+        with m.If(queue):
+            m.d.sync += f_tail.eq(Mux(nmiss == 2, f_tail + 2, f_tail + 1))
+        cur = Signal(1 + sw)
+        m.d.comb += cur.eq(Mux(f_head[0], flight[1][1].data, flight[0][1].data))
         beat = Signal(range(max(beats) + 1))
         cur_raw = cur[-1]
         cur_slot = cur[:-1]
@@ -345,43 +501,9 @@ class CachedReader(wiring.Component):
             rr.addr.eq(headv.slot0[:rslot] * beats[1] + headv.beat0), rr.en.eq(pop),
         ]
 
-        # -- cache state: tag check updates, fills, reads ---------------------------------------------------
-        def update(cache, ports, fill_hit, read_dec):
-            """ports: (set, tag, hit, way, active) per port checked in this cycle."""
-            S, W = cache.sets, cache.ways
-            for s in range(S):
-                for w in range(W):
-                    inc = []
-                    for (ps, pt, ph, pw, act) in ports:
-                        here = act & (ps == s) & (pw == w)
-                        inc.append(here)
-                        with m.If(act & (ps == s)):
-                            # LRU: the accessed way becomes the youngest; younger valid ways age by one
-                            acc_age = Signal(cache.age_bits + 1, name=f"{cache.name}_acc_{s}_{w}_{len(inc)}")
-                            aw = Array(cache.age[s][x] for x in range(W))[pw]
-                            vw = Array(cache.valid[s][x] for x in range(W))[pw]
-                            m.d.comb += acc_age.eq(Mux(vw, aw, W))
-                            with m.If(pw == w):
-                                m.d.sync += cache.age[s][w].eq(0)
-                                with m.If(~ph):
-                                    m.d.sync += [cache.tag[s][w].eq(pt), cache.valid[s][w].eq(1),
-                                                 cache.filled[s][w].eq(0)]
-                            with m.Elif(cache.valid[s][w] & (cache.age[s][w] < acc_age)):
-                                m.d.sync += cache.age[s][w].eq(cache.age[s][w] + 1)
-                    slot = s * W + w
-                    fill = fill_hit(slot)
-                    with m.If(fill):
-                        m.d.sync += cache.filled[s][w].eq(1)
-                    dec = read_dec(slot)
-                    m.d.sync += cache.count[s][w].eq(cache.count[s][w] + sum(inc) - dec)
-
-        update(ic, [(s0, t0, hit0, way0, take & ~req.raw), (s1, t1, hit1, way1, take & two)],
-               lambda slot: last & ~cur_raw & (cur_slot[:islot] == slot),
-               lambda slot: pop & ~headv.raw & ((headv.slot0[:islot] == slot)
-                                                 + ((headv.slot1 == slot) & (headv.slot1 != headv.slot0[:islot]))))
-        update(rc, [(sr, tr, hitr, wayr, take & req.raw)],
-               lambda slot: last & cur_raw & (cur_slot[:rslot] == slot),
-               lambda slot: pop & headv.raw & (headv.slot0[:rslot] == slot))
+        # -- the fills: a burst's last beat makes its line readable from the next cycle ----------------
+        ic.fill_line(m, cur_slot[:islot], last & ~cur_raw)
+        rc.fill_line(m, cur_slot[:rslot], last & cur_raw)
 
         # -- the output register (the RAMs' read registers, and what goes with them) -------------------------
         o_raw = Signal()

@@ -80,6 +80,11 @@ class CachedTexelFetch(wiring.Component):
         })
 
     @property
+    def fetch(self) -> TexelFetch:
+        """The texel pipeline behind the caches (its ``features``, ``geometry``)."""
+        return self._tf
+
+    @property
     def latency(self) -> int:
         """Cycles from ``i`` to ``o`` when every reference hits: ``LATENCY + 4``."""
         return LATENCY + ADDRESS_STAGES + 2
