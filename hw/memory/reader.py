@@ -29,9 +29,17 @@ Responses leave in request order, none lost or duplicated; a line is read from m
 stays in the cache, however many references wait on it; a line is not replaced while a reference to
 it waits.
 
-Every cache field (tags, valid, LRU ages, filled bits, counts of waiting references) is a flip-flop:
-fine for the small caches of simulation, where a synthesised cache would keep tags in LUT RAM (not
-built yet).
+Storage: the caches' per-line state is in LUT RAM (``amaranth.lib.memory.Memory`` with asynchronous
+read ports and ``ram_style = distributed``, one write port each: :class:`_Cache`), read and written
+in the cycles the flip-flops of an earlier version were, so the timing above is unchanged: per set,
+the ways' tags and LRU ages; the counts of waiting references as two counters mod ``2^n`` (checked
+in, written by the tag check; read out, written by the data read); whether a line is filled as two
+bits (one flipped by the fill, one set by the allocation to the other's complement). The index
+cache's rows are banked by set parity (a straddling index's two lines lie in consecutive sets), so
+every memory has one writer per cycle. Only the valid bits are flip-flops (``sets * ways``), cleared
+by reset; an allocation rebases its line's count and filled bit, so a reset, even with bursts in
+flight, leaves the caches empty and consistent. The reference FIFO and the queue of bursts in flight
+are LUT RAM too; the lines are block RAM (one row per bus beat, registered reads).
 
 Arguments
 ---------
