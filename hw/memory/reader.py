@@ -36,9 +36,10 @@ the ways' tags and LRU ages; the counts of waiting references as two counters mo
 in, written by the tag check; read out, written by the data read); whether a line is filled as two
 bits (one flipped by the fill, one set by the allocation to the other's complement). The index
 cache's rows are banked by set parity (a straddling index's two lines lie in consecutive sets), so
-every memory has one writer per cycle. Only the valid bits are flip-flops (``sets * ways``), cleared
-by reset; an allocation rebases its line's count and filled bit, so a reset, even with bursts in
-flight, leaves the caches empty and consistent. The reference FIFO and the queue of bursts in flight
+every memory has one writer per cycle. The valid bits of a set's ways are in its row too, and count
+only once the set's row has been written since reset: one flip-flop per set (``touched``, cleared by
+reset, set through a decoder of the row's write address); an allocation rebases its line's count and
+filled bit, so a reset, even with bursts in flight, leaves the caches empty and consistent. The reference FIFO and the queue of bursts in flight
 are LUT RAM too; the lines are block RAM (one row per bus beat, registered reads).
 
 Arguments
@@ -135,7 +136,7 @@ class _Rows:
         if self.banks == 1:
             (s, en, row), = writes
             m.d.comb += [ports[0].addr.eq(self._row(s)), ports[0].en.eq(en), ports[0].data.eq(row)]
-            return
+            return [(ports[0].addr, ports[0].en)]
         p = writes[0][0][0]
         (s0, en0, row0), (s1, en1, row1) = writes
         for b, port in enumerate(ports):
@@ -143,19 +144,26 @@ class _Rows:
             m.d.comb += [port.addr.eq(Mux(mine, self._row(s0), self._row(s1))),
                          port.en.eq(Mux(mine, en0, en1)),
                          port.data.eq(Mux(mine, Value.cast(row0), Value.cast(row1)))]
+        return [(port.addr, port.en) for port in ports]
+
+    def bit(self, bits, s):
+        """The bit of set ``s`` in ``bits`` (one flip-flop vector per bank, a bit per row)."""
+        at = [b.bit_select(self._row(s), 1) if len(b) > 1 else b for b in bits]
+        return at[0] if self.banks == 1 else Mux(s[0], at[1], at[0])
 
 
 class _Cache:
     """One cache's per-line state, its tag check, its fills and its reads.
 
-    Valid bits: flip-flops (``sets * ways``, cleared by reset: the cache starts empty at every reset).
-    Everything else in LUT RAM (:class:`_Rows`, a row per set, every way of the set in the row):
-    ``lines`` (tag and LRU age of each way), ``issued`` and ``retired`` (counts mod ``2^count_bits``
+    In LUT RAM (:class:`_Rows`, a row per set, every way of the set in the row): ``lines`` (tag and
+    LRU age of each way, and the ways' valid bits), ``issued`` and ``retired`` (counts mod ``2^count_bits``
     of the references checked into the FIFO and read out of it: the waiting references are their
     difference, each count written by one side), ``alloc`` and ``fill`` (a bit per way: a line is
     filled when the two are equal; an allocation writes ``alloc = ~fill``, a fill toggles ``fill``).
-    The counts and the alloc bit are rebased at every allocation, so what a reset leaves in the
-    memories (it clears only the valid bits) is never read."""
+    In flip-flops: ``touched``, a bit per set, cleared by reset (the cache starts empty at every
+    reset), set when the set's row is written; a row's valid bits count only when its set is
+    touched. The counts and the alloc bit are rebased at every allocation, so what a reset leaves in
+    the memories is never read."""
 
     def __init__(self, m, name, shape, banks, count_bits, tag_bits):
         self.shape = shape
@@ -167,9 +175,11 @@ class _Cache:
         self.tag_bits = tag_bits
         self.name = name
         S, W = self.sets, self.ways
-        self.valid = Signal(S * W, name=f"{name}_valid")
+        self.touched = [Signal(S // banks, name=f"{name}_touched{b}" if banks > 1 else f"{name}_touched")
+                        for b in range(banks)]
         way = data.StructLayout({"tag": tag_bits, "age": self.age_bits})
-        self.lines = _Rows(m, f"{name}_tags", data.ArrayLayout(way, W), S, banks)
+        self.lines = _Rows(m, f"{name}_tags", data.StructLayout({"way": data.ArrayLayout(way, W), "valid": W}),
+                           S, banks)
         self.issued = _Rows(m, f"{name}_issued", data.ArrayLayout(count_bits, W), S, banks)
         self.retired = _Rows(m, f"{name}_retired", data.ArrayLayout(count_bits, W), S, banks)
         self.alloc = _Rows(m, f"{name}_alloc", W, S, banks)
@@ -202,11 +212,11 @@ class _Cache:
         alloc = self.alloc.read(m, sets, f"{self.name}_alloc_check")
         fill = self.fill.read(m, sets, f"{self.name}_fill_check")
         out, writes = [], {f: [] for f in ("lines", "issued", "alloc")}
-        set_valid = 0
         for k, ((line, act), s, t) in enumerate(zip(ports, sets, tags)):
+            # the row's valid bits count once its set has been written since reset
             valid = Signal(W, name=f"{self.name}_valid{k}")
-            m.d.comb += valid.eq(self.valid.word_select(s, W) if S > 1 else self.valid)
-            row = lines[k]
+            m.d.comb += valid.eq(Mux(self.lines.bit(self.touched, s), lines[k].valid, 0))
+            row = lines[k].way
             hits = [valid[w] & (row[w].tag == t) for w in range(W)]
             hit = Signal(name=f"{self.name}_hit{k}")
             way = Signal(max(1, self.way_bits), name=f"{self.name}_way{k}")
@@ -243,17 +253,18 @@ class _Cache:
                 counts.append((Mux(here, Mux(hit, issued[k][w], retired[k][w]) + 1, issued[k][w]))[:self.count_bits])
                 allocs.append(Mux(here & ~hit, ~fill[k][w], alloc[k][w]))
             # each row assigned in one piece (CXXRTL would assemble a row written field by field)
-            m.d.comb += [new_row.eq(Cat(*ways)), new_issued.eq(Cat(*counts)), new_alloc.eq(Cat(*allocs))]
+            m.d.comb += [new_row.eq(Cat(Cat(*ways), valid | (C(1, W) << way)[:W])), new_issued.eq(Cat(*counts)),
+                         new_alloc.eq(Cat(*allocs))]
             writes["lines"].append((s, act, new_row))
             writes["issued"].append((s, act, new_issued))
             writes["alloc"].append((s, act, new_alloc))
-            slot = Cat(way[:self.way_bits], s[:self.set_bits]) if self.way_bits else s[:max(1, self.set_bits)]
-            set_valid = set_valid | Mux(act & ~hit, C(1, S * W) << slot, 0)
             out.append((s, hit, way, busy))
-        self.lines.write(m, writes["lines"])
+        # a set is touched when its row is written (a decoder of the bank's write address)
+        for touched, (addr, en) in zip(self.touched, self.lines.write(m, writes["lines"])):
+            with m.If(en):
+                m.d.sync += (touched.bit_select(addr, 1) if len(touched) > 1 else touched).eq(1)
         self.issued.write(m, writes["issued"])
         self.alloc.write(m, writes["alloc"])
-        m.d.sync += self.valid.eq(self.valid | set_valid)
         return out
 
     def read_out(self, m, slots, retire):
