@@ -98,10 +98,11 @@ class _Fields:
 
 
 class _Rows:
-    """One per-set field of a cache in LUT RAM: a row per set, split into ``banks`` memories by set
-    parity when 2 (the index cache: the two lines of a straddling index lie in consecutive sets, so
-    each bank has at most one writer per party per cycle). Each memory has one write port (what a
-    LUT RAM has) and one asynchronous (combinational) read port per party that reads it."""
+    """One per-set field of a cache in LUT RAM: a row per set, in ``banks`` memories (2: by set
+    parity, for the index cache, whose straddling index checks two consecutive sets in one cycle).
+    Each memory has one write port (what a LUT RAM has) and one asynchronous (combinational) read
+    port per party that reads it; a party works on each bank apart (its logic per bank), so no
+    row-wide multiplexer sits between the banks."""
 
     def __init__(self, m, name, shape, sets, banks):
         self.shape = shape
@@ -112,58 +113,39 @@ class _Rows:
                 shape=shape, depth=sets // banks, init=[], attrs={"ram_style": "distributed"})
             self.mems.append(mem)
 
-    def _row(self, s):
+    def row(self, s):
+        """The row of set ``s`` in its bank."""
         return s >> _log2(self.banks)
 
-    def read(self, m, sets, name):
-        """Rows of ``sets`` (one set, or two of different parity or equal), combinational."""
-        ports = [mem.read_port(domain="comb") for mem in self.mems]
-        out = [Signal(self.shape, name=f"{name}{k}") for k in range(len(sets))]
-        if self.banks == 1:
-            m.d.comb += ports[0].addr.eq(self._row(sets[0]))
-            m.d.comb += [o.eq(ports[0].data) for o in out]
-            return out
-        p = sets[0][0]
-        for b, port in enumerate(ports):
-            m.d.comb += port.addr.eq(Mux(p == b, self._row(sets[0]), self._row(sets[-1])))
-        for o, s in zip(out, sets):
-            m.d.comb += o.eq(Mux(s[0], ports[1].data, ports[0].data))
+    def read(self, m, b, s, name):
+        """Bank ``b``'s row of set ``s`` (a set of that bank), combinational."""
+        port = self.mems[b].read_port(domain="comb")
+        out = Signal(self.shape, name=name)
+        m.d.comb += [port.addr.eq(self.row(s)), out.eq(port.data)]
         return out
 
-    def write(self, m, writes):
-        """``writes``: (set, enable, row) per party port; two ports write sets of different parity."""
-        ports = [mem.write_port() for mem in self.mems]
-        if self.banks == 1:
-            (s, en, row), = writes
-            m.d.comb += [ports[0].addr.eq(self._row(s)), ports[0].en.eq(en), ports[0].data.eq(row)]
-            return [(ports[0].addr, ports[0].en)]
-        p = writes[0][0][0]
-        (s0, en0, row0), (s1, en1, row1) = writes
-        for b, port in enumerate(ports):
-            mine = p == b
-            m.d.comb += [port.addr.eq(Mux(mine, self._row(s0), self._row(s1))),
-                         port.en.eq(Mux(mine, en0, en1)),
-                         port.data.eq(Mux(mine, Value.cast(row0), Value.cast(row1)))]
-        return [(port.addr, port.en) for port in ports]
-
-    def bit(self, bits, s):
-        """The bit of set ``s`` in ``bits`` (one flip-flop vector per bank, a bit per row)."""
-        at = [b.bit_select(self._row(s), 1) if len(b) > 1 else b for b in bits]
-        return at[0] if self.banks == 1 else Mux(s[0], at[1], at[0])
+    def write(self, m, b, s, en, data):
+        """Write bank ``b``'s row of set ``s`` at the clock edge when ``en`` (one call per bank)."""
+        port = self.mems[b].write_port()
+        m.d.comb += [port.addr.eq(self.row(s)), port.en.eq(en), port.data.eq(data)]
+        return port.addr, port.en
 
 
 class _Cache:
     """One cache's per-line state, its tag check, its fills and its reads.
 
     In LUT RAM (:class:`_Rows`, a row per set, every way of the set in the row): ``lines`` (tag and
-    LRU age of each way, and the ways' valid bits), ``issued`` and ``retired`` (counts mod ``2^count_bits``
-    of the references checked into the FIFO and read out of it: the waiting references are their
-    difference, each count written by one side), ``alloc`` and ``fill`` (a bit per way: a line is
-    filled when the two are equal; an allocation writes ``alloc = ~fill``, a fill toggles ``fill``).
-    In flip-flops: ``touched``, a bit per set, cleared by reset (the cache starts empty at every
-    reset), set when the set's row is written; a row's valid bits count only when its set is
-    touched. The counts and the alloc bit are rebased at every allocation, so what a reset leaves in
-    the memories is never read."""
+    LRU age of each way, and the ways' valid bits), ``issued`` and ``retired`` (counts mod
+    ``2^count_bits`` of the references checked into the FIFO and read out of it: the waiting
+    references are their difference, each count written by one side), ``alloc`` and ``fill`` (a bit
+    per way: a line is filled when the two are equal; an allocation writes ``alloc = ~fill``, a fill
+    toggles ``fill``). In flip-flops: ``touched``, a bit per set, cleared by reset (the cache starts
+    empty at every reset), set when the set's row is written; a row's valid bits count only when its
+    set is touched. The counts and the alloc bit are rebased at every allocation, so what a reset
+    leaves in the memories is never read.
+
+    Every party (tag check, data read, fill) reaches at most one set per bank in a cycle: with two
+    banks, its two sets are consecutive (or the same, the second then unused)."""
 
     def __init__(self, m, name, shape, banks, count_bits, tag_bits):
         self.shape = shape
@@ -173,6 +155,7 @@ class _Cache:
         self.age_bits = max(1, self.way_bits)
         self.count_bits = count_bits
         self.tag_bits = tag_bits
+        self.banks = banks
         self.name = name
         S, W = self.sets, self.ways
         self.touched = [Signal(S // banks, name=f"{name}_touched{b}" if banks > 1 else f"{name}_touched")
@@ -194,6 +177,26 @@ class _Cache:
     def way_of(self, slot):
         return slot[:self.way_bits] if self.way_bits else C(0, 1)
 
+    def _banked(self, m, items, name):
+        """``items``: one tuple of values per port (1 port, or 2 whose sets differ in parity; the first
+        value of each tuple its set). Returns one tuple per bank: the port's values that bank holds."""
+        if self.banks == 1:
+            return [items[0]]
+        p = items[0][0][0]
+        out = []
+        for b in range(2):
+            vals = []
+            for j, (v0, v1) in enumerate(zip(*items)):
+                sig = Signal(max(len(Value.cast(v0)), len(Value.cast(v1))), name=f"{self.name}_{name}{b}_{j}")
+                m.d.comb += sig.eq(Mux(p == b, v0, v1))
+                vals.append(sig)
+            out.append(tuple(vals))
+        return out
+
+    def _unbank(self, m, s, per_bank):
+        """The value of the bank holding set ``s`` (small signals: hit, way, ...)."""
+        return per_bank[0] if self.banks == 1 else Mux(s[0], per_bank[1], per_bank[0])
+
     def check(self, m, ports):
         """The tag check: ``ports`` is (line, active) per lookup (two lookups: consecutive lines).
         Returns (set, hit, way, busy victim) per port, combinational; updates the state of the active
@@ -206,21 +209,25 @@ class _Cache:
             m.d.comb += [s.eq(line[:self.set_bits] if self.set_bits else 0), t.eq(line >> self.set_bits)]
             sets.append(s)
             tags.append(t)
-        lines = self.lines.read(m, sets, f"{self.name}_row")
-        issued = self.issued.read(m, sets, f"{self.name}_issued_row")
-        retired = self.retired.read(m, sets, f"{self.name}_retired_check")
-        alloc = self.alloc.read(m, sets, f"{self.name}_alloc_check")
-        fill = self.fill.read(m, sets, f"{self.name}_fill_check")
-        out, writes = [], {f: [] for f in ("lines", "issued", "alloc")}
-        for k, ((line, act), s, t) in enumerate(zip(ports, sets, tags)):
+        banked = self._banked(m, [(s, t, act) for s, t, (_, act) in zip(sets, tags, ports)], "check")
+        results = []
+        for b, (s, t, act) in enumerate(banked):
+            n = f"{self.name}{b}" if self.banks > 1 else self.name
+            lines = self.lines.read(m, b, s, f"{n}_row")
+            issued = self.issued.read(m, b, s, f"{n}_issued_row")
+            retired = self.retired.read(m, b, s, f"{n}_retired_check")
+            alloc = self.alloc.read(m, b, s, f"{n}_alloc_check")
+            fill = self.fill.read(m, b, s, f"{n}_fill_check")
+            touched = self.touched[b]
             # the row's valid bits count once its set has been written since reset
-            valid = Signal(W, name=f"{self.name}_valid{k}")
-            m.d.comb += valid.eq(Mux(self.lines.bit(self.touched, s), lines[k].valid, 0))
-            row = lines[k].way
+            valid = Signal(W, name=f"{n}_valid")
+            here_touched = touched.bit_select(self.lines.row(s), 1) if len(touched) > 1 else touched
+            m.d.comb += valid.eq(Mux(here_touched, lines.valid, 0))
+            row = lines.way
             hits = [valid[w] & (row[w].tag == t) for w in range(W)]
-            hit = Signal(name=f"{self.name}_hit{k}")
-            way = Signal(max(1, self.way_bits), name=f"{self.name}_way{k}")
-            busy = Signal(name=f"{self.name}_busy{k}")
+            hit = Signal(name=f"{n}_hit")
+            way = Signal(max(1, self.way_bits), name=f"{n}_way")
+            busy = Signal(name=f"{n}_busy")
             m.d.comb += hit.eq(Cat(*hits).any())
             # The way: the hit's; else the lowest empty way; else the oldest (age W-1).
             with m.If(hit):
@@ -234,72 +241,80 @@ class _Cache:
                 for w in reversed(range(W)):
                     with m.If(~valid[w]):
                         m.d.comb += way.eq(w)
-            waiting = Signal(self.count_bits, name=f"{self.name}_waiting{k}")
-            m.d.comb += waiting.eq(issued[k][way] - retired[k][way])
+            waiting = Signal(self.count_bits, name=f"{n}_waiting")
+            m.d.comb += waiting.eq(issued[way] - retired[way])
             m.d.comb += busy.eq(~hit & valid.bit_select(way, 1) & (waiting != 0))
             # LRU: the accessed way becomes the youngest; younger valid ways age by one. A miss puts
             # the line's tag in the way, rebases its count on what was read out, and clears its fill.
-            acc_age = Signal(self.age_bits + 1, name=f"{self.name}_acc_age{k}")
+            acc_age = Signal(self.age_bits + 1, name=f"{n}_acc_age")
             m.d.comb += acc_age.eq(Mux(valid.bit_select(way, 1), Array(row[w].age for w in range(W))[way], W))
-            new_row = Signal(self.lines.shape, name=f"{self.name}_new_row{k}")
-            new_issued = Signal(self.issued.shape, name=f"{self.name}_new_issued{k}")
-            new_alloc = Signal(W, name=f"{self.name}_new_alloc{k}")
+            new_row = Signal(self.lines.shape, name=f"{n}_new_row")
+            new_issued = Signal(self.issued.shape, name=f"{n}_new_issued")
+            new_alloc = Signal(W, name=f"{n}_new_alloc")
             ways, counts, allocs = [], [], []
             for w in range(W):
                 here = way == w
                 old_age = row[w].age
                 ways.append(Cat(Mux(here & ~hit, t, row[w].tag)[:self.tag_bits],
                                 Mux(here, 0, Mux(valid[w] & (old_age < acc_age), old_age + 1, old_age))[:self.age_bits]))
-                counts.append((Mux(here, Mux(hit, issued[k][w], retired[k][w]) + 1, issued[k][w]))[:self.count_bits])
-                allocs.append(Mux(here & ~hit, ~fill[k][w], alloc[k][w]))
+                counts.append((Mux(here, Mux(hit, issued[w], retired[w]) + 1, issued[w]))[:self.count_bits])
+                allocs.append(Mux(here & ~hit, ~fill[w], alloc[w]))
             # each row assigned in one piece (CXXRTL would assemble a row written field by field)
             m.d.comb += [new_row.eq(Cat(Cat(*ways), valid | (C(1, W) << way)[:W])), new_issued.eq(Cat(*counts)),
                          new_alloc.eq(Cat(*allocs))]
-            writes["lines"].append((s, act, new_row))
-            writes["issued"].append((s, act, new_issued))
-            writes["alloc"].append((s, act, new_alloc))
-            out.append((s, hit, way, busy))
-        # a set is touched when its row is written (a decoder of the bank's write address)
-        for touched, (addr, en) in zip(self.touched, self.lines.write(m, writes["lines"])):
+            addr, en = self.lines.write(m, b, s, act, new_row)
+            self.issued.write(m, b, s, act, new_issued)
+            self.alloc.write(m, b, s, act, new_alloc)
+            # a set is touched when its row is written (a decoder of the bank's write address)
             with m.If(en):
                 m.d.sync += (touched.bit_select(addr, 1) if len(touched) > 1 else touched).eq(1)
-        self.issued.write(m, writes["issued"])
-        self.alloc.write(m, writes["alloc"])
+            results.append((hit, way, busy))
+        out = []
+        for k, s in enumerate(sets):
+            hit = Signal(name=f"{self.name}_hit{k}")
+            way = Signal(max(1, self.way_bits), name=f"{self.name}_way{k}")
+            busy = Signal(name=f"{self.name}_busy{k}")
+            m.d.comb += [hit.eq(self._unbank(m, s, [r[0] for r in results])),
+                         way.eq(self._unbank(m, s, [r[1] for r in results])),
+                         busy.eq(self._unbank(m, s, [r[2] for r in results]))]
+            out.append((s, hit, way, busy))
         return out
 
     def read_out(self, m, slots, retire):
         """The data read: whether every line of ``slots`` (one, or two in consecutive sets, or the
-        same twice) is filled, combinational; ``retire`` (one enable per slot) counts a reference
-        read out of each at the clock edge."""
+        same twice) is filled, combinational; ``retire`` (one enable per slot; the second only when
+        the slots differ) counts a reference read out of each at the clock edge."""
         sets = [Signal(max(1, self.set_bits), name=f"{self.name}_head_set{k}") for k in range(len(slots))]
         m.d.comb += [s.eq(self.set_of(slot)) for s, slot in zip(sets, slots)]
-        alloc = self.alloc.read(m, sets, f"{self.name}_alloc_head")
-        fill = self.fill.read(m, sets, f"{self.name}_fill_head")
-        retired = self.retired.read(m, sets, f"{self.name}_retired_head")
-        filled = Signal(len(slots), name=f"{self.name}_head_filled")
-        writes = []
-        for k, (slot, s, en) in enumerate(zip(slots, sets, retire)):
-            w = self.way_of(slot)
-            m.d.comb += filled[k].eq(alloc[k].bit_select(w, 1) == fill[k].bit_select(w, 1))
-            new = Signal(self.retired.shape, name=f"{self.name}_new_retired{k}")
-            m.d.comb += new.eq(Cat(*(Mux(w == x, retired[k][x] + 1, retired[k][x])[:self.count_bits]
+        banked = self._banked(m, [(s, self.way_of(slot), en) for s, slot, en in zip(sets, slots, retire)], "head")
+        filled_b = []
+        for b, (s, w, en) in enumerate(banked):
+            n = f"{self.name}{b}" if self.banks > 1 else self.name
+            alloc = self.alloc.read(m, b, s, f"{n}_alloc_head")
+            fill = self.fill.read(m, b, s, f"{n}_fill_head")
+            retired = self.retired.read(m, b, s, f"{n}_retired_head")
+            f = Signal(name=f"{n}_head_filled")
+            m.d.comb += f.eq(alloc.bit_select(w, 1) == fill.bit_select(w, 1))
+            filled_b.append(f)
+            new = Signal(self.retired.shape, name=f"{n}_new_retired")
+            m.d.comb += new.eq(Cat(*(Mux(w == x, retired[x] + 1, retired[x])[:self.count_bits]
                                      for x in range(self.ways))))
-            writes.append((s, en, new))
-        self.retired.write(m, writes)
+            self.retired.write(m, b, s, en, new)
+        filled = Signal(len(slots), name=f"{self.name}_head_filled")
+        m.d.comb += [filled[k].eq(self._unbank(m, s, filled_b)) for k, s in enumerate(sets)]
         return filled
 
     def fill_line(self, m, slot, en):
         """A burst's last beat fills the line of ``slot`` at the clock edge (``en``)."""
         s = Signal(max(1, self.set_bits), name=f"{self.name}_fill_set")
         m.d.comb += s.eq(self.set_of(slot))
-        row, = self.fill.read(m, [s], f"{self.name}_fill_row")
         w = self.way_of(slot)
-        new = Signal(self.ways, name=f"{self.name}_new_fill")
-        m.d.comb += new.eq(row ^ (C(1, self.ways) << w))
-        if self.fill.banks == 1:
-            self.fill.write(m, [(s, en, new)])
-        else:
-            self.fill.write(m, [(s, en, new), (s, C(0, 1), new)])
+        for b in range(self.banks):
+            n = f"{self.name}{b}" if self.banks > 1 else self.name
+            row = self.fill.read(m, b, s, f"{n}_fill_row")
+            new = Signal(self.ways, name=f"{n}_new_fill")
+            m.d.comb += new.eq(row ^ (C(1, self.ways) << w)[:self.ways])
+            self.fill.write(m, b, s, en & (s[0] == b) if self.banks > 1 else en, new)
 
 
 class CachedReader(wiring.Component):
