@@ -241,9 +241,11 @@ class _Cache:
                 for w in reversed(range(W)):
                     with m.If(~valid[w]):
                         m.d.comb += way.eq(w)
-            waiting = Signal(self.count_bits, name=f"{n}_waiting")
-            m.d.comb += waiting.eq(issued[way] - retired[way])
-            m.d.comb += busy.eq(~hit & valid.bit_select(way, 1) & (waiting != 0))
+            # a way's references wait when its counts differ (mod 2^n: equal is none waiting), found
+            # for every way beside the tag compare, then chosen by the way (no subtract after it)
+            waiting = Signal(W, name=f"{n}_waiting")
+            m.d.comb += waiting.eq(Cat(*(issued[w] != retired[w] for w in range(W))))
+            m.d.comb += busy.eq(~hit & (valid & waiting).bit_select(way, 1))
             # LRU: the accessed way becomes the youngest; younger valid ways age by one. A miss puts
             # the line's tag in the way, rebases its count on what was read out, and clears its fill.
             acc_age = Signal(self.age_bits + 1, name=f"{n}_acc_age")
