@@ -523,17 +523,31 @@ class CachedReader(wiring.Component):
             m.d.sync += f_head.eq(f_head + 1)
 
         # -- line RAMs: a row per beat --------------------------------------------------------------------
-        m.submodules.index_lines = iram = memory.Memory(shape=bus_bits, depth=ic.sets * ic.ways * beats[0], init=[])
+        # The index lines in two banks, so that words w and w + 1 come from one read port each (a
+        # block RAM has two ports: one writes, one reads): they lie in one row, or in consecutive
+        # beats of a line, or in the last beat of a line and the first of the next set's: banks by
+        # row parity, or by set parity when a line is one beat.
+        kbit = 0 if beats[0] > 1 else _log2(ic.ways)
+        ibank = []
+        for b in range(2):
+            m.submodules[f"index_lines{b}"] = mem = memory.Memory(
+                shape=bus_bits, depth=ic.sets * ic.ways * beats[0] // 2, init=[])
+            ibank.append((mem.write_port(), mem.read_port()))
+
+        def split(row):                             # a row -> (its bank, its address in the bank)
+            return row[kbit], Cat(row[:kbit], row[kbit + 1:])
+        irow0, irow1, wrow = (Signal(islot + max(1, _log2(beats[0])), name=n) for n in ("irow0", "irow1", "wrow"))
+        m.d.comb += [irow0.eq(headv.slot0[:islot] * beats[0] + headv.beat0),
+                     irow1.eq(headv.slot1 * beats[0] + headv.beat1), wrow.eq(cur_slot[:islot] * beats[0] + beat)]
+        (p0, a0_), (p1, a1_), (pw, aw_) = split(irow0), split(irow1), split(wrow)
+        for b, (wp, rp) in enumerate(ibank):
+            m.d.comb += [wp.addr.eq(aw_), wp.data.eq(self.axi.rdata), wp.en.eq(self.axi.rvalid & ~cur_raw & (pw == b)),
+                         rp.addr.eq(Mux(p0 == b, a0_, a1_)), rp.en.eq(pop)]
         m.submodules.raw_lines = rram = memory.Memory(shape=bus_bits, depth=rc.sets * rc.ways * beats[1], init=[])
-        iw, rw = iram.write_port(), rram.write_port()
-        ir0, ir1, rr = iram.read_port(), iram.read_port(), rram.read_port()
+        rw, rr = rram.write_port(), rram.read_port()
         m.d.comb += [
-            iw.addr.eq(cur_slot[:islot] * beats[0] + beat), iw.data.eq(self.axi.rdata),
-            iw.en.eq(self.axi.rvalid & ~cur_raw),
             rw.addr.eq(cur_slot[:rslot] * beats[1] + beat), rw.data.eq(self.axi.rdata),
             rw.en.eq(self.axi.rvalid & cur_raw),
-            ir0.addr.eq(headv.slot0[:islot] * beats[0] + headv.beat0), ir0.en.eq(pop),
-            ir1.addr.eq(headv.slot1 * beats[0] + headv.beat1), ir1.en.eq(pop),
             rr.addr.eq(headv.slot0[:rslot] * beats[1] + headv.beat0), rr.en.eq(pop),
         ]
 
@@ -543,20 +557,23 @@ class CachedReader(wiring.Component):
 
         # -- the output register (the RAMs' read registers, and what goes with them) -------------------------
         o_raw = Signal()
+        o_bank = Signal(2)                          # the index banks holding w and w + 1
         o_off0 = Signal.like(headv.off0)
         o_off1 = Signal.like(headv.off1)
         o_tag = Signal(max(1, self._tag_width))
         with m.If(pop):
             m.d.sync += [self.o.valid.eq(1), o_raw.eq(headv.raw), o_off0.eq(headv.off0), o_off1.eq(headv.off1),
-                         o_tag.eq(headv.tag)]
+                         o_tag.eq(headv.tag), o_bank.eq(Cat(p0, p1))]
         with m.Elif(self.o.ready):
             m.d.sync += self.o.valid.eq(0)
         wbits = self._word_bits
+        ir0 = Mux(o_bank[0], ibank[1][1].data, ibank[0][1].data)
+        ir1 = Mux(o_bank[1], ibank[1][1].data, ibank[0][1].data)
         m.d.comb += [
             self.o.p.raw.eq(o_raw),
             self.o.p.word0.eq(Mux(o_raw, rr.data.word_select(o_off0, 32),
-                                  ir0.data.word_select(o_off0[:max(1, _log2(bus // wb))], wbits))),
-            self.o.p.word1.eq(ir1.data.word_select(o_off1, wbits)),
+                                  ir0.word_select(o_off0[:max(1, _log2(bus // wb))], wbits))),
+            self.o.p.word1.eq(ir1.word_select(o_off1, wbits)),
         ]
         if self._tag_width:
             m.d.comb += self.o.p.tag.eq(o_tag)
