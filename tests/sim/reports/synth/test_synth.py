@@ -335,7 +335,8 @@ def test_cached_harness_and_memories():
     for field in ("issued", "retired", "alloc", "fill"):
         assert mems[f"unit.reader.index_{field}0"][0] == 2 and mems[f"unit.reader.raw_{field}"][0] == 2
     assert mems["unit.reader.references"][0] == 4
-    assert mems["unit.reader.index_lines"] == (16 * 2, 128)          # a row per 16-byte beat
+    # a row per 16-byte beat, two banks (words w and w + 1 read one port each)
+    assert mems["unit.reader.index_lines0"] == mems["unit.reader.index_lines1"] == (16, 128)
     # the texel pipeline behind the caches holds the codebook (and no index or raw memory)
     assert any(n.startswith("unit.texel.back.codebook_rom.codebook") for n in mems)
     assert not any(".index_reader." in n or ".codebook_rom.raw." in n for n in mems)
@@ -368,7 +369,7 @@ def test_report_area_memory_external_synthesis(tmp_path, capsys):
     assert rep["top"] == "texel fetch, external memory (cached)" and rep["latency"] == 18
     assert rep["memory"]["index_cache"]["size"] == 512 and rep["memory"]["prefetch"] == 4
     mem = rep["memories"]
-    lut_ram = [n for n in mem if n.startswith("unit.reader.") and not n.endswith("_lines")]
+    lut_ram = [n for n in mem if n.startswith("unit.reader.") and "_lines" not in n]
     assert len(lut_ram) == 2 * 5 + 5 + 1 + 2                 # index (2 banks), raw, references, flight
     for n in lut_ram:
         assert mem[n]["mapped_to"] == "distributed RAM", (n, mem[n])
