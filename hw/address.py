@@ -99,8 +99,8 @@ class BlockAddress(wiring.Component):
         self._word_bits = word_bits
         twiddle_ports = {"layout": In(1), "log2h": In(4)} if self._twiddle else {}
         lw = (word_bits or 1).bit_length() - 1
-        word_ports = {"index_bits": In(5), "word": Out(max(base_bits, k_bits + 5 - lw) + 1), "bit_offset": Out(max(1, lw)),
-                      "straddle": Out(1)} if word_bits else {}
+        word_ports = {"index_bits": In(5), "word": Out(max(base_bits, k_bits + 5 - lw) + 1),
+                      "bit_offset": Out(max(1, lw)), "straddle": Out(1)} if word_bits else {}
         super().__init__({
             **twiddle_ports,
             **word_ports,

@@ -39,8 +39,9 @@ cache's rows are banked by set parity (a straddling index's two lines lie in con
 every memory has one writer per cycle. The valid bits of a set's ways are in its row too, and count
 only once the set's row has been written since reset: one flip-flop per set (``touched``, cleared by
 reset, set through a decoder of the row's write address); an allocation rebases its line's count and
-filled bit, so a reset, even with bursts in flight, leaves the caches empty and consistent. The reference FIFO and the queue of bursts in flight
-are LUT RAM too; the lines are block RAM (one row per bus beat, registered reads).
+filled bit, so a reset, even with bursts in flight, leaves the caches empty and consistent. The
+reference FIFO and the queue of bursts in flight are LUT RAM too; the lines are block RAM when large
+enough (one row per bus beat, registered reads; the index lines in two banks, one read port each).
 
 Arguments
 ---------
@@ -257,8 +258,8 @@ class _Cache:
             for w in range(W):
                 here = way == w
                 old_age = row[w].age
-                ways.append(Cat(Mux(here & ~hit, t, row[w].tag)[:self.tag_bits],
-                                Mux(here, 0, Mux(valid[w] & (old_age < acc_age), old_age + 1, old_age))[:self.age_bits]))
+                new_age = Mux(here, 0, Mux(valid[w] & (old_age < acc_age), old_age + 1, old_age))
+                ways.append(Cat(Mux(here & ~hit, t, row[w].tag)[:self.tag_bits], new_age[:self.age_bits]))
                 counts.append((Mux(here, Mux(hit, issued[w], retired[w]) + 1, issued[w]))[:self.count_bits])
                 allocs.append(Mux(here & ~hit, ~fill[w], alloc[w]))
             # each row assigned in one piece (CXXRTL would assemble a row written field by field)
@@ -452,7 +453,8 @@ class CachedReader(wiring.Component):
             new.raw.eq(req.raw),
             new.slot0.eq(Mux(req.raw, slotr, slot0)),
             new.slot1.eq(slot1),
-            new.beat0.eq(Mux(req.raw, (ra & (rc.shape.line - 1)) >> _log2(bus), (a0 & (ic.shape.line - 1)) >> _log2(bus))),
+            new.beat0.eq(Mux(req.raw, (ra & (rc.shape.line - 1)) >> _log2(bus),
+                             (a0 & (ic.shape.line - 1)) >> _log2(bus))),
             new.beat1.eq((a1 & (ic.shape.line - 1)) >> _log2(bus)),
             new.off0.eq(Mux(req.raw, (ra & (bus - 1)) >> 2, (a0 & (bus - 1)) >> _log2(wb))),
             new.off1.eq((a1 & (bus - 1)) >> _log2(wb)),

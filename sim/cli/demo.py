@@ -13,8 +13,8 @@ import time
 
 import numpy as np
 
-from .common import (CliError, Outputs, add_backend, add_json, add_memory_options, add_unit, emit, memory_config, resolve,
-                     unit_geometry, with_default, write_bytes, write_json)
+from .common import (CliError, Outputs, add_backend, add_json, add_memory_options, add_unit, emit, memory_config,
+                     resolve, unit_geometry, with_default, write_bytes, write_json)
 from vqtex.sim.reports.quality import DEFAULT_VMAX, side_by_side
 
 from .render import encode_scene, memory_line, memory_summary, parse_frames, render_to_files

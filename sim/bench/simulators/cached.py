@@ -30,7 +30,8 @@ CACHES = ((16384, 4096), (4096, 1024))
 
 def _cpp_bytes(build, backend: str) -> int:
     folder = os.path.dirname(build.library)
-    files = [os.path.join(folder, "design.cc")] if backend == "cxxrtl" else glob.glob(os.path.join(folder, "obj", "*.cpp"))
+    files = ([os.path.join(folder, "design.cc")] if backend == "cxxrtl"
+             else glob.glob(os.path.join(folder, "obj", "*.cpp")))
     return sum(os.path.getsize(f) for f in files if os.path.exists(f))
 
 
@@ -53,8 +54,9 @@ def run(caches=CACHES, backends=("cxxrtl", "verilator"), json_out: bool = False)
         t = time.perf_counter()
         model = run_cached(ts, req, cfg, zero_latency=False)
         golden_s = time.perf_counter() - t
-        rows.append({"caches": [index_bytes, raw_bytes], "backend": "golden cycle model", "cycles": int(model["cycles"]),
-                     "run_s": round(golden_s, 2), "requests_per_s": round(len(req) / golden_s)})
+        rows.append({"caches": [index_bytes, raw_bytes], "backend": "golden cycle model",
+                     "cycles": int(model["cycles"]), "run_s": round(golden_s, 2),
+                     "requests_per_s": round(len(req) / golden_s)})
         for backend in backends:
             with tempfile.TemporaryDirectory(prefix="vqtex-bench-cached-") as folder, using_cache(folder):
                 t = time.perf_counter()
@@ -69,10 +71,10 @@ def run(caches=CACHES, backends=("cxxrtl", "verilator"), json_out: bool = False)
                 if got["cycles"] != model["cycles"] or not np.array_equal(got["responses"], want):
                     raise RuntimeError(f"{backend} at caches {index_bytes}+{raw_bytes}: {got['cycles']} cycles, "
                                        f"golden {model['cycles']} (or the responses differ)")
+                steps = {k: round(v, 1) for k, v in build.steps.items() if v >= 0.05}
                 rows.append({"caches": [index_bytes, raw_bytes], "backend": backend, "cycles": int(got["cycles"]),
-                             "build_s": round(build_s, 1), "build_steps_s": {k: round(v, 1) for k, v in build.steps.items()
-                                                                             if v >= 0.05},
-                             "cpp_bytes": cpp, "run_s": round(best, 2), "cycles_per_s": round(got["cycles"] / best)})
+                             "build_s": round(build_s, 1), "build_steps_s": steps, "cpp_bytes": cpp,
+                             "run_s": round(best, 2), "cycles_per_s": round(got["cycles"] / best)})
     out = {"frame": "topspin 0, trilinear, sparse stream", "requests": int(len(req)), "rows": rows}
     if json_out:
         print(json.dumps(out))
