@@ -107,6 +107,22 @@ def test_scene_frame_equals_golden(backend):
     check(ts, req, MemoryConfig(**SCENE, kind="dram"), backend, 0.0, 0)
 
 
+def test_default_caches_equal_golden():
+    """The command line's default caches (16 KB index, 4 KB raw, 32-byte lines, 4 ways: 640 lines)
+    build on CXXRTL (in about 30 s: the caches' state is LUT RAM, hw.memory.reader) and match golden
+    on a stream over a set larger than both caches (every set's lines replaced)."""
+    need("g++")
+    from vqtex.golden.encode import encode
+    from tests.support.sets import image
+    ts = encode([image((256, 256), 20), image((256, 256), 21)], block=(2, 2), codebook_size=16, color="rgb",
+                index_bits=12, mipmaps=True, raw_below=64, seed=3)
+    assert len(ts.index_words) * 4 > 2 * 16384 and len(ts.raw_words) * 4 > 2 * 4096
+    req = stream(ts, 8000, seed=9)
+    for latency, stall in ((1, 0.0), (60, 0.3)):
+        m = check(ts, req, MemoryConfig(latency=latency), "cxxrtl", stall, latency)
+        assert m["bursts"] > (16384 + 4096) // 32 and m["stall_cycles"]["miss"] > 0     # more fills than lines
+
+
 def test_axi_slave_refuses_what_it_does_not_hold():
     """The drivers' slave checks the master's side: a memory image shorter than the bursts the
     stream needs stops the run with the protocol error (as sim.backends.axi_memory does on pysim)."""
