@@ -109,8 +109,7 @@ def compiled_build(ts, config, *, lanes: int = 4, frac: int | None = None, backe
     info = cached_filter_design_info(ts, config, lanes=lanes, frac=frac, tag_width=TAG_WIDTH)
     if backend == "cxxrtl":
         from .cxxrtl import build_design
-        from .memory import cached_cxx_flags
-        return build_design(info, cxxflags=cached_cxx_flags())
+        return build_design(info)
     from . import verilator
     from .verilog import export_cached_filter_verilog
     return verilator.build_design(info, lambda: export_cached_filter_verilog(

@@ -30,7 +30,7 @@ from vqtex.golden.memory.timing import plan
 from ..streams import ready_pattern
 from .interface import GOLDEN_CHUNK, SimResult
 
-__all__ = ["run", "run_pysim", "run_compiled", "build_cached", "cached_cxx_flags", "BACKENDS"]
+__all__ = ["run", "run_pysim", "run_compiled", "build_cached", "BACKENDS"]
 
 #: Backends that run the cached unit.
 BACKENDS = ("golden", "pysim", "cxxrtl", "verilator")
@@ -156,26 +156,12 @@ def build_cached(ts, config, backend: str, *, tag_width: int = 8):
     info = cached_design_info(ts, config, tag_width=tag_width)
     if backend == "cxxrtl":
         from .cxxrtl import build_design
-        return build_design(info, cxxflags=cached_cxx_flags())
+        return build_design(info)
     if backend == "verilator":
         from .verilator import build_design
         from .verilog import export_cached_verilog
-        return build_design(info, lambda: export_cached_verilog(ts, config, tag_width=tag_width))
+        return build_design(info, lambda: export_cached_verilog(ts, config, tag_width=tag_width)[0])
     raise ValueError(f"no compiled backend {backend!r} (cxxrtl, verilator)")
-
-
-def cached_cxx_flags() -> list:
-    """The C++ flags of a cached design's CXXRTL build: the backend's, and with clang a deeper
-    bracket limit (the caches' state is flip-flops read through set-indexed multiplexers, which
-    CXXRTL writes as nested expressions: with the CLI's default caches, 16 + 4 KB of 32-byte lines,
-    4 ways, deeper than clang's default of 256 brackets, a compile error)."""
-    import os
-    from .cxxrtl import CXXFLAGS
-    from .toolchain import find_cxx
-    flags = list(CXXFLAGS)
-    if "clang" in os.path.basename(find_cxx()):
-        flags.append("-fbracket-depth=4096")
-    return flags
 
 
 def _worst_cycles(n: int, config) -> int:
