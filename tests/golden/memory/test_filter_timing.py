@@ -6,7 +6,7 @@ the arbiter's order; never faster than a perfect cache, never faster with a long
 import numpy as np
 import pytest
 
-from tests.hw.filter.test_hw_filter import edge_pixels, filter_set
+from tests.support import edge_pixels, filter_set
 from vqtex.golden import filter as spec
 from vqtex.golden.memory import filter as gf
 from vqtex.golden.memory import timing

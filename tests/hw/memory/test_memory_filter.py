@@ -8,7 +8,7 @@ order only (the cycle model has none)."""
 import numpy as np
 import pytest
 
-from tests.hw.filter.test_hw_filter import edge_pixels, filter_set
+from tests.support import edge_pixels, filter_set
 from vqtex.golden import filter as spec
 from vqtex.golden.memory.cache import CacheShape
 from vqtex.golden.memory.system import MemoryConfig

@@ -31,7 +31,7 @@ def scene_pixels(mode):
     from vqtex.golden.render import plan_frame
     from vqtex.golden.render.pyramid import VQSource
     from vqtex.golden.render.scene import build_texture_set, parse_scene
-    from tests.golden.need.test_need import SMALL as SCENE_TOML
+    from tests.support import NEED_SCENE as SCENE_TOML
     scene = parse_scene(SCENE_TOML, "small.toml")
     ts = build_texture_set(scene)
     sampler = plan_frame(scene, 1, VQSource(ts), mode)
@@ -60,7 +60,7 @@ def test_scene_frame_equals_the_cycle_model():
 
 def test_verilator_equals_the_cycle_model():
     need("g++", "verilator")
-    from tests.hw.filter.test_hw_filter import edge_pixels, filter_set
+    from tests.support import edge_pixels, filter_set
     from vqtex.golden import filter as spec
     from vqtex.hw.filter.footprint import level_table
     ts = filter_set()

@@ -6,10 +6,12 @@ import json
 
 import pytest
 
-from tests.sim.cli.test_render_filter import MIRRORED
-from tests.support import assert_one_error
+from tests.support import TINY_SCENE, assert_one_error
 from vqtex.sim.cli import main
 
+#: test_render_filter's scene: the tiny scene with a mirrored axis, and smaller (pysim runs every cycle).
+MIRRORED = TINY_SCENE.replace('address = "clamp"', 'address = ["mirror", "clamp"]').replace("size = [20, 16]",
+                                                                                             "size = [12, 10]")
 SMALL = ["--memory", "external", "--cache-size", "256", "--raw-cache-size", "128", "--cache-line", "16",
          "--cache-ways", "2", "--prefetch", "4", "--memory-latency", "30"]
 
