@@ -108,8 +108,16 @@ def compiled_build(ts, config, *, lanes: int = 4, frac: int | None = None, backe
     from .design import cached_filter_design_info
     info = cached_filter_design_info(ts, config, lanes=lanes, frac=frac, tag_width=TAG_WIDTH)
     if backend == "cxxrtl":
-        from .cxxrtl import build_design
-        return build_design(info)
+        import os
+        from .cxxrtl import CXXFLAGS, build_design
+        from .toolchain import find_cxx
+        flags = list(CXXFLAGS)
+        if "clang" in os.path.basename(find_cxx()):
+            # the arbiter's queues (lanes * (2 Q + 2) entries, 256 at 4 lanes and Q = 16) are read
+            # through multiplexers CXXRTL writes as nested expressions, deeper than clang's default
+            # of 256 brackets (a compile error)
+            flags.append("-fbracket-depth=4096")
+        return build_design(info, cxxflags=flags)
     from . import verilator
     from .verilog import export_cached_filter_verilog
     return verilator.build_design(info, lambda: export_cached_filter_verilog(
