@@ -71,10 +71,12 @@ class BankedROM(wiring.Component):
     depth : int, optional
         Words of the memory (default ``len(init)``; more: the rest start as zero).
     load : hw.bus_port.LoadTarget, optional
-        Loadable: where the memory sits in the register map; each bank gets a second port, on
-        which the bus writes and reads (:func:`hw.bus_port.attach_memory` with ``own_port``: a
-        true dual-port block RAM, whose ports are at most 18 bits wide on an ECP5: use
-        ``LOADABLE_BANK_DEPTH``), and a bank wider than 32 bits is padded to whole bus words.
+        Loadable: where the memory sits in the register map; each bank gets a write port, and a
+        bank wider than 32 bits is padded to whole bus words. A memory deeper than 512 words
+        (``BANK_DEPTH``) is read by the bus on the same port, the block RAMs' second one
+        (:func:`hw.bus_port.attach_memory` with ``own_port``: true dual port, at most 18 bits a port
+        on an ECP5, so use ``LOADABLE_BANK_DEPTH``), and the pipeline's read address has no
+        multiplexer; a shallower one shares the pipeline's read port with the bus's reads.
 
     Members
     -------
@@ -152,6 +154,11 @@ class BankedROM(wiring.Component):
         # A loadable bank of more than 32 bits is written 32 bits at a time: its width is padded to
         # whole bus words (the padding is never read by the pipeline).
         stored = self._width if load is None or self._width <= DATA_WIDTH else -(-self._width // DATA_WIDTH) * DATA_WIDTH
+        # A loadable memory deeper than one 36-bit DP16KD (512 words) gives the bus the block RAMs'
+        # second port (true dual port, 18 bits per port: no more block RAMs from 1024 words a bank);
+        # a shallower one shares the pipeline's read port with the bus's reads (a multiplexer on
+        # the read address), which keeps it in one 512 x 36 block RAM per 36 bits instead of two.
+        own_port = load is not None and self._depth > BANK_DEPTH
         if load is not None:                # the command decoded once, then a bank compare each
             hit, row, lane, command = load_decode(m, self.load, region=load.region, lanes=load.lanes,
                                                   stride=load.stride, phase=load.phase, depth=self._depth, name="load")
@@ -163,7 +170,7 @@ class BankedROM(wiring.Component):
             # (a loadable bank: a read in the cycle of a write may read anything, so that Yosys can
             # put the bus's read and write on one port of the block RAM: hw.bus_port.attach_memory)
             m.submodules[f"bank{k}"] = mem = memory.Memory(shape=stored, depth=depth, init=part,
-                                                           attrs={} if load is None else {"no_rw_check": 1})
+                                                           attrs={"no_rw_check": 1} if own_port else {})
             # The fabric register behind the block RAM (stored bits); a bus read comes through the
             # block RAM's second port and a register of its own (hw.bus_port.attach_memory).
             q = Signal(stored, name=f"data{k}")
@@ -171,7 +178,7 @@ class BankedROM(wiring.Component):
                 bank_hit = hit if self._banks == 1 else hit & (row[offset_bits:] == k)
                 rd, answer = attach_memory(m, mem, command, hit=bank_hit, row=row[:offset_bits], lane=lane,
                                            name=f"bank{k}_load", read_addr=self.addr[:offset_bits], read_en=self.en,
-                                           own_port=True)
+                                           own_port=own_port)
                 answers.append(answer)
             else:
                 rd = mem.read_port(domain="sync")

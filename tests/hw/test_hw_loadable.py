@@ -73,7 +73,8 @@ def test_larger_geometry_and_stale_rows(bank_depth):
     big, small = texture_set("rgb_4x4_b8_mip", images=3), texture_set("yuv_4x4_b12_mip")
     g = _geometry(big, small).union(Geometry.of(big))
     g = Geometry(**{**g.to_dict(), "index_words": g.index_words + 100, "codebook_entries": g.codebook_entries + 7,
-                    "raw_words": g.raw_words + 9, "textures": 5})
+                    "raw_words": max(g.raw_words + 9, 1100), "textures": 5})
+    assert g.raw_words > 1024 >= g.codebook_entries     # both ways of reading back (hw.banked_rom)
     phases = [(big, random_requests(big, 30, seed=1)), (small, random_requests(small, 30, seed=2))]
     for (ts, req), r in zip(phases, pysim.run_phases(g, phases, bank_depth=bank_depth)):
         _check(ts, req, r, stall=0.0, seed=0)
@@ -100,6 +101,9 @@ def test_read_back_and_errors(bank_depth):
     (and change nothing). With 16-word banks, the reads come from many banks' second ports."""
     ts = texture_set("yuv_dreamcast_4x4_b12_mip")
     g = _geometry(ts)
+    # a raw memory deeper than 512 words: the bus reads it on its own port (hw.banked_rom)
+    g = Geometry(**{**g.to_dict(), "raw_words": max(g.raw_words, 600)})
+    assert g.codebook_entries <= 512 < g.raw_words
     rmap = RegisterMap(g)
     writes = load_writes(ts, g).astype(np.int64)
     rng = np.random.default_rng(0)
