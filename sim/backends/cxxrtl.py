@@ -44,7 +44,7 @@ import numpy as np
 from .cxxrtl_inplace import inplace_cycle, inplace_rewrite
 from .design import HALVES, DesignInfo, design_info
 from .interface import SimResult
-from .yosys import rtlil_script, run_yosys
+from .yosys import fragment_rtlil, rtlil_script, run_yosys
 from .toolchain import (ToolchainError, cached_build, digest, find_cxx, index_get, index_put, run_tool,
                         source_stamp, texture_set_digest, tool_version)
 
@@ -63,7 +63,7 @@ API_VERSION = 5
 #: The AXI4 read master's ports the drivers' slave (drivers/axi_slave.h) drives and reads.
 AXI_PORTS = ("araddr", "arlen", "arsize", "arburst", "arvalid", "arready", "rdata", "rlast", "rvalid")
 #: The driver sources every compiled build of a unit depends on, besides its own driver.
-SHARED_DRIVER_SOURCES = ("batch.h", "axi_slave.h", "memory_model.h")
+SHARED_DRIVER_SOURCES = ("batch.h", "halves.h", "axi_slave.h", "memory_model.h")
 
 
 def cxxrtl_sources(info: DesignInfo) -> dict:
@@ -103,19 +103,17 @@ _writing = threading.Lock()
 
 
 def write_cxxrtl(fragment, ports) -> str:
-    """The fragment's RTLIL (``amaranth.back.rtlil``) through Yosys ``write_cxxrtl`` with our options
-    (:data:`WRITE_CXXRTL`), as ``amaranth.back.cxxrtl`` does with its own. Written once per fragment
-    and kept: Amaranth's conversion prepares a fragment in place, so a second conversion of the same
-    one fails, and a unit's description (with its fragment) is elaborated once per process
-    (:mod:`sim.backends.design`) while its C++ may be asked for again (a build with other flags, a
-    library evicted from the cache, the rewrite tests)."""
+    """The fragment's RTLIL (:func:`sim.backends.yosys.fragment_rtlil`, converted once per fragment)
+    through Yosys ``write_cxxrtl`` with our options (:data:`WRITE_CXXRTL`), as
+    ``amaranth.back.cxxrtl`` does with its own. Written once per fragment and kept (a unit's
+    description, with its fragment, is elaborated once per process, :mod:`sim.backends.design`,
+    while its C++ may be asked for again: a build with other flags, a library evicted from the
+    cache, the rewrite tests)."""
     names = tuple(ports)
     with _writing:                          # (one conversion of a fragment at a time)
         kept = _written.get(fragment, {})
         if names not in kept:
-            from amaranth.back import rtlil
-            text, _ = rtlil.convert_fragment(fragment, ports, "top", emit_src=False)
-            kept[names] = run_yosys(rtlil_script(text, WRITE_CXXRTL))
+            kept[names] = run_yosys(rtlil_script(fragment_rtlil(fragment, ports), WRITE_CXXRTL))
             _written[fragment] = kept
         return kept[names]
 
@@ -551,7 +549,7 @@ class BatchLibrary:
             lib.vq_axi_trace.argtypes = [ctypes.c_void_p, _u64p, _u64p]
             lib.vq_axi_error.argtypes = [ctypes.c_void_p]
             lib.vq_axi_error.restype = ctypes.c_char_p
-            if hasattr(lib, "vq_set_threads"):         # CXXRTL only (the two halves: driver.cc)
+            if hasattr(lib, "vq_set_threads"):         # a unit run as its two halves (drivers/halves.h)
                 lib.vq_set_threads.argtypes = [ctypes.c_void_p, ctypes.c_int]
             if lib.vq_api_version() != API_VERSION:
                 raise ToolchainError(f"{path}: batch API version {lib.vq_api_version()}, expected {API_VERSION}")
@@ -567,8 +565,9 @@ class BatchLibrary:
         self.set_threads(default_threads())
 
     def set_threads(self, threads: int) -> int:
-        """Threads ``vq_run`` may use: 2 runs the back end of the unit on a second thread (CXXRTL;
-        the Verilator library always uses one). Returns the number in use."""
+        """Threads ``vq_run`` may use: 2 runs the back end of the unit on a second thread (a library
+        of the unit's two halves, drivers/halves.h: CXXRTL's texel-fetch unit, Verilator's with
+        ``halves=True``; any other uses one). Returns the number in use."""
         if hasattr(self.lib, "vq_set_threads"):
             self.threads = int(self.lib.vq_set_threads(self.handle, int(threads)))
         return self.threads

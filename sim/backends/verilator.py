@@ -8,7 +8,9 @@ CXXRTL backend, and run through the same ctypes code (:class:`sim.backends.cxxrt
 responses, cycles, stall counts, straddles and occupancy are comparable one for one. One build
 function serves both units (:func:`build_design`, from the unit's
 :class:`sim.backends.design.DesignInfo`); :func:`build_verilator`, :func:`open_verilator` and
-:func:`run` are the texel-fetch unit's entry points.
+:func:`run` are the texel-fetch unit's entry points. ``halves=True`` builds the baked texel-fetch
+unit instead as its two halves, two models run by drivers/halves.h as the CXXRTL backend runs its
+halves (measured, not the default: slower on one thread; docs/simulation.md).
 
 Builds are cached (:mod:`sim.backends.toolchain`) by a hash of the Verilog, the driver sources, the Verilator
 and compiler versions and the flags; Verilator's runtime (``verilated.cpp``) is compiled once per
@@ -22,7 +24,7 @@ import re
 import time
 
 from .cxxrtl import DRIVER_DIR, SHARED_DRIVER_SOURCES, Build, batch_header, driver_sources, open_design, run_unit
-from .design import DesignInfo, design_info
+from .design import HALVES, DesignInfo, design_info
 from .toolchain import (ToolchainError, cache_dir, cached_build, digest, find_cxx, find_tool, index_get, index_put,
                         run_tool, source_stamp, tool_version)
 
@@ -30,7 +32,7 @@ __all__ = ["run", "build_verilator", "build_design", "open_verilator", "build_li
            "CXXFLAGS", "MODEL_OPT", "SLOW_OPT", "MODEL_CXXFLAGS", "verilator_include_dir", "verilator_runtime",
            "model_sources", "harness_verilog", "top_ports", "HARNESS_NAME"]
 
-VERILATOR_FLAGS = ["--cc", "--prefix", "Vtop", "-O3", "--x-assign", "fast", "--x-initial", "fast",
+VERILATOR_FLAGS = ["--cc", "-O3", "--x-assign", "fast", "--x-initial", "fast",
                    "--noassert", "-Wno-fatal", "-Wno-lint", "-Wno-style"]
 #: Verilator's runtime (verilated.cpp, verilated_threads.cpp), compiled once per Verilator and compiler.
 CXXFLAGS = ["-std=c++17", "-O2", "-fPIC", "-DNDEBUG"]
@@ -74,12 +76,16 @@ def _bits(off: int, width: int) -> str:
     return f"({x} & {hex((1 << width) - 1)}ULL)" if width < 64 else x
 
 
-def ports_header(info: DesignInfo) -> str:
+def ports_header(info: DesignInfo, *, halves: bool = False) -> str:
     """``ports.h`` for verilator_driver.cc: batch.h's constants, the payload words spread over the
     request ports of the unit's Verilog top (one port per field, or the payload whole; a port wider
-    than 64 bits is Verilator's array of 32-bit words) and the response gathered back."""
+    than 64 bits is Verilator's array of 32-bit words) and the response gathered back. With
+    ``halves``, the baked texel-fetch unit as its two models (``VQ_HALVES``): the request goes to
+    the front end's ``i_payload`` whole, and ``VQ_O_TAG_OFFSET`` says where the front end's
+    ``o_tag`` sits in ``o.payload`` (the back end's ``rgba`` is bits 0..31)."""
+    request = [("i_payload", 0, info.request_width)] if halves else info.verilog_request
     sets = []
-    for port, off, width in info.verilog_request:
+    for port, off, width in request:
         if width <= 64:
             sets.append(f"top->{port} = {_bits(off, width)};")
         else:
@@ -89,8 +95,12 @@ def ports_header(info: DesignInfo) -> str:
     strobes = " ".join(f"c[VQ_C_STROBES + {k}] += top->{s};" for k, s in enumerate(info.strobes))
     lines = batch_header(info, "sim/backends/verilator.py")
     lines += [f"#define VQ_SET_REQUEST(top, p) {' '.join(sets)}", f"#define VQ_GET_RESPONSE(top) ({gets or '0'})",
-              f"#define VQ_GET_VALID(top) uint32_t(top->{info.valid.replace('__', '_')})",
+              f"#define VQ_GET_VALID(top) uint32_t(top->{harness_port(info.valid)})",
               f"#define VQ_STROBES(top, c) {strobes}"]
+    if halves:
+        lines.append("#define VQ_HALVES 1")
+        if info.tag_width:
+            lines += ["#define VQ_O_TAG 1", f"#define VQ_O_TAG_OFFSET {info.response_fields['tag'][0]}"]
     if info.bus:                            # the loadable unit's Wishbone port (bus_* ports)
         lines.append("#define VQ_BUS 1")
     if info.axi_bytes:                      # the AXI4 read master's rdata from 32-bit words
@@ -136,6 +146,13 @@ def top_ports(verilog: str, top_name: str) -> list[tuple[str, str, int]]:
     return [(d, name, abs(int(hi) - int(lo)) + 1 if hi else 1) for d, hi, lo, name in _PORT.findall(body)]
 
 
+def harness_port(name: str) -> str:
+    """The harness's name for a port of the unit: the same, with ``__`` as ``_`` (Verilator writes a
+    ``__`` in a C++ name as ``___05F``; the halves' ports are Amaranth's ``i__valid``,
+    ``i__payload``, ...; the exported tops have no such name)."""
+    return name.replace("__", "_")
+
+
 def harness_verilog(verilog: str, top_name: str) -> str:
     """A simulation-only wrapper around the unit's exported top ``top_name`` (which stays byte for
     byte what ``vqtex export`` writes): one clock edge per ``eval()`` of the Verilated model.
@@ -148,37 +165,40 @@ def harness_verilog(verilog: str, top_name: str) -> str:
     clock-low ``eval()`` and the rising edge read before. Verilator otherwise needs two ``eval()``
     per cycle (clock low, to settle the inputs and to see the clock fall; clock high), and the
     scheduling of each costs as much as a tenth of the default unit's cycle (docs/simulation.md,
-    Verilator section)."""
+    Verilator section). A port's name in the harness is :func:`harness_port`'s."""
     ports = top_ports(verilog, top_name)
     names = [n for _, n, _ in ports]
     if "clk" not in names:
         raise ToolchainError(f"module {top_name} has no clk port")
+    if len({harness_port(n) for n in names}) != len(names):
+        raise ToolchainError(f"module {top_name}: two ports with the same harness name")
+    hp = harness_port
 
     def rng(width):
         return f"[{width - 1}:0] " if width > 1 else ""
     ins = [(n, w) for d, n, w in ports if d == "input" and n != "clk"]
     outs = [(n, w) for d, n, w in ports if d == "output"]
     lines = [f"// generated by sim/backends/verilator.py: the Verilator backend's harness around {top_name}",
-             f"module {HARNESS_NAME}(tick, {', '.join(n for n in names if n != 'clk')});",
+             f"module {HARNESS_NAME}(tick, {', '.join(hp(n) for n in names if n != 'clk')});",
              "  input tick;"]
-    lines += [f"  input {rng(w)}{n};" for n, w in ins]
-    lines += [f"  output reg {rng(w)}{n};" for n, w in outs]
+    lines += [f"  input {rng(w)}{hp(n)};" for n, w in ins]
+    lines += [f"  output reg {rng(w)}{hp(n)};" for n, w in outs]
     lines += ["  reg phase = 1'b0;", "  wire clk = tick ^ phase;"]
-    lines += [f"  wire {rng(w)}unit_{n};" for n, w in outs]
-    conns = ["    .clk(clk)"] + [f"    .{n}({n})" for n, _ in ins] + [f"    .{n}(unit_{n})" for n, _ in outs]
+    lines += [f"  wire {rng(w)}unit_{hp(n)};" for n, w in outs]
+    conns = ["    .clk(clk)"] + [f"    .{n}({hp(n)})" for n, _ in ins] + [f"    .{n}(unit_{hp(n)})" for n, _ in outs]
     lines += [f"  {top_name} unit (", ",\n".join(conns), "  );", "  always_ff @(posedge clk) begin",
               "    phase <= tick;"]
-    lines += [f"    {n} <= unit_{n};" for n, _ in outs]
+    lines += [f"    {hp(n)} <= unit_{hp(n)};" for n, _ in outs]
     lines += ["  end", "endmodule", ""]
     return "\n".join(lines)
 
 
-def model_sources(obj: str) -> tuple[list[str], list[str]]:
-    """The C++ files Verilator wrote into ``obj``, as (fast, slow) by its own classification
-    (``Vtop_classes.mk``: ``VM_CLASSES_FAST``/``VM_SUPPORT_FAST`` run every cycle,
+def model_sources(obj: str, prefix: str = "Vtop") -> tuple[list[str], list[str]]:
+    """The C++ files Verilator wrote into ``obj`` for the model ``prefix``, as (fast, slow) by its own
+    classification (``{prefix}_classes.mk``: ``VM_CLASSES_FAST``/``VM_SUPPORT_FAST`` run every cycle,
     ``VM_CLASSES_SLOW``/``VM_SUPPORT_SLOW`` once: construction, initial blocks, constant pool)."""
     lists = {"FAST": [], "SLOW": []}
-    with open(os.path.join(obj, "Vtop_classes.mk")) as f:
+    with open(os.path.join(obj, f"{prefix}_classes.mk")) as f:
         kind = None
         for line in f:
             words = line.replace("\\", " ").split()
@@ -193,36 +213,44 @@ def model_sources(obj: str) -> tuple[list[str], list[str]]:
             if kind:
                 lists[kind] += [w + ".cpp" for w in words]
     if not lists["FAST"]:
-        raise ToolchainError(f"Verilator wrote no model classes into {obj} (Vtop_classes.mk)")
+        raise ToolchainError(f"Verilator wrote no model classes into {obj} ({prefix}_classes.mk)")
     return lists["FAST"], lists["SLOW"]
 
 
-def build_library(folder: str, verilog: str, header: str, *, verilator: str, cxx: str, inc: str, runtime: str,
-                  top_name: str, what: str, extra_flags=()) -> dict:
-    """In ``folder``: write ``top.v`` (the unit's export), ``harness.v`` (:func:`harness_verilog`
-    around its module ``top_name``) and ``ports.h``, verilate the harness (C++ only, Verilator's
-    makefile is not used) and build ``libvq.so``: the model's run-once C++ at ``SLOW_OPT``, its
-    per-cycle C++ and drivers/verilator_driver.cc as one translation unit (``model.cc``) at
-    ``MODEL_OPT``, linked with Verilator's runtime. Returns the seconds of each step,
-    ``{"verilate": s, "link": s}``."""
+def build_library(folder: str, models, header: str, *, verilator: str, cxx: str, inc: str, runtime: str,
+                  what: str, extra_flags=()) -> dict:
+    """In ``folder``: for each model ``(prefix, verilog, top_name)`` of ``models`` (the unit's export,
+    prefix ``top``; or the texel-fetch unit's two halves, ``front`` and ``back``) write
+    ``{prefix}.v`` and ``{prefix}_harness.v`` (:func:`harness_verilog` around its module
+    ``top_name``) and verilate the harness into ``obj_{prefix}`` as class ``V{prefix}`` (C++ only,
+    Verilator's makefile is not used); write ``ports.h`` and build ``libvq.so``: the models' run-once
+    C++ at ``SLOW_OPT``, their per-cycle C++ and drivers/verilator_driver.cc as one translation unit
+    (``model.cc``) at ``MODEL_OPT``, linked with Verilator's runtime. Returns the seconds of each
+    step, ``{"verilate": s, "link": s}``."""
     import concurrent.futures
-    with open(os.path.join(folder, "top.v"), "w") as f:
-        f.write(verilog)
-    with open(os.path.join(folder, "harness.v"), "w") as f:
-        f.write(harness_verilog(verilog, top_name))
     with open(os.path.join(folder, "ports.h"), "w") as f:
         f.write(header)
     t = time.perf_counter()
-    run_tool([verilator, *VERILATOR_FLAGS, *extra_flags, "--top-module", HARNESS_NAME, "--Mdir", "obj",
-              "top.v", "harness.v"], folder, "Verilator", "build.log")
+    fast, slow, includes = [], [], []
+    for prefix, verilog, top_name in models:
+        with open(os.path.join(folder, f"{prefix}.v"), "w") as f:
+            f.write(verilog)
+        with open(os.path.join(folder, f"{prefix}_harness.v"), "w") as f:
+            f.write(harness_verilog(verilog, top_name))
+        obj = f"obj_{prefix}"
+        run_tool([verilator, *VERILATOR_FLAGS, *extra_flags, "--prefix", f"V{prefix}", "--top-module", HARNESS_NAME,
+                  "--Mdir", obj, f"{prefix}.v", f"{prefix}_harness.v"], folder, "Verilator", "build.log")
+        f_, s_ = model_sources(os.path.join(folder, obj), prefix=f"V{prefix}")
+        fast += f_
+        slow += s_
+        includes += ["-I", obj]
     t_verilate = time.perf_counter() - t
-    fast, slow = model_sources(os.path.join(folder, "obj"))
     for name, files in (("model.cc", fast), ("slow.cc", slow)):
         with open(os.path.join(folder, name), "w") as f:
             f.writelines(f'#include "{src}"\n' for src in files)
             if name == "model.cc":
                 f.write(f'#include "{os.path.join(DRIVER_DIR, "verilator_driver.cc")}"\n')
-    common = [cxx, *[f for f in CXXFLAGS if not f.startswith("-O")], *MODEL_CXXFLAGS, "-I", "obj", "-I", inc,
+    common = [cxx, *[f for f in CXXFLAGS if not f.startswith("-O")], *MODEL_CXXFLAGS, *includes, "-I", inc,
               "-I", os.path.join(inc, "vltstd"), "-I", DRIVER_DIR, "-I", folder]
     t = time.perf_counter()
     with concurrent.futures.ThreadPoolExecutor(2) as pool:     # the two compilers side by side
@@ -239,16 +267,18 @@ def build_library(folder: str, verilog: str, header: str, *, verilator: str, cxx
 
 
 def build_verilator(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True,
-                    geometry=None, threads: int = 1) -> Build:
-    """The Verilator library of the texel-fetch unit's exported Verilog for ``ts`` (built or from the
-    cache); with ``geometry``, of the loadable unit of that geometry (one build per geometry); with
-    ``threads`` > 1, verilated with ``--threads`` (measured only: sim.bench.simulators.verilator_speed)."""
+                    geometry=None, threads: int = 1, halves: bool = False) -> Build:
+    """The Verilator library of the texel-fetch unit for ``ts`` (built or from the cache): the
+    exported Verilog whole; with ``geometry``, of the loadable unit of that geometry (one build per
+    geometry); with ``threads`` > 1, verilated with ``--threads`` (measured only:
+    sim.bench.simulators.verilator_speed). ``halves=True``: the baked unit's two halves as two
+    models, run as the CXXRTL backend runs them (:func:`build_design`)."""
     from .verilog import export_verilog
     t0 = time.perf_counter()
     info = design_info(ts, one_port=one_port, tag_width=tag_width, specialise=specialise, geometry=geometry)
     return build_design(info, lambda: export_verilog(ts, one_port=one_port, tag_width=tag_width,
                                                      specialise=specialise, geometry=geometry), elaborated=t0,
-                        threads=threads)
+                        threads=threads, halves=halves)
 
 
 def _verilog_file() -> str:
@@ -256,15 +286,31 @@ def _verilog_file() -> str:
     return verilog.__file__
 
 
-def build_design(info: DesignInfo, verilog, *, elaborated: float | None = None, threads: int = 1) -> Build:
+def build_design(info: DesignInfo, verilog, *, elaborated: float | None = None, threads: int = 1,
+                 halves: bool = False) -> Build:
     """The Verilator library of any unit (built or from the cache): ``verilog()`` gives the unit's
     exported Verilog (module ``info.verilog_name``), called only when the library must be built;
-    ``threads`` > 1: Verilator's multi-threaded model (``--threads``)."""
+    ``threads`` > 1: Verilator's multi-threaded model (``--threads``).
+
+    ``halves=True`` (the baked texel-fetch unit only, ``info.halves``; not with ``threads``): its two
+    halves, each verilated as a model of its own from the very fragment the export instantiates
+    (:func:`sim.backends.verilog.export_half_verilog`, same Yosys script), run by drivers/halves.h
+    as the CXXRTL backend runs its halves: the front end ahead in chunks, the back end replaying the
+    recorded link, on one thread or (``BatchLibrary.set_threads(2)``, the default when the process
+    may use two CPUs) on two. Same responses, cycles and counters as the whole unit. Not the
+    default: on one thread it is slower than the whole export (each half's ``eval()`` has its own
+    scheduling, about 10 ns, more than the smaller working sets save; docs/simulation.md, Verilator
+    section). Default (``None``, ``False``): the exported Verilog whole, what ``vqtex export``
+    writes."""
     verilator = find_tool("verilator")
     # The CXXRTL backend's compiler (clang++ when installed, else g++; $CXX overrides), so that the
     # two backends are compared with the same compiler; on the default unit clang++'s model is also
     # about 14% faster than g++'s (docs/simulation.md, Verilator section).
     cxx = find_cxx()
+    halves = bool(halves)
+    if halves and (not info.halves or threads > 1):
+        raise ToolchainError(f"the {info.unit} unit has no halves to verilate apart" if not info.halves else
+                             "Verilator's --threads runs the exported Verilog whole, not the halves")
     t0 = time.perf_counter() if elaborated is None else elaborated
     steps = {"elaborate": time.perf_counter() - t0}
     drivers = driver_sources("verilator_driver.cc", *SHARED_DRIVER_SOURCES)
@@ -275,25 +321,29 @@ def build_design(info: DesignInfo, verilog, *, elaborated: float | None = None, 
         with open(os.path.abspath(mod), "rb") as f:
             this += f.read()
     quick = digest("verilator-quick", source_stamp(), this, info.unit, *info.options, flags,
-                   tool_version(verilator), tool_version(cxx), *drivers)
+                   tool_version(verilator), tool_version(cxx), *drivers, "halves" if halves else "whole")
     key = index_get("verilator", quick)
     root = os.path.join(cache_dir(), "verilator")
     if key and os.path.isfile(os.path.join(root, key, "libvq.so")):
         return Build(os.path.join(root, key, "libvq.so"), 0.0, True, info, key, steps)
     t1 = time.perf_counter()
-    text = verilog()
-    header = ports_header(info)
+    if halves:
+        from .verilog import export_half_verilog
+        models = [(half, export_half_verilog(info, half), "top") for half in HALVES]
+    else:
+        models = [("top", verilog(), info.verilog_name)]
+    header = ports_header(info, halves=halves)
     steps["export"] = time.perf_counter() - t1
-    key = digest("verilator", text, harness_verilog(text, info.verilog_name), header, *drivers, flags,
-                 tool_version(verilator), tool_version(cxx))
+    key = digest("verilator", *[(p, text, harness_verilog(text, name)) for p, text, name in models], header,
+                 *drivers, flags, tool_version(verilator), tool_version(cxx))
     inc = verilator_include_dir(verilator)
     t2 = time.perf_counter()
     runtime = verilator_runtime(verilator, cxx, inc)
     steps["runtime"] = time.perf_counter() - t2
 
     def build(folder):
-        steps.update(build_library(folder, text, header, verilator=verilator, cxx=cxx, inc=inc, runtime=runtime,
-                                   top_name=info.verilog_name, what=f"the Verilator model ({info.unit})",
+        steps.update(build_library(folder, models, header, verilator=verilator, cxx=cxx, inc=inc, runtime=runtime,
+                                   what=f"the Verilator model ({info.unit}{', halves' if halves else ''})",
                                    extra_flags=extra))
     lib, secs, cached = cached_build("verilator", key, build, "libvq.so")
     index_put("verilator", quick, key)
@@ -301,10 +351,11 @@ def build_design(info: DesignInfo, verilog, *, elaborated: float | None = None, 
 
 
 def open_verilator(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True, geometry=None,
-                   threads: int = 1):
-    """(BatchLibrary, DesignInfo, Build) of the texel-fetch unit's Verilator library."""
+                   threads: int = 1, halves: bool = False):
+    """(BatchLibrary, DesignInfo, Build) of the texel-fetch unit's Verilator library (``halves``: as
+    :func:`build_verilator`)."""
     return open_design(build_verilator(ts, one_port=one_port, tag_width=tag_width, specialise=specialise,
-                                       geometry=geometry, threads=threads))
+                                       geometry=geometry, threads=threads, halves=halves))
 
 
 def run(ts, requests, *, stall: float = 0.0, seed: int = 0, one_port: bool = False, tag_width: int = 8,

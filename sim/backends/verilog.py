@@ -24,7 +24,7 @@ simulator-minded reader might notice are Yosys's: ``reg x = value;`` register in
 from __future__ import annotations
 
 from .design import FILTER_TOP_NAME, TOP_NAME, FilterTop, TexelFetchTop, port_map, response_ports
-from .yosys import rtlil_script, run_yosys
+from .yosys import fragment_rtlil, rtlil_script, run_yosys
 
 #: The Yosys script of the sv dialect: amaranth.back.verilog's own (amaranth 0.5, internal attributes
 #: stripped) with the processes turned into multiplexers (``proc`` without ``-nomux``) and each
@@ -42,7 +42,7 @@ _ATTRS = "-remove generator -remove top -remove src -remove amaranth.hierarchy -
 SV_SCRIPT = ("proc -norom", "opt_clean", "opt_dff", "opt_clean", "memory_collect", f"attrmap {_ATTRS}",
              f"attrmap -modattr {_ATTRS}", "write_verilog -sv -noparallelcase")
 
-__all__ = ["export_verilog", "export_filter_verilog", "export_cached_verilog", "icarus_testbench", "run_icarus", "DIALECTS"]
+__all__ = ["export_verilog", "export_half_verilog", "export_filter_verilog", "export_cached_verilog", "icarus_testbench", "run_icarus", "DIALECTS"]
 
 #: Output dialects: "sv" (default) writes combinational logic as ``assign`` statements and registers
 #: as ``always_ff`` blocks with their enable and reset (:data:`SV_SCRIPT`); "v2005" is Amaranth's plain
@@ -95,6 +95,19 @@ def _systemverilog(top, name: str) -> str:
     from amaranth.hdl import Fragment
     il, _ = rtlil.convert_fragment(Fragment.get(top, None), port_map(top), name, emit_src=False)
     return run_yosys(rtlil_script(il, *SV_SCRIPT))
+
+
+def export_half_verilog(info, half: str) -> str:
+    """SystemVerilog of one half (``"front"`` or ``"back"``, :data:`sim.backends.design.HALVES`) of
+    the baked texel-fetch unit described by ``info`` (:func:`sim.backends.design.design_info`), as
+    :func:`export_verilog` writes the whole unit (:data:`SV_SCRIPT`): the very fragment the export
+    instantiates as ``fetch.front``/``fetch.back``, top module ``top`` with the half's own ports
+    (the front end: ``i__valid``, ``i__ready``, ``i__payload``, ``o_valid``, ``o_ready``, ``o_tag``,
+    ``link``, the strobes and ``valid``; the back end: ``link`` in, ``rgba`` out). Simulation only:
+    the Verilator backend runs the two halves as CXXRTL does (docs/simulation.md); ``vqtex export``
+    writes the whole unit, one top module."""
+    frag, ports = info.halves[half]
+    return run_yosys(rtlil_script(fragment_rtlil(frag, ports), *SV_SCRIPT))
 
 
 def export_filter_verilog(ts, *, lanes: int = 1, tag_width: int = 8, frac: int | None = None,

@@ -10,10 +10,32 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import threading
+import weakref
 
 from .toolchain import ToolchainError
 
-__all__ = ["run_yosys", "rtlil_script"]
+__all__ = ["run_yosys", "rtlil_script", "fragment_rtlil"]
+
+#: RTLIL per fragment and port names: see fragment_rtlil.
+_converted: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+_converting = threading.Lock()
+
+
+def fragment_rtlil(fragment, ports, name: str = "top") -> str:
+    """The RTLIL text of an elaborated fragment (``amaranth.back.rtlil.convert_fragment``, no source
+    locations, top module ``name``), converted once per fragment, port names and module name and
+    kept: Amaranth's conversion prepares a fragment in place, so a second conversion of the same
+    one fails, and one fragment feeds several Yosys scripts (CXXRTL's C++, and the Verilog of the
+    texel-fetch unit's halves that the Verilator backend runs)."""
+    key = (tuple(ports), name)
+    with _converting:
+        kept = _converted.get(fragment, {})
+        if key not in kept:
+            from amaranth.back import rtlil
+            kept[key], _ = rtlil.convert_fragment(fragment, ports, name, emit_src=False)
+            _converted[fragment] = kept
+        return kept[key]
 
 
 def rtlil_script(rtlil_text: str, *commands: str) -> str:

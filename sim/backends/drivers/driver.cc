@@ -21,18 +21,19 @@
 // transfers; the back end replays cycle c from that record. The result is the same clock cycle for
 // cycle, bit for bit, as the whole unit (tested against golden and against the Verilator model of the
 // whole exported unit). With two threads the back end runs on a second core, a few thousand cycles
-// behind, through a ring of records; with one thread the two alternate every VQ_CHUNK cycles.
+// behind, through a ring of records; with one thread the two alternate every VQ_CHUNK cycles
+// (halves.h, the mechanism the Verilator driver's halves use too; here, the adapter's
+// front_cycle and back_cycle).
 #include <cxxrtl/cxxrtl.h>
 
-#include <atomic>
 #include <type_traits>
-#include <thread>
 
 #include "vq_ops.h"
 
 #include "design.cc"
 #include "ports.h"
 #include "batch.h"
+#include "halves.h"
 
 using namespace cxxrtl;
 
@@ -187,29 +188,14 @@ VQ_EXPORT int vq_load_memory(void *h, const char *name, const uint32_t *rows, ui
 
 VQ_EXPORT int vq_set_threads(void *, int) { return 1; }
 #else
-// What the back end needs of cycle c: the link and whether a response transfers.
-struct Record {
-    value<VQ_LINK_BITS> link;
-    uint32_t took;
-};
-
-//: Cycles per chunk of records, chunks in the ring.
-constexpr uint64_t VQ_CHUNK = 512, VQ_RING_CHUNKS = 8, VQ_RING = VQ_CHUNK * VQ_RING_CHUNKS;
-
-// Spin briefly, then give the core away until ready() holds.
-template<class P> static inline void vq_wait(P &&ready) {
-    for (unsigned k = 0; !ready(); k++) {
-        if (k < 256) {
-#if defined(__x86_64__) || defined(__i386__)
-            __builtin_ia32_pause();
-#endif
-        } else {
-            std::this_thread::yield();
-        }
-    }
-}
-
+// The two halves (halves.h runs them): each a CXXRTL model, the front end's ports driven and
+// sampled here, the back end's link set from the record.
 struct Sim {
+    // What the back end needs of cycle c: the link and whether a response transfers.
+    struct Record {
+        value<VQ_LINK_BITS> link;
+        uint32_t took;
+    };
     Half<vq_front::p_top, VQ_FRONT_INPLACE, VQ_FRONT_EXACT_STEP> front;
     Half<vq_back::p_top, VQ_BACK_INPLACE, VQ_BACK_EXACT_STEP> back;
     std::vector<Record> ring = std::vector<Record>(VQ_RING);
@@ -217,122 +203,42 @@ struct Sim {
     vq_trace trace;
 
     void reset() { front.reset(); back.reset(); }
-};
-
-// The front end's run: batch.h's run loop with a cycle that drives and clocks the front half and
-// records, for the back end, the link and whether a response transfers (the back end reads the
-// response's colour itself).
-template<bool AlwaysReady>
-struct FrontRun : vq_run_state<AlwaysReady> {
-    Sim &s;
-    FrontRun(Sim &s, uint64_t n, const int64_t *req, const uint32_t *layout, const uint8_t *ready,
-             uint64_t n_ready, uint64_t max_cycles)
-        : vq_run_state<AlwaysReady>(n, req, layout, ready, n_ready, max_cycles, s.trace), s(s) {}
-    uint64_t run(uint64_t limit) {
-        // Locals captured by the hook (the model's stores could alias members, not these).
-        auto &front = s.front;
+    vq_cycle_out front_cycle(bool i_valid, const vq_payload &payload, bool o_ready, uint64_t *strobes,
+                             vq_occupancy &occ, uint64_t *occ_sums, Record &rec) {
         auto &top = front.top;
-        Record *const ring = s.ring.data();
-        auto cycle = [&front, &top, ring](uint64_t c, bool i_valid, const vq_payload &payload, bool o_ready,
-                                          uint64_t *strobes, vq_occupancy &occ, uint64_t *occ_sums) {
-            vq_put(top.VQ_I_VALID, i_valid);
-            vq_put(top.VQ_I_PAYLOAD, payload);
-            vq_put(top.VQ_O_READY, o_ready);
-            vq_cycle_out r;
-            Record &rec = ring[c % VQ_RING];
-            front.cycle([&]() {
-                r.took = vq_get(top.VQ_O_VALID) && o_ready;
-                r.accepted = i_valid && vq_get(top.VQ_I_READY);
+        vq_put(top.VQ_I_VALID, i_valid);
+        vq_put(top.VQ_I_PAYLOAD, payload);
+        vq_put(top.VQ_O_READY, o_ready);
+        vq_cycle_out r;
+        front.cycle([&]() {
+            r.took = vq_get(top.VQ_O_VALID) && o_ready;
+            r.accepted = i_valid && vq_get(top.VQ_I_READY);
 #ifdef VQ_O_TAG
-                r.out = vq_get(top.VQ_O_TAG) << VQ_O_TAG_OFFSET;   // the tag where o.payload holds it
+            r.out = vq_get(top.VQ_O_TAG) << VQ_O_TAG_OFFSET;   // the tag where o.payload holds it
 #endif
-                rec.link = vq_val(top.VQ_LINK);
-                VQ_STROBES(top, strobes)
-                occ.add(uint32_t(vq_get(top.VQ_VALID)), occ_sums);
-            });
-            rec.took = r.took;
-            return r;
-        };
-        return vq_run_state<AlwaysReady>::run(limit, cycle, [](uint64_t, uint64_t) {});
-    }
-};
-
-// The back end's run: replays the recorded cycles and stores the colours of the responses.
-struct alignas(64) BackRun {
-    Sim &s;
-    uint32_t *rgba;
-    uint64_t c = 0, got = 0;
-
-    BackRun(Sim &s, uint32_t *rgba) : s(s), rgba(rgba) {}
-    void run(uint64_t upto) {
-        auto &top = s.back.top;
-        // Locals, not members, in the loop: the compiler keeps them in registers (the model's
-        // stores may alias members), and the other thread's state stays off this cache line.
-        uint64_t c = this->c, got = this->got;
-        const Record *ring = s.ring.data();
-        for (; c < upto; c++) {
-            const Record &r = ring[c % VQ_RING];
-            top.VQ_LINK = r.link;
-            uint64_t out = 0;
-            s.back.cycle([&]() { out = vq_get(top.VQ_RGBA); });
-            if (r.took)
-                rgba[got++] = uint32_t(out);
-        }
-        this->c = c;
-        this->got = got;
-    }
-};
-
-template<bool AlwaysReady>
-static int vq_run_halves(Sim &s, uint64_t n, const int64_t *req, const uint32_t *layout, const uint8_t *ready,
-                         uint64_t n_ready, uint64_t max_cycles, uint32_t *rgba, uint64_t *counters) {
-    s.reset();
-    FrontRun<AlwaysReady> f(s, n, req, layout, ready, n_ready, max_cycles);
-    BackRun b(s, rgba);
-    if (s.threads < 2 || n < VQ_RING) {
-        // One thread: a chunk of the front end, then the same cycles of the back end.
-        while (f.rc < 0)
-            b.run(f.run(VQ_CHUNK));
-        b.run(f.c);
-    } else {
-        // Two threads: the front end here, the back end on another, at most VQ_RING cycles behind.
-        alignas(64) std::atomic<uint64_t> produced{0};
-        alignas(64) std::atomic<uint64_t> consumed{0};
-        alignas(64) std::atomic<bool> finished{false};
-        std::thread back([&]() {
-            for (;;) {
-                uint64_t upto = 0;
-                bool last = false;
-                vq_wait([&]() {
-                    last = finished.load(std::memory_order_acquire);
-                    upto = produced.load(std::memory_order_acquire);
-                    return last || upto > b.c;
-                });
-                b.run(upto);
-                consumed.store(b.c, std::memory_order_release);
-                if (last && b.c == upto)
-                    break;
-            }
+            rec.link = vq_val(top.VQ_LINK);
+            VQ_STROBES(top, strobes)
+            occ.add(uint32_t(vq_get(top.VQ_VALID)), occ_sums);
         });
-        while (f.rc < 0) {
-            vq_wait([&]() { return f.c + VQ_CHUNK <= consumed.load(std::memory_order_acquire) + VQ_RING; });
-            produced.store(f.run(VQ_CHUNK), std::memory_order_release);
-        }
-        finished.store(true, std::memory_order_release);
-        back.join();
+        return r;
     }
-    return f.finish(counters, b.got);
-}
+    uint32_t back_cycle(const Record &rec) {
+        auto &top = back.top;
+        top.VQ_LINK = rec.link;
+        uint64_t out = 0;
+        back.cycle([&]() { out = vq_get(top.VQ_RGBA); });
+        return uint32_t(out);
+    }
+};
 
 int vq_run_batch(Sim &s, uint64_t n, const int64_t *req, const uint32_t *layout, const uint8_t *ready,
                  uint64_t n_ready, uint64_t max_cycles, uint32_t *rgba, uint64_t *counters) {
-    if (ready == nullptr)
-        return vq_run_halves<true>(s, n, req, layout, ready, n_ready, max_cycles, rgba, counters);
-    return vq_run_halves<false>(s, n, req, layout, ready, n_ready, max_cycles, rgba, counters);
+    return vq_run_halves_batch(s, n, req, layout, ready, n_ready, max_cycles, rgba, counters);
 }
 }
 
 VQ_BATCH_EXPORTS(Sim, 1)
+VQ_HALVES_EXPORTS(Sim)
 
 // Memories are named as in the whole unit: "front index_reader even_bank bank0", "back codebook_rom ...".
 VQ_EXPORT int vq_load_memory(void *h, const char *name, const uint32_t *rows, uint64_t depth, uint32_t chunks_per_row) {
@@ -345,11 +251,4 @@ VQ_EXPORT int vq_load_memory(void *h, const char *name, const uint32_t *rows, ui
     return -1;
 }
 
-// Threads for vq_run: 1 (the halves alternate) or 2 (the back end on a second thread). Returns the
-// number in use.
-VQ_EXPORT int vq_set_threads(void *h, int threads) {
-    Sim *s = static_cast<Sim *>(h);
-    s->threads = threads >= 2 ? 2 : 1;
-    return s->threads;
-}
 #endif

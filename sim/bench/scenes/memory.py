@@ -9,9 +9,11 @@ part (docs/memory.md). Also how fast the golden cycle model runs.
 
 ``--claim`` prints the paper's claim instead (issue 25, item 7; docs/memory.md): for each scene of
 ``--scenes`` (default topspin,town) and each cache size of ``--sizes`` (default 1 to 64 KB in powers
-of two), the VQ set against the same textures uncompressed through the same caches and fixed memory
-(prefetching, ``--prefetch`` entries, ``--latency`` cycles): memory bytes per textured pixel, cycles
-per textured pixel, hit rates, texels per clock against zero latency; ``--plot PATH`` draws them.
+of two), the VQ set against the same textures uncompressed through the same caches and memory
+(prefetching, ``--prefetch`` entries; the fixed memory of ``--latency`` cycles, or ``--memory-model
+dram``): memory bytes per textured pixel, cycles per textured pixel, hit rates, texels per clock
+against zero latency, over ``--frame`` or the sum of ``--frames 0,10,20`` (each frame its own stream);
+``--plot PATH`` draws them.
 The hit rates and bytes are the caches' classification (numpy, :func:`golden.memory.timing.plan`);
 the cycles are the golden cycle model's loop over requests, the slow part (about 1e5 requests per
 second on a free core, a few times less on a shared one), run once per row; the zero-latency
@@ -93,11 +95,18 @@ def scene_memory(scene_name="topspin", frame: int = 0, latency: int = 100, sizes
             "latency": latency, "line": line, "ways": ways, "encode_seconds": encode_s, "rows": rows}
 
 
-def claim(scene_name="topspin", frame: int = 0, sizes=(1, 2, 4, 8, 16, 32, 64), latency: int = 100,
-          prefetch: int = 16, line: int = 32, ways: int = 4, cycles: bool = True, progress=None) -> dict:
-    """The paper's claim on one scene's frame (see the module docstring): rows of (cache_kb,
+def claim(scene_name="topspin", frame=0, sizes=(1, 2, 4, 8, 16, 32, 64), latency: int = 100,
+          prefetch: int = 16, line: int = 32, ways: int = 4, cycles: bool = True, progress=None,
+          kind: str = "fixed") -> dict:
+    """The paper's claim on one scene's frames (see the module docstring): rows of (cache_kb,
     textures "vq" or "uncompressed", hit_rate per cache, bytes_per_pixel, bytes_per_texel and, with
-    ``cycles``, cycles_per_pixel and of_zero_latency)."""
+    ``cycles``, cycles_per_pixel and of_zero_latency).
+
+    ``frame`` is one frame number or a sequence of them: each frame is its own stream (the caches
+    empty at its start, as a frame of :func:`scene_memory`), and a row sums the frames' references,
+    hits, bytes, pixels and cycles. ``kind`` is the memory model (``"fixed"``: ``latency`` cycles and
+    the bus's bandwidth; ``"dram"``: the DDR3-1600 part of :class:`golden.memory.system.MemoryConfig`,
+    where ``latency`` is not used)."""
     from vqtex.golden.memory.cache import CacheShape
     from vqtex.golden.memory.system import MemoryConfig
     from vqtex.golden.memory.timing import plan, run_requests
@@ -106,12 +115,15 @@ def claim(scene_name="topspin", frame: int = 0, sizes=(1, 2, 4, 8, 16, 32, 64), 
     from vqtex.hw.texel_fetch import LATENCY
     from vqtex.sim.streams import ready_pattern
 
+    frames = (frame,) if isinstance(frame, (int, np.integer)) else tuple(frame)
     scene = load_scene(scene_name) if isinstance(scene_name, str) else scene_name     # a name, or a Scene
     scene_name = scene_name if isinstance(scene_name, str) else str(scene.path)
     images = [img for img, _ in scene.load_textures()]
     sets = {"vq": build_texture_set(scene, images), "uncompressed": uncompressed_set(scene, images)}
-    req, sampler = frame_requests(scene, frame, sets["vq"], "trilinear")
-    pixels, n = len(sampler.fragments), len(req)
+    streams = [frame_requests(scene, f, sets["vq"], "trilinear") for f in frames]
+    reqs = [req for req, _ in streams]
+    pixels = sum(len(sampler.fragments) for _, sampler in streams)
+    n = sum(len(req) for req in reqs)
 
     def always(m):
         return ready_pattern(0, 0.0, m)
@@ -120,29 +132,44 @@ def claim(scene_name="topspin", frame: int = 0, sizes=(1, 2, 4, 8, 16, 32, 64), 
     for name, ts in sets.items():
         for kb in sizes:
             shape = CacheShape(kb * 1024, line, ways)
-            cfg = MemoryConfig(index_cache=shape, raw_cache=shape, prefetch=prefetch, latency=latency)
-            p = plan(ts, req, cfg)
-            misses = np.bincount(p.cache, minlength=2)
+            cfg = MemoryConfig(index_cache=shape, raw_cache=shape, prefetch=prefetch, latency=latency, kind=kind)
+            plans = [plan(ts, req, cfg) for req in reqs]
+            misses = sum(np.bincount(p.cache, minlength=2) for p in plans)
+            refs = [sum(p.references[c] for p in plans) for c in range(2)]
+            hits = [sum(p.hits[c] for p in plans) for c in range(2)]
             total = int(misses[0]) * line + int(misses[1]) * line
-            row = {"cache_kb": kb, "textures": name, "references": {"index": p.references[0], "raw": p.references[1]},
-                   "hit_rate": {k: (p.hits[c] / p.references[c] if p.references[c] else None)
-                                for c, k in enumerate(("index", "raw"))},
+            row = {"cache_kb": kb, "textures": name, "references": {"index": refs[0], "raw": refs[1]},
+                   "hit_rate": {k: (hits[c] / refs[c] if refs[c] else None) for c, k in enumerate(("index", "raw"))},
                    "bytes_per_pixel": total / pixels, "bytes_per_texel": total / n}
             if cycles:
                 if name not in zero:
-                    zero[name] = run_requests(ts, req, cfg, LATENCY, always, ideal=True)["cycles"]
+                    zero[name] = sum(run_requests(ts, req, cfg, LATENCY, always, ideal=True)["cycles"] for req in reqs)
                 t0 = time.perf_counter()
-                out = run_requests(ts, req, cfg, LATENCY, always)
+                outs = [run_requests(ts, req, cfg, LATENCY, always) for req in reqs]
                 seconds += time.perf_counter() - t0
-                assert sum(out["memory_bytes"].values()) == total
-                row.update(cycles=out["cycles"], cycles_per_pixel=out["cycles"] / pixels,
-                           zero_latency_cycles=zero[name], of_zero_latency=zero[name] / out["cycles"])
+                assert sum(sum(out["memory_bytes"].values()) for out in outs) == total
+                c = sum(out["cycles"] for out in outs)
+                row.update(cycles=c, cycles_per_pixel=c / pixels, zero_latency_cycles=zero[name],
+                           of_zero_latency=zero[name] / c)
             rows.append(row)
             if progress:
                 progress(row)
-    return {"scene": scene_name, "frame": frame, "requests": int(n), "pixels": int(pixels), "latency": latency,
+    return {"scene": scene_name, "frame": frames[0] if len(frames) == 1 else list(frames), "requests": int(n),
+            "pixels": int(pixels), "latency": latency if kind == "fixed" else None, "memory": kind,
             "prefetch": prefetch, "line": line, "ways": ways, "rows": rows,
             "model_requests_per_second": (len(rows) * n / seconds) if seconds else None}
+
+
+def _memory_words(r: dict) -> str:
+    """The memory of a claim result in words."""
+    if r.get("memory", "fixed") == "fixed":
+        return f"fixed memory, latency {r['latency']} cycles"
+    return "DDR3-1600 (MT41K256M16-125) at 200 MHz"
+
+
+def _frames_words(r: dict) -> str:
+    f = r["frame"]
+    return f"frame {f}" if isinstance(f, int) else f"frames {','.join(map(str, f))}"
 
 
 def plot_claim(results: list, path: str) -> None:
@@ -175,16 +202,16 @@ def plot_claim(results: list, path: str) -> None:
         ax.grid(True, alpha=0.3)
     axes[0].legend(fontsize=8)
     r0 = results[0]
-    fig.suptitle(f"frame {r0['frame']}, trilinear; {r0['line']}-byte lines, {r0['ways']} ways; memory latency "
-                 f"{r0['latency']} cycles, {r0['prefetch']}-entry prefetch FIFO", fontsize=10)
+    fig.suptitle(f"{_frames_words(r0)}, trilinear; {r0['line']}-byte lines, {r0['ways']} ways; {_memory_words(r0)}, "
+                 f"{r0['prefetch']}-entry prefetch FIFO", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
 
 def _print_claim(r: dict) -> None:
-    print(f"{r['scene']} frame {r['frame']}: {r['requests']} requests (trilinear), {r['pixels']} textured pixels; "
-          f"fixed memory, latency {r['latency']} cycles, {r['prefetch']}-entry FIFO, {r['line']}-byte lines, "
+    print(f"{r['scene']} {_frames_words(r)}: {r['requests']} requests (trilinear), {r['pixels']} textured pixels; "
+          f"{_memory_words(r)}, {r['prefetch']}-entry FIFO, {r['line']}-byte lines, "
           f"{r['ways']} ways")
     print(f"{'cache':>6} {'textures':>12} {'index hit':>9} {'raw hit':>7} {'B/pixel':>8} {'VQ gain':>7} "
           f"{'cyc/pixel':>9} {'of 0-lat':>8}")
@@ -206,6 +233,9 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scene", default="topspin")
     ap.add_argument("--frame", type=int, default=0)
+    ap.add_argument("--frames", default=None, help="--claim: frames, comma-separated (each its own stream, summed)")
+    ap.add_argument("--memory-model", default="fixed", choices=("fixed", "dram"),
+                    help="--claim: the fixed-latency memory or the DDR3-1600 part")
     ap.add_argument("--latency", type=int, default=100)
     ap.add_argument("--sizes", default="1,4,16,64", help="cache sizes in KB, comma-separated")
     ap.add_argument("--prefetch", type=int, default=16)
@@ -219,7 +249,8 @@ def main(argv=None) -> None:
     a = ap.parse_args(argv)
     if a.claim:
         sizes = (1, 2, 4, 8, 16, 32, 64) if a.sizes == "1,4,16,64" else tuple(int(s) for s in a.sizes.split(","))
-        results = [claim(name, a.frame, sizes, a.latency, a.prefetch, cycles=not a.no_cycles)
+        frames = a.frame if a.frames is None else tuple(int(f) for f in a.frames.split(","))
+        results = [claim(name, frames, sizes, a.latency, a.prefetch, cycles=not a.no_cycles, kind=a.memory_model)
                    for name in a.scenes.split(",")]
         if a.plot:
             plot_claim(results, a.plot)

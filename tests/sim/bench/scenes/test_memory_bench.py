@@ -58,3 +58,28 @@ def test_claim_rows_are_the_cycle_model(tmp_path):
     assert r["rows"][2]["bytes_per_pixel"] > r["rows"][0]["bytes_per_pixel"] > 0
     plot_claim([r], str(tmp_path / "claim.png"))
     assert (tmp_path / "claim.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_claim_sums_frames_and_takes_the_dram():
+    """--claim over several frames is the sum of each frame's own run (the caches empty at each
+    frame's start); with the DRAM model the rows are run_cached's with the DDR3 part."""
+    from vqtex.golden.memory.cache import CacheShape
+    from vqtex.golden.memory.system import MemoryConfig
+    from vqtex.golden.render.frame import frame_requests
+    from vqtex.sim.backends.cycle_model import run_cached
+    scene = parse_scene(SMALL, "small.toml")
+    one = [claim(scene, frame=f, sizes=(1,), latency=40, prefetch=4) for f in (0, 2)]
+    both = claim(scene, frame=(0, 2), sizes=(1,), latency=40, prefetch=4)
+    assert both["frame"] == [0, 2] and both["pixels"] == one[0]["pixels"] + one[1]["pixels"]
+    for k, row in enumerate(both["rows"]):
+        assert row["cycles"] == one[0]["rows"][k]["cycles"] + one[1]["rows"][k]["cycles"]
+        assert np.isclose(row["bytes_per_pixel"] * both["pixels"],
+                          sum(o["rows"][k]["bytes_per_pixel"] * o["pixels"] for o in one))
+    dram = claim(scene, frame=1, sizes=(1,), prefetch=4, kind="dram")
+    assert dram["memory"] == "dram" and dram["latency"] is None
+    ts = build_texture_set(scene)
+    req, _ = frame_requests(scene, 1, ts, "trilinear")
+    shape = CacheShape(1024, 32, 4)
+    model = run_cached(ts, req, MemoryConfig(index_cache=shape, raw_cache=shape, prefetch=4, kind="dram"))
+    assert dram["rows"][0]["cycles"] == model["cycles"]
+    assert dram["rows"][0]["cycles"] != claim(scene, frame=1, sizes=(1,), latency=40, prefetch=4)["rows"][0]["cycles"]
