@@ -47,6 +47,12 @@ class BlockAddress(wiring.Component):
         is ignored, no multiplexer).
     raw : bool
         The set has raw levels (default): compute ``raw_addr`` (an adder); else leave it 0.
+    word_bits : int or None
+        With an index word width (16, 32, 64), also register the index words a request reads (the
+        cached unit, :class:`hw.memory.unit.CachedTexelFetch`, whose tag check follows this stage
+        in the next cycle): ``bit = k * index_bits``, ``word = base + (bit >> log2 word_bits)``,
+        ``bit_offset = bit mod word_bits`` and ``straddle = bit_offset + index_bits > word_bits``
+        (the on-chip unit's index reader does this in stages of its own). Default None: not built.
 
     Members
     -------
@@ -70,10 +76,15 @@ class BlockAddress(wiring.Component):
         Offset inside the block.
     raw_addr : Out(raw_bits)
         Raw memory word of texel (i, j) (0 when ``raw`` is false).
+    index_bits : In(5)
+        ``word_bits`` only: the level's index width.
+    word, bit_offset, straddle : Out
+        ``word_bits`` only: the request's first index word, its index's bit offset in it, and whether
+        the index straddles into the next word.
     """
 
     def __init__(self, *, base_bits: int, k_bits: int, raw_bits: int, twiddle: bool = False,
-                 raw: bool = True, linear: bool = True):
+                 raw: bool = True, linear: bool = True, word_bits: int | None = None):
         for name, v in (("base_bits", base_bits), ("k_bits", k_bits), ("raw_bits", raw_bits)):
             if not isinstance(v, int) or v < 1:
                 raise TypeError(f"{name} must be a positive integer, not {v!r}")
@@ -83,9 +94,16 @@ class BlockAddress(wiring.Component):
         self._twiddle = bool(twiddle)
         self._linear = bool(linear) or not self._twiddle
         self._raw = bool(raw)
+        if word_bits not in (None, 16, 32, 64):
+            raise ValueError(f"word_bits {word_bits!r}: 16, 32 or 64 (or None)")
+        self._word_bits = word_bits
         twiddle_ports = {"layout": In(1), "log2h": In(4)} if self._twiddle else {}
+        lw = (word_bits or 1).bit_length() - 1
+        word_ports = {"index_bits": In(5), "word": Out(max(base_bits, k_bits + 5 - lw) + 1),
+                      "bit_offset": Out(max(1, lw)), "straddle": Out(1)} if word_bits else {}
         super().__init__({
             **twiddle_ports,
+            **word_ports,
             "i": In(COORD_BITS),
             "j": In(COORD_BITS),
             "log2w": In(4),
@@ -128,6 +146,13 @@ class BlockAddress(wiring.Component):
             ]
             if self._raw:
                 m.d.sync += self.raw_addr.eq(self.base + (self.j << self.log2w) + self.i)
+            if self._word_bits:
+                W = self._word_bits
+                lw = W.bit_length() - 1
+                bit = Signal(self._k_bits + 5)
+                m.d.comb += bit.eq(k_out[:self._k_bits] * self.index_bits)
+                m.d.sync += [self.word.eq(self.base + (bit >> lw)), self.bit_offset.eq(bit[:lw]),
+                             self.straddle.eq((bit[:lw] + self.index_bits) > W)]
         return m
 
     def _twiddled(self, m, bx, by, k, x, y):

@@ -306,3 +306,80 @@ def test_the_mirror_check_reads_the_tree(tmp_path, monkeypatch):
         test_tests_mirror_the_packages()
     assert "tests/golden/test_render_frame.py tests vqtex.golden.render" in str(e.value)
     assert "tests/hw/filter/ has no __init__.py" in str(e.value)
+
+
+# no test module imports from another
+
+def imports_of_test_modules(rel: str, source: str) -> list:
+    """The imports of other test modules in the file ``rel`` (its path under tests/, ``golden/test_x.py``)
+    of text ``source``, one line each: ``from tests.golden.test_x import Y``, ``import tests.hw.test_y``,
+    ``from .test_x import Y``, ``from . import test_x``, ``from tests.golden import test_x``, at module level
+    or inside a function. What tests share lives in tests/support/ (:func:`test_tests_mirror_the_packages`)."""
+    package = ["tests"] + list(pathlib.PurePosixPath(rel).parent.parts)
+    problems = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                up = package[:len(package) - (node.level - 1)]
+                base = ".".join(up + ([base] if base else []))
+            names = [base] + [f"{base}.{a.name}" for a in node.names]
+        else:
+            continue
+        for name in names:
+            parts = name.split(".")
+            if parts[0] == "tests" and any(p.startswith("test_") for p in parts[1:]):
+                problems.append(f"tests/{rel}:{node.lineno} imports {name}: move what it shares into tests/support/")
+                break
+    return problems
+
+
+def test_no_test_module_imports_another():
+    """A test module imports fixtures and helpers from tests/support/, never from another test
+    module: importing one runs its module-level code (its sets, its parametrisations), ties the two
+    modules' layouts together, and hides a shared piece where nobody looks for it."""
+    problems = []
+    for path in sorted(TESTS.rglob("*.py")):
+        rel = path.relative_to(TESTS)
+        if rel.parts[0] == "data":
+            continue
+        problems += imports_of_test_modules(rel.as_posix(), path.read_text())
+    assert not problems, "\n".join(problems)
+
+
+CROSS_IMPORTS = [
+    ("sim/cli/test_a.py", "from tests.sim.cli.test_render import TINY\n"),
+    ("golden/test_a.py", "from .test_geometry import get_set\n"),
+    ("golden/test_a.py", "from . import test_geometry\n"),
+    ("hw/filter/test_a.py", "from ..test_hw_specialise import CASES\n"),
+    ("sim/cli/test_a.py", "def test_x():\n    from tests.golden.test_format_hostile import CASES\n"),
+    ("sim/test_a.py", "import tests.hw.test_hw_specialise as t\n"),
+    ("golden/test_a.py", "from tests.golden import test_fetch\n"),
+    ("support/sets.py", "from tests.golden.test_geometry import get_set\n"),
+]
+
+
+@pytest.mark.parametrize("rel, source", CROSS_IMPORTS, ids=[c[1].strip().splitlines()[-1].strip() for c in CROSS_IMPORTS])
+def test_the_cross_import_check_finds_an_import_of_a_test_module(rel, source):
+    """The check above can fail: each of these imports another test module."""
+    problems = imports_of_test_modules(rel, source)
+    assert len(problems) == 1 and "move what it shares into tests/support/" in problems[0], problems
+
+
+def test_the_cross_import_check_passes_support_and_the_package():
+    assert imports_of_test_modules("sim/cli/test_a.py", "from tests.support import TINY_SCENE, need\n"
+                                                    "from tests import support\nimport tests.support.sets\n"
+                                                    "from vqtex.golden.fetch import fetch\n"
+                                                    "from .cocotb_bus import vqtex_bus_host\n") == []
+
+
+def test_the_cross_import_check_reads_the_tree(tmp_path, monkeypatch):
+    """The whole-tree check fails on a tree where one test module imports another."""
+    (tmp_path / "golden").mkdir()
+    (tmp_path / "golden" / "test_a.py").write_text("X = 1\n")
+    (tmp_path / "golden" / "test_b.py").write_text("from tests.golden.test_a import X\n")
+    monkeypatch.setattr(f"{__name__}.TESTS", tmp_path)
+    with pytest.raises(AssertionError, match=r"tests/golden/test_b.py:1 imports tests.golden.test_a"):
+        test_no_test_module_imports_another()

@@ -49,7 +49,9 @@ class MemoryConfig:
     prefetch : int
         Depth of the FIFO of references between the tag check and the data read (Igehy et al.'s
         prefetching); 1 is the blocking cache (a miss stalls the next tag check until its data is
-        read). At least 1.
+        read). At least 1. The default, 128, is the default latency (100 cycles) rounded up to a
+        power of two: Igehy et al. size the FIFO to the memory's latency, and at that depth a miss
+        is hidden behind the references queued after it (docs/memory.md, "Town's 0.927").
     kind : str
         ``"fixed"`` (:class:`golden.memory.external.FixedMemory`) or ``"dram"``
         (:class:`golden.memory.dram.DramMemory`).
@@ -65,7 +67,7 @@ class MemoryConfig:
     """
     index_cache: CacheShape = field(default_factory=lambda: CacheShape(16384, 32, 4))
     raw_cache: CacheShape = field(default_factory=lambda: CacheShape(4096, 32, 4))
-    prefetch: int = 16
+    prefetch: int = 128
     kind: str = "fixed"
     latency: int = 100
     bandwidth: int = 16

@@ -6,7 +6,7 @@ from __future__ import annotations
 import fnmatch
 
 from ..texel_fetch import TexelFetch
-from . import address, features, index_reader, texture_filter
+from . import address, features, index_reader, memory, texture_filter
 from . import texel_fetch as fetch
 from .harness import Property
 from .sets import pvr2_set, rgb_set, yuv_set
@@ -90,6 +90,14 @@ PROPERTIES = (
              "keeps valid and payload until ready, under any requests and backpressure",
              lambda bug: texture_filter.FilterStreamHarness(yuv_set, 2, bug), "induction", 3,
              texture_filter.BLEND_IGNORES_READY, 25, quick_control=False),
+    Property("memory.reader.prefetch", "memory",
+             "every word the cached reader (2-entry FIFO) hands on is the memory's word at its request's address, "
+             "and no line is read twice while its burst is in flight, under any requests, backpressure and memory "
+             "timing (a free AXI slave)",
+             lambda bug: memory.ReaderHarness(2, 16, bug), "bmc", 10, memory.DATA_READ_EARLY, 10),
+    Property("memory.reader.blocking", "memory",
+             "the same for the blocking cached reader (one reference waits at a time)",
+             lambda bug: memory.ReaderHarness(1, 16, bug), "bmc", 14, memory.wrong_lane(4, 16), 14),
 )
 
 

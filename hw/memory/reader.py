@@ -29,9 +29,19 @@ Responses leave in request order, none lost or duplicated; a line is read from m
 stays in the cache, however many references wait on it; a line is not replaced while a reference to
 it waits.
 
-Every cache field (tags, valid, LRU ages, filled bits, counts of waiting references) is a flip-flop:
-fine for the small caches of simulation, where a synthesised cache would keep tags in LUT RAM (not
-built yet).
+Storage: the caches' per-line state is in LUT RAM (``amaranth.lib.memory.Memory`` with asynchronous
+read ports and ``ram_style = distributed``, one write port each: :class:`_Cache`), read and written
+in the cycles the flip-flops of an earlier version were, so the timing above is unchanged: per set,
+the ways' tags and LRU ages; the counts of waiting references as two counters mod ``2^n`` (checked
+in, written by the tag check; read out, written by the data read); whether a line is filled as two
+bits (one flipped by the fill, one set by the allocation to the other's complement). The index
+cache's rows are banked by set parity (a straddling index's two lines lie in consecutive sets), so
+every memory has one writer per cycle. The valid bits of a set's ways are in its row too, and count
+only once the set's row has been written since reset: one flip-flop per set (``touched``, cleared by
+reset, set through a decoder of the row's write address); an allocation rebases its line's count and
+filled bit, so a reset, even with bursts in flight, leaves the caches empty and consistent. The
+reference FIFO and the queue of bursts in flight are LUT RAM too; the lines are block RAM when large
+enough (one row per bus beat, registered reads; the index lines in two banks, one read port each).
 
 Arguments
 ---------
@@ -88,65 +98,226 @@ class _Fields:
         return Cat(*(sig for _, sig in parts))
 
 
-class _Cache:
-    """One cache's state and its tag check: ``ports`` lookups per cycle into different sets."""
+class _Rows:
+    """One per-set field of a cache in LUT RAM: a row per set, in ``banks`` memories (2: by set
+    parity, for the index cache, whose straddling index checks two consecutive sets in one cycle).
+    Each memory has one write port (what a LUT RAM has) and one asynchronous (combinational) read
+    port per party that reads it; a party works on each bank apart (its logic per bank), so no
+    row-wide multiplexer sits between the banks."""
 
-    def __init__(self, m, name, shape, ports, count_bits):
+    def __init__(self, m, name, shape, sets, banks):
+        self.shape = shape
+        self.banks = banks
+        self.mems = []
+        for b in range(banks):
+            m.submodules[f"{name}{b}" if banks > 1 else name] = mem = memory.Memory(
+                shape=shape, depth=sets // banks, init=[], attrs={"ram_style": "distributed"})
+            self.mems.append(mem)
+
+    def row(self, s):
+        """The row of set ``s`` in its bank."""
+        return s >> _log2(self.banks)
+
+    def read(self, m, b, s, name):
+        """Bank ``b``'s row of set ``s`` (a set of that bank), combinational."""
+        port = self.mems[b].read_port(domain="comb")
+        out = Signal(self.shape, name=name)
+        m.d.comb += [port.addr.eq(self.row(s)), out.eq(port.data)]
+        return out
+
+    def write(self, m, b, s, en, data):
+        """Write bank ``b``'s row of set ``s`` at the clock edge when ``en`` (one call per bank)."""
+        port = self.mems[b].write_port()
+        m.d.comb += [port.addr.eq(self.row(s)), port.en.eq(en), port.data.eq(data)]
+        return port.addr, port.en
+
+
+class _Cache:
+    """One cache's per-line state, its tag check, its fills and its reads.
+
+    In LUT RAM (:class:`_Rows`, a row per set, every way of the set in the row): ``lines`` (tag and
+    LRU age of each way, and the ways' valid bits), ``issued`` and ``retired`` (counts mod
+    ``2^count_bits`` of the references checked into the FIFO and read out of it: the waiting
+    references are their difference, each count written by one side), ``alloc`` and ``fill`` (a bit
+    per way: a line is filled when the two are equal; an allocation writes ``alloc = ~fill``, a fill
+    toggles ``fill``). In flip-flops: ``touched``, a bit per set, cleared by reset (the cache starts
+    empty at every reset), set when the set's row is written; a row's valid bits count only when its
+    set is touched. The counts and the alloc bit are rebased at every allocation, so what a reset
+    leaves in the memories is never read.
+
+    Every party (tag check, data read, fill) reaches at most one set per bank in a cycle: with two
+    banks, its two sets are consecutive (or the same, the second then unused)."""
+
+    def __init__(self, m, name, shape, banks, count_bits, tag_bits):
         self.shape = shape
         self.sets, self.ways = shape.sets, shape.ways
         self.set_bits = _log2(self.sets)
-        self.age_bits = max(1, _log2(self.ways))
-        S, W = self.sets, self.ways
-        self.tag = [[Signal(32, name=f"{name}_tag_{s}_{w}") for w in range(W)] for s in range(S)]
-        self.valid = [[Signal(name=f"{name}_valid_{s}_{w}") for w in range(W)] for s in range(S)]
-        self.age = [[Signal(self.age_bits + 1, name=f"{name}_age_{s}_{w}") for w in range(W)] for s in range(S)]
-        self.filled = [[Signal(name=f"{name}_filled_{s}_{w}") for w in range(W)] for s in range(S)]
-        self.count = [[Signal(count_bits, name=f"{name}_count_{s}_{w}") for w in range(W)] for s in range(S)]
+        self.way_bits = _log2(self.ways)
+        self.age_bits = max(1, self.way_bits)
+        self.count_bits = count_bits
+        self.tag_bits = tag_bits
+        self.banks = banks
         self.name = name
-        self.ports = ports
+        S, W = self.sets, self.ways
+        self.touched = [Signal(S // banks, name=f"{name}_touched{b}" if banks > 1 else f"{name}_touched")
+                        for b in range(banks)]
+        way = data.StructLayout({"tag": tag_bits, "age": self.age_bits})
+        self.lines = _Rows(m, f"{name}_tags", data.StructLayout({"way": data.ArrayLayout(way, W), "valid": W}),
+                           S, banks)
+        self.issued = _Rows(m, f"{name}_issued", data.ArrayLayout(count_bits, W), S, banks)
+        self.retired = _Rows(m, f"{name}_retired", data.ArrayLayout(count_bits, W), S, banks)
+        self.alloc = _Rows(m, f"{name}_alloc", W, S, banks)
+        self.fill = _Rows(m, f"{name}_fill", W, S, banks)
 
     def slot_bits(self):
         return max(1, _log2(self.sets * self.ways))
 
-    def lookup(self, m, line, k):
-        """Combinational lookup of ``line`` on port ``k``: (set, hit, way, busy victim)."""
-        S, W = self.sets, self.ways
-        s = Signal(max(1, self.set_bits), name=f"{self.name}_set{k}")
-        t = Signal(32, name=f"{self.name}_line_tag{k}")
-        m.d.comb += [s.eq(line[:self.set_bits] if self.set_bits else 0), t.eq(line >> self.set_bits)]
-        hit = Signal(name=f"{self.name}_hit{k}")
-        way = Signal(max(1, _log2(W)), name=f"{self.name}_way{k}")
-        busy = Signal(name=f"{self.name}_busy{k}")
-        ways = []
-        for w in range(W):
-            tw = Array(self.tag[x][w] for x in range(S))[s]
-            vw = Array(self.valid[x][w] for x in range(S))[s]
-            aw = Array(self.age[x][w] for x in range(S))[s]
-            cw = Array(self.count[x][w] for x in range(S))[s]
-            ways.append((tw, vw, aw, cw))
-        hits = [vw & (tw == t) for tw, vw, aw, cw in ways]
-        m.d.comb += hit.eq(Cat(*hits).any())
-        # The way: the hit's; else the lowest empty way; else the oldest (age W-1).
-        with m.If(hit):
-            for w in reversed(range(W)):
-                with m.If(hits[w]):
-                    m.d.comb += way.eq(w)
-        with m.Else():
-            for w in reversed(range(W)):
-                tw, vw, aw, cw = ways[w]
-                with m.If(vw & (aw == W - 1)):
-                    m.d.comb += way.eq(w)
-            for w in reversed(range(W)):
-                tw, vw, aw, cw = ways[w]
-                with m.If(~vw):
-                    m.d.comb += way.eq(w)
-        vway = Array(v for _, v, _, _ in ways)[way]
-        cway = Array(c for _, _, _, c in ways)[way]
-        m.d.comb += busy.eq(~hit & vway & (cway != 0))
-        return s, t, hit, way, busy
+    def set_of(self, slot):
+        return slot >> self.way_bits if self.set_bits else C(0, 1)
 
-    def filled_at(self, slot):
-        return Array(self.filled[x][w] for x in range(self.sets) for w in range(self.ways))[slot]
+    def way_of(self, slot):
+        return slot[:self.way_bits] if self.way_bits else C(0, 1)
+
+    def _banked(self, m, items, name):
+        """``items``: one tuple of values per port (1 port, or 2 whose sets differ in parity; the first
+        value of each tuple its set). Returns one tuple per bank: the port's values that bank holds."""
+        if self.banks == 1:
+            return [items[0]]
+        p = items[0][0][0]
+        out = []
+        for b in range(2):
+            vals = []
+            for j, (v0, v1) in enumerate(zip(*items)):
+                sig = Signal(max(len(Value.cast(v0)), len(Value.cast(v1))), name=f"{self.name}_{name}{b}_{j}")
+                m.d.comb += sig.eq(Mux(p == b, v0, v1))
+                vals.append(sig)
+            out.append(tuple(vals))
+        return out
+
+    def _unbank(self, m, s, per_bank):
+        """The value of the bank holding set ``s`` (small signals: hit, way, ...)."""
+        return per_bank[0] if self.banks == 1 else Mux(s[0], per_bank[1], per_bank[0])
+
+    def check(self, m, ports):
+        """The tag check: ``ports`` is (line, active) per lookup (two lookups: consecutive lines).
+        Returns (set, hit, way, busy victim) per port, combinational; updates the state of the active
+        ports' sets at the clock edge."""
+        S, W = self.sets, self.ways
+        sets, tags = [], []
+        for k, (line, act) in enumerate(ports):
+            s = Signal(max(1, self.set_bits), name=f"{self.name}_set{k}")
+            t = Signal(self.tag_bits, name=f"{self.name}_line_tag{k}")
+            m.d.comb += [s.eq(line[:self.set_bits] if self.set_bits else 0), t.eq(line >> self.set_bits)]
+            sets.append(s)
+            tags.append(t)
+        banked = self._banked(m, [(s, t, act) for s, t, (_, act) in zip(sets, tags, ports)], "check")
+        results = []
+        for b, (s, t, act) in enumerate(banked):
+            n = f"{self.name}{b}" if self.banks > 1 else self.name
+            lines = self.lines.read(m, b, s, f"{n}_row")
+            issued = self.issued.read(m, b, s, f"{n}_issued_row")
+            retired = self.retired.read(m, b, s, f"{n}_retired_check")
+            alloc = self.alloc.read(m, b, s, f"{n}_alloc_check")
+            fill = self.fill.read(m, b, s, f"{n}_fill_check")
+            touched = self.touched[b]
+            # the row's valid bits count once its set has been written since reset
+            valid = Signal(W, name=f"{n}_valid")
+            here_touched = touched.bit_select(self.lines.row(s), 1) if len(touched) > 1 else touched
+            m.d.comb += valid.eq(Mux(here_touched, lines.valid, 0))
+            row = lines.way
+            hits = [valid[w] & (row[w].tag == t) for w in range(W)]
+            hit = Signal(name=f"{n}_hit")
+            way = Signal(max(1, self.way_bits), name=f"{n}_way")
+            busy = Signal(name=f"{n}_busy")
+            m.d.comb += hit.eq(Cat(*hits).any())
+            # The way: the hit's; else the lowest empty way; else the oldest (age W-1).
+            with m.If(hit):
+                for w in reversed(range(W)):
+                    with m.If(hits[w]):
+                        m.d.comb += way.eq(w)
+            with m.Else():
+                for w in reversed(range(W)):
+                    with m.If(valid[w] & (row[w].age == W - 1)):
+                        m.d.comb += way.eq(w)
+                for w in reversed(range(W)):
+                    with m.If(~valid[w]):
+                        m.d.comb += way.eq(w)
+            # a way's references wait when its counts differ (mod 2^n: equal is none waiting), found
+            # for every way beside the tag compare, then chosen by the way (no subtract after it)
+            waiting = Signal(W, name=f"{n}_waiting")
+            m.d.comb += waiting.eq(Cat(*(issued[w] != retired[w] for w in range(W))))
+            m.d.comb += busy.eq(~hit & (valid & waiting).bit_select(way, 1))
+            # LRU: the accessed way becomes the youngest; younger valid ways age by one. A miss puts
+            # the line's tag in the way, rebases its count on what was read out, and clears its fill.
+            acc_age = Signal(self.age_bits + 1, name=f"{n}_acc_age")
+            m.d.comb += acc_age.eq(Mux(valid.bit_select(way, 1), Array(row[w].age for w in range(W))[way], W))
+            new_row = Signal(self.lines.shape, name=f"{n}_new_row")
+            new_issued = Signal(self.issued.shape, name=f"{n}_new_issued")
+            new_alloc = Signal(W, name=f"{n}_new_alloc")
+            ways, counts, allocs = [], [], []
+            for w in range(W):
+                here = way == w
+                old_age = row[w].age
+                new_age = Mux(here, 0, Mux(valid[w] & (old_age < acc_age), old_age + 1, old_age))
+                ways.append(Cat(Mux(here & ~hit, t, row[w].tag)[:self.tag_bits], new_age[:self.age_bits]))
+                counts.append((Mux(here, Mux(hit, issued[w], retired[w]) + 1, issued[w]))[:self.count_bits])
+                allocs.append(Mux(here & ~hit, ~fill[w], alloc[w]))
+            # each row assigned in one piece (CXXRTL would assemble a row written field by field)
+            m.d.comb += [new_row.eq(Cat(Cat(*ways), valid | (C(1, W) << way)[:W])), new_issued.eq(Cat(*counts)),
+                         new_alloc.eq(Cat(*allocs))]
+            addr, en = self.lines.write(m, b, s, act, new_row)
+            self.issued.write(m, b, s, act, new_issued)
+            self.alloc.write(m, b, s, act, new_alloc)
+            # a set is touched when its row is written (a decoder of the bank's write address)
+            with m.If(en):
+                m.d.sync += (touched.bit_select(addr, 1) if len(touched) > 1 else touched).eq(1)
+            results.append((hit, way, busy))
+        out = []
+        for k, s in enumerate(sets):
+            hit = Signal(name=f"{self.name}_hit{k}")
+            way = Signal(max(1, self.way_bits), name=f"{self.name}_way{k}")
+            busy = Signal(name=f"{self.name}_busy{k}")
+            m.d.comb += [hit.eq(self._unbank(m, s, [r[0] for r in results])),
+                         way.eq(self._unbank(m, s, [r[1] for r in results])),
+                         busy.eq(self._unbank(m, s, [r[2] for r in results]))]
+            out.append((s, hit, way, busy))
+        return out
+
+    def read_out(self, m, slots, retire):
+        """The data read: whether every line of ``slots`` (one, or two in consecutive sets, or the
+        same twice) is filled, combinational; ``retire`` (one enable per slot; the second only when
+        the slots differ) counts a reference read out of each at the clock edge."""
+        sets = [Signal(max(1, self.set_bits), name=f"{self.name}_head_set{k}") for k in range(len(slots))]
+        m.d.comb += [s.eq(self.set_of(slot)) for s, slot in zip(sets, slots)]
+        banked = self._banked(m, [(s, self.way_of(slot), en) for s, slot, en in zip(sets, slots, retire)], "head")
+        filled_b = []
+        for b, (s, w, en) in enumerate(banked):
+            n = f"{self.name}{b}" if self.banks > 1 else self.name
+            alloc = self.alloc.read(m, b, s, f"{n}_alloc_head")
+            fill = self.fill.read(m, b, s, f"{n}_fill_head")
+            retired = self.retired.read(m, b, s, f"{n}_retired_head")
+            f = Signal(name=f"{n}_head_filled")
+            m.d.comb += f.eq(alloc.bit_select(w, 1) == fill.bit_select(w, 1))
+            filled_b.append(f)
+            new = Signal(self.retired.shape, name=f"{n}_new_retired")
+            m.d.comb += new.eq(Cat(*(Mux(w == x, retired[x] + 1, retired[x])[:self.count_bits]
+                                     for x in range(self.ways))))
+            self.retired.write(m, b, s, en, new)
+        filled = Signal(len(slots), name=f"{self.name}_head_filled")
+        m.d.comb += [filled[k].eq(self._unbank(m, s, filled_b)) for k, s in enumerate(sets)]
+        return filled
+
+    def fill_line(self, m, slot, en):
+        """A burst's last beat fills the line of ``slot`` at the clock edge (``en``)."""
+        s = Signal(max(1, self.set_bits), name=f"{self.name}_fill_set")
+        m.d.comb += s.eq(self.set_of(slot))
+        w = self.way_of(slot)
+        for b in range(self.banks):
+            n = f"{self.name}{b}" if self.banks > 1 else self.name
+            row = self.fill.read(m, b, s, f"{n}_fill_row")
+            new = Signal(self.ways, name=f"{n}_new_fill")
+            m.d.comb += new.eq(row ^ (C(1, self.ways) << w)[:self.ways])
+            self.fill.write(m, b, s, en & (s[0] == b) if self.banks > 1 else en, new)
 
 
 class CachedReader(wiring.Component):
@@ -190,10 +361,13 @@ class CachedReader(wiring.Component):
         bus_bits = 8 * bus
         wb = self._word_bits // 8
         count_bits = max(1, Q.bit_length()) + 1
-        caches = []
-        for c, (name, shape) in enumerate((("index", cfg.index_cache), ("raw", cfg.raw_cache))):
-            caches.append(_Cache(m, name, shape, 2 if c == 0 else 1, count_bits))
-        ic, rc = caches
+        aw = self._addr_width
+        # The index cache's rows in two banks by set parity (a straddling index checks two
+        # consecutive sets in one cycle); tags as wide as the AXI address leaves them.
+        ic = _Cache(m, "index", cfg.index_cache, 2, count_bits,
+                    max(1, aw - _log2(cfg.index_cache.line) - _log2(cfg.index_cache.sets)))
+        rc = _Cache(m, "raw", cfg.raw_cache, 1, count_bits,
+                    max(1, aw - _log2(cfg.raw_cache.line) - _log2(cfg.raw_cache.sets)))
         beats = [ic.shape.line // bus, rc.shape.line // bus]
         req = self.i.p
 
@@ -206,9 +380,11 @@ class CachedReader(wiring.Component):
         line0, line1, rline = a0 >> il, a1 >> il, ra >> rl
         two = Signal()
         m.d.comb += two.eq(~req.raw & req.straddle & (line1 != line0))
-        s0, t0, hit0, way0, busy0 = ic.lookup(m, line0, 0)
-        s1, t1, hit1, way1, busy1 = ic.lookup(m, line1, 1)
-        sr, tr, hitr, wayr, busyr = rc.lookup(m, rline, 0)
+        take = Signal()
+        # port 1 looks up the line after line0 (line1 when ``two``; unused otherwise)
+        (s0, hit0, way0, busy0), (s1, hit1, way1, busy1) = ic.check(
+            m, [(line0, take & ~req.raw), (line0 + 1, take & two)])
+        (sr, hitr, wayr, busyr), = rc.check(m, [(rline, take & req.raw)])
         miss0 = ~req.raw & ~hit0
         miss1 = two & ~hit1
         missr = req.raw & ~hitr
@@ -234,7 +410,10 @@ class CachedReader(wiring.Component):
             "raw": 1, "slot0": max(islot, rslot), "slot1": islot, "beat0": max(1, _log2(max(beats))),
             "beat1": max(1, _log2(max(beats))), "off0": max(1, _log2(bus // min(wb, 4)) or 1),
             "off1": max(1, _log2(bus // wb) or 1), "tag": max(1, self._tag_width)})
-        fifo = [Signal(entry, name=f"ref_{q}") for q in range(Q)]
+        # in LUT RAM: written at the tail by the tag check, read at the head by the data read
+        m.submodules.references = fifo = memory.Memory(shape=entry, depth=Q, init=[],
+                                                       attrs={"ram_style": "distributed"})
+        fifo_w, fifo_r = fifo.write_port(), fifo.read_port(domain="comb")
         level = Signal(range(Q + 1))
         head = Signal(range(max(Q, 2)))
         tail = Signal(range(max(Q, 2)))
@@ -242,22 +421,25 @@ class CachedReader(wiring.Component):
         o_free = Signal()
         m.d.comb += o_free.eq(~self.o.valid | self.o.ready)
         headv = Signal(entry)
-        m.d.comb += headv.eq(Array(fifo)[head] if Q > 1 else fifo[0])
-        head_filled = Mux(headv.raw, rc.filled_at(headv.slot0[:rslot]),
-                          ic.filled_at(headv.slot0[:islot]) & ic.filled_at(headv.slot1))
+        m.d.comb += [fifo_r.addr.eq(head), headv.eq(fifo_r.data)]
+        # the head's lines filled? (a read out of the index cache retires one reference per line)
+        i_filled = ic.read_out(m, [headv.slot0[:islot], headv.slot1],
+                               [pop & ~headv.raw, pop & ~headv.raw & (headv.slot1 != headv.slot0[:islot])])
+        r_filled = rc.read_out(m, [headv.slot0[:rslot]], [pop & headv.raw])
+        head_filled = Mux(headv.raw, r_filled, i_filled.all())
         m.d.comb += pop.eq((level != 0) & head_filled & o_free)
         m.d.comb += self.stall_fill.eq((level != 0) & ~head_filled & o_free)
 
-        take = Signal()
         m.d.comb += [
             self.i.ready.eq(~slot_v[1] & (~slot_v[0] | self.axi.arready) & ((level != Q) | pop) & ~busy),
             take.eq(self.i.valid & self.i.ready),
         ]
         # the entry of the request being checked
-        # The entry's fields as separate signals, joined only where the FIFO stores them: one packed
-        # ``new`` wire would hold both bits of ``a1`` (beat1, off1) and bits computed from them through
-        # the tag check (slot1), and Verilator, which orders a wire as a whole, would see a
-        # combinational cycle through it (UNOPTFLAT) where there is none.
+        # The entry's fields as separate signals, joined only where the FIFO stores them, and there
+        # through a gate (the write data is driven only when ``take``): one packed wire would hold
+        # both bits of ``a1`` (beat1, off1) and bits computed from them through the tag check
+        # (slot1), Yosys makes such a wire the driver of ``a1``'s bits, and Verilator, which orders a
+        # wire as a whole, would see a combinational cycle through it (UNOPTFLAT) where there is none.
         new = _Fields({name: Signal(f.shape, name=f"new_{name}") for name, f in entry})
         slot0 = Signal(islot)
         slot1 = Signal(islot)
@@ -271,14 +453,17 @@ class CachedReader(wiring.Component):
             new.raw.eq(req.raw),
             new.slot0.eq(Mux(req.raw, slotr, slot0)),
             new.slot1.eq(slot1),
-            new.beat0.eq(Mux(req.raw, (ra & (rc.shape.line - 1)) >> _log2(bus), (a0 & (ic.shape.line - 1)) >> _log2(bus))),
+            new.beat0.eq(Mux(req.raw, (ra & (rc.shape.line - 1)) >> _log2(bus),
+                             (a0 & (ic.shape.line - 1)) >> _log2(bus))),
             new.beat1.eq((a1 & (ic.shape.line - 1)) >> _log2(bus)),
             new.off0.eq(Mux(req.raw, (ra & (bus - 1)) >> 2, (a0 & (bus - 1)) >> _log2(wb))),
             new.off1.eq((a1 & (bus - 1)) >> _log2(wb)),
             new.tag.eq(req.tag),
         ]
+        m.d.comb += [fifo_w.addr.eq(tail), fifo_w.en.eq(take)]
+        with m.If(take):        # (a gate, not a plain wire: see ``new`` above)
+            m.d.comb += fifo_w.data.eq(new.value(entry))
         with m.If(take):
-            m.d.sync += Array(fifo)[tail].eq(new.value(entry)) if Q > 1 else fifo[0].eq(new.value(entry))
             m.d.sync += tail.eq(Mux(tail == Q - 1, 0, tail + 1))
         with m.If(pop):
             m.d.sync += head.eq(Mux(head == Q - 1, 0, head + 1))
@@ -303,24 +488,33 @@ class CachedReader(wiring.Component):
 
         # -- bursts in flight: which line each fills, in AR order ----------------------------------------
         depth = 1 << (2 * Q + 4).bit_length()
-        flight = [Signal(1 + max(islot, rslot), name=f"flight_{q}") for q in range(depth)]
         f_head = Signal(range(depth))
         f_tail = Signal(range(depth))
-        # bursts are queued in tag-check order, the order they leave on AR and come back on R
-        with m.If(take & (nmiss != 0)):
-            sw = max(islot, rslot)
+        sw = max(islot, rslot)
 
-            def fl(slot, raw):                      # a flight entry: the slot, zero-extended, then raw
-                return Cat(slot, C(0, sw - len(slot)), C(raw, 1))
-            first_slot = Mux(req.raw, fl(slotr, 1), Mux(miss0, fl(slot0, 0), fl(slot1, 0)))
-            m.d.sync += Array(flight)[f_tail].eq(first_slot)
-            with m.If(nmiss == 2):
-                m.d.sync += Array(flight)[(f_tail + 1)[:len(f_tail)]].eq(fl(slot1, 0))
-                m.d.sync += f_tail.eq(f_tail + 2)
-            with m.Else():
-                m.d.sync += f_tail.eq(f_tail + 1)
-        cur = Signal(1 + max(islot, rslot))
-        m.d.comb += cur.eq(Array(flight)[f_head])
+        def fl(slot, raw):                          # a flight entry: the slot, zero-extended, then raw
+            return Cat(slot, C(0, sw - len(slot)), C(raw, 1))
+        # in LUT RAM, two banks by position parity (a tag check queues up to two bursts: one each)
+        flight = []
+        for b in range(2):
+            m.submodules[f"flight{b}"] = mem = memory.Memory(shape=1 + sw, depth=depth // 2, init=[],
+                                                             attrs={"ram_style": "distributed"})
+            flight.append((mem.write_port(), mem.read_port(domain="comb")))
+        # bursts are queued in tag-check order, the order they leave on AR and come back on R
+        first = Signal(1 + sw)
+        second = Signal(1 + sw)
+        queue = take & (nmiss != 0)
+        m.d.comb += [first.eq(Mux(req.raw, fl(slotr, 1), Mux(miss0, fl(slot0, 0), fl(slot1, 0)))),
+                     second.eq(fl(slot1, 0))]
+        t1 = (f_tail + 1)[:len(f_tail)]
+        for b, (wp, rp) in enumerate(flight):
+            mine = f_tail[0] == b
+            m.d.comb += [wp.addr.eq(Mux(mine, f_tail >> 1, t1 >> 1)), wp.data.eq(Mux(mine, first, second)),
+                         wp.en.eq(queue & (mine | (nmiss == 2))), rp.addr.eq(f_head >> 1)]
+        with m.If(queue):
+            m.d.sync += f_tail.eq(Mux(nmiss == 2, f_tail + 2, f_tail + 1))
+        cur = Signal(1 + sw)
+        m.d.comb += cur.eq(Mux(f_head[0], flight[1][1].data, flight[0][1].data))
         beat = Signal(range(max(beats) + 1))
         cur_raw = cur[-1]
         cur_slot = cur[:-1]
@@ -331,74 +525,57 @@ class CachedReader(wiring.Component):
             m.d.sync += f_head.eq(f_head + 1)
 
         # -- line RAMs: a row per beat --------------------------------------------------------------------
-        m.submodules.index_lines = iram = memory.Memory(shape=bus_bits, depth=ic.sets * ic.ways * beats[0], init=[])
+        # The index lines in two banks, so that words w and w + 1 come from one read port each (a
+        # block RAM has two ports: one writes, one reads): they lie in one row, or in consecutive
+        # beats of a line, or in the last beat of a line and the first of the next set's: banks by
+        # row parity, or by set parity when a line is one beat.
+        kbit = 0 if beats[0] > 1 else _log2(ic.ways)
+        ibank = []
+        for b in range(2):
+            m.submodules[f"index_lines{b}"] = mem = memory.Memory(
+                shape=bus_bits, depth=ic.sets * ic.ways * beats[0] // 2, init=[])
+            ibank.append((mem.write_port(), mem.read_port()))
+
+        def split(row):                             # a row -> (its bank, its address in the bank)
+            return row[kbit], Cat(row[:kbit], row[kbit + 1:])
+        irow0, irow1, wrow = (Signal(islot + max(1, _log2(beats[0])), name=n) for n in ("irow0", "irow1", "wrow"))
+        m.d.comb += [irow0.eq(headv.slot0[:islot] * beats[0] + headv.beat0),
+                     irow1.eq(headv.slot1 * beats[0] + headv.beat1), wrow.eq(cur_slot[:islot] * beats[0] + beat)]
+        (p0, a0_), (p1, a1_), (pw, aw_) = split(irow0), split(irow1), split(wrow)
+        for b, (wp, rp) in enumerate(ibank):
+            m.d.comb += [wp.addr.eq(aw_), wp.data.eq(self.axi.rdata), wp.en.eq(self.axi.rvalid & ~cur_raw & (pw == b)),
+                         rp.addr.eq(Mux(p0 == b, a0_, a1_)), rp.en.eq(pop)]
         m.submodules.raw_lines = rram = memory.Memory(shape=bus_bits, depth=rc.sets * rc.ways * beats[1], init=[])
-        iw, rw = iram.write_port(), rram.write_port()
-        ir0, ir1, rr = iram.read_port(), iram.read_port(), rram.read_port()
+        rw, rr = rram.write_port(), rram.read_port()
         m.d.comb += [
-            iw.addr.eq(cur_slot[:islot] * beats[0] + beat), iw.data.eq(self.axi.rdata),
-            iw.en.eq(self.axi.rvalid & ~cur_raw),
             rw.addr.eq(cur_slot[:rslot] * beats[1] + beat), rw.data.eq(self.axi.rdata),
             rw.en.eq(self.axi.rvalid & cur_raw),
-            ir0.addr.eq(headv.slot0[:islot] * beats[0] + headv.beat0), ir0.en.eq(pop),
-            ir1.addr.eq(headv.slot1 * beats[0] + headv.beat1), ir1.en.eq(pop),
             rr.addr.eq(headv.slot0[:rslot] * beats[1] + headv.beat0), rr.en.eq(pop),
         ]
 
-        # -- cache state: tag check updates, fills, reads ---------------------------------------------------
-        def update(cache, ports, fill_hit, read_dec):
-            """ports: (set, tag, hit, way, active) per port checked in this cycle."""
-            S, W = cache.sets, cache.ways
-            for s in range(S):
-                for w in range(W):
-                    inc = []
-                    for (ps, pt, ph, pw, act) in ports:
-                        here = act & (ps == s) & (pw == w)
-                        inc.append(here)
-                        with m.If(act & (ps == s)):
-                            # LRU: the accessed way becomes the youngest; younger valid ways age by one
-                            acc_age = Signal(cache.age_bits + 1, name=f"{cache.name}_acc_{s}_{w}_{len(inc)}")
-                            aw = Array(cache.age[s][x] for x in range(W))[pw]
-                            vw = Array(cache.valid[s][x] for x in range(W))[pw]
-                            m.d.comb += acc_age.eq(Mux(vw, aw, W))
-                            with m.If(pw == w):
-                                m.d.sync += cache.age[s][w].eq(0)
-                                with m.If(~ph):
-                                    m.d.sync += [cache.tag[s][w].eq(pt), cache.valid[s][w].eq(1),
-                                                 cache.filled[s][w].eq(0)]
-                            with m.Elif(cache.valid[s][w] & (cache.age[s][w] < acc_age)):
-                                m.d.sync += cache.age[s][w].eq(cache.age[s][w] + 1)
-                    slot = s * W + w
-                    fill = fill_hit(slot)
-                    with m.If(fill):
-                        m.d.sync += cache.filled[s][w].eq(1)
-                    dec = read_dec(slot)
-                    m.d.sync += cache.count[s][w].eq(cache.count[s][w] + sum(inc) - dec)
-
-        update(ic, [(s0, t0, hit0, way0, take & ~req.raw), (s1, t1, hit1, way1, take & two)],
-               lambda slot: last & ~cur_raw & (cur_slot[:islot] == slot),
-               lambda slot: pop & ~headv.raw & ((headv.slot0[:islot] == slot)
-                                                 + ((headv.slot1 == slot) & (headv.slot1 != headv.slot0[:islot]))))
-        update(rc, [(sr, tr, hitr, wayr, take & req.raw)],
-               lambda slot: last & cur_raw & (cur_slot[:rslot] == slot),
-               lambda slot: pop & headv.raw & (headv.slot0[:rslot] == slot))
+        # -- the fills: a burst's last beat makes its line readable from the next cycle ----------------
+        ic.fill_line(m, cur_slot[:islot], last & ~cur_raw)
+        rc.fill_line(m, cur_slot[:rslot], last & cur_raw)
 
         # -- the output register (the RAMs' read registers, and what goes with them) -------------------------
         o_raw = Signal()
+        o_bank = Signal(2)                          # the index banks holding w and w + 1
         o_off0 = Signal.like(headv.off0)
         o_off1 = Signal.like(headv.off1)
         o_tag = Signal(max(1, self._tag_width))
         with m.If(pop):
             m.d.sync += [self.o.valid.eq(1), o_raw.eq(headv.raw), o_off0.eq(headv.off0), o_off1.eq(headv.off1),
-                         o_tag.eq(headv.tag)]
+                         o_tag.eq(headv.tag), o_bank.eq(Cat(p0, p1))]
         with m.Elif(self.o.ready):
             m.d.sync += self.o.valid.eq(0)
         wbits = self._word_bits
+        ir0 = Mux(o_bank[0], ibank[1][1].data, ibank[0][1].data)
+        ir1 = Mux(o_bank[1], ibank[1][1].data, ibank[0][1].data)
         m.d.comb += [
             self.o.p.raw.eq(o_raw),
             self.o.p.word0.eq(Mux(o_raw, rr.data.word_select(o_off0, 32),
-                                  ir0.data.word_select(o_off0[:max(1, _log2(bus // wb))], wbits))),
-            self.o.p.word1.eq(ir1.data.word_select(o_off1, wbits)),
+                                  ir0.word_select(o_off0[:max(1, _log2(bus // wb))], wbits))),
+            self.o.p.word1.eq(ir1.word_select(o_off1, wbits)),
         ]
         if self._tag_width:
             m.d.comb += self.o.p.tag.eq(o_tag)

@@ -80,6 +80,11 @@ class CachedTexelFetch(wiring.Component):
         })
 
     @property
+    def fetch(self) -> TexelFetch:
+        """The texel pipeline behind the caches (its ``features``, ``geometry``)."""
+        return self._tf
+
+    @property
     def latency(self) -> int:
         """Cycles from ``i`` to ``o`` when every reference hits: ``LATENCY + 4``."""
         return LATENCY + ADDRESS_STAGES + 2
@@ -103,7 +108,7 @@ class CachedTexelFetch(wiring.Component):
         m.submodules.descriptor = desc = DescriptorTable(ts, features=feat, geometry=g)
         m.submodules.address = addr = BlockAddress(
             base_bits=widths["base"], k_bits=g.k_bits, raw_bits=addr_bits(g.raw_words), raw=feat.raw,
-            twiddle=feat.twiddled, linear=0 in feat.layouts)
+            twiddle=feat.twiddled, linear=0 in feat.layouts, word_bits=W)
         v1, v2 = Signal(), Signal()
         en1, en2 = Signal(), Signal()
         m.d.comb += [
@@ -131,23 +136,22 @@ class CachedTexelFetch(wiring.Component):
         ]
         if addr.twiddle:
             m.d.comb += [addr.layout.eq(row.layout), addr.log2h.eq(row.log2h)]
+        m.d.comb += addr.index_bits.eq(row.index_bits)
         row2 = Signal.like(desc.row, name="row_address")
         with m.If(en2):
             m.d.sync += row2.eq(desc.row)
         d2 = desc.fields(row2)
-        # the words: w = base + (k * b >> log2 W), off = k * b mod W; raw: the raw word
-        bit = Signal(g.k_bits + 5)
-        m.d.comb += bit.eq(addr.k * d2.index_bits)
-        lw = (W - 1).bit_length()
+        # the words, registered by the address stage (w = base + (k * b >> log2 W), off = k * b mod
+        # W, the straddle; so the tag check's cycle starts at registers); raw: the raw word
         word = Signal(32)
-        m.d.comb += word.eq(Mux(d2.compressed, d2.base + (bit >> lw), addr.raw_addr if feat.raw else 0))
+        m.d.comb += word.eq(Mux(d2.compressed, addr.word, addr.raw_addr if feat.raw else 0))
         r = Signal(ride)
-        m.d.comb += [r.request.eq(req2), r.off.eq(bit[:lw]), r.b.eq(d2.index_bits)]
+        m.d.comb += [r.request.eq(req2), r.off.eq(addr.bit_offset), r.b.eq(d2.index_bits)]
         m.d.comb += [
             reader.i.valid.eq(v2),
             reader.i.p.raw.eq(~d2.compressed),
             reader.i.p.word.eq(word),
-            reader.i.p.straddle.eq(d2.compressed & ((bit[:lw] + d2.index_bits) > W)),
+            reader.i.p.straddle.eq(d2.compressed & addr.straddle),
             reader.i.p.tag.eq(r.as_value()),
         ]
 

@@ -155,20 +155,12 @@ def build_cached(ts, config, backend: str, *, tag_width: int = 8):
     from .design import cached_design_info
     info = cached_design_info(ts, config, tag_width=tag_width)
     if backend == "cxxrtl":
-        import os
-        from .cxxrtl import CXXFLAGS, build_design
-        from .toolchain import find_cxx
-        flags = list(CXXFLAGS)
-        if "clang" in os.path.basename(find_cxx()):
-            # The caches' state is flip-flops read through set-indexed multiplexers, which CXXRTL
-            # writes as nested expressions: with the CLI's default caches (16 + 4 KB of 32-byte
-            # lines, 4 ways) deeper than clang's default of 256 brackets (a compile error).
-            flags.append("-fbracket-depth=4096")
-        return build_design(info, cxxflags=flags)
+        from .cxxrtl import build_design
+        return build_design(info)
     if backend == "verilator":
         from .verilator import build_design
         from .verilog import export_cached_verilog
-        return build_design(info, lambda: export_cached_verilog(ts, config, tag_width=tag_width))
+        return build_design(info, lambda: export_cached_verilog(ts, config, tag_width=tag_width)[0])
     raise ValueError(f"no compiled backend {backend!r} (cxxrtl, verilator)")
 
 

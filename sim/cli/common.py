@@ -225,7 +225,7 @@ _MEMORY_OPTIONS = (
     ("raw_cache_size", "--raw-cache-size", "CACHE_BYTES", 4096, "the raw cache's bytes"),
     ("cache_line", "--cache-line", "CACHE_LINE", 32, "bytes per cache line (both caches; one AXI burst)"),
     ("cache_ways", "--cache-ways", None, 4, "ways per set (both caches), LRU"),
-    ("prefetch", "--prefetch", "PREFETCH", 16, "entries of the FIFO of references between tag check and data "
+    ("prefetch", "--prefetch", "PREFETCH", 128, "entries of the FIFO of references between tag check and data "
                                                "read; 1 is the blocking cache"),
     ("memory_latency", "--memory-latency", "MEMORY_LATENCY", 100, "fixed memory: cycles from AR to the first beat"),
     ("memory_bandwidth", "--memory-bandwidth", "MEMORY_BANDWIDTH", 16, "fixed memory: bytes per clock"),

@@ -13,11 +13,11 @@ import time
 
 import numpy as np
 
-from .common import (CliError, Outputs, add_backend, add_json, add_unit, emit, resolve, unit_geometry, with_default, write_bytes,
-                     write_json)
+from .common import (CliError, Outputs, add_backend, add_json, add_memory_options, add_unit, emit, memory_config,
+                     resolve, unit_geometry, with_default, write_bytes, write_json)
 from vqtex.sim.reports.quality import DEFAULT_VMAX, side_by_side
 
-from .render import encode_scene, parse_frames, render_to_files
+from .render import encode_scene, memory_line, memory_summary, parse_frames, render_to_files
 
 __all__ = ["add_parser", "cmd_demo"]
 
@@ -31,6 +31,9 @@ def cmd_demo(args) -> int:
     check they are identical, write the frames and a report, print a summary."""
     from vqtex.golden.render.scene import load_scene
     t_start = time.perf_counter()
+    memory = memory_config(args)
+    if memory is not None and args.unit is not None:
+        raise CliError("--memory external is the specialised baked unit behind caches: no --unit")
     with Outputs() as outs:
         out_dir = outs.folder(args.out_dir)
         scene = load_scene("topspin")
@@ -49,9 +52,12 @@ def cmd_demo(args) -> int:
         per_frame, mismatches = render_to_files(
             scene, ts, frames, frame_paths.get, images, outs=outs, mode="trilinear", backend=args.backend,
             cycle_model=True, on_frame=lambda r: _compare(r, outs.path(compare)) if r["frame"] == frames[0] else None,
-            unit=args.unit, geometry=geometry)
+            unit=args.unit, geometry=geometry, memory=memory)
         report = _report(args, ts, per_frame, mismatches, encode_s)
         report["unit"] = args.unit
+        if memory is not None:
+            report["unit"] = "cached"
+            report["memory"] = memory_summary(memory, per_frame)
         if geometry is not None:
             report["geometry"] = geometry.to_dict()
             report["load_cycles_per_frame"] = per_frame[0].get("load_cycles")
@@ -89,7 +95,7 @@ def _summary(args, scene, frames, report, per_frame, mismatches) -> str:
     if args.backend == "golden":
         rtl = "  RTL: not run (--backend golden); cycles below are the golden cycle model's"
     else:
-        rtl = (f"  RTL ({args.backend}, {args.unit} unit) frames identical to golden: "
+        rtl = (f"  RTL ({args.backend}, {report['unit']} unit) frames identical to golden: "
                f"{'yes' if not mismatches else 'NO ' + str(mismatches)}")
         if report.get("load_cycles_per_frame") is not None:
             rtl += f"\n  loaded over the bus port before each frame: {report['load_cycles_per_frame']} cycles"
@@ -101,6 +107,7 @@ def _summary(args, scene, frames, report, per_frame, mismatches) -> str:
         rtl,
         f"  cycles per frame: {report['cycles_per_frame']:.0f} for "
         f"{np.mean([f['requests'] for f in per_frame]):.0f} texel requests (latency {per_frame[0].get('latency', 0)})",
+        *(["  " + memory_line(report)] if "memory" in report else []),
         f"  {args.out_dir}/{COMPARE_NAME}: frame {frames[0]} uncompressed | compressed | difference "
         f"(black 0 to white {DEFAULT_VMAX}+ levels, the scale under it)",
         f"  wrote {args.out_dir}/topspin_*.png, topspin.vqt and report.json in {report['total_seconds']:.1f} s",
@@ -116,5 +123,6 @@ def add_parser(sub) -> None:
                                                                "or one number", "0:3"))
     add_backend(d, BACKENDS, "cxxrtl")
     add_unit(d)
+    add_memory_options(d)
     add_json(d)
     d.set_defaults(func=cmd_demo)

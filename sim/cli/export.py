@@ -1,5 +1,12 @@
 """``vqtex export FILE.vqt -o OUT.v [--one-port] [--tag-width N] [--name NAME] [--dialect sv|v2005] [--testbench DIR]
-[--lint] [--json]``; ``vqtex export [FILE.vqt] --unit loadable [--geometry NAME|FILE.toml] -o OUT.v``.
+[--lint] [--json]``; ``vqtex export [FILE.vqt] --unit loadable [--geometry NAME|FILE.toml] -o OUT.v``;
+``vqtex export FILE.vqt --memory external [--cache-size B --raw-cache-size B --cache-line B --cache-ways N
+--prefetch Q --bus-bytes B] -o OUT.sv``.
+
+``--memory external`` exports the cached unit (:class:`hw.memory.unit.CachedTexelFetch`, docs/memory.md):
+the index map and raw levels in a memory outside it, read by its AXI4 read master (ports ``axi_*``)
+through the caches the options shape (the same options as ``vqtex sim``; the memory's own timing
+options do not apply: the memory is whatever answers the master).
 
 ``--testbench DIR`` (with FILE.vqt, the texel-fetch unit) also writes a cocotb testbench of the
 unit into DIR (:mod:`vqtex.sim.testbench.write`: ``tb_texel_fetch.py``, ``run_tb.py``,
@@ -25,8 +32,8 @@ import re
 import subprocess
 import tempfile
 
-from .common import (Outputs, add_hardware_options, add_index_banks, add_json, add_tag_width, add_unit, emit, load_set,
-                     unit_geometry, with_default)
+from .common import (Outputs, add_hardware_options, add_index_banks, add_json, add_memory_options, add_tag_width,
+                     add_unit, emit, load_set, memory_config, unit_geometry, with_default)
 
 __all__ = ["add_parser", "cmd_export", "lint_verilog", "waiver_path", "LINT_WAIVERS", "ExportError"]
 
@@ -99,6 +106,7 @@ def cmd_export(args) -> int:
                           "texture filter")
     if args.testbench is not None and args.file is None:
         raise ExportError("--testbench needs FILE.vqt: the texture set the bench loads and checks responses against")
+    memory = _memory(args)
     with Outputs() as outs:
         out = outs.add(args.output, (".v", ".sv"), "Verilog")
         vlt = outs.add(waiver_path(args.output))
@@ -109,7 +117,7 @@ def cmd_export(args) -> int:
             from vqtex.sim.testbench.write import FILES
             folder = outs.folder(args.testbench)
             bench = {name: outs.add(os.path.join(folder, name)) for name in FILES}
-        text, ports, geometry, ts = _export(args, out)
+        text, ports, geometry, ts, latency = _export(args, out, memory)
         with open(outs.path(out), "w") as f:
             f.write(text)
         with open(outs.path(vlt), "w") as f:
@@ -121,20 +129,20 @@ def cmd_export(args) -> int:
             with open(outs.path(header), "w") as f:
                 f.write(c_header(geometry))
         if bench is not None:
-            from vqtex.hw.texel_fetch import LATENCY
             from vqtex.sim.testbench.write import write_testbench
             write_testbench({name: outs.path(p) for name, p in bench.items()}, verilog=out, ts=ts,
-                            top=args.name, unit=args.unit, tag_width=args.tag_width, latency=LATENCY,
-                            geometry=geometry, folder=folder)
-    from vqtex.hw.texel_fetch import LATENCY as latency
-    if args.filter_lanes is not None:
-        from vqtex.hw.filter import LATENCY as latency
+                            top=args.name, unit="external" if memory is not None else args.unit,
+                            tag_width=args.tag_width, latency=latency, geometry=geometry, folder=folder,
+                            memory=memory)
     report = {"output": args.output, "lint_waivers": waiver_path(args.output), "module": args.name, "bytes": len(text.encode()),
               "one_port": bool(args.one_port), "unit": args.unit, "dialect": args.dialect, "tag_width": args.tag_width,
               "latency": latency, "ports": ports, "lint": "clean" if args.lint else "not run",
               "top": "texel fetch" if args.filter_lanes is None else f"texture filter, {args.filter_lanes} lane(s)"}
     if args.filter_lanes is not None:
         report["index_banks"] = args.index_banks
+    if memory is not None:
+        from vqtex.sim.testbench.write import memory_dict
+        report["memory"] = memory_dict(memory)
     also = ""
     if geometry is not None:
         from vqtex.golden.register_map import RegisterMap
@@ -145,7 +153,8 @@ def cmd_export(args) -> int:
         report["testbench"] = {name: p for name, p in bench.items()}
         also += f"; its cocotb testbench in {args.testbench} (python {bench['run_tb.py']})"
     emit(report, args.json, f"wrote {args.output} (module {args.name}, {len(ports)} ports, "
-                             f"latency {latency}, {len(text.encode())} bytes"
+                             f"latency {latency}{' when every reference hits' if memory else ''}, "
+                             f"{len(text.encode())} bytes"
                              f"{', lint clean' if args.lint else ''}), its Verilator lint waivers "
                              f"{waiver_path(args.output)}{also}")
     return 0
@@ -157,9 +166,25 @@ def register_map_paths(output: str) -> tuple:
     return stem + ".regs.md", stem + ".h"
 
 
-def _export(args, out):
-    """The Verilog text, its ports, the loadable unit's geometry (None for the baked units) and the
-    texture set (None without FILE); linted when ``--lint`` (an ExportError on a warning)."""
+def _memory(args):
+    """``--memory external``'s MemoryConfig (None on chip); what the cached unit cannot be refused."""
+    for timing in ("memory_latency", "memory_bandwidth", "memory_model", "dram_part", "dram_clock", "controller_cycles"):
+        if getattr(args, timing) is not None:
+            raise ExportError(f"--{timing.replace('_', '-')}: the memory's timing is not part of the exported "
+                              "unit (whatever answers its AXI master is the memory)")
+    memory = memory_config(args)                    # a CliError (one line, exit 2) if refused
+    if memory is None:
+        return None
+    if args.filter_lanes is not None or args.one_port or args.unit != "specialised" or args.dialect != "sv":
+        raise ExportError("--memory external exports the cached unit: specialised, two index banks, "
+                          "SystemVerilog (no --filter-lanes, --one-port, --unit full|loadable or --dialect v2005)")
+    return memory
+
+
+def _export(args, out, memory=None):
+    """The Verilog text, its ports, the loadable unit's geometry (None for the baked units), the
+    texture set (None without FILE) and the latency (with ``memory``: when every reference hits);
+    linted when ``--lint`` (an ExportError on a warning)."""
     from vqtex.golden.format import FormatError
     from vqtex.sim.backends.verilog import export_verilog
     ts = None
@@ -173,12 +198,18 @@ def _export(args, out):
     if geometry is not None and args.filter_lanes is not None:
         raise ExportError("--filter-lanes exports the baked texture filter; --unit loadable is the texel-fetch unit")
     ports = {}
-    if args.filter_lanes is not None:
+    if memory is not None:
+        from vqtex.sim.backends.verilog import export_cached_verilog
+        text, top = export_cached_verilog(ts, memory, tag_width=args.tag_width, name=args.name, ports=ports)
+        latency = top.unit.latency
+    elif args.filter_lanes is not None:
+        from vqtex.hw.filter import LATENCY as latency
         from vqtex.sim.backends.verilog import export_filter_verilog
         text, top = export_filter_verilog(ts, lanes=args.filter_lanes, tag_width=args.tag_width, name=args.name,
                                           index_banks=args.index_banks)
         ports.update({n: len(getattr(top, n)) for n in top.signature.members})
     else:
+        from vqtex.hw.texel_fetch import LATENCY as latency
         text = export_verilog(ts, one_port=args.one_port, tag_width=args.tag_width, name=args.name,
                               dialect=args.dialect, ports=ports, specialise=args.unit == "specialised",
                               geometry=geometry)
@@ -190,7 +221,7 @@ def _export(args, out):
             warnings = lint_verilog(path, args.name)
         if warnings:
             raise ExportError(f"verilator lint: {len(warnings)} warning(s), first: {warnings[0]}")
-    return text, ports, geometry, ts
+    return text, ports, geometry, ts, latency
 
 
 def add_parser(sub) -> None:
@@ -209,6 +240,7 @@ def add_parser(sub) -> None:
                    help=with_default("export the texture filter (hw.filter, docs/filter.md) with this many "
                                      "texel-fetch lanes instead of the texel-fetch unit", "the texel-fetch unit"))
     add_index_banks(e)
+    add_memory_options(e)
     e.add_argument("--dialect", choices=["sv", "v2005"], default="sv",
                    help=with_default("sv: assign and always_ff (X-free in Icarus -g2012); v2005: plain Verilog", "sv"))
     e.add_argument("--testbench", metavar="DIR", default=None,

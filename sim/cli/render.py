@@ -411,7 +411,7 @@ def cmd_render(args) -> int:
             report["cycles_per_frame"] = round(float(np.mean([f["cycles"] for f in per_frame])), 1)
         if memory is not None:
             report["cycles_per_frame"] = round(float(np.mean([f.get("cycles", 0) for f in per_frame])), 1)
-            report["memory"] = _memory_summary(memory, per_frame)
+            report["memory"] = memory_summary(memory, per_frame)
         stream_mismatches = []
         if args.compare_fixed:
             report["cycles_per_frame"] = round(float(np.mean([f.get("cycles", 0) for f in per_frame])), 1)
@@ -442,12 +442,7 @@ def cmd_render(args) -> int:
         text.append(f"RTL frames identical to golden: {'yes' if not mismatches else 'NO, frames ' + str(mismatches)}; "
                     f"{report['cycles_per_frame']:.0f} cycles per frame")
     if memory is not None:
-        m = report["memory"]
-        text.append(f"external memory ({m['configuration']}): {report['cycles_per_frame']:,.0f} cycles per frame, "
-                    f"{m['bytes_per_texel']:.4f} bytes read per texel, {m['bytes_per_pixel']:.4f} per pixel, "
-                    f"hit rates index {_pct(m['hit_rate']['index'])}, raw {_pct(m['hit_rate']['raw'])}"
-                    + (f", {m['of_zero_latency']:.3f} of the zero-latency texels per clock" if "of_zero_latency" in m
-                       else ""))
+        text.append(memory_line(report))
     if args.compare_fixed:
         text.append(f"fixed stream: {report['fixed_requests_per_frame']:,.0f} requests and "
                     f"{report['fixed_cycles_per_frame']:,.0f} cycles per frame; sparse: "
@@ -469,7 +464,18 @@ def _pct(v) -> str:
     return "-" if v is None else f"{100 * v:.2f}%"
 
 
-def _memory_summary(memory, per_frame) -> dict:
+def memory_line(report) -> str:
+    """The external memory's line of a render (or demo) summary, from ``report["memory"]``
+    (:func:`memory_summary`) and ``report["cycles_per_frame"]``."""
+    m = report["memory"]
+    return (f"external memory ({m['configuration']}): {report['cycles_per_frame']:,.0f} cycles per frame, "
+            f"{m['bytes_per_texel']:.4f} bytes read per texel, {m['bytes_per_pixel']:.4f} per pixel, "
+            f"hit rates index {_pct(m['hit_rate']['index'])}, raw {_pct(m['hit_rate']['raw'])}"
+            + (f", {m['of_zero_latency']:.3f} of the zero-latency texels per clock" if "of_zero_latency" in m
+               else ""))
+
+
+def memory_summary(memory, per_frame) -> dict:
     """The external memory's figures over the frames: bytes per texel and per textured pixel, hit
     rates (over all references), cycles against zero latency (golden)."""
     frames = [f for f in per_frame if "memory" in f]

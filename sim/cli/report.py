@@ -17,8 +17,9 @@ import os
 import time
 
 from . import limits
-from .common import (Outputs, add_hardware_options, add_index_banks, add_json, add_tag_width, add_unit, check_folder, emit, load_set,
-                     number_help, progress_line, resolve, unit_geometry, with_default)
+from .common import (CliError, Outputs, add_hardware_options, add_index_banks, add_json, add_memory_options, add_tag_width,
+                     add_unit, check_folder, emit, load_set, memory_config, number_help, progress_line, resolve,
+                     unit_geometry, with_default)
 from .simulate import add_trace_arguments, plot_output, run_trace
 
 __all__ = ["add_parser", "cmd_report_area", "cmd_report_cycles", "BUILTINS", "ReportError"]
@@ -51,6 +52,17 @@ def cmd_report_area(args) -> int:
                                                                    and not sizeless):
         raise ReportError("report area: give a FILE.vqt or --builtin NAME (not both; neither with --unit loadable "
                           "--geometry NAME)")
+    memory = memory_config(args)
+    if memory is not None:
+        # only the caches, the FIFO and the bus shape the hardware; the memory's timing is the model's
+        timing = [o for o in ("memory_model", "memory_latency", "memory_bandwidth", "dram_part", "dram_clock",
+                              "controller_cycles") if getattr(args, o) is not None]
+        if timing:
+            raise CliError(f"report area: --{timing[0].replace('_', '-')} is the memory's timing, not the unit's "
+                           "hardware (give the caches, --prefetch and --bus-bytes)")
+        if args.one_port or args.unit is not None or args.filter_lanes is not None:
+            raise CliError("report area: --memory external is the specialised baked unit behind caches: no "
+                           "--one-port, --unit or --filter-lanes")
     lanes = args.filter_lanes is not None
     resolve(args, "index_banks", "parity", lanes, "is how the texture filter's lanes hold the index memory: "
             "it needs --filter-lanes")
@@ -91,7 +103,7 @@ def cmd_report_area(args) -> int:
             ts, one_port=args.one_port, tag_width=args.tag_width, place=not args.no_pnr, freq=args.freq,
             seed=args.seed, workdir=workdir, timeout=args.timeout, name=name, specialise=unit == "specialised",
             progress=lambda m, u=unit: progress_line(f"report area: {u + ' unit: ' if len(units) > 1 else ''}{m}"),
-            filter_lanes=args.filter_lanes, index_banks=args.index_banks, geometry=geometry)
+            filter_lanes=args.filter_lanes, index_banks=args.index_banks, geometry=geometry, memory=memory)
         if t_set is not None:
             reps[unit]["seconds"] = {"encode": t_set, **reps[unit]["seconds"]}
     if len(units) == 1:
@@ -135,6 +147,7 @@ def add_parser(sub) -> None:
                    help=with_default("synthesize the texture filter (hw.filter: footprint, this many texel-fetch "
                                      "lanes, blend) instead of the texel-fetch unit", "the texel-fetch unit"))
     add_index_banks(a)
+    add_memory_options(a)
     add_unit(a, both=True)
     add_tag_width(a)
     a.add_argument("--freq", type=limits.FREQ, default=None,

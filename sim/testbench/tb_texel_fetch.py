@@ -8,6 +8,9 @@ it does, in one cocotb test, ``texel_fetch_against_golden``:
    geometry)`` (colour matrix, every descriptor row, the index, codebook and raw memories) through the
    ``bus_*`` Wishbone port by cocotbext-wishbone's ``WishboneMaster``; every write must be acked.
    The baked units hold the set in their ROMs already (the bench checks the set is the one baked in).
+   **Memory** (the external-memory unit, ``unit`` ``external``): cocotbext-axi's ``AxiRamRead``
+   answers the ``axi_*`` master from the set's memory image (``golden.memory.system.Layout.image``:
+   the index map at 0, the raw levels from the next 4 KB), with its own ``arready`` and R timing.
 3. **Random phase**: ``requests`` requests; every bin the set can reach (``vqtex.sim.testbench.bins``)
    gets ``per_bin`` requests drawn from its blocks, the rest are ``golden.fetch.random_requests``,
    shuffled. The **driver** offers them on ``i_*`` with random idle cycles (``gap``), holding valid
@@ -21,10 +24,18 @@ it does, in one cocotb test, ``texel_fetch_against_golden``:
 5. **Scoreboard**: response ``n`` must equal ``vqtex.golden.fetch.fetch`` of request ``n`` with tag
    ``n mod 2**tag_width``, in order; no response may be missing or extra (the bench watches
    ``o_valid`` for ``latency + 8`` cycles after the last one). The strobes: ``stall_output`` must
-   equal ``o_valid & ~o_ready`` every cycle, ``straddle`` pulse once per straddling request.
+   equal ``o_valid & ~o_ready`` every cycle, ``straddle`` pulse once per straddling request. The
+   external-memory unit: every AR is an INCR burst of the bus width that stays inside a 4 KB page
+   and inside the memory image (checked at its handshake; AxiRamRead itself asserts the 4 KB rule
+   but wraps an address past its size, so the bench checks that), and the bursts are exactly the
+   golden caches' misses of the whole stream, in order (``golden.memory.timing.plan``: the lines,
+   each read once while it stays cached); its latency is a lower bound (``latency``, every
+   reference a hit), a miss takes what the memory takes.
 6. **Coverage** (cocotb-coverage): cover points colour, index width, straddle, level group, stall and
    their cross, whose bins are exactly the ones this set can reach (the others are ``ign_bins``);
-   the report is logged and written to ``coverage.xml`` and ``coverage.json`` (reachable, hit,
+   the external-memory unit also covers ``memory``: each request's references all hit, or one missed
+   (golden's caches); a hit the random phase lacks is closed by repeating its last request. The
+   report is logged and written to ``coverage.xml`` and ``coverage.json`` (reachable, hit,
    missed, per phase) in the build folder.
 
 Configuration: ``tb_config.json`` beside this file (written by the export), overridden by the
@@ -47,6 +58,9 @@ from cocotb.utils import get_sim_time
 from cocotb_coverage.coverage import CoverCross, CoverPoint, coverage_db
 
 from vqtex.golden.fetch import fetch, random_requests
+from vqtex.golden.memory.cache import CacheShape
+from vqtex.golden.memory.system import Layout, MemoryConfig
+from vqtex.golden.memory.timing import plan as memory_plan
 from vqtex.golden.format import TextureSet
 from vqtex.sim.testbench.bins import DIMENSIONS, bin_name, candidates, request_bins
 
@@ -69,7 +83,17 @@ def settings() -> dict:
     cfg["per_bin"] = int(env.get("VQTEX_TB_PER_BIN", cfg["per_bin"]))
     cfg["set_path"] = env.get("VQTEX_TB_SET") or os.path.join(HERE, cfg["set"])
     cfg["report"] = env.get("VQTEX_TB_REPORT") or os.path.join(os.getcwd(), "coverage.json")
+    cfg.setdefault("memory", None)
     return cfg
+
+
+def memory_config(cfg: dict) -> MemoryConfig | None:
+    """The external-memory unit's caches, FIFO depth and bus width (``tb_config.json``'s ``memory``)."""
+    m = cfg.get("memory")
+    if m is None:
+        return None
+    return MemoryConfig(index_cache=CacheShape(**m["index_cache"]), raw_cache=CacheShape(**m["raw_cache"]),
+                        prefetch=m["prefetch"], bus_bytes=m["bus_bytes"])
 
 
 def random_phase(ts: TextureSet, cands: dict, n: int, per_bin: int, rng) -> np.ndarray:
@@ -112,6 +136,8 @@ class Coverage:
             sample = point(sample)
         self.sample = sample
         self.cross = coverage_db["vqtex.cross"]
+        self.sample_memory = CoverPoint("vqtex.memory", xf=lambda outcome: outcome, bins=["hit", "miss"])(
+            lambda outcome: None)
 
     def hit(self) -> set:
         return {key for key, count in self.cross.detailed_coverage.items() if count > 0}
@@ -145,6 +171,10 @@ class Bench:
         self.accepted: list = []            # cycle each request was taken (i_valid & i_ready)
         self.presented: list = []           # cycle its response first showed o_valid
         self.stalls: set = set()            # cycles of output backpressure or a one-port bubble
+        self.memory = memory_config(cfg)    # the external-memory unit's caches (None on chip)
+        self.history = np.zeros((0, 4), np.int64)   # every request so far (the caches' state is the stream's)
+        self.bursts: list = []              # (address, beats) of every AR handshake
+        self.memory_hits = {"hit": 0, "miss": 0}
 
     async def drive(self, req: np.ndarray):
         """Offer ``req`` on ``i_*``: valid and payload held until ``i_ready``, random idle cycles between."""
@@ -175,6 +205,10 @@ class Bench:
         dut, base = self.dut, self.received
         expected = fetch(self.ts, req[:, 0], req[:, 1], req[:, 2], req[:, 3])
         keys = request_bins(self.ts, req)
+        missed = np.zeros(len(req), bool)
+        if self.memory is not None:
+            self.history = np.concatenate([self.history, req])
+            missed = memory_plan(self.ts, self.history, self.memory).misses[-len(req):] > 0
         self.straddling += sum(key[2] for key in keys)
         n, held, last = 0, False, None
         while n < len(req):
@@ -200,6 +234,9 @@ class Bench:
                         self.mismatches.append(f"response {base + n} to request {req[n].tolist()}: got {payload}, "
                                                f"expected {want_payload} (golden.fetch)")
                     self.coverage.sample(*keys[n], held)
+                    if self.memory is not None:
+                        self.memory_hits["miss" if missed[n] else "hit"] += 1
+                        self.coverage.sample_memory("miss" if missed[n] else "hit")
                     n, held, last = n + 1, False, None
                 else:
                     held, last = True, payload
@@ -230,9 +267,45 @@ class Bench:
             self.mismatches.append(f"straddle strobe: {self.strobes['straddle']} pulses, golden has "
                                    f"{self.straddling} straddling requests")
 
+    async def watch_ar(self, size: int):
+        """The external-memory unit's AR channel: every handshake an INCR burst of the bus width,
+        inside a 4 KB page and inside the memory (``size`` bytes); recorded for :meth:`check_bursts`."""
+        dut, bus = self.dut, self.memory.bus_bytes
+        while True:
+            await ReadOnly()
+            if dut.axi_arvalid.value == 1 and dut.axi_arready.value == 1:
+                addr, beats = int(dut.axi_araddr.value), int(dut.axi_arlen.value) + 1
+                burst, beat_size = int(dut.axi_arburst.value), int(dut.axi_arsize.value)
+                self.bursts.append((addr, beats))
+                if burst != 1 or 1 << beat_size != bus:
+                    self.mismatches.append(f"AR 0x{addr:x}: burst type {burst}, {1 << beat_size}-byte beats "
+                                           f"(expected INCR of {bus})")
+                if addr // 4096 != (addr + beats * bus - 1) // 4096:
+                    self.mismatches.append(f"AR 0x{addr:x} of {beats} beats crosses a 4 KB boundary")
+                if addr + beats * bus > size:
+                    self.mismatches.append(f"AR 0x{addr:x} of {beats} beats reads past the memory ({size} bytes)")
+            await RisingEdge(dut.clk)
+
+    def check_bursts(self):
+        """The bursts are golden's misses of the whole stream, in order: every line the stream needs is
+        read, none twice while it stays in the cache (nor while its burst is in flight)."""
+        p = memory_plan(self.ts, self.history, self.memory)
+        want = list(zip(p.address.tolist(), p.beats.tolist()))
+        if self.bursts != want:
+            first = next((n for n, (a, b) in enumerate(zip(self.bursts, want)) if a != b), min(len(self.bursts), len(want)))
+            self.mismatches.append(f"{len(self.bursts)} bursts, golden's caches miss {len(want)} times; first "
+                                   f"difference at burst {first}: "
+                                   f"{self.bursts[first] if first < len(self.bursts) else None} != "
+                                   f"{want[first] if first < len(want) else None} (address, beats)")
+        return {"bursts": len(self.bursts), "golden_bursts": len(want),
+                "hit_rate": {"index": round(p.hits[0] / max(1, p.references[0]), 4),
+                             "raw": round(p.hits[1] / max(1, p.references[1]), 4)}}
+
     def check_latency(self, latency: int) -> dict:
         """A response shows ``latency`` cycles after its request was taken when no output stall or
-        one-port bubble came between (hw.texel_fetch: "presented on o in cycle t + 14"), and never sooner."""
+        one-port bubble came between (hw.texel_fetch: "presented on o in cycle t + 14"), and never sooner.
+        The external-memory unit: never sooner (``latency`` is its latency when every reference hits;
+        a miss waits for the memory, whose timing is the bus model's)."""
         taken, shown = np.array(self.accepted, np.int64), np.array(self.presented, np.int64)
         if len(taken) != len(shown):
             self.mismatches.append(f"{len(taken)} requests taken, {len(shown)} responses shown")
@@ -240,7 +313,7 @@ class Bench:
         stalls = np.array(sorted(self.stalls), np.int64)
         between = np.searchsorted(stalls, shown) - np.searchsorted(stalls, taken)
         lat = shown - taken
-        free = between == 0
+        free = (between == 0) & (self.memory is None)
         for n in np.flatnonzero((lat < latency) | (free & (lat != latency)))[:10]:
             self.mismatches.append(f"response {n}: shown {lat[n]} cycles after its request was taken, latency "
                                    f"{latency}{' (no stall between)' if free[n] else ''}")
@@ -268,9 +341,10 @@ def _int(value):
     return int(value) if value.is_resolvable else str(value)
 
 
-async def _start(dut):
-    """Clock and reset. Nothing is driven at time 0: Icarus 11 does not propagate a VPI write made
-    then to the logic that reads the port (iverilog issues #1041/#1111, cocotb #4886)."""
+async def _start(dut, image: bytes | None = None):
+    """Clock and reset; with ``image``, cocotbext-axi's AxiRamRead holding it answers the ``axi_*``
+    master. Nothing is driven at time 0: Icarus 11 does not propagate a VPI write made then to the
+    logic that reads the port (iverilog issues #1041/#1111, cocotb #4886)."""
     await Timer(1, unit="ns")
     cocotb.start_soon(Clock(dut.clk, PERIOD_NS, unit="ns").start())
     for name in ("i_valid", "i_texture", "i_level", "i_i", "i_j", "i_tag"):
@@ -282,6 +356,10 @@ async def _start(dut):
         for name in ("bus_cyc", "bus_stb", "bus_we", "bus_adr", "bus_dat_w"):
             getattr(dut, name).value = 0
         dut.bus_sel.value = 1
+    if image is not None:
+        from cocotbext.axi import AxiRamRead, AxiReadBus
+        ram = AxiRamRead(AxiReadBus.from_prefix(dut, "axi"), dut.clk, dut.rst, size=len(image))
+        ram.write(0, image)
     for _ in range(3):
         await RisingEdge(dut.clk)
     dut.rst.value = 0
@@ -329,11 +407,13 @@ async def texel_fetch_against_golden(dut):
     coverage = Coverage(reachable)
     dut._log.info("set %s: %d textures, %d reachable bins; %d requests, seed %d, stall %.2f, gap %.2f",
                   cfg["set_path"], ts.n_textures, len(reachable), cfg["requests"], cfg["seed"], cfg["stall"], cfg["gap"])
-    await _start(dut)
+    image = Layout.of(ts).image(ts) if cfg["memory"] is not None else None
+    await _start(dut, image)
     if cfg["unit"] == "loadable":
         await _load(dut, ts, cfg["geometry"], dut._log)
     bench = Bench(dut, ts, cfg, coverage, rng)
     strobes = cocotb.start_soon(bench.count_strobes()) if hasattr(dut, "straddle") else None
+    ar = cocotb.start_soon(bench.watch_ar(len(image))) if image is not None else None
 
     req = random_phase(ts, cands, cfg["requests"], cfg["per_bin"], rng)
     await bench.run(req, [None] * len(req))
@@ -342,10 +422,20 @@ async def texel_fetch_against_golden(dut):
     holes = sorted(reachable - coverage.hit(), key=str)
     closure = [(_inside_blocks(ts, cands[key[:4]][rng.integers(0, len(cands[key[:4]]), 1)], rng)[0], key[4])
                for key in holes]
+    if bench.memory is not None and bench.memory_hits["hit"] == 0 and bench.sent:
+        # a request's lines stay cached after it is read: its repeat hits (golden says whether it did)
+        closure.append((closure[-1][0] if closure else bench.history[-1], False))
     if closure:
         creq = np.array([c[0] for c in closure], np.int64)
         await bench.run(creq, [c[1] for c in closure])
     await bench.quiet(cfg["latency"] + 8)
+    memory = {}
+    if ar is not None:
+        ar.cancel()
+        memory = {**bench.check_bursts(), "memory_bins": dict(bench.memory_hits)}
+        for outcome, count in bench.memory_hits.items():
+            if not count:
+                bench.mismatches.append(f"memory coverage: no request {'missed' if outcome == 'miss' else 'hit'}")
     if strobes is not None:
         strobes.cancel()
         bench.check_strobes()
@@ -356,7 +446,7 @@ async def texel_fetch_against_golden(dut):
               "mismatches": len(bench.mismatches), "responses": bench.received,
               "straddling_requests": bench.straddling, "straddle_strobes": bench.strobes["straddle"], **timing,
               "set": os.path.basename(cfg["set_path"]), "unit": cfg["unit"], "seed": cfg["seed"],
-              "stall": cfg["stall"], "simulator": cocotb.SIM_NAME}
+              "stall": cfg["stall"], "simulator": cocotb.SIM_NAME, **memory}
     summary = coverage.report(dut._log, cfg["report"], phases)
     dut._log.info("coverage: %d of %d reachable bins (%.1f %%): %d by the random phase, %d by closure; %d responses, "
                   "%d mismatches", summary["hit"], summary["reachable"], summary["percent"], summary["hit_by_random"],

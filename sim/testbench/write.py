@@ -8,7 +8,8 @@ Into DIR go, beside or away from the Verilog (the configuration names it by a pa
 - ``run_tb.py``: its runner on cocotb's Python runner, ``SIM=icarus`` or ``SIM=verilator``, a verbatim
   copy of :mod:`vqtex.sim.testbench.run_tb`;
 - ``tb_config.json``: the top module, the unit (``specialised``, ``full``, ``loadable`` with its
-  geometry), tag width and latency, the Verilog and its Verilator waivers, the default run
+  geometry, ``external``: the cached unit with its caches' shapes), tag width and latency (the
+  cached unit's when every reference hits), the Verilog and its Verilator waivers, the default run
   (``requests``, ``seed``, ``stall``, ``gap``, ``per_bin``), the texture set and its digest;
 - ``tb_set.vqt``: the texture set, the one baked into the unit's ROMs or the one the bench loads
   through the bus (the scoreboard computes the expected responses from it at run time).
@@ -26,7 +27,7 @@ import json
 import os
 import shutil
 
-__all__ = ["FILES", "DEFAULTS", "write_testbench", "set_digest", "testbench_files"]
+__all__ = ["FILES", "DEFAULTS", "write_testbench", "set_digest", "testbench_files", "memory_dict"]
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 #: What DIR receives: the copied modules and the two data files.
@@ -45,18 +46,29 @@ def testbench_files(folder: str) -> list:
     return [os.path.join(folder, name) for name in FILES]
 
 
+def memory_dict(memory) -> dict:
+    """A :class:`golden.memory.system.MemoryConfig`'s shape as JSON: the caches (size, line, ways),
+    the FIFO depth and the bus width (what the exported cached unit is built with; its memory's
+    timing is whatever answers its AXI master)."""
+    return {"index_cache": {"size": memory.index_cache.size, "line": memory.index_cache.line,
+                            "ways": memory.index_cache.ways},
+            "raw_cache": {"size": memory.raw_cache.size, "line": memory.raw_cache.line, "ways": memory.raw_cache.ways},
+            "prefetch": memory.prefetch, "bus_bytes": memory.bus_bytes}
+
+
 def write_testbench(paths: dict, *, verilog: str, ts, top: str, unit: str, tag_width: int, latency: int,
-                    geometry=None, folder: str | None = None) -> dict:
+                    geometry=None, folder: str | None = None, memory=None) -> dict:
     """Write :data:`FILES` to ``paths[name]`` (staging paths; ``folder`` is where they end up, default
     that of ``paths``' config file, so the Verilog and its ``.vlt`` are named relative to it).
-    Returns the configuration written."""
+    ``memory``: the cached unit's MemoryConfig (``unit`` ``external``). Returns the configuration written."""
     folder = os.path.abspath(folder or os.path.dirname(paths["tb_config.json"]))
     stem = os.path.splitext(os.path.abspath(verilog))[0]
     cfg = {"top": top, "unit": unit, "tag_width": int(tag_width), "latency": int(latency),
            "verilog": os.path.relpath(os.path.abspath(verilog), folder),
            "waivers": os.path.relpath(stem + ".vlt", folder),
            "set": "tb_set.vqt", "set_digest": set_digest(ts),
-           "geometry": geometry.dumps() if geometry is not None else None, **DEFAULTS}
+           "geometry": geometry.dumps() if geometry is not None else None,
+           "memory": memory_dict(memory) if memory is not None else None, **DEFAULTS}
     for name in ("tb_texel_fetch.py", "run_tb.py"):
         shutil.copyfile(os.path.join(HERE, name), paths[name])
     with open(paths["tb_config.json"], "w") as f:

@@ -7,7 +7,7 @@ import pytest
 from vqtex.golden import filter as fx
 from vqtex.golden.render.sampling import Sampler, fold_coordinate
 
-from tests.golden.render.test_render_sampling import _frags
+from tests.support import fragments
 
 SHAPES = [[(16, 4), (8, 2), (4, 1), (2, 1), (1, 1)], [(1, 8), (1, 4), (1, 2), (1, 1)], [(32, 32)]]
 
@@ -111,21 +111,21 @@ def test_mirror_fold_keeps_the_texels():
     shapes = [[(8, 4), (4, 2), (2, 1), (1, 1)]]
     base = Sampler(shapes, ["mirror"], "trilinear")
     d = (0.05, 0.0, 0.0, 0.05)
-    ref = base.requests(_frags(s, s[::-1], d=d))
+    ref = base.requests(fragments(s, s[::-1], d=d))
     for k in (1, -3, 1e6):
-        got = base.requests(_frags(s + 2 * k, s[::-1] - 2 * k, d=d))
+        got = base.requests(fragments(s + 2 * k, s[::-1] - 2 * k, d=d))
         assert (got == ref).all()
     for bad in (np.inf, -np.inf):
-        r = base.requests(_frags([bad], [0.25], d=d))
-        assert (r == base.requests(_frags([0.0], [0.25], d=d))).all()
+        r = base.requests(fragments([bad], [0.25], d=d))
+        assert (r == base.requests(fragments([0.0], [0.25], d=d))).all()
     with pytest.raises(ValueError, match="NaN"):                # a NaN coordinate names no texel
-        base.requests(_frags([np.nan], [0.25], d=d))
+        base.requests(fragments([np.nan], [0.25], d=d))
 
 
 def test_bilinear_is_trilinear_level_zero_when_magnified():
     rng = np.random.default_rng(2)
     shapes = [[(8, 8), (4, 4), (2, 2), (1, 1)]]
-    f = _frags(rng.uniform(-2, 3, 64), rng.uniform(-2, 3, 64), w=8, d=(0.01, 0, 0, 0.01))
+    f = fragments(rng.uniform(-2, 3, 64), rng.uniform(-2, 3, 64), w=8, d=(0.01, 0, 0, 0.01))
     tex = rng.integers(0, 256, (8 * 8 + 16 + 4 + 1, 4), dtype=np.uint8)
     for addr in ("wrap", "clamp", "mirror"):
         tri = Sampler(shapes, [addr], "trilinear", stream="fixed")
@@ -153,7 +153,7 @@ def test_filter_inputs_and_place_give_the_frame():
     frame requests() + resolve() make, at any number of fractional bits."""
     rng = np.random.default_rng(3)
     shapes = [[(16, 4), (8, 2), (4, 1), (2, 1), (1, 1)]]
-    f = _frags(rng.uniform(-3, 3, 40), rng.uniform(-3, 3, 40), w=8, d=(0.3, 0.1, 0.0, 0.2))
+    f = fragments(rng.uniform(-3, 3, 40), rng.uniform(-3, 3, 40), w=8, d=(0.3, 0.1, 0.0, 0.2))
     pyr = rng.integers(0, 256, (64 + 16 + 4 + 2 + 1, 4), dtype=np.uint8)
     base = np.array([0, 64, 80, 84, 86])
     widths = np.array([16, 8, 4, 2, 1])

@@ -4,7 +4,6 @@ Every file here has a correct checksum (anyone can make one), so each change rea
 Loading must raise the one documented FormatError, quickly and without allocating much more than
 the file holds; anything it accepts must be safe to use (info's rates, every level decoded)."""
 
-import json
 import time
 import tracemalloc
 
@@ -13,54 +12,11 @@ import pytest
 
 from vqtex.golden.fetch import decode
 from vqtex.golden.format import FormatError, TextureSet
-from vqtex.sim.bench.robustness.fuzz import ALLOC_BOUND, join_vqt, mutate_vqt, run_mutations, seed_files, split_vqt, try_file
+from tests.support import HOSTILE_CASES as CASES
+from tests.support import edit_descriptor, edit_header, hostile_files, set_key
+from vqtex.sim.bench.robustness.fuzz import ALLOC_BOUND, mutate_vqt, run_mutations, try_file
 
-FILES = seed_files()
-
-
-def _edit(data: bytes, change) -> bytes:
-    """``data`` with its JSON header changed by ``change(header_dict)`` (or text), checksum recomputed."""
-    prefix, header, body = split_vqt(data)
-    obj = json.loads(header)
-    out = change(obj)
-    text = out if isinstance(out, str) else json.dumps(obj)
-    return join_vqt(prefix, text.encode(), body)
-
-
-def _descriptor_edit(data: bytes, field: str, value: int, tex: int = 0, level: int = 1) -> bytes:
-    ts = TextureSet.from_bytes(data)
-    ts.descriptors[tex, level][field] = value
-    return ts.to_bytes()
-
-
-def _set(obj, path, value):
-    for k in path[:-1]:
-        obj = obj[k]
-    obj[path[-1]] = value
-
-
-CASES = {
-    "dtype with a comma": lambda d: _edit(d, lambda h: _set(h, ["arrays", "raw_words", "dtype"], "<u4,<u4")),
-    "object dtype": lambda d: _edit(d, lambda h: _set(h, ["arrays", "codebook", "dtype"], "O")),
-    "word width of infinity": lambda d: _edit(d, lambda h: json.dumps(h).replace('"word_bits": 32', '"word_bits": Infinity')),
-    "word width 1e999": lambda d: _edit(d, lambda h: json.dumps(h).replace('"word_bits": 32', '"word_bits": 1e999')),
-    "deeply nested JSON": lambda d: _edit(d, lambda h: json.dumps(h).replace('"params": {', '"deep": ' + "[" * 100000 + "]" * 100000 + ', "params": {', 1)),
-    "sub-level count 10^9": lambda d: _edit(d, lambda h: _set(h, ["codebooks", 0, "nsub"], 10**9)),
-    "codebook of size 0": lambda d: _edit(d, lambda h: _set(h, ["codebooks", 0, "size"], 0)),
-    "missing key": lambda d: _edit(d, lambda h: h["textures"][0].pop("levels")),
-    "bool as an integer": lambda d: _edit(d, lambda h: _set(h, ["textures", 0, "index_bits"], True)),
-    "index words of rank 2": lambda d: _edit(d, lambda h: _set(h, ["arrays", "index_words", "shape"],
-                                                               [1, h["arrays"]["index_words"]["shape"][0]])),
-    "1 GiB level 0": lambda d: _descriptor_edit(d, "log2w", 31, level=0),
-    "level wider than the texture": lambda d: _descriptor_edit(d, "log2w", 12, level=0),
-    "sub-level base elsewhere": lambda d: _descriptor_edit(d, "base", 1, level=1),
-    "index width elsewhere": lambda d: _descriptor_edit(d, "index_bits", 9, level=0),
-    "plane offset elsewhere": lambda d: _descriptor_edit(d, "texel_off", 3, level=1),
-    "decode of the wrong size": lambda d: _edit(d, lambda h: _set(h, ["textures", 0, "width"], 128)),
-    "array past the end": lambda d: _edit(d, lambda h: _set(h, ["arrays", "raw_words", "offset"], 10**12)),
-    "huge integer": lambda d: _edit(d, lambda h: json.dumps(h).replace('"word_bits": 32', '"word_bits": ' + "9" * 5000)),
-    "levels past 1x1": lambda d: _edit(d, lambda h: _set(h, ["textures", 0, "levels"], 16)),
-}
+FILES = hostile_files()
 
 
 @pytest.mark.parametrize("name", sorted(CASES))
@@ -125,22 +81,22 @@ def _pruned_seed() -> bytes:
 PRUNED = _pruned_seed()
 
 PRUNED_CASES = {
-    "absent levels not a list": lambda d: _edit(d, lambda h: _set(h, ["textures", 0, "absent_levels"], 3)),
-    "absent level past the levels": lambda d: _edit(d, lambda h: _set(h, ["textures", 0, "absent_levels"], [0, 99])),
-    "absent levels out of order": lambda d: _edit(d, lambda h: h["textures"][0]["absent_levels"].reverse()),
-    "absent levels repeated": lambda d: _edit(d, lambda h: h["textures"][0]["absent_levels"].insert(0, 0)),
-    "empty absent list": lambda d: _edit(d, lambda h: _set(h, ["textures", 0, "absent_levels"], [])),
-    "absent level as a bool": lambda d: _edit(d, lambda h: _set(h, ["textures", 0, "absent_levels"], [True])),
-    "stored level listed absent": lambda d: _edit(d, lambda h: h["textures"][0]["absent_levels"].append(6)),
-    "absent level not listed": lambda d: _edit(d, lambda h: h["textures"][0]["absent_levels"].remove(0)),
-    "presence bits one byte short": lambda d: _edit(d, lambda h: (_set(h, ["arrays", "present_blocks", "shape"], [h["arrays"]["present_blocks"]["shape"][0] - 1]),
-                                                                  _set(h, ["arrays", "present_blocks", "nbytes"], h["arrays"]["present_blocks"]["nbytes"] - 1))),
-    "presence bits of rank 2": lambda d: _edit(d, lambda h: _set(h, ["arrays", "present_blocks", "shape"], [1, h["arrays"]["present_blocks"]["shape"][0]])),
-    "presence bits as words": lambda d: _edit(d, lambda h: _set(h, ["arrays", "present_blocks", "dtype"], "<u4")),
-    "presence bits past the end": lambda d: _edit(d, lambda h: _set(h, ["arrays", "present_blocks", "offset"], 10**9)),
-    "unknown array": lambda d: _edit(d, lambda h: _set(h, ["arrays", "extra"], h["arrays"]["present_blocks"])),
-    "absent level marked compressed": lambda d: _descriptor_edit(d, "compressed", 1, level=0),
-    "sub-level of an absent top elsewhere": lambda d: _descriptor_edit(d, "base", 7, level=1),
+    "absent levels not a list": lambda d: edit_header(d, lambda h: set_key(h, ["textures", 0, "absent_levels"], 3)),
+    "absent level past the levels": lambda d: edit_header(d, lambda h: set_key(h, ["textures", 0, "absent_levels"], [0, 99])),
+    "absent levels out of order": lambda d: edit_header(d, lambda h: h["textures"][0]["absent_levels"].reverse()),
+    "absent levels repeated": lambda d: edit_header(d, lambda h: h["textures"][0]["absent_levels"].insert(0, 0)),
+    "empty absent list": lambda d: edit_header(d, lambda h: set_key(h, ["textures", 0, "absent_levels"], [])),
+    "absent level as a bool": lambda d: edit_header(d, lambda h: set_key(h, ["textures", 0, "absent_levels"], [True])),
+    "stored level listed absent": lambda d: edit_header(d, lambda h: h["textures"][0]["absent_levels"].append(6)),
+    "absent level not listed": lambda d: edit_header(d, lambda h: h["textures"][0]["absent_levels"].remove(0)),
+    "presence bits one byte short": lambda d: edit_header(d, lambda h: (set_key(h, ["arrays", "present_blocks", "shape"], [h["arrays"]["present_blocks"]["shape"][0] - 1]),
+                                                                  set_key(h, ["arrays", "present_blocks", "nbytes"], h["arrays"]["present_blocks"]["nbytes"] - 1))),
+    "presence bits of rank 2": lambda d: edit_header(d, lambda h: set_key(h, ["arrays", "present_blocks", "shape"], [1, h["arrays"]["present_blocks"]["shape"][0]])),
+    "presence bits as words": lambda d: edit_header(d, lambda h: set_key(h, ["arrays", "present_blocks", "dtype"], "<u4")),
+    "presence bits past the end": lambda d: edit_header(d, lambda h: set_key(h, ["arrays", "present_blocks", "offset"], 10**9)),
+    "unknown array": lambda d: edit_header(d, lambda h: set_key(h, ["arrays", "extra"], h["arrays"]["present_blocks"])),
+    "absent level marked compressed": lambda d: edit_descriptor(d, "compressed", 1, level=0),
+    "sub-level of an absent top elsewhere": lambda d: edit_descriptor(d, "base", 7, level=1),
 }
 
 

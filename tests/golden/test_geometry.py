@@ -5,7 +5,6 @@ pvrtex's .dt files, and the TOML file form (round trips, and every way a file ca
 from __future__ import annotations
 
 import dataclasses
-import functools
 import os
 import re
 from pathlib import Path
@@ -18,30 +17,12 @@ from vqtex.golden.constants import COLORS, LAYOUTS, PVR2_COLORS
 from vqtex.golden.geometry import (BLOCK_SHAPES, MAX_DEPTH, PRESETS, Geometry, GeometryError, geometry_from,
                                    preset)
 from vqtex.golden.pvr2.pvr_set import import_dt
-from vqtex.golden.render.scene import build_texture_set, load_scene
-from tests.support import CONFIGS, REPO, combined_set, pvr2_small_sets, texture_set
+from tests.support import CONFIGS, REPO, combined_set, get_set, pvr2_small_sets, scene_set, texture_set
 
 PAPER_COLORS = ("rgb", "rgba", "intensity", "yuv411")
 
 
-# -- the sets --------------------------------------------------------------------------------------
-
-@functools.lru_cache(maxsize=None)
-def scene_set(name):
-    return build_texture_set(load_scene(name))
-
-
-@functools.lru_cache(maxsize=None)
-def get_set(name):
-    """A test set by name: a CONFIGS name, ``combined``, ``pvr2:NAME`` or ``scene:NAME``."""
-    if name == "combined":
-        return combined_set()
-    if name.startswith("pvr2:"):
-        return pvr2_small_sets()[name[5:]]
-    if name.startswith("scene:"):
-        return scene_set(name[6:])
-    return texture_set(name)
-
+# -- the sets (tests.support.get_set) --------------------------------------------------------------
 
 SET_NAMES = list(CONFIGS) + ["combined", "pvr2:rectangles_and_mip8", "pvr2:crate_argb4444_c_64_m"]
 

@@ -62,7 +62,7 @@ def test_bank_address_is_block_parity_and_one_to_one(banks):
 @pytest.mark.parametrize("lanes", [2, 4, 8])
 @pytest.mark.parametrize("name", sorted(SETS))
 def test_no_footprint_has_a_bank_conflict(name, lanes):
-    from tests.hw.filter.test_hw_filter import edge_pixels
+    from tests.support import edge_pixels
     ts = SETS[name]
     table = spec.LevelTable([ts.level_shapes(t) for t in range(ts.n_textures)])
     frac = spec.coordinate_frac_bits(table.max_log2)

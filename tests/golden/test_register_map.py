@@ -21,9 +21,8 @@ from vqtex.golden.constants import COLORS, LAYOUTS, MAX_LEVELS
 from vqtex.golden.geometry import BLOCK_SHAPES, PRESETS, Geometry, GeometryError
 from vqtex.golden.register_map import (CONTROL, DESCRIPTOR_WORDS, ID_VALUE, REGIONS, LoadError, RegisterMap,
                                        c_header, expected_reads, load_cycles, load_writes, mapped, markdown)
-from tests.support import need, texture_set
+from tests.support import get_set, need, texture_set
 
-from .test_geometry import get_set
 
 #: Region codes (the top three bits of a word address).
 CODES = {"control": 0, "descriptors": 1, "index": 2, "codebook": 3, "raw": 4}
@@ -56,7 +55,6 @@ def test_tables_as_documented():
 
 
 # -- the sets and the geometries they are loaded into ---------------------------------------------------
-
 
 
 def wide(g):

@@ -1,6 +1,7 @@
 """Texture sets for tests: a noisy test image, the configuration matrix (``CONFIGS``), several
-groups combined, the built-in sets of ``vqtex report area``, and PowerVR2 sets made byte by byte or
-from pvrtex's files."""
+groups combined, the built-in sets of ``vqtex report area``, PowerVR2 sets made byte by byte or
+from pvrtex's files, a set by name (``get_set``), the texture filter's edge-case set (``filter_set``)
+and the specialised unit's configurations (``SPECIALISE_CASES``)."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from vqtex.golden.color import DREAMCAST_YUV422
 from vqtex.golden.encode import encode
 from vqtex.golden.format import TextureSet
 from vqtex.golden.pvr2 import pvr, pvr_set
+from vqtex.golden.render.scene import build_texture_set, load_scene
 
 from .tools import PVRTEX_DATA
 
@@ -132,3 +134,82 @@ def pvr2_small_sets() -> dict:
     parts.append(pvr_set.from_dt(pvr.parse_dt(mip, decode=False)))
     crate = os.path.join(PVRTEX_DATA, "generated", "crate_argb4444_c_64_m.dt")
     return {"rectangles_and_mip8": TextureSet.combine(parts), "crate_argb4444_c_64_m": pvr_set.import_dt([crate])}
+
+
+@functools.lru_cache(maxsize=None)
+def scene_set(name):
+    return build_texture_set(load_scene(name))
+
+
+@functools.lru_cache(maxsize=None)
+def get_set(name):
+    """A test set by name: a CONFIGS name, ``combined``, ``pvr2:NAME`` or ``scene:NAME``."""
+    if name == "combined":
+        return combined_set()
+    if name.startswith("pvr2:"):
+        return pvr2_small_sets()[name[5:]]
+    if name.startswith("scene:"):
+        return scene_set(name[6:])
+    return texture_set(name)
+
+
+@functools.lru_cache(maxsize=None)
+def filter_set() -> TextureSet:
+    """Nx1 and 1xN levels (32x4 and 4x16 down to 1x1), a compressed 2-level yuv411 16x16, and a
+    texture without mipmaps."""
+    a = encode([image((32, 4), 1), image((4, 16), 2)], block=(2, 2), codebook_size=8,
+               color="rgb", mipmaps=True, raw_below=4, seed=1)
+    b = encode([image((16, 16), 3)], block=(4, 4), codebook_size=8, color="yuv411", index_bits=12,
+               mipmaps=True, raw_below=8, seed=2)
+    c = encode([image((8, 8), 4, channels=4)], block=(2, 2), codebook_size=4, color="rgba", seed=3)
+    return TextureSet.combine([a, b, c])
+
+
+@functools.lru_cache(maxsize=None)
+def three_widths() -> TextureSet:
+    """rgb 8-bit (mipmapped), intensity 12-bit, rgba 6-bit, 32-bit words: three index widths (k*b as
+    shifts and adds selected by b), straddles, raw levels, three colour formats, no yuv411."""
+    return TextureSet.combine([
+        encode([image((64, 64), 20, 3)], block=(4, 4), codebook_size=16, color="rgb", index_bits=8,
+               mipmaps=True, raw_below=4, seed=1),
+        encode([image((32, 32), 21, 1)], block=(2, 2), codebook_size=12, color="intensity", index_bits=12, seed=2),
+        encode([image((32, 32), 22, 4)], block=(4, 2), codebook_size=8, color="rgba", index_bits=6, seed=3),
+    ])
+
+
+@functools.lru_cache(maxsize=None)
+def two_widths_no_straddle() -> TextureSet:
+    """rgb 8-bit and rgb 16-bit indices in 32-bit words, no mipmaps: two widths that both divide the
+    word (one bank, the mask), one colour, no raw levels."""
+    return TextureSet.combine([
+        encode([image((32, 32), 23, 3)], block=(4, 4), codebook_size=16, color="rgb", index_bits=8, seed=4),
+        encode([image((64, 32), 24, 3)], block=(2, 2), codebook_size=16, color="rgb", index_bits=16, seed=5),
+    ])
+
+
+#: name -> (texture set, what the specialised unit (hw.features) must be): the configurations of the issue (rgb-only
+#: 8-bit, intensity, yuv411, rgba, 12-bit straddling, mixed raw/compressed, no mipmaps, mipmaps).
+SPECIALISE_CASES = {
+    "rgb8_no_mip": (lambda: texture_set("rgb_4x4_b8_k256"),
+                    dict(colors={"rgb"}, widths=(8,), straddle=False, raw=False, matrix=False, sublevels=False)),
+    "rgb8_mip": (lambda: texture_set("rgb_4x4_b8_mip"),
+                 dict(colors={"rgb"}, widths=(8,), straddle=False, raw=True, matrix=False, sublevels=True)),
+    "intensity_b5_w64": (lambda: texture_set("i8_4x2_b5_w64"),
+                         dict(colors={"intensity"}, widths=(5,), straddle=True, raw=False, matrix=False)),
+    "yuv_dreamcast_b12_mip": (lambda: texture_set("yuv_dreamcast_4x4_b12_mip"),
+                              dict(colors={"yuv411"}, widths=(12,), straddle=True, raw=True, matrix=True)),
+    "yuv_jfif_b12_mip": (lambda: texture_set("yuv_4x4_b12_mip"),
+                         dict(colors={"yuv411"}, widths=(12,), straddle=True, raw=True, matrix=True)),
+    "rgba_b7_mip_w16": (lambda: texture_set("rgba_2x2_b7_mip_w16"),
+                        dict(colors={"rgba"}, widths=(7,), straddle=True, raw=True, matrix=False)),
+    "rgb12_w16": (lambda: texture_set("rgb_4x4_b12_w16"),
+                  dict(colors={"rgb"}, widths=(12,), straddle=True, raw=False, matrix=False)),
+    "raw_only": (lambda: texture_set("raw_only_8x8_mip"),
+                 dict(colors=set(), widths=(), straddle=False, raw=True, matrix=False, compressed=False)),
+    "three_widths": (three_widths, dict(colors={"rgb", "intensity", "rgba"}, widths=(6, 8, 12), straddle=True,
+                                        raw=True, matrix=False)),
+    "two_widths_no_straddle": (two_widths_no_straddle, dict(colors={"rgb"}, widths=(8, 16), straddle=False,
+                                                            raw=False, matrix=False)),
+    "combined": (combined_set, dict(colors={"rgb", "rgba", "intensity", "yuv411"}, widths=(5, 7, 8, 12),
+                                            straddle=True, raw=True, matrix=True)),
+}

@@ -51,7 +51,7 @@ def uncompressed_set(scene, images=None):
 
 
 def scene_memory(scene_name="topspin", frame: int = 0, latency: int = 100, sizes=(1, 4, 16, 64),
-                 prefetch: int = 16, line: int = 32, ways: int = 4, uncompressed: bool = True,
+                 prefetch: int = 128, line: int = 32, ways: int = 4, uncompressed: bool = True,
                  dram: bool = True) -> dict:
     from vqtex.golden.memory.cache import CacheShape
     from vqtex.golden.memory.system import MemoryConfig
@@ -96,7 +96,7 @@ def scene_memory(scene_name="topspin", frame: int = 0, latency: int = 100, sizes
 
 
 def claim(scene_name="topspin", frame=0, sizes=(1, 2, 4, 8, 16, 32, 64), latency: int = 100,
-          prefetch: int = 16, line: int = 32, ways: int = 4, cycles: bool = True, progress=None,
+          prefetch: int = 128, line: int = 32, ways: int = 4, cycles: bool = True, progress=None,
           kind: str = "fixed") -> dict:
     """The paper's claim on one scene's frames (see the module docstring): rows of (cache_kb,
     textures "vq" or "uncompressed", hit_rate per cache, bytes_per_pixel, bytes_per_texel and, with
@@ -238,7 +238,7 @@ def main(argv=None) -> None:
                     help="--claim: the fixed-latency memory or the DDR3-1600 part")
     ap.add_argument("--latency", type=int, default=100)
     ap.add_argument("--sizes", default="1,4,16,64", help="cache sizes in KB, comma-separated")
-    ap.add_argument("--prefetch", type=int, default=16)
+    ap.add_argument("--prefetch", type=int, default=128)
     ap.add_argument("--no-uncompressed", action="store_true", help="the VQ set only")
     ap.add_argument("--no-dram", action="store_true", help="the fixed-latency memory only")
     ap.add_argument("--json", action="store_true")

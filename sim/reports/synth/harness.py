@@ -53,13 +53,19 @@ def design_rtlil(ts, *, one_port: bool = False, tag_width: int = 8, specialise: 
 
 
 def design_memories(ts, *, one_port: bool = False, tag_width: int = 8, specialise: bool = True,
-                    filter_lanes: int | None = None, index_banks: str = "parity", geometry=None) -> dict:
+                    filter_lanes: int | None = None, index_banks: str = "parity", geometry=None,
+                    memory=None) -> dict:
     """Every memory of ``TexelFetch(ts)`` -> ``(depth, width)``, named as Yosys names it inside the
     unit (``fetch.back.codebook_rom.codebook.bank0``, ``fetch.front.descriptor.table``): the banks of
     :class:`hw.banked_rom.BankedROM` are memories of their own. With ``filter_lanes``, those of
-    ``TextureFilter(ts, lanes=filter_lanes)`` (``filter.lane0.back.codebook_rom.codebook.bank0``, ...)."""
+    ``TextureFilter(ts, lanes=filter_lanes)`` (``filter.lane0.back.codebook_rom.codebook.bank0``, ...).
+    With ``memory``, those of ``CachedTexelFetch(ts, memory)`` (``unit.reader.index_tags0``,
+    ``unit.texel.back.codebook_rom.codebook.bank0``, ...)."""
     from vqtex.hw.memories import elaborate, memories
-    if filter_lanes is not None:
+    if memory is not None:
+        from vqtex.hw.memory.unit import CachedTexelFetch
+        top, prefix = CachedTexelFetch(ts, memory, tag_width=tag_width), "unit"
+    elif filter_lanes is not None:
         from vqtex.hw.filter import TextureFilter
         top, prefix = TextureFilter(ts, lanes=filter_lanes, tag_width=tag_width, index_banks=index_banks), "filter"
     else:

@@ -17,13 +17,17 @@ __all__ = ["area_report"]
 def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool = True, freq: float = 150.0,
                 seed: int = 1, workdir: str | None = None, timeout: float | None = None,
                 name: str | None = None, progress=None, specialise: bool = True,
-                filter_lanes: int | None = None, index_banks: str = "parity", geometry=None) -> dict:
+                filter_lanes: int | None = None, index_banks: str = "parity", geometry=None,
+                memory=None) -> dict:
     """Synthesize (and unless ``place`` is false, place and route) the unit holding ``ts``: the
     specialised texel-fetch unit (:class:`hw.features.Features`), or with ``specialise=False`` the
     full one; or with ``filter_lanes`` the texture filter (``hw.filter.TextureFilter``) with that many
     (specialised) lanes (``top`` in the report says which) and ``index_banks`` (``parity``: one index
     memory banked by block parity, or ``lane``: a copy per lane). With ``geometry``, the loadable
-    unit of that geometry (``ts`` is not used: the unit holds no texture data).
+    unit of that geometry (``ts`` is not used: the unit holds no texture data). With ``memory`` (a
+    :class:`golden.memory.system.MemoryConfig`), the cached unit (``hw.memory.unit.CachedTexelFetch``:
+    the index map and raw levels in external memory behind its caches, its AXI4 read master as ports;
+    only the cache shapes, FIFO depth and bus width shape the hardware).
 
     ``progress(message)``, when given, is called as each long step starts (elaboration, synthesis,
     place and route).
@@ -45,12 +49,20 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
     if filter_lanes is not None:
         from vqtex.sim.backends.design import FilterTop
         unit = FilterTop(ts, lanes=filter_lanes, tag_width=tag_width, index_banks=index_banks)
+    elif memory is not None:
+        from vqtex.hw.memory.unit import ADDRESS_STAGES
+        from vqtex.sim.backends.design import CachedTexelFetchTop
+        unit = CachedTexelFetchTop(ts, memory, tag_width=tag_width)
+        LATENCY = unit.unit.latency
     harness = Harness(ts, one_port=one_port, tag_width=tag_width, specialise=specialise, unit=unit, geometry=geometry)
     il = harness.rtlil()
     t_rtlil = time.perf_counter() - t0
     shapes = design_memories(ts, one_port=one_port, tag_width=tag_width, specialise=specialise,
-                             filter_lanes=filter_lanes, index_banks=index_banks, geometry=geometry)
-    if filter_lanes is None:
+                             filter_lanes=filter_lanes, index_banks=index_banks, geometry=geometry,
+                             memory=memory)
+    if memory is not None:
+        features = harness.unit.unit.fetch.features
+    elif filter_lanes is None:
         features = harness.unit.fetch.features
     else:                               # the filter's lanes are specialised texel-fetch units
         from vqtex.hw.features import Features
@@ -63,7 +75,8 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
         top = syn["stat"].get(HARNESS_NAME) or {}
         rep = {
             "design": name or "texture set",
-            "top": ("texel fetch" if filter_lanes is None else
+            "top": ("texel fetch, external memory (cached)" if memory is not None else
+                    "texel fetch" if filter_lanes is None else
                     f"texture filter, {filter_lanes} lane(s), index memory "
                     + ("banked by block parity" if index_banks == "parity" else "per lane")),
             "device": f"{DEVICE['device']}-{DEVICE['speed']} {DEVICE['package']}",
@@ -88,6 +101,11 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
         }
         if geometry is not None:
             rep["geometry"] = geometry.to_dict()
+        if memory is not None:
+            rep["memory"] = {"index_cache": vars(memory.index_cache) | {"sets": memory.index_cache.sets},
+                             "raw_cache": vars(memory.raw_cache) | {"sets": memory.raw_cache.sets},
+                             "prefetch": memory.prefetch, "bus_bytes": memory.bus_bytes,
+                             "address_stages": ADDRESS_STAGES}
         if place:
             progress(f"place and route (nextpnr, {freq:g} MHz), typically 20-40 s")
             pnr = run_nextpnr(folder, freq=freq, seed=seed, timeout=timeout)

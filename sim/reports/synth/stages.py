@@ -59,6 +59,17 @@ def stage_of(name: str) -> str:
     if parts[0] != "unit":
         return "harness"
     # unit.fetch.<submodule>.<signal> or unit.fetch.<signal> or unit.<port>
+    # the cached unit (hw.memory.unit): unit.unit.<reader|descriptor|address|texel>...; its texel
+    # pipeline is named as the on-chip unit's
+    if len(parts) >= 3 and parts[1] == "unit":
+        if parts[2] == "texel":
+            parts = ["unit", "fetch"] + parts[3:]
+        elif parts[2] == "reader":
+            return "cache (tag check, FIFO, AXI, data read)"
+        elif parts[2] in ("descriptor", "address"):
+            return f"cached unit's {_SUBMODULES[parts[2]]}"
+        else:
+            return "cached unit top"
     if len(parts) >= 3 and parts[1] == "fetch" and parts[2] in ("front", "back"):
         parts = parts[:2] + parts[3:]           # the two halves (hw.pipeline): named by their blocks
     if len(parts) >= 3 and parts[1] == "fetch":

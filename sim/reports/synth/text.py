@@ -16,6 +16,13 @@ def area_text(rep: dict) -> str:
         f"MULT18X18D {u.get('dsps', 0)}  CCU2C {u.get('carry', 0)}  DPR16X4 {u.get('dist_ram', 0)}  "
         f"PFUMX/L6MUX21 {u.get('wide_mux', 0)}   (unit; harness adds {rep['harness_ffs']} FF)",
     ]
+    mem_cfg = rep.get("memory")
+    if mem_cfg:
+        c = [f"{name} {d['size'] // 1024 if d['size'] >= 1024 else d['size']}{' KB' if d['size'] >= 1024 else ' B'} "
+             f"({d['sets']} sets x {d['ways']} ways of {d['line']}-byte lines)"
+             for name, d in (("index cache", mem_cfg["index_cache"]), ("raw cache", mem_cfg["raw_cache"]))]
+        lines.append(f"  external memory: {', '.join(c)}, {mem_cfg['prefetch']}-entry reference FIFO, "
+                     f"{mem_cfg['bus_bytes']}-byte AXI bus")
     for mem, d in rep.get("memories", {}).items():
         shape = f"{d['depth']} x {d['width']}" if "depth" in d else "?"
         how = f"{d['DP16KD']} DP16KD" if d["DP16KD"] else d["mapped_to"]

@@ -5,63 +5,18 @@ from collections import OrderedDict
 import numpy as np
 import pytest
 
+from tests.support import NEED_SCENE
 from vqtex.golden.format import MAX_LEVELS, unpack_indices
 from vqtex.golden.need.analysis import CacheSpec, analyse, cache_hits, distinct_requests, scene_level_shapes, scene_streams
 from vqtex.golden.render.scene import build_texture_set, parse_scene
 
-#: Three textures: a 12-bit map (straddling indices) with raw small levels, a yuv411 texture of 2x2
-#: blocks, and one no mesh uses (never touched).
-SMALL = """
-[scene]
-frames = 4
-size = [48, 40]
-[camera]
-position = [0, 1.5, 3]
-target = [0, 0.3, 0]
-[camera.orbit]
-degrees = 90
-[groups.a]
-block = "4x4"
-codebook_size = 16
-index_bits = 12
-[groups.b]
-block = "2x2"
-codebook_size = 8
-color = "yuv411"
-[[texture]]
-name = "floor"
-generator = "checker"
-size = [64, 64]
-group = "a"
-[[texture]]
-name = "unused"
-generator = "stripes"
-size = [32, 32]
-group = "a"
-[[texture]]
-name = "thing"
-generator = "marble"
-size = [64, 32]
-address = ["wrap", "clamp"]
-group = "b"
-[[mesh]]
-shape = "plane"
-texture = "floor"
-size = [8, 8]
-tiling = [4, 4]
-[[mesh]]
-shape = "top"
-texture = "thing"
-segments = 12
-spin = { degrees_per_frame = 30 }
-"""
 
 FRAMES = [0, 2, 3]
 
 
 @pytest.fixture(scope="module")
 def small():
-    scene = parse_scene(SMALL, "small.toml")
+    scene = parse_scene(NEED_SCENE, "small.toml")
     ts = build_texture_set(scene)
     streams = list(scene_streams(scene, ts, FRAMES))
     return scene, ts, streams

@@ -4,32 +4,22 @@ else is refused, and the container round-trips them."""
 import numpy as np
 import pytest
 
+from tests.support import PRUNE_SCENES, small_scene
 from vqtex.golden.fetch import RequestError, check_requests, fetch
 from vqtex.golden.format import FormatError, TextureSet
 from vqtex.golden.need.analysis import analyse, distinct_requests, scene_streams
 from vqtex.golden.need.prune import encode_needed, prune, pruned_bytes, touched_levels
 from vqtex.golden.render.frame import render_frame
 from vqtex.golden.render.pyramid import VQSource
-from vqtex.golden.render.scene import build_texture_set, builtin_scene_path, parse_scene
-
-#: built-in scene -> (its size line, a small size, the frames pruned for, a frame outside them)
-SMALL = {"topspin": ("size = [400, 400]", "size = [72, 72]", [0, 6], 25),
-         "town": ("size = [400, 300]", "size = [80, 60]", [0, 30], 59)}
+from vqtex.golden.render.scene import build_texture_set
 
 
-def small_scene(name):
-    old, new, _, _ = SMALL[name]
-    text = builtin_scene_path(name).read_text()
-    assert old in text
-    return parse_scene(text.replace(old, new), builtin_scene_path(name))
-
-
-@pytest.fixture(scope="module", params=sorted(SMALL))
+@pytest.fixture(scope="module", params=sorted(PRUNE_SCENES))
 def pruned(request):
     name = request.param
     scene = small_scene(name)
     ts = build_texture_set(scene)
-    frames = SMALL[name][2]
+    frames = PRUNE_SCENES[name][2]
     need = analyse(ts, scene_streams(scene, ts, frames))
     return name, scene, ts, frames, need, TextureSet.from_bytes(prune(ts, need).to_bytes())
 
@@ -57,7 +47,7 @@ def test_pruned_set_is_smaller_and_says_what_is_absent(pruned):
 
 def test_requests_outside_the_need_are_refused(pruned):
     name, scene, ts, frames, need, p = pruned
-    other = next(scene_streams(scene, ts, [SMALL[name][3]]))[1]
+    other = next(scene_streams(scene, ts, [PRUNE_SCENES[name][3]]))[1]
     with pytest.raises(RequestError, match="pruned from this texture set"):
         check_requests(p, *other.T)
     # exactly the requests of untouched levels or blocks are refused, one at a time

@@ -3,23 +3,13 @@
 import numpy as np
 import pytest
 
+from tests.support import fragments
 from vqtex.golden.render.camera import Camera
 from vqtex.golden.render.pyramid import ReferenceSource, build_pyramid
 from vqtex.golden.render.raster import Fragments, rasterize
 from vqtex.golden.render.sampling import (
     FRAC_BITS, WEIGHT_BITS, Sampler, address, level_of_detail, quantize_lod, trilinear_weights,
 )
-
-
-def _frags(s, t, w=None, tex=None, d=(0.0, 0.0, 0.0, 0.0)):
-    s = np.asarray(s, float)
-    t = np.asarray(t, float)
-    n = len(s)
-    w = w or n
-    z = np.zeros(n)
-    return Fragments(w, (n + w - 1) // w, np.arange(n), np.zeros(n, np.int64),
-                     np.zeros(n, np.int64) if tex is None else np.asarray(tex, np.int64),
-                     s, t, z + d[0], z + d[1], z + d[2], z + d[3])
 
 
 def _facing_quad_lod(texels_per_pixel, tex_size=256, frame=64):
@@ -54,13 +44,13 @@ def test_lod_of_known_minification(k, lod):
 def test_lod_clamps_to_the_pyramid():
     shapes = [[(8, 8), (4, 4), (2, 2), (1, 1)]]
     sm = Sampler(shapes, stream="fixed")
-    mag = _frags([0.3], [0.3], d=(0.01, 0, 0, 0.01))  # 0.08 texels per pixel: magnification
+    mag = fragments([0.3], [0.3], d=(0.01, 0, 0, 0.01))  # 0.08 texels per pixel: magnification
     r = sm.requests(mag)
     assert (r[:, 1] == [0, 0, 0, 0, 1, 1, 1, 1]).all()
-    big = _frags([0.3], [0.3], d=(100.0, 0, 0, 100.0))
+    big = fragments([0.3], [0.3], d=(100.0, 0, 0, 100.0))
     r = sm.requests(big)
     assert (r[:, 1] == 3).all()  # the 1x1 level, twice
-    flat = _frags([0.3], [0.3])  # zero derivatives: lambda = -LOD_LIMIT -> level 0
+    flat = fragments([0.3], [0.3])  # zero derivatives: lambda = -LOD_LIMIT -> level 0
     assert (sm.requests(flat)[:4, 1] == 0).all()
 
 
@@ -81,7 +71,7 @@ def test_trilinear_weights_sum_in_the_sampler_and_constant_texture_is_exact():
     img = np.full((32, 16, 3), (17, 200, 99), np.uint8)
     src = ReferenceSource([img])
     sm = Sampler([src.level_shapes(0)], mode="trilinear", stream="fixed")
-    f = _frags(rng.uniform(-3, 3, n), rng.uniform(-3, 3, n), w=100,
+    f = fragments(rng.uniform(-3, 3, n), rng.uniform(-3, 3, n), w=100,
                d=tuple(rng.uniform(-0.2, 0.2, 4)))
     f.dsdx = rng.uniform(-0.3, 0.3, n)
     f.dtdy = rng.uniform(-0.3, 0.3, n)
@@ -99,7 +89,7 @@ def test_trilinear_matches_float_reference_up_to_rounding():
     pyr = build_pyramid(img)
     n = 3000
     s, t = rng.uniform(0, 1, n), rng.uniform(0, 1, n)
-    f = _frags(s, t, w=100)
+    f = fragments(s, t, w=100)
     f.dsdx = rng.uniform(0.001, 0.2, n)
     f.dtdy = f.dsdx.copy()
     sm = Sampler([src.level_shapes(0)])
@@ -138,15 +128,15 @@ def test_wrap_and_clamp_addressing():
     sm = Sampler(shapes, address=["wrap", "clamp", ("wrap", "clamp")], mode="point")
     s = np.array([-0.01, 1.01, -0.01, 1.01, -0.01, 1.5])
     t = np.array([-0.01, 1.01, -0.01, 1.01, 1.3, 1.3])
-    r = sm.requests(_frags(s, t, tex=[0, 0, 1, 1, 2, 2]))
+    r = sm.requests(fragments(s, t, tex=[0, 0, 1, 1, 2, 2]))
     assert r[:, 2].tolist() == [7, 0, 0, 7, 7, 4]
     assert r[:, 3].tolist() == [3, 0, 0, 3, 3, 3]
     # trilinear footprint at a clamped border repeats the edge texel
     sm = Sampler(shapes[:1], address=["clamp"], stream="fixed")
-    r = sm.requests(_frags([0.0], [0.0])).reshape(8, 4)
+    r = sm.requests(fragments([0.0], [0.0])).reshape(8, 4)
     assert r[:4, 2].tolist() == [0, 0, 0, 0] and r[:4, 3].tolist() == [0, 0, 0, 0]
     sm = Sampler(shapes[:1], address=["wrap"], stream="fixed")
-    r = sm.requests(_frags([0.0], [0.0])).reshape(8, 4)
+    r = sm.requests(fragments([0.0], [0.0])).reshape(8, 4)
     assert r[:4, 2].tolist() == [7, 0, 7, 0] and r[:4, 3].tolist() == [3, 3, 0, 0]
 
 
@@ -158,7 +148,7 @@ def test_point_sampling_equals_direct_lookup():
     tex = rng.integers(0, 2, n)
     s, t = rng.uniform(-2, 3, n), rng.uniform(-2, 3, n)
     sm = Sampler([src.level_shapes(k) for k in range(2)], mode="point")
-    reqs = sm.requests(_frags(s, t, w=50, tex=tex))
+    reqs = sm.requests(fragments(s, t, w=50, tex=tex))
     assert (reqs[:, 1] == 0).all() and (reqs[:, 0] == tex).all()
     frame = sm.resolve(src.fetch(*reqs.T)).reshape(-1, 4)[:n]
     for k in range(2):

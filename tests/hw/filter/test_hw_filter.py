@@ -1,55 +1,16 @@
 """hw.filter against golden.filter on Amaranth's simulator: the footprint stage alone (many cases:
 no memories), the whole TextureFilter (tiny cases) with 1, 2, 4 and 8 lanes, backpressure, cycle counts."""
 
-import functools
-
 import numpy as np
 import pytest
 from amaranth.sim import Simulator
 
 from tests import support
 from vqtex.golden import filter as spec
-from vqtex.golden.encode import encode
-from vqtex.golden.format import TextureSet
 from vqtex.hw.filter import LATENCY, TextureFilter
 from vqtex.hw.filter.footprint import Footprint, level_table
 from vqtex.sim.backends.filter import golden_colors, simulate_filter
 from vqtex.sim.streams import ready_pattern
-
-
-@functools.lru_cache(maxsize=None)
-def filter_set() -> TextureSet:
-    """Nx1 and 1xN levels (32x4 and 4x16 down to 1x1), a compressed 2-level yuv411 16x16, and a
-    texture without mipmaps."""
-    a = encode([support.image((32, 4), 1), support.image((4, 16), 2)], block=(2, 2), codebook_size=8,
-               color="rgb", mipmaps=True, raw_below=4, seed=1)
-    b = encode([support.image((16, 16), 3)], block=(4, 4), codebook_size=8, color="yuv411", index_bits=12,
-               mipmaps=True, raw_below=8, seed=2)
-    c = encode([support.image((8, 8), 4, channels=4)], block=(2, 2), codebook_size=4, color="rgba", seed=3)
-    return TextureSet.combine([a, b, c])
-
-
-def edge_pixels(table: spec.LevelTable, frac: int, n: int, seed: int) -> dict:
-    """Random pixels weighted to the hard cases: s and t on texel edges and centres of every level,
-    at 0, +-1, +-2 and just inside; lod at exact level boundaries, at the last level, 0 (magnification)."""
-    rng = np.random.default_rng(seed)
-    tex = rng.integers(0, len(table.last), n)
-    last = table.last[tex]
-    one = 1 << frac
-
-    def coord():
-        k = rng.integers(0, 4, n)
-        lg = rng.integers(0, frac - spec.FRAC_BITS + 1, n)       # a texel (or half-texel) grid of 2^lg
-        grid = (rng.integers(-2 << lg, (2 << lg) + 1) << (frac - lg)) >> rng.integers(0, 2, n)
-        near = rng.choice([-one, 0, one, 2 * one, -2 * one + 1, 2 * one - 1, one - 1, -1], n)
-        return np.clip(np.select([k == 0, k == 1, k == 2],
-                                 [grid, grid + rng.choice([-1, 1], n), near],
-                                 rng.integers(-2 * one, 2 * one + 1, n)), -2 * one, 2 * one)
-    lod = np.select([rng.random(n) < 0.25, rng.random(n) < 0.33, rng.random(n) < 0.5],
-                    [last << spec.FRAC_BITS, (rng.integers(0, 16, n) % (last + 1)) << spec.FRAC_BITS, 0],
-                    rng.integers(0, 1 << 12, n) % ((last << spec.FRAC_BITS) + 1))
-    return {"texture": tex, "s": coord(), "t": coord(), "lod": lod, "mode": rng.integers(0, 3, n),
-            "address_s": rng.integers(0, 3, n), "address_t": rng.integers(0, 3, n)}
 
 
 def test_footprint_stage_against_golden():
@@ -58,7 +19,7 @@ def test_footprint_stage_against_golden():
     table = spec.LevelTable(shapes)
     frac = spec.coordinate_frac_bits(table.max_log2) + 1
     n = 600
-    px = edge_pixels(table, frac, n, 1)
+    px = support.edge_pixels(table, frac, n, 1)
     want = spec.footprint(table, px["texture"], px["s"], px["t"], px["lod"], px["mode"], px["address_s"],
                           px["address_t"], frac)
     dut = Footprint(table, texture_bits=3, frac=frac, tag_width=10)
@@ -101,10 +62,10 @@ def test_footprint_stage_against_golden():
 
 @pytest.mark.parametrize("lanes,stall", [(1, 0.0), (1, 0.3), (2, 0.2), (4, 0.0), (4, 0.4), (8, 0.0)])
 def test_filter_against_golden(lanes, stall):
-    ts = filter_set()
+    ts = support.filter_set()
     table = level_table(ts)
     frac = spec.coordinate_frac_bits(table.max_log2)
-    px = edge_pixels(table, frac, 60 if lanes > 1 else 40, lanes * 10 + int(stall * 10))
+    px = support.edge_pixels(table, frac, 60 if lanes > 1 else 40, lanes * 10 + int(stall * 10))
     res = simulate_filter(ts, px, backend="pysim", lanes=lanes, stall=stall, seed=lanes)
     want = golden_colors(ts, px, frac)
     assert (res.colors == want).all()
@@ -120,10 +81,10 @@ def test_filter_against_golden(lanes, stall):
 
 def test_filter_with_more_fractional_bits_and_small_banks():
     """A wider s and t (frac above the minimum) and 8-word memory banks give the same colours."""
-    ts = filter_set()
+    ts = support.filter_set()
     table = level_table(ts)
     frac = spec.coordinate_frac_bits(table.max_log2) + 3
-    px = edge_pixels(table, frac, 30, 5)
+    px = support.edge_pixels(table, frac, 30, 5)
     res = simulate_filter(ts, px, backend="pysim", lanes=2, frac=frac)
     assert (res.colors == golden_colors(ts, px, frac)).all()
     from vqtex.sim.backends.filter import run_pysim
@@ -132,7 +93,7 @@ def test_filter_with_more_fractional_bits_and_small_banks():
 
 
 def test_filter_rejects_bad_configuration():
-    ts = filter_set()
+    ts = support.filter_set()
     with pytest.raises(ValueError):
         TextureFilter(ts, lanes=3)
     with pytest.raises(ValueError):

@@ -18,7 +18,7 @@ from vqtex.sim.backends.design import FIELDS
 from vqtex.sim.backends.filter import golden_colors, simulate_filter
 from vqtex.sim.backends.pysim import run_stream
 
-from .test_hw_filter import edge_pixels, filter_set
+from tests.support import edge_pixels, filter_set
 
 
 def _pixels(ts, n, seed):

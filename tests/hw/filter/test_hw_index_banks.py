@@ -10,7 +10,7 @@ from amaranth.lib.wiring import In, Out
 from amaranth.sim import Simulator
 
 from tests import support
-from tests.hw.filter.test_hw_filter import edge_pixels
+from tests.support import edge_pixels
 from vqtex.golden import filter as spec
 from vqtex.golden import index_banks as golden_banks
 from vqtex.golden.format import TextureSet

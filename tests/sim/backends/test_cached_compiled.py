@@ -96,7 +96,7 @@ def test_scene_frame_equals_golden(backend):
     _need(backend)
     from vqtex.golden.render.frame import frame_requests
     from vqtex.golden.render.scene import build_texture_set, parse_scene
-    from tests.golden.need.test_need import SMALL as SCENE_TOML
+    from tests.support import NEED_SCENE as SCENE_TOML
     scene = parse_scene(SCENE_TOML, "small.toml")
     ts = build_texture_set(scene)
     req, _ = frame_requests(scene, 1, ts, "trilinear")
@@ -105,6 +105,22 @@ def test_scene_frame_equals_golden(backend):
         m = check(ts, req, MemoryConfig(**SCENE, latency=latency), backend, stall, 1)
         assert m["bursts"] > 0
     check(ts, req, MemoryConfig(**SCENE, kind="dram"), backend, 0.0, 0)
+
+
+def test_default_caches_equal_golden():
+    """The command line's default caches (16 KB index, 4 KB raw, 32-byte lines, 4 ways: 640 lines)
+    build on CXXRTL (in about 30 s: the caches' state is LUT RAM, hw.memory.reader) and match golden
+    on a stream over a set larger than both caches (every set's lines replaced)."""
+    need("g++")
+    from vqtex.golden.encode import encode
+    from tests.support.sets import image
+    ts = encode([image((256, 256), 20), image((256, 256), 21)], block=(2, 2), codebook_size=16, color="rgb",
+                index_bits=12, mipmaps=True, raw_below=64, seed=3)
+    assert len(ts.index_words) * 4 > 2 * 16384 and len(ts.raw_words) * 4 > 2 * 4096
+    req = stream(ts, 8000, seed=9)
+    for latency, stall in ((1, 0.0), (60, 0.3)):
+        m = check(ts, req, MemoryConfig(latency=latency), "cxxrtl", stall, latency)
+        assert m["bursts"] > (16384 + 4096) // 32 and m["stall_cycles"]["miss"] > 0     # more fills than lines
 
 
 def test_axi_slave_refuses_what_it_does_not_hold():
@@ -143,7 +159,7 @@ def test_verilator_sees_no_combinational_cycle(tmp_path):
     ts = texture_set("yuv_4x4_b12_mip")
     for prefetch in (1, 16):
         src = tmp_path / f"cached{prefetch}.v"
-        src.write_text(export_cached_verilog(ts, MemoryConfig(**SMALL, prefetch=prefetch)))
+        src.write_text(export_cached_verilog(ts, MemoryConfig(**SMALL, prefetch=prefetch))[0])
         out = subprocess.run([find_tool("verilator"), "--lint-only", "-Wno-fatal", "-Wno-lint", "-Wno-style",
                               "--top-module", "cached_texel_fetch", str(src)], capture_output=True, text=True)
         assert out.returncode == 0, out.stderr[-2000:]

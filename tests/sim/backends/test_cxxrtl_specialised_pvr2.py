@@ -9,7 +9,9 @@ import pytest
 from amaranth.back import rtlil
 
 from tests import support
-from tests.hw.test_hw_texel_fetch_pvr2 import SMALL
+from tests.support import pvr2_small_sets
+
+SMALL = pvr2_small_sets()
 from tests.support import assert_same, back_to_back_requests, need, random_requests, shared_cache
 from vqtex.golden.pvr2 import pvr, pvr_set
 from vqtex.golden.fetch import fetch

@@ -6,7 +6,7 @@ Verilator the same as CXXRTL."""
 import numpy as np
 import pytest
 
-from tests.hw.filter.test_hw_filter import edge_pixels, filter_set
+from tests.support import edge_pixels, filter_set
 from tests.support import need, shared_cache
 from vqtex.golden import filter as spec
 from vqtex.hw.filter import LATENCY

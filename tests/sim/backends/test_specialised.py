@@ -1,4 +1,4 @@
-"""Every specialised configuration of TexelFetch (tests/hw/test_hw_specialise.py's CASES) bit-exact
+"""Every specialised configuration of TexelFetch (tests.support's SPECIALISE_CASES) bit-exact
 against golden on the compiled CXXRTL backend with random backpressure, the full unit beside it, the
 build cache keeping the two apart, and the exported Verilog of the most specialised units under
 Icarus Verilog."""
@@ -7,7 +7,7 @@ Icarus Verilog."""
 import numpy as np
 import pytest
 
-from tests.hw.test_hw_specialise import CASES
+from tests.support import SPECIALISE_CASES as CASES
 from tests.support import assert_same, back_to_back_requests, need, random_requests, shared_cache
 from vqtex.golden.fetch import fetch
 from vqtex.sim.backends.interface import simulate
@@ -78,7 +78,7 @@ def test_pruned_small_town_specialised_on_cxxrtl():
     renumbered narrower): its specialised unit is no wider than the unpruned set's, and answers
     those frames' requests on the compiled backend exactly as golden answers the unpruned set."""
     need("g++")
-    from tests.golden.need.test_prune import SMALL, small_scene
+    from tests.support import PRUNE_SCENES as SMALL, small_scene
     from vqtex.golden.need.analysis import analyse, scene_streams
     from vqtex.golden.need.prune import prune
     from vqtex.golden.render.scene import build_texture_set

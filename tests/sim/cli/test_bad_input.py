@@ -7,7 +7,7 @@ import os
 import numpy as np
 import pytest
 
-from tests.sim.cli.test_render import TINY
+from tests.support import TINY_SCENE
 from vqtex.golden.render.imageio import write_image
 from vqtex.sim.backends import toolchain
 from vqtex.sim.cli import main
@@ -97,7 +97,7 @@ def test_encode_warnings(tmp_path, capsys):
 
 def test_frames_beyond_the_animation_warn_and_clamp(tmp_path, capsys):
     scene = tmp_path / "tiny.toml"
-    scene.write_text(TINY)
+    scene.write_text(TINY_SCENE)
     code, out, err = _run(capsys, "render", scene, "-o", tmp_path / "f.png", "--frames", "1:9", "--json")
     assert code == 0
     assert _warnings(err) == ["vqtex: warning: --frames 1:9: the scene has 2 frames (0..1); rendering 1 of them"]

@@ -160,10 +160,10 @@ def test_hostile_vqt_is_one_line_and_exit_2_within_a_second(tmp_path, capsys):
     """info and decode on a file whose header nests 100000 deep and one whose level 0 claims 2^31
     columns: one line, exit 2, no output file."""
     import time
-    from tests.golden.test_format_hostile import CASES, FILES
+    from tests.support import HOSTILE_CASES, hostile_files
     for k, name in enumerate(("deeply nested JSON", "1 GiB level 0", "sub-level count 10^9")):
         path = tmp_path / f"bad{k}.vqt"
-        path.write_bytes(CASES[name](FILES[0]))
+        path.write_bytes(HOSTILE_CASES[name](hostile_files()[0]))
         for argv in (["info", str(path)], ["decode", str(path), "-o", str(tmp_path / "o.png")]):
             t0 = time.perf_counter()
             code, stdout, stderr = _run(capsys, *argv)

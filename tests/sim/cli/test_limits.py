@@ -241,9 +241,9 @@ def test_a_scene_beyond_the_rasterizer_limits_is_one_line(tmp_path, capsys):
     """A floor of 1e9 units (the scene reader's largest magnitude) through the view of a camera whose
     near plane is at 1e-6: clipped, beyond raster.CLIP_RANGE times the near plane; the command answers
     with one line (a SceneError), not a traceback and not half a frame."""
-    from tests.sim.cli.test_render import TINY
+    from tests.support import TINY_SCENE
     scene = tmp_path / "huge.toml"
-    scene.write_text(TINY.replace("size = [6.0, 6.0]", "size = [1e9, 1e9]").replace("fov = 50", "fov = 50\nnear = 1e-6"))
+    scene.write_text(TINY_SCENE.replace("size = [6.0, 6.0]", "size = [1e9, 1e9]").replace("fov = 50", "fov = 50\nnear = 1e-6"))
     code, out, err = run_cli(capsys, "render", scene, "--frames", "0", "-o", tmp_path / "f.png")
     assert code == 2 and out == "" and err.count("\n") == 1, err
     assert "frame 0" in err and "needs clipping" in err, err

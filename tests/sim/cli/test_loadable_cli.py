@@ -18,7 +18,7 @@ from vqtex.golden.geometry import PRESETS, Geometry
 from vqtex.golden.register_map import load_cycles, load_writes
 from vqtex.sim.backends.toolchain import using_cache
 
-from .test_pvr2_cli import crates_scene
+from tests.support import crates_scene
 
 
 @pytest.fixture(scope="module", autouse=True)

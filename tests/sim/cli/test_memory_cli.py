@@ -96,7 +96,7 @@ def test_render_with_external_memory(capsys, tmp_path, backend):
     from vqtex.golden.render.frame import frame_requests
     from vqtex.golden.render.scene import build_texture_set, parse_scene
     from vqtex.sim.backends.cycle_model import run_cached
-    from tests.golden.need.test_need import SMALL
+    from tests.support import NEED_SCENE as SMALL
     scene_file = tmp_path / "small.toml"
     scene_file.write_text(SMALL)
     with shared_cache():
@@ -121,3 +121,24 @@ def test_render_with_external_memory(capsys, tmp_path, backend):
         assert frame["identical_to_golden"] and model["bursts"] > 0
     assert_one_error(capsys, ["render", scene_file, "--frames", "1", "-o", tmp_path / "g.png", "--memory", "external",
                               "--compare-fixed"], "not with --compare-fixed")
+
+
+def test_demo_with_external_memory(capsys, tmp_path):
+    """demo --memory external: topspin's frame through the cached unit (its default caches) on the
+    default backend, identical to golden, with the memory report render prints; --unit is refused."""
+    need("g++")
+    with shared_cache():
+        code, text, err = run_cli(capsys, "demo", "-o", tmp_path / "d", "--frames", "0", "--memory", "external")
+        assert code == 0, err
+        lines = text.splitlines()
+        assert "RTL (cxxrtl, cached unit) frames identical to golden: yes" in text
+        mem = [ln for ln in lines if ln.strip().startswith("external memory (index cache 16 KB")]
+        assert len(mem) == 1 and "bytes read per texel" in mem[0] and "hit rates index" in mem[0]
+        rep = json.loads((tmp_path / "d" / "report.json").read_text())
+        assert rep["unit"] == "cached" and rep["identical_to_golden"]
+        m = rep["memory"]
+        assert 0.99 < m["hit_rate"]["index"] < 1 and 0.99 < m["hit_rate"]["raw"] < 1
+        assert m["bytes_per_pixel"] > 0 and rep["frames"][0]["stall_cycles"]["memory"] > 0
+        assert rep["frames"][0]["latency"] == 18
+    assert_one_error(capsys, ["demo", "-o", tmp_path / "e", "--memory", "external", "--unit", "full"], "no --unit")
+    assert_one_error(capsys, ["demo", "-o", tmp_path / "e", "--cache-size", "4096"], "needs --memory external")

@@ -3,13 +3,12 @@ reading a .dt too (info, decode, sim, export, report's input), scenes naming .dt
 damaged or foreign .dt files as one-line errors with exit status 2."""
 
 import json
-import shutil
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from tests.support import PVRTEX_DATA, need, shared_cache_dir
+from tests.support import PVRTEX_DATA, crates_scene, need, shared_cache_dir
 from vqtex.golden.pvr2 import pvr, pvr_set
 from vqtex.golden.format import TextureSet
 from vqtex.golden.render.imageio import read_image
@@ -71,38 +70,6 @@ def test_export_a_dt_lint_clean(capsys, tmp_path):
     code, text, err = _run(capsys, "export", YUV_MIP, "-o", out, "--lint", "--json")
     assert code == 0, err
     assert json.loads(text)["lint"] == "clean" and "module texel_fetch" in out.read_text()
-
-
-def crates_scene(folder):
-    """A scene of two pvrtex .dt textures (a crate on a floor) written into ``folder``; its path."""
-    for p in (YUV_MIP, ARGB):
-        shutil.copy(p, folder / p.name)
-    (folder / "crates.toml").write_text(f'''
-[scene]
-name = "crates"
-frames = 1
-size = [48, 48]
-[camera]
-position = [0.0, 1.2, 3.0]
-target = [0.0, 0.0, 0.0]
-fov = 45
-[[texture]]
-name = "crate"
-file = "{YUV_MIP.name}"
-[[texture]]
-name = "floor"
-file = "{ARGB.name}"
-[[mesh]]
-name = "box"
-shape = "box"
-texture = "crate"
-[[mesh]]
-name = "floor"
-shape = "plane"
-texture = "floor"
-translate = [0.0, -0.6, 0.0]
-''')
-    return folder / "crates.toml"
 
 
 def test_render_a_scene_naming_dt_textures(capsys, tmp_path):

@@ -5,71 +5,15 @@ import json
 import numpy as np
 import pytest
 
+from tests.support import TINY_SCENE
 from vqtex.golden.render.imageio import read_image
 from vqtex.sim.cli import main
-
-TINY = """
-[scene]
-name = "tiny"
-frames = 2
-size = [20, 16]
-background = [0, 0, 0]
-
-[camera]
-position = [0.0, 1.2, 2.2]
-target = [0.0, 0.0, 0.0]
-fov = 50
-
-[camera.orbit]
-center = [0.0, 0.0, 0.0]
-degrees = 90
-
-[groups.a]
-block = "4x4"
-codebook_size = 16
-color = "yuv411"
-index_bits = 12
-mipmaps = true
-
-[groups.b]
-block = "2x2"
-codebook_size = 8
-color = "rgb"
-index_bits = 5
-mipmaps = false
-
-[[texture]]
-name = "wood"
-generator = "wood"
-size = [64, 64]
-group = "a"
-
-[[texture]]
-name = "check"
-generator = "checker"
-size = [32, 32]
-group = "b"
-address = "clamp"
-
-[[mesh]]
-name = "floor"
-shape = "plane"
-texture = "wood"
-size = [6.0, 6.0]
-tiling = [4.0, 4.0]
-
-[[mesh]]
-name = "box"
-shape = "box"
-texture = "check"
-size = [0.8, 0.8, 0.8]
-"""
 
 
 @pytest.fixture
 def scene_file(tmp_path):
     p = tmp_path / "tiny.toml"
-    p.write_text(TINY)
+    p.write_text(TINY_SCENE)
     return p
 
 
@@ -93,9 +37,9 @@ def test_rtl_frames_identical_to_golden(tmp_path, scene_file, capsys, mode):
 
 def test_scene_errors_are_one_line(tmp_path, scene_file, capsys):
     bad = tmp_path / "bad.toml"
-    cases = [TINY.replace('size = [64, 64]', 'size = [60, 64]'),
-             TINY.replace('shape = "box"', 'shape = "teapot"'),
-             TINY + "\n[bogus]\nx = 1\n",
+    cases = [TINY_SCENE.replace('size = [64, 64]', 'size = [60, 64]'),
+             TINY_SCENE.replace('shape = "box"', 'shape = "teapot"'),
+             TINY_SCENE + "\n[bogus]\nx = 1\n",
              "not toml [[["]
     for text in cases:
         bad.write_text(text)

@@ -6,13 +6,13 @@ import json
 import numpy as np
 import pytest
 
-from tests.sim.cli.test_render import TINY
+from tests.support import TINY_SCENE
 from tests.support import need, shared_cache
 from vqtex.golden.render.imageio import read_image
 from vqtex.sim.cli import main
 
 #: The tiny scene with a mirrored axis, and smaller (pysim runs every cycle in Python).
-MIRRORED = TINY.replace('address = "clamp"', 'address = ["mirror", "clamp"]').replace("size = [20, 16]",
+MIRRORED = TINY_SCENE.replace('address = "clamp"', 'address = ["mirror", "clamp"]').replace("size = [20, 16]",
                                                                                        "size = [12, 10]")
 
 
@@ -109,7 +109,7 @@ def test_export_filter_verilog_lint_clean(tmp_path, capsys, lanes, banks):
     banked index memory), Verilator lint clean with the export's waivers; its ports are the whole
     payloads and the strobes."""
     need("verilator")
-    from tests.hw.filter.test_hw_filter import filter_set
+    from tests.support import filter_set
     vqt = tmp_path / "set.vqt"
     filter_set().save(str(vqt))
     out = tmp_path / "tf.sv"

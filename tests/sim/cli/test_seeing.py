@@ -8,7 +8,7 @@ import sys
 import numpy as np
 import pytest
 
-from tests.sim.cli.test_render import TINY
+from tests.support import TINY_SCENE
 from vqtex.golden.encode import reference_pyramid
 from vqtex.golden.fetch import decode
 from vqtex.golden.format import TextureSet
@@ -58,7 +58,7 @@ def test_encode_and_info_psnr_per_texture_and_level(tmp_path, capsys):
 
 def test_render_reference_and_difference(tmp_path, capsys):
     scene_file = tmp_path / "tiny.toml"                # bigger frames, 4 codewords: a visible error
-    scene_file.write_text(TINY.replace("size = [20, 16]", "size = [48, 40]").replace("codebook_size = 16", "codebook_size = 4"))
+    scene_file.write_text(TINY_SCENE.replace("size = [20, 16]", "size = [48, 40]").replace("codebook_size = 16", "codebook_size = 4"))
     code, out, err = _run(capsys, "render", scene_file, "-o", tmp_path / "f.png", "--reference", tmp_path / "ref.png",
                           "--diff", tmp_path / "d.png", "--diff-scale", "16", "--json")
     assert code == 0, err

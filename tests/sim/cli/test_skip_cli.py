@@ -9,14 +9,14 @@ from vqtex.golden.render.imageio import read_image
 from vqtex.golden.render.scene import parse_scene
 from vqtex.hw.texel_fetch import LATENCY
 from vqtex.sim.cli import main
-from tests.sim.cli.test_render import TINY
+from tests.support import TINY_SCENE
 from tests.support import need, shared_cache_dir
 
 
 @pytest.fixture
 def scene_file(tmp_path):
     p = tmp_path / "tiny.toml"
-    p.write_text(TINY)
+    p.write_text(TINY_SCENE)
     return p
 
 
@@ -108,7 +108,7 @@ def test_bench_skip_on_a_small_scene(cache, capsys):
     need("g++")
     from vqtex.sim.bench.scenes.skip import run
     capsys.readouterr()
-    rows = run(json_out=True, scenes=[parse_scene(TINY, "tiny.toml")])          # its two frames
+    rows = run(json_out=True, scenes=[parse_scene(TINY_SCENE, "tiny.toml")])          # its two frames
     assert json.loads(capsys.readouterr().out) == {"skip": json.loads(json.dumps(rows))}
     row = rows[0]
     assert row["frames"] == 2 and row["frames_identical"] is True

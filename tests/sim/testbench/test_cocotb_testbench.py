@@ -10,9 +10,12 @@ PowerVR2 (four formats, twiddled maps).
 - Each run: every response equal to golden.fetch, none lost or extra, ``stall_output`` equal to
   ``o_valid & ~o_ready`` every cycle, one ``straddle`` strobe per straddling request, and 100 % of the
   coverage bins the set can reach, their number checked here against ``bins.reachable`` of the set.
+- The external-memory (cached) unit, ``--memory external``: its AXI master answered by cocotbext-axi's
+  AxiRamRead holding the set's memory image, on Icarus (blocking and a 4-entry FIFO) and Verilator:
+  the same checks, the AXI protocol and the bursts equal to golden's caches' misses.
 - Negative controls: a Verilog whose red and green outputs are swapped fails the scoreboard; a baked
   unit refuses another set; closure hits the stall bins when the random phase cannot (no
-  backpressure at all).
+  backpressure at all); the cached unit's bench told another cache shape fails on the bursts.
 
 A few hundred requests per run: seconds on Icarus; a Verilator build is most of its test's time.
 """
@@ -244,3 +247,73 @@ def test_latency_check_can_fail(capsys, tmp_path):
         json.dump(cfg, f)
     code, out, cov = _run(folder, "icarus", "--stall", 0)
     assert code == 1 and f"cycles after its request was taken, latency {LATENCY + 1}" in out, out[-4000:]
+
+
+# -- the external-memory (cached) unit: its AXI master served by cocotbext-axi's AxiRamRead ----------
+
+#: Small caches (the Verilog's size and build time grow with the lines): 8 + 4 lines of 16 bytes.
+CACHES = ("--cache-size", 128, "--raw-cache-size", 64, "--cache-line", 16, "--cache-ways", 2, "--bus-bytes", 16)
+
+
+def _external(capsys, tmp_path, prefetch: int) -> str:
+    _need_axi()
+    return _export(capsys, tmp_path, "yuv12_straddle", "--memory", "external", *CACHES, "--prefetch", prefetch)
+
+
+def _need_axi():
+    need_python("cocotbext.axi")
+
+
+@pytest.mark.parametrize("sim,prefetch", [("icarus", 1), ("icarus", 4), ("verilator", 4)])
+def test_external_memory_unit(capsys, tmp_path, sim, prefetch):
+    """The cached unit (blocking, and a 4-entry FIFO) answered by AxiRamRead holding the set's memory
+    image: every response equal to golden.fetch, 100 % of the cross, requests that hit and that
+    missed, every AR an INCR burst of the bus inside 4 KB and the memory, the bursts exactly golden's
+    misses in order, no response sooner than the all-hit latency."""
+    _need(sim)
+    ts = SETS["yuv12_straddle"]()
+    folder = _external(capsys, tmp_path, prefetch)
+    with open(os.path.join(folder, "tb_config.json")) as f:
+        cfg = json.load(f)
+    assert cfg["unit"] == "external" and cfg["memory"]["prefetch"] == prefetch and cfg["latency"] == LATENCY + 4
+    code, out, cov = _run(folder, sim)
+    assert code == 0 and cov is not None and f"run_tb: {sim}: PASS" in out, out[-6000:]
+    want = reachable(ts)
+    assert cov["hit"] == cov["reachable"] == len(want) and cov["mismatches"] == 0
+    assert cov["responses"] == cov["requests"]["random"] + cov["requests"]["closure"]
+    assert cov["bursts"] == cov["golden_bursts"] > 0
+    assert cov["memory_bins"]["hit"] > 0 and cov["memory_bins"]["miss"] > 0
+    assert sum(cov["memory_bins"].values()) == cov["responses"]
+    assert cov["latency_min"] >= LATENCY + 4 and cov["latency_max"] > LATENCY + 4      # misses wait for memory
+
+
+def test_external_memory_burst_check_can_fail(capsys, tmp_path):
+    """Negative control of the burst check: the bench told the index cache has one way (the unit has
+    two) expects other misses than the unit makes, and fails naming the first burst that differs."""
+    _need("icarus")
+    folder = _external(capsys, tmp_path, 4)
+    path = os.path.join(folder, "tb_config.json")
+    with open(path) as f:
+        cfg = json.load(f)
+    cfg["memory"]["index_cache"]["ways"] = 1
+    with open(path, "w") as f:
+        json.dump(cfg, f)
+    code, out, cov = _run(folder, "icarus")
+    assert code == 1 and "golden's caches miss" in out and "first difference at burst" in out, out[-4000:]
+    assert cov["bursts"] != cov["golden_bursts"] and cov["mismatches"] == 1
+
+
+def test_export_external_memory_refusals(capsys, tmp_path):
+    from tests.support import assert_one_error
+    vqt = tmp_path / "s.vqt"
+    SETS["rgb8"]().save(vqt)
+    out = tmp_path / "u.sv"
+    for extra, pattern in ((("--one-port",), "--memory external exports the cached unit"),
+                           (("--unit", "full"), "--memory external exports the cached unit"),
+                           (("--dialect", "v2005"), "--memory external exports the cached unit"),
+                           (("--memory-latency", "30"), "--memory-latency: the memory's timing is not part"),
+                           (("--memory-model", "dram"), "--memory-model: the memory's timing is not part"),
+                           (("--cache-line", "8192"), "--cache-line")):
+        assert_one_error(capsys, ["export", vqt, "--memory", "external", "-o", out, *extra], pattern)
+    assert_one_error(capsys, ["export", vqt, "--prefetch", "4", "-o", out], "--prefetch needs --memory external")
+    assert not out.exists()

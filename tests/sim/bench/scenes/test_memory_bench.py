@@ -7,7 +7,7 @@ from vqtex.golden.fetch import decode
 from vqtex.golden.render.scene import build_texture_set, parse_scene
 from vqtex.sim.bench.scenes.memory import claim, plot_claim, scene_memory, uncompressed_set
 
-from tests.golden.need.test_need import SMALL
+from tests.support import NEED_SCENE as SMALL
 
 
 def test_uncompressed_set_is_every_level_raw():

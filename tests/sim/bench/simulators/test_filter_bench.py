@@ -1,6 +1,6 @@
 """``vqtex bench sim``'s filter table on a few pixels: rates reported, colours and cycles agree."""
 
-from tests.hw.filter.test_hw_filter import edge_pixels, filter_set
+from tests.support import edge_pixels, filter_set
 from tests.support import need, shared_cache
 from vqtex.golden import filter as spec
 from vqtex.hw.filter import LATENCY

@@ -2,7 +2,7 @@
 
 import os
 
-from tests.hw.test_hw_specialise import CASES
+from tests.support import SPECIALISE_CASES as CASES
 from tests.support import need, shared_cache_dir
 
 

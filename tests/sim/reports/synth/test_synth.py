@@ -303,3 +303,75 @@ def test_rom_ports_two_reads_of_a_512_deep_rom_cost_a_second_copy():
     from vqtex.sim.reports.rom_ports import rom_cost
     assert rom_cost(512, 36, 1)["DP16KD"] == 1 and rom_cost(512, 36, 2)["DP16KD"] == 2
     assert rom_cost(1024, 36, 1)["DP16KD"] == rom_cost(1024, 36, 2)["DP16KD"] == 2
+
+
+# ---------------------------------------------------------------------------------------------
+# the cached unit (--memory external): its caches' state in LUT RAM
+
+#: Small caches (the tiny set's 2 KB index map and 3 KB of raw words are larger than both).
+SMALL_CACHES = ("--cache-size", "512", "--raw-cache-size", "256", "--prefetch", "4")
+
+
+def _small_caches():
+    from vqtex.golden.memory.cache import CacheShape
+    from vqtex.golden.memory.system import MemoryConfig
+    return MemoryConfig(index_cache=CacheShape(512, 32, 4), raw_cache=CacheShape(256, 32, 4), prefetch=4)
+
+
+def test_cached_harness_and_memories():
+    from vqtex.sim.backends.design import CachedTexelFetchTop
+    ts = builtin_set("tiny")
+    cfg = _small_caches()
+    top = CachedTexelFetchTop(ts, cfg)
+    harness = synth.Harness(ts, unit=top)
+    assert harness.port_bits == sum(len(getattr(top, n)) for n in top.signature.members)
+    assert "vqtex_harness.unit" in harness.rtlil()
+    mems = synth.design_memories(ts, memory=cfg)
+    # the index cache's rows in two banks by set parity (4 sets: 2 rows each), the raw cache's in one
+    # (2 sets); a row holds every way: 4 x (tag, age) and the 4 valid bits
+    tags = mems["unit.reader.index_tags0"]
+    assert tags[0] == 2 and mems["unit.reader.index_tags1"] == tags and mems["unit.reader.raw_tags"][0] == 2
+    assert tags[1] == 4 * (32 - 5 - 2 + 2) + 4
+    for field in ("issued", "retired", "alloc", "fill"):
+        assert mems[f"unit.reader.index_{field}0"][0] == 2 and mems[f"unit.reader.raw_{field}"][0] == 2
+    assert mems["unit.reader.references"][0] == 4
+    # a row per 16-byte beat, two banks (words w and w + 1 read one port each)
+    assert mems["unit.reader.index_lines0"] == mems["unit.reader.index_lines1"] == (16, 128)
+    # the texel pipeline behind the caches holds the codebook (and no index or raw memory)
+    assert any(n.startswith("unit.texel.back.codebook_rom.codebook") for n in mems)
+    assert not any(".index_reader." in n or ".codebook_rom.raw." in n for n in mems)
+    assert synth.stage_of("unit.unit.reader.index_tags0") == "cache (tag check, FIFO, AXI, data read)"
+    assert synth.stage_of("unit.unit.texel.back.codebook_rom.window1") == "codebook ROM"
+
+
+@pytest.mark.parametrize("extra, pattern", [
+    (["--memory-latency", "40"], "--memory-latency is the memory's timing"),
+    (["--memory-model", "dram"], "--memory-model is the memory's timing"),
+    (["--unit", "full"], "no --one-port, --unit or --filter-lanes"),
+    (["--one-port"], "no --one-port, --unit or --filter-lanes"),
+    (["--filter-lanes", "2"], "no --one-port, --unit or --filter-lanes"),
+    (["--cache-line", "128", "--cache-size", "256"], "--memory external: a 256-byte cache cannot hold"),
+])
+def test_memory_external_refuses(capsys, extra, pattern):
+    code, out, err = _run(capsys, "report", "area", "--builtin", "tiny", "--memory", "external", *extra)
+    assert code == 2 and out == "" and err.count("\n") == 1 and pattern in err, err
+
+
+def test_report_area_memory_external_synthesis(tmp_path, capsys):
+    """Synthesis only (no place and route): the caches' per-line state, the reference FIFO and the
+    queue of bursts in flight are LUT RAM (TRELLIS_DPR16X4), forced (``ram_style``), where Yosys's
+    cost model alone may choose otherwise (the lines, 32 rows here, are LUT RAM by its choice)."""
+    _need_tools()
+    code, out, err = _run(capsys, "report", "area", "--builtin", "tiny", "--memory", "external", *SMALL_CACHES,
+                          "--no-pnr", "--json")
+    assert code == 0, err
+    rep = json.loads(out)
+    assert rep["top"] == "texel fetch, external memory (cached)" and rep["latency"] == 18
+    assert rep["memory"]["index_cache"]["size"] == 512 and rep["memory"]["prefetch"] == 4
+    mem = rep["memories"]
+    lut_ram = [n for n in mem if n.startswith("unit.reader.") and "_lines" not in n]
+    assert len(lut_ram) == 2 * 5 + 5 + 1 + 2                 # index (2 banks), raw, references, flight
+    for n in lut_ram:
+        assert mem[n]["mapped_to"] == "distributed RAM", (n, mem[n])
+    assert rep["utilisation"]["dist_ram"] > 0
+    assert "external memory: index cache 512 B" in synth.area_text(rep)
