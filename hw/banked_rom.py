@@ -20,10 +20,15 @@ from amaranth.utils import ceil_log2
 
 from .bus_port import DATA_WIDTH, LoadTarget, attach_memory, load_decode, or_all
 
-__all__ = ["BankedROM", "BANK_DEPTH", "LATENCY", "pick", "addr_bits"]
+__all__ = ["BankedROM", "BANK_DEPTH", "LOADABLE_BANK_DEPTH", "LATENCY", "pick", "addr_bits"]
 
 #: Words per bank: the depth of one DP16KD at its 36-bit width.
 BANK_DEPTH = 512
+#: Words per bank of a loadable memory: the depth of one DP16KD at its 18-bit width, as a true
+#: dual-port block RAM (the pipeline reads on one port, the bus reads and writes on the other) is
+#: at most 18 bits wide per port. 1024 x 18 holds what 512 x 36 does: the same block RAM count for
+#: any memory of 512 words or more.
+LOADABLE_BANK_DEPTH = 1024
 #: Cycles from the address to the banks' data: the memory's read register, then a fabric register.
 LATENCY = 2
 
@@ -66,9 +71,12 @@ class BankedROM(wiring.Component):
     depth : int, optional
         Words of the memory (default ``len(init)``; more: the rest start as zero).
     load : hw.bus_port.LoadTarget, optional
-        Loadable: where the memory sits in the register map; each bank gets a write port and
-        shares its read port with the bus's reads (:func:`hw.bus_port.attach_memory`), and a bank
-        wider than 32 bits is padded to whole bus words.
+        Loadable: where the memory sits in the register map; each bank gets a write port, and a
+        bank wider than 32 bits is padded to whole bus words. A memory deeper than 512 words
+        (``BANK_DEPTH``) is read by the bus on the same port, the block RAMs' second one
+        (:func:`hw.bus_port.attach_memory` with ``own_port``: true dual port, at most 18 bits a port
+        on an ECP5, so use ``LOADABLE_BANK_DEPTH``), and the pipeline's read address has no
+        multiplexer; a shallower one shares the pipeline's read port with the bus's reads.
 
     Members
     -------
@@ -146,6 +154,11 @@ class BankedROM(wiring.Component):
         # A loadable bank of more than 32 bits is written 32 bits at a time: its width is padded to
         # whole bus words (the padding is never read by the pipeline).
         stored = self._width if load is None or self._width <= DATA_WIDTH else -(-self._width // DATA_WIDTH) * DATA_WIDTH
+        # A loadable memory deeper than one 36-bit DP16KD (512 words) gives the bus the block RAMs'
+        # second port (true dual port, 18 bits per port: no more block RAMs from 1024 words a bank);
+        # a shallower one shares the pipeline's read port with the bus's reads (a multiplexer on
+        # the read address), which keeps it in one 512 x 36 block RAM per 36 bits instead of two.
+        own_port = load is not None and self._depth > BANK_DEPTH
         if load is not None:                # the command decoded once, then a bank compare each
             hit, row, lane, command = load_decode(m, self.load, region=load.region, lanes=load.lanes,
                                                   stride=load.stride, phase=load.phase, depth=self._depth, name="load")
@@ -154,15 +167,18 @@ class BankedROM(wiring.Component):
         for k in range(self._banks):
             part = self._init[k * d:(k + 1) * d]
             depth = min(d, self._depth - k * d) if load is not None or self._depth > len(self._init) else len(part)
-            m.submodules[f"bank{k}"] = mem = memory.Memory(shape=stored, depth=depth, init=part)
-            # The fabric register behind the block RAM (stored bits: a bus read answers the padding
-            # too); a bus read's answer goes through it as well (hw.bus_port.attach_memory).
+            # (a loadable bank: a read in the cycle of a write may read anything, so that Yosys can
+            # put the bus's read and write on one port of the block RAM: hw.bus_port.attach_memory)
+            m.submodules[f"bank{k}"] = mem = memory.Memory(shape=stored, depth=depth, init=part,
+                                                           attrs={"no_rw_check": 1} if own_port else {})
+            # The fabric register behind the block RAM (stored bits); a bus read comes through the
+            # block RAM's second port and a register of its own (hw.bus_port.attach_memory).
             q = Signal(stored, name=f"data{k}")
             if load is not None:
                 bank_hit = hit if self._banks == 1 else hit & (row[offset_bits:] == k)
                 rd, answer = attach_memory(m, mem, command, hit=bank_hit, row=row[:offset_bits], lane=lane,
                                            name=f"bank{k}_load", read_addr=self.addr[:offset_bits], read_en=self.en,
-                                           data_r=q)
+                                           own_port=own_port)
                 answers.append(answer)
             else:
                 rd = mem.read_port(domain="sync")

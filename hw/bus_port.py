@@ -241,8 +241,14 @@ def delayed(m, value, cycles: int, *, name: str):
     return value
 
 
+@dataclass(frozen=True)
+class _ReadData:
+    """The pipeline's read data of :func:`attach_memory` with ``own_port`` (a register)."""
+    data: Value
+
+
 def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int | None = None, pack=None,
-                  unpack=None, name: str, read_addr, read_en, data_r=None):
+                  unpack=None, name: str, read_addr, read_en, data_r=None, own_port: bool = False):
     """Give ``mem`` (an ``amaranth.lib.memory.Memory``, not yet elaborated) a write port for the load
     command ``load``, and its one read port, shared: the pipeline reads at ``read_addr`` when
     ``read_en``; a bus read takes the port in the cycle of its command (the pipeline is empty then:
@@ -261,6 +267,20 @@ def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int
     With ``only_lane=None`` a row is the entry's lanes side by side (width ``32 * lanes`` or less,
     written 32 bits at a time); with ``only_lane=k`` the memory holds lane ``k`` of each entry only
     (``pack(bus_word)`` gives the row, ``unpack(row)`` the bus word; default: the low bits).
+
+    With ``own_port`` the bus reads through a read port of its own at the write port's address
+    (``row``), which Yosys merges with the write port into one read-write port: the block RAM's
+    second port (an ECP5 DP16KD in true dual-port mode, 1024 x 18 bits). The pipeline's read port
+    then takes ``read_addr`` with no multiplexer in front of the block RAM's address (the loadable
+    unit's critical path at 134.6 MHz, docs/area.md), and the bus's read data has a fabric register
+    of its own (``data_r`` is not used). Same timing as the shared port. ``mem`` must then carry
+    the attribute ``no_rw_check`` (a read in the cycle of a write to the same word may read
+    anything: the drain rule keeps the pipeline's reads and the bus's writes apart, and the bus
+    reads only in cycles without a write), and the pipeline's port is an asynchronous read port
+    followed by a register enabled by ``read_en`` (returned as ``read_port.data``): Yosys merges
+    that register into the block RAM and, with the attribute, may share port B between the bus's
+    read and write. With a synchronous port Amaranth states the read-during-write result (the old
+    word) and Yosys keeps two copies of the memory instead.
     """
     width = Shape.cast(mem.shape).width
     mine = Signal(name=f"{name}_mine")
@@ -276,15 +296,25 @@ def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int
         m.d.comb += wp.data.eq(pack(load.data) if pack is not None else load.data[:width])
     rp = mem.read_port(domain="sync")
     bus_read = Signal(name=f"{name}_bus_read")
-    m.d.comb += [bus_read.eq(load.read & mine),
-                 rp.addr.eq(Mux(bus_read, row, read_addr)), rp.en.eq(read_en | bus_read)]
+    m.d.comb += bus_read.eq(load.read & mine)
+    if own_port:                    # the bus's read beside its write: the block RAM's second port
+        bp = rp
+        comb = mem.read_port(domain="comb")
+        rp = _ReadData(Signal.like(comb.data, name=f"{name}_read_data"))
+        m.d.comb += [bp.addr.eq(row), comb.addr.eq(read_addr)]
+        with m.If(read_en):
+            m.d.sync += rp.data.eq(comb.data)
+        data_r = Signal.like(bp.data, name=f"{name}_data_r")
+    else:
+        bp = rp
+        m.d.comb += [rp.addr.eq(Mux(bus_read, row, read_addr)), rp.en.eq(read_en | bus_read)]
     hit_r = Signal(name=f"{name}_hit_r")            # the read data is on the port
     hit_rr = Signal(name=f"{name}_hit_rr")          # ... and in data_r
     m.d.sync += [hit_r.eq(bus_read), hit_rr.eq(hit_r)]
     if data_r is None:
         data_r = Signal.like(rp.data, name=f"{name}_data_r")
     with m.If(hit_r):
-        m.d.sync += Value.cast(data_r).eq(rp.data)
+        m.d.sync += Value.cast(data_r).eq(bp.data)
     if wide:
         lane_r = Signal(len(lane), name=f"{name}_lane_r")
         lane_rr = Signal(len(lane), name=f"{name}_lane_rr")

@@ -31,7 +31,7 @@ from vqtex.golden.geometry import Geometry
 from vqtex.golden.register_map import LoadError, RegisterMap
 
 from .back_end import BackEnd
-from .banked_rom import BANK_DEPTH
+from .banked_rom import BANK_DEPTH, LOADABLE_BANK_DEPTH
 from .bus_port import BusPort, load_layout, wishbone_signature
 from .features import Features
 from .front_end import FrontEnd, index_port_members
@@ -94,9 +94,10 @@ class TexelFetch(wiring.Component):
         Single-bank index memory (reproduces the paper's straddle penalty in cycle counts).
     tag_width : int
         Width of the request tag carried to the response.
-    bank_depth : int
+    bank_depth : int, optional
         Words per block RAM bank of the index, codebook and raw memories (a power of two; default
-        512, one ECP5 DP16KD; see :class:`hw.banked_rom.BankedROM`).
+        512 for the baked unit, one ECP5 DP16KD at 36 bits, and 1024 for a loadable one, one
+        DP16KD at 18 bits per port in true dual-port mode; see :class:`hw.banked_rom.BankedROM`).
     specialise : bool
         Build only what the texture set needs (default; :class:`hw.features.Features`: no colour
         matrix without yuv411, no multipliers where shifts do, no raw path without raw levels, no
@@ -148,7 +149,7 @@ class TexelFetch(wiring.Component):
     """
 
     def __init__(self, texture_set: TextureSet | None = None, *, one_port: bool = False, tag_width: int = 8,
-                 bank_depth: int = BANK_DEPTH, specialise: bool = True, index_port: bool = False,
+                 bank_depth: int | None = None, specialise: bool = True, index_port: bool = False,
                  geometry: Geometry | None = None, loadable: bool = False, bus_port: bool = True,
                  raw_port: bool = False):
         if texture_set is not None and not isinstance(texture_set, TextureSet):
@@ -159,6 +160,8 @@ class TexelFetch(wiring.Component):
             raise TypeError(f"geometry must be a Geometry, not {type(geometry).__name__}")
         if not isinstance(tag_width, int) or tag_width < 0:
             raise TypeError(f"tag_width must be a non-negative integer, not {tag_width!r}")
+        if bank_depth is None:
+            bank_depth = LOADABLE_BANK_DEPTH if loadable else BANK_DEPTH
         if not isinstance(bank_depth, int) or bank_depth < 1 or bank_depth & (bank_depth - 1):
             raise ValueError(f"bank_depth must be a power of two, not {bank_depth!r}")
         if texture_set is not None:

@@ -141,7 +141,7 @@ class TextureFilter(wiring.Component):
         return super().__new__(cls)
 
     def __init__(self, texture_set: TextureSet | None = None, *, lanes: int = 1, tag_width: int = 8,
-                 frac: int | None = None, bank_depth: int = BANK_DEPTH, index_banks: str = "parity",
+                 frac: int | None = None, bank_depth: int | None = None, index_banks: str = "parity",
                  geometry=None, loadable: bool = False):
         self._loadable = bool(loadable)
         self._geometry = geometry
@@ -245,7 +245,8 @@ class TextureFilter(wiring.Component):
             for s in range(lanes // self._banks):
                 ib = IndexBanks(banked_image, k_bits=k_bits(self._ts),
                                 base_bits=descriptor_widths(lane_set)["base"], widths=feat.index_widths,
-                                straddle=feat.straddle, twiddle=feat.twiddled, bank_depth=self._bank_depth)
+                                straddle=feat.straddle, twiddle=feat.twiddled,
+                                bank_depth=BANK_DEPTH if self._bank_depth is None else self._bank_depth)
                 m.submodules[f"index_banks{s}"] = ib
                 for n in range(self._banks):
                     f = fetch[s * self._banks + n]

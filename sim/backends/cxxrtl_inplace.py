@@ -19,6 +19,10 @@ that does the same clock cycle with ``rst`` low:
    read a copy taken before the updates. ``p_rst`` is the constant 0 in this function, so the
    compiler drops the reset multiplexers.
 
+An asynchronous memory read port (the loadable unit's first block RAM ports) is a combinational
+statement too (a block of eight lines, :data:`_MEMREAD`): it reads the memory before this cycle's
+writes are committed, as in ``eval()``.
+
 Memory write ports (the loadable unit's) are ``if (posedge_p_clk)`` blocks that queue a write
 (``memory_x.update(...)``) and write no register: they run before the register updates (so they
 read this cycle's register states, as in ``eval()``), every register update then reads the memories
@@ -53,8 +57,24 @@ _COMB = re.compile(rf"^\t(?:value<\d+> \w+|const value<\d+> &?\w+ = [\w.]+"
 _TARGET = re.compile(r"(\w+)\.slice<")
 
 
+#: An asynchronous memory read port (the loadable unit's pipeline ports, ``hw.bus_port.attach_memory``
+#: with ``own_port``), as CXXRTL writes one: a combinational statement of eight lines that reads the
+#: memory's current words (the writes of the cycle are committed after it) into one wire.
+_MEMREAD = re.compile(r"\tauto (tmp_\d+) = memory_index\([^;]*\);\n"
+                      r"\tCXXRTL_ASSERT\(\1\.valid && \"out of bounds read\"\);\n"
+                      r"\tif\(\1\.valid\) \{\n"
+                      r"\t\tvalue<(\d+)> (tmp_\d+) = memory_\w+\[\1\.index\];\n"
+                      r"\t\t(\w+) = \3;\n"
+                      r"\t\} else \{\n"
+                      r"\t\t\4 = value<\2> \{\};\n"
+                      r"\t\}\Z")
+
+
 def _targets(line: str) -> set:
     """The wires and locals a combinational assignment writes (all of them, or parts)."""
+    read = _MEMREAD.match(line)
+    if read:
+        return {read.group(4)}
     lhs = line.split(" = ", 1)[0].strip()
     return set(_TARGET.findall(lhs)) or {lhs}
 _ALIAS = re.compile(r"^\tconst value<(?P<width>\d+)> &(?P<dst>\w+) = (?P<src>\w+\.curr);$")
@@ -88,6 +108,16 @@ def _items(body: str):
             items.append(("reg", inner))
         elif _COMB.match(line) and ".next" not in line:
             items.append(("comb", line))
+        elif line.startswith("\tauto tmp_") and "= memory_index(" in line:
+            block = [line]
+            while k < len(lines) and lines[k] != "\t}":
+                block.append(lines[k])
+                k += 1
+            block = "\n".join(block + lines[k:k + 1])
+            k += 1
+            if not _MEMREAD.match(block):
+                return None
+            items.append(("comb", block))
         else:
             return None
     return items

@@ -64,16 +64,19 @@ def test_pvr2_sets_load():
         _check(ts, req, r, stall=0.2, seed=2)
 
 
-def test_larger_geometry_and_stale_rows():
+@pytest.mark.parametrize("bank_depth", [None, 64])
+def test_larger_geometry_and_stale_rows(bank_depth):
     """A set loaded into a geometry larger than it (more textures, deeper memories) after a set
     with more textures: the rows the second set does not use are written invalid, and requests of
-    the second set are exact."""
+    the second set are exact. With 64-word banks, every memory has several banks (the pipeline's
+    bank select behind the block RAMs' first ports, the bus's writes on the second ports)."""
     big, small = texture_set("rgb_4x4_b8_mip", images=3), texture_set("yuv_4x4_b12_mip")
     g = _geometry(big, small).union(Geometry.of(big))
     g = Geometry(**{**g.to_dict(), "index_words": g.index_words + 100, "codebook_entries": g.codebook_entries + 7,
-                    "raw_words": g.raw_words + 9, "textures": 5})
+                    "raw_words": max(g.raw_words + 9, 1100), "textures": 5})
+    assert g.raw_words > 1024 >= g.codebook_entries     # both ways of reading back (hw.banked_rom)
     phases = [(big, random_requests(big, 30, seed=1)), (small, random_requests(small, 30, seed=2))]
-    for (ts, req), r in zip(phases, pysim.run_phases(g, phases)):
+    for (ts, req), r in zip(phases, pysim.run_phases(g, phases, bank_depth=bank_depth)):
         _check(ts, req, r, stall=0.0, seed=0)
 
 
@@ -91,12 +94,16 @@ def _bus_program(dut, ops):
     return np.array(out["data"], np.uint64), np.array(out["err"], bool), out["cycles"]
 
 
-def test_read_back_and_errors():
+@pytest.mark.parametrize("bank_depth", [None, 16])
+def test_read_back_and_errors(bank_depth):
     """Every kind of word reads back what the load wrote (control registers sign-extended, the
     geometry's read-only registers), and unmapped addresses and read-only writes answer with err
-    (and change nothing)."""
+    (and change nothing). With 16-word banks, the reads come from many banks' second ports."""
     ts = texture_set("yuv_dreamcast_4x4_b12_mip")
     g = _geometry(ts)
+    # a raw memory deeper than 512 words: the bus reads it on its own port (hw.banked_rom)
+    g = Geometry(**{**g.to_dict(), "raw_words": max(g.raw_words, 600)})
+    assert g.codebook_entries <= 512 < g.raw_words
     rmap = RegisterMap(g)
     writes = load_writes(ts, g).astype(np.int64)
     rng = np.random.default_rng(0)
@@ -113,7 +120,7 @@ def test_read_back_and_errors():
         np.stack([writes[:, 0], writes[:, 1], np.ones(len(writes), np.int64)], 1),
         [[ro_write, 0x1234, 1], [bad[0], 7, 1]],
         np.stack([reads, np.zeros(len(reads), np.int64), np.zeros(len(reads), np.int64)], 1)])
-    dut = TexelFetch(geometry=g, loadable=True)
+    dut = TexelFetch(geometry=g, loadable=True, **({} if bank_depth is None else {"bank_depth": bank_depth}))
     data, err, _ = _bus_program(dut, ops)
     n = len(writes)
     assert not err[:n].any()
