@@ -140,6 +140,26 @@ def connect_bus(m, top, unit) -> None:
             m.d.comb += getattr(top, f"bus_{name}").eq(getattr(unit.bus, name))
 
 
+def axi_members(unit) -> dict:
+    """A cached unit's AXI4 read master as top-level members ``axi_araddr``, ..., ``axi_rready`` (the
+    master's view: the unit's own signature members), plus ``axi_arid`` (an output, tied to 0 by
+    :func:`connect_axi`) and ``axi_rid`` (an input, ignored): one ID."""
+    members = {"axi_arid": Out(1), "axi_rid": In(1)}
+    for name, member in unit.axi.signature.members.items():
+        members[f"axi_{name}"] = Out(member.shape) if member.flow == wiring.Out else In(member.shape)
+    return members
+
+
+def connect_axi(m, top, unit) -> None:
+    """Wire ``top``'s ``axi_*`` members (:func:`axi_members`) to ``unit.axi``; ``axi_arid`` is 0."""
+    m.d.comb += top.axi_arid.eq(0)
+    for name, member in unit.axi.signature.members.items():
+        if member.flow == wiring.Out:
+            m.d.comb += getattr(top, f"axi_{name}").eq(getattr(unit.axi, name))
+        else:
+            m.d.comb += getattr(unit.axi, name).eq(getattr(top, f"axi_{name}"))
+
+
 class FilterTop(wiring.Component):
     """``hw.filter.TextureFilter`` with one port per stream member (``i_valid``, ``i_ready``,
     ``i_payload``, ``o_valid``, ``o_ready``, ``o_payload``) and its strobes, for synthesis
@@ -508,11 +528,10 @@ class CachedTexelFetchTop(wiring.Component):
         self._unit = CachedTexelFetch(texture_set, config, tag_width=tag_width)
         u = self._unit
         members = {"i_valid": In(1), "i_ready": Out(1), "o_valid": Out(1), "o_ready": In(1),
-                   "stall_memory": Out(1), "stall_output": Out(1), "axi_arid": Out(1), "axi_rid": In(1)}
+                   "stall_memory": Out(1), "stall_output": Out(1)}
         members.update({f"i_{n}": In(f.width) for n, f in u.i.p.shape() if f.width})
         members.update({f"o_{n}": Out(f.width) for n, f in u.o.p.shape() if f.width})
-        for name, member in u.axi.signature.members.items():
-            members[f"axi_{name}"] = Out(member.shape) if member.flow == wiring.Out else In(member.shape)
+        members.update(axi_members(u))
         super().__init__(members)
 
     @property
@@ -524,15 +543,10 @@ class CachedTexelFetchTop(wiring.Component):
         m.submodules.unit = u = self._unit
         m.d.comb += [u.i.valid.eq(self.i_valid), self.i_ready.eq(u.i.ready),
                      self.o_valid.eq(u.o.valid), u.o.ready.eq(self.o_ready),
-                     self.stall_memory.eq(u.stall_memory), self.stall_output.eq(u.stall_output),
-                     self.axi_arid.eq(0)]
+                     self.stall_memory.eq(u.stall_memory), self.stall_output.eq(u.stall_output)]
         m.d.comb += [getattr(u.i.p, n).eq(getattr(self, f"i_{n}")) for n, f in u.i.p.shape() if f.width]
         m.d.comb += [getattr(self, f"o_{n}").eq(getattr(u.o.p, n)) for n, f in u.o.p.shape() if f.width]
-        for name, member in u.axi.signature.members.items():
-            if member.flow == wiring.Out:
-                m.d.comb += getattr(self, f"axi_{name}").eq(getattr(u.axi, name))
-            else:
-                m.d.comb += getattr(u.axi, name).eq(getattr(self, f"axi_{name}"))
+        connect_axi(m, self, u)
         return m
 
 
@@ -554,9 +568,8 @@ class CachedFilterTop(wiring.Component):
         self._strobes = [n for n in u.signature.members if n not in ("i", "o", "axi")]
         members = {"i_valid": In(1), "i_ready": Out(1), "i_payload": In(len(u.i.p.as_value())),
                    "o_valid": Out(1), "o_ready": In(1), "o_payload": Out(len(u.o.p.as_value())),
-                   **{n: Out(1) for n in self._strobes}, "axi_arid": Out(1), "axi_rid": In(1)}
-        for name, member in u.axi.signature.members.items():
-            members[f"axi_{name}"] = Out(member.shape) if member.flow == wiring.Out else In(member.shape)
+                   **{n: Out(1) for n in self._strobes}}
+        members.update(axi_members(u))
         super().__init__(members)
 
     @property
@@ -571,12 +584,7 @@ class CachedFilterTop(wiring.Component):
         m = Module()
         m.submodules.unit = u = self._unit
         m.d.comb += [u.i.valid.eq(self.i_valid), self.i_ready.eq(u.i.ready), u.i.p.eq(self.i_payload),
-                     self.o_valid.eq(u.o.valid), u.o.ready.eq(self.o_ready), self.o_payload.eq(u.o.p),
-                     self.axi_arid.eq(0)]
+                     self.o_valid.eq(u.o.valid), u.o.ready.eq(self.o_ready), self.o_payload.eq(u.o.p)]
         m.d.comb += [getattr(self, n).eq(getattr(u, n)) for n in self._strobes]
-        for name, member in u.axi.signature.members.items():
-            if member.flow == wiring.Out:
-                m.d.comb += getattr(self, f"axi_{name}").eq(getattr(u.axi, name))
-            else:
-                m.d.comb += getattr(u.axi, name).eq(getattr(self, f"axi_{name}"))
+        connect_axi(m, self, u)
         return m
