@@ -150,3 +150,27 @@ def test_a_lost_exception_still_ends_the_command(tmp_path, capsys, monkeypatch):
     assert main(["cache", "info"]) == 143               # a command without outputs: main checks at its end
     assert capsys.readouterr().err == "vqtex: terminated by SIGTERM\n"
     assert main(["cache", "info", "--keep-mb", "1"]) == 2   # the next call starts afresh
+
+
+def test_module_run_exit_status_survives_a_caught_nested_interrupt(tmp_path):
+    """``python -m vqtex.sim.cli`` keeps the command's exit status after a ``KeyboardInterrupt`` was
+    raised and caught inside an ``exec`` of a string (as Ctrl-C during a lazy import's dataclass
+    does): without the empty ``exec`` in ``__main__`` CPython ends such a process by SIGINT (-2)."""
+    probe = tmp_path / "probe"
+    probe.mkdir()
+    (probe / "__init__.py").write_text("")
+    (probe / "__main__.py").write_text(
+        "import contextlib, io, runpy, sys\n"
+        "from vqtex.sim.cli.entry import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n    main(['cache', 'info', '--json'])\n"  # every import done
+        "try:\n    exec('raise KeyboardInterrupt')\nexcept KeyboardInterrupt:\n    pass\n"
+        "sys.argv = ['vqtex', 'cache', 'info', '--json']\n"
+        "runpy.run_module('vqtex.sim.cli', run_name='__main__')\n")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(tmp_path), os.environ.get("PYTHONPATH"), REPO])))
+    r = subprocess.run([sys.executable, "-m", "probe"], capture_output=True, text=True, env=env, timeout=120)
+    assert r.returncode == 0, r.stderr
+    # the control: the same probe without vqtex's __main__ dies by SIGINT, so the check above can fail
+    (probe / "__main__.py").write_text(
+        "import sys\ntry:\n    exec('raise KeyboardInterrupt')\nexcept KeyboardInterrupt:\n    pass\nsys.exit(0)\n")
+    r = subprocess.run([sys.executable, "-m", "probe"], capture_output=True, text=True, env=env, timeout=120)
+    assert r.returncode == -signal.SIGINT
