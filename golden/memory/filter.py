@@ -14,9 +14,11 @@ its slots (``k + lanes g`` of every pixel's group ``g``) through its own index a
 (:func:`golden.memory.timing.plan` of its stream: numpy), and the rules of
 :mod:`golden.memory.timing` hold per group with the lanes joined:
 
-- ``a[n]`` (group n enters the address stages) ``>= a[n-1] + 1``, ``>= g[n - ADDRESS_STAGES]``;
+- ``a[n]`` (group n enters the address stages) ``>= a[n-1] + 1``, ``>= g[n - S]`` with ``S =
+  ADDRESS_STAGES + LOOKUP_STAGES`` (the address stages and the lookup, the tag check's first
+  cycle);
   ``a[0] = FOOTPRINT_LATENCY``;
-- ``g[n]`` (every lane's tag check, the same cycle) ``>= a[n] + ADDRESS_STAGES``, ``>= g[n-1] +
+- ``g[n]`` (every lane's tag check, the same cycle) ``>= a[n] + S``, ``>= g[n-1] +
   max(1, max_k misses_k[n-1])``, and for every lane ``>= p_k[n-Q]`` and ``>= p_k[v_k] + 1`` (its
   victim rule);
 - lane k's j-th burst of group n is offered in ``g[n] + 1 + j`` and issued by the arbiter's rule
@@ -29,8 +31,8 @@ its slots (``k + lanes g`` of every pixel's group ``g``) through its own index a
 - the lanes' outputs ``T[n] = e[n] + LATENCY`` (the texel pipeline's), and pixel m's colour
   transfers ``BLEND_LATENCY`` cycles after its last group's: ``cycles = T[last] + BLEND_LATENCY + 1``.
 
-With every reference a hit: ``cycles = groups + FOOTPRINT_LATENCY + ADDRESS_STAGES + 2 + LATENCY +
-BLEND_LATENCY`` = ``groups + 27`` (the on-chip filter: ``groups + 23``). With one lane the rules are
+With every reference a hit: ``cycles = groups + FOOTPRINT_LATENCY + ADDRESS_STAGES + LOOKUP_STAGES
++ 2 + LATENCY + BLEND_LATENCY`` = ``groups + 28`` (the on-chip filter: ``groups + 23``). With one lane the rules are
 :func:`golden.memory.timing.run`'s exactly (the tests hold them equal).
 
 Not modelled: output backpressure (``o.ready`` low). Why a loop over groups: as in
@@ -45,7 +47,7 @@ from .. import filter as spec
 from ..format import TextureSet
 from .arbiter import Arbiter
 from .system import MemoryConfig
-from .timing import ADDRESS_STAGES, plan
+from .timing import ADDRESS_STAGES, LOOKUP_STAGES, plan
 
 __all__ = ["FOOTPRINT_LATENCY", "BLEND_LATENCY", "FETCH_LATENCY", "lane_requests", "run", "run_pixels"]
 
@@ -92,7 +94,7 @@ def run(plans: list, config: MemoryConfig, last: np.ndarray, *, start: int = FOO
     burst's AR cycle in issue order, with ``ar_lane``)."""
     lanes = len(plans)
     n = len(last)
-    La, Q, L = ADDRESS_STAGES, config.prefetch, int(latency)
+    La, Q, L = ADDRESS_STAGES + LOOKUP_STAGES, config.prefetch, int(latency)
     mem = config.make_memory()
     d = mem.beat_interval
     arb = Arbiter()

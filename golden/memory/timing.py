@@ -72,13 +72,16 @@ from ..format import TextureSet
 from .cache import classify
 from .system import Layout, MemoryConfig, references
 
-__all__ = ["ADDRESS_STAGES", "FRONT_LATENCY", "Plan", "plan", "run", "run_requests", "TexelPipeline", "StreamSink"]
+__all__ = ["ADDRESS_STAGES", "LOOKUP_STAGES", "FRONT_LATENCY", "Plan", "plan", "run", "run_requests", "TexelPipeline", "StreamSink"]
 
-#: Stages before the tag check (descriptor, block address).
+#: The unit's address stages before the cache block (descriptor, block address).
 ADDRESS_STAGES = 2
+#: The tag check's first cycle (the lookup: the set's tag row read and registered), a stream
+#: register of the cache block in the chain in front of the tag check.
+LOOKUP_STAGES = 1
 #: Cycles from accepting a request to offering it to the texel pipeline when every reference hits:
-#: the address stages, the tag check and the data read.
-FRONT_LATENCY = ADDRESS_STAGES + 2
+#: the address stages, the lookup, the tag check and the data read.
+FRONT_LATENCY = ADDRESS_STAGES + LOOKUP_STAGES + 2
 
 
 @dataclass
@@ -231,7 +234,7 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
     (int64 (B,), the first beat of each burst) and the per-stage event times ``accept``, ``tag``,
     ``read``, ``enter`` (int64 (N,))."""
     n = len(p.misses)
-    La, Q, L = int(address_stages), config.prefetch, int(pipeline_latency)
+    La, Q, L = int(address_stages) + LOOKUP_STAGES, config.prefetch, int(pipeline_latency)
     mem = config.make_memory()
     d = mem.beat_interval
     pipe = consumer if consumer is not None else TexelPipeline(L, ready_pattern, max(64, 2 * n + L + 64, n_hint))

@@ -168,6 +168,12 @@ class _Cache:
         self.retired = _Rows(m, f"{name}_retired", data.ArrayLayout(count_bits, W), S, banks)
         self.alloc = _Rows(m, f"{name}_alloc", W, S, banks)
         self.fill = _Rows(m, f"{name}_fill", W, S, banks)
+        # what the tag check writes into each bank's tag row this cycle (for the lookup's forwarding):
+        # the row, its address, and whether the bank's port is active (a request is being checked)
+        rb = max(1, _log2(S // banks))
+        self.w_addr = [Signal(rb, name=f"{name}_fwd_addr{b}") for b in range(banks)]
+        self.w_act = [Signal(name=f"{name}_fwd_act{b}") for b in range(banks)]
+        self.w_row = [Signal(self.lines.shape, name=f"{name}_fwd_row{b}") for b in range(banks)]
 
     def slot_bits(self):
         return max(1, _log2(self.sets * self.ways))
@@ -198,23 +204,61 @@ class _Cache:
         """The value of the bank holding set ``s`` (small signals: hit, way, ...)."""
         return per_bank[0] if self.banks == 1 else Mux(s[0], per_bank[1], per_bank[0])
 
-    def check(self, m, ports):
-        """The tag check: ``ports`` is (line, active) per lookup (two lookups: consecutive lines).
-        Returns (set, hit, way, busy victim) per port, combinational; updates the state of the active
-        ports' sets at the clock edge."""
+    def lookup(self, m, line, load):
+        """The tag check's first cycle: at the clock edge when ``load``, registers the set and tag of
+        ``line`` (and of ``line + 1``: a second port, when the cache has two banks), and each bank's
+        tag row and touched bit for them, read from the LUT RAM (a bank holds the port whose set has
+        its parity). A row the tag check writes in this same cycle (the request ahead, in its second
+        cycle) is forwarded: the register takes the written row and touched bit, not the memory's old
+        ones. Only the tag check writes these rows, and it writes only when the request it checks
+        leaves, which is when a new one is loaded: so the registered rows are exact while a request
+        waits in the second cycle."""
+        nports = self.banks
+        sb = max(1, self.set_bits)
+        self.rset = [Signal(sb, name=f"{self.name}_set{k}") for k in range(nports)]
+        self.rtag = [Signal(self.tag_bits, name=f"{self.name}_line_tag{k}") for k in range(nports)]
+        nsets, ntags = [], []
+        for k in range(nports):
+            ln = line if k == 0 else line + 1
+            s = Signal(sb, name=f"{self.name}_next_set{k}")
+            t = Signal(self.tag_bits, name=f"{self.name}_next_tag{k}")
+            m.d.comb += [s.eq(ln[:self.set_bits] if self.set_bits else 0), t.eq(ln >> self.set_bits)]
+            nsets.append(s)
+            ntags.append(t)
+            with m.If(load):
+                m.d.sync += [self.rset[k].eq(s), self.rtag[k].eq(t)]
+        self.rrow = [Signal(self.lines.shape, name=f"{self.name}{b}_row" if self.banks > 1 else f"{self.name}_row")
+                     for b in range(self.banks)]
+        self.rtouched = [Signal(name=f"{self.name}{b}_row_touched" if self.banks > 1 else f"{self.name}_row_touched")
+                         for b in range(self.banks)]
+        for b in range(self.banks):
+            n = f"{self.name}{b}" if self.banks > 1 else self.name
+            if self.banks == 1:
+                s = nsets[0]
+            else:
+                s = Signal(sb, name=f"{n}_next_set")
+                m.d.comb += s.eq(Mux(nsets[0][0] == b, nsets[0], nsets[1]))
+            rd = self.lines.read(m, b, s, f"{n}_next_row")
+            r = self.lines.row(s)
+            touched = self.touched[b]
+            here = touched.bit_select(r, 1) if len(touched) > 1 else touched
+            fwd = Signal(name=f"{n}_fwd")
+            m.d.comb += fwd.eq(self.w_act[b] & (self.w_addr[b] == r) if len(touched) > 1 else self.w_act[b])
+            with m.If(load):
+                m.d.sync += [self.rrow[b].eq(Mux(fwd, self.w_row[b], rd)), self.rtouched[b].eq(here | fwd)]
+
+    def check(self, m, actives, take):
+        """The tag check's second cycle, on what :meth:`lookup` registered: ``actives`` is whether each
+        port is looked up (the request is valid and reads that line), ``take`` whether the request
+        leaves the check this cycle. Returns (set, hit, way, busy victim) per port, combinational;
+        updates the state of the active ports' sets at the clock edge when ``take``."""
         S, W = self.sets, self.ways
-        sets, tags = [], []
-        for k, (line, act) in enumerate(ports):
-            s = Signal(max(1, self.set_bits), name=f"{self.name}_set{k}")
-            t = Signal(self.tag_bits, name=f"{self.name}_line_tag{k}")
-            m.d.comb += [s.eq(line[:self.set_bits] if self.set_bits else 0), t.eq(line >> self.set_bits)]
-            sets.append(s)
-            tags.append(t)
-        banked = self._banked(m, [(s, t, act) for s, t, (_, act) in zip(sets, tags, ports)], "check")
+        sets, tags = self.rset, self.rtag
+        banked = self._banked(m, [(s, t, act) for s, t, act in zip(sets, tags, actives)], "check")
         results = []
         for b, (s, t, act) in enumerate(banked):
             n = f"{self.name}{b}" if self.banks > 1 else self.name
-            lines = self.lines.read(m, b, s, f"{n}_row")
+            lines = self.rrow[b]
             issued = self.issued.read(m, b, s, f"{n}_issued_row")
             retired = self.retired.read(m, b, s, f"{n}_retired_check")
             alloc = self.alloc.read(m, b, s, f"{n}_alloc_check")
@@ -222,8 +266,7 @@ class _Cache:
             touched = self.touched[b]
             # the row's valid bits count once its set has been written since reset
             valid = Signal(W, name=f"{n}_valid")
-            here_touched = touched.bit_select(self.lines.row(s), 1) if len(touched) > 1 else touched
-            m.d.comb += valid.eq(Mux(here_touched, lines.valid, 0))
+            m.d.comb += valid.eq(Mux(self.rtouched[b], lines.valid, 0))
             row = lines.way
             hits = [valid[w] & (row[w].tag == t) for w in range(W)]
             hit = Signal(name=f"{n}_hit")
@@ -265,9 +308,10 @@ class _Cache:
             # each row assigned in one piece (CXXRTL would assemble a row written field by field)
             m.d.comb += [new_row.eq(Cat(Cat(*ways), valid | (C(1, W) << way)[:W])), new_issued.eq(Cat(*counts)),
                          new_alloc.eq(Cat(*allocs))]
-            addr, en = self.lines.write(m, b, s, act, new_row)
-            self.issued.write(m, b, s, act, new_issued)
-            self.alloc.write(m, b, s, act, new_alloc)
+            addr, en = self.lines.write(m, b, s, act & take, new_row)
+            self.issued.write(m, b, s, act & take, new_issued)
+            self.alloc.write(m, b, s, act & take, new_alloc)
+            m.d.comb += [self.w_addr[b].eq(self.lines.row(s)), self.w_act[b].eq(act), self.w_row[b].eq(new_row)]
             # a set is touched when its row is written (a decoder of the bank's write address)
             with m.If(en):
                 m.d.sync += (touched.bit_select(addr, 1) if len(touched) > 1 else touched).eq(1)
@@ -324,7 +368,7 @@ class CachedReader(wiring.Component):
     __doc__ = __doc__
 
     def __init__(self, config, *, word_bits: int = 32, raw_base: int = 0, word_addr_bits: int = 24,
-                 tag_width: int = 8, addr_width: int = 32):
+                 tag_width: int = 8, addr_width: int = 32, joint: bool = False):
         if word_bits not in (16, 32, 64):
             raise ValueError(f"index word of {word_bits} bits: 16, 32 or 64")
         if config.index_cache.sets < 2:
@@ -337,6 +381,7 @@ class CachedReader(wiring.Component):
         self._tag_width = tag_width
         self._addr_width = addr_width
         self._bus = config.bus_bytes
+        self._joint = bool(joint)
         self.request_layout = data.StructLayout({
             "raw": 1, "word": word_addr_bits, "straddle": 1, "tag": tag_width})
         wide = max(word_bits, 32)
@@ -346,12 +391,13 @@ class CachedReader(wiring.Component):
             "o": Out(stream.Signature(self.response_layout)),
             "stall_fill": Out(1),
             "axi": Out(axi4_read_signature(addr_width, 8 * self._bus)),
+            **({"check_ready": Out(1), "check_go": In(1)} if joint else {}),
         })
 
     @property
     def latency(self) -> int:
-        """Cycles from ``i`` to ``o`` when every reference hits (tag check, data read): 2."""
-        return 2
+        """Cycles from ``i`` to ``o`` when every reference hits (lookup, tag check, data read): 3."""
+        return 3
 
     def elaborate(self, platform):
         m = Module()
@@ -371,24 +417,49 @@ class CachedReader(wiring.Component):
         beats = [ic.shape.line // bus, rc.shape.line // bus]
         req = self.i.p
 
-        # -- the references of the request on i -----------------------------------------------------
+        # -- the references of the request on i, registered by the lookup (the tag check's first cycle) --
         a0 = Signal(self._addr_width + 8)
         a1 = Signal(self._addr_width + 8)
         ra = Signal(self._addr_width + 8)
         m.d.comb += [a0.eq(req.word * wb), a1.eq((req.word + 1) * wb), ra.eq(self._raw_base + req.word * 4)]
         il, rl = _log2(ic.shape.line), _log2(rc.shape.line)
         line0, line1, rline = a0 >> il, a1 >> il, ra >> rl
-        two = Signal()
-        m.d.comb += two.eq(~req.raw & req.straddle & (line1 != line0))
+        # the lookup is a stream register: it takes a request when empty or when its request leaves
+        # the check (``take``); the check (the second cycle) works from its registers
+        lv = Signal(name="lookup_valid")
+        load = Signal()
         take = Signal()
+        m.d.comb += load.eq(~lv | take)
+        with m.If(load):
+            m.d.sync += lv.eq(self.i.valid)
+        ic.lookup(m, line0, load)
+        rc.lookup(m, rline, load)
+        l_raw, l_two, l_tag = Signal(name="lookup_raw"), Signal(name="lookup_two"), Signal(max(1, self._tag_width),
+                                                                                      name="lookup_tag")
+        l_beat0, l_beat1 = (Signal(max(1, _log2(max(beats))), name=n) for n in ("lookup_beat0", "lookup_beat1"))
+        l_off0, l_off1 = Signal(max(1, _log2(bus // min(wb, 4)) or 1), name="lookup_off0"), \
+            Signal(max(1, _log2(bus // wb) or 1), name="lookup_off1")
+        l_addr = [Signal(self._addr_width, name=f"lookup_line_addr{j}") for j in range(3)]   # line0, line0 + 1, raw
+        with m.If(load):
+            m.d.sync += [
+                l_raw.eq(req.raw), l_two.eq(~req.raw & req.straddle & (line1 != line0)),
+                l_beat0.eq(Mux(req.raw, (ra & (rc.shape.line - 1)) >> _log2(bus),
+                               (a0 & (ic.shape.line - 1)) >> _log2(bus))),
+                l_beat1.eq((a1 & (ic.shape.line - 1)) >> _log2(bus)),
+                l_off0.eq(Mux(req.raw, (ra & (bus - 1)) >> 2, (a0 & (bus - 1)) >> _log2(wb))),
+                l_off1.eq((a1 & (bus - 1)) >> _log2(wb)),
+                l_addr[0].eq(line0 << il), l_addr[1].eq((line0 + 1) << il), l_addr[2].eq(rline << rl),
+            ]
+            if self._tag_width:
+                m.d.sync += l_tag.eq(req.tag)
+        two = l_two
         # port 1 looks up the line after line0 (line1 when ``two``; unused otherwise)
-        (s0, hit0, way0, busy0), (s1, hit1, way1, busy1) = ic.check(
-            m, [(line0, take & ~req.raw), (line0 + 1, take & two)])
-        (sr, hitr, wayr, busyr), = rc.check(m, [(rline, take & req.raw)])
-        miss0 = ~req.raw & ~hit0
+        (s0, hit0, way0, busy0), (s1, hit1, way1, busy1) = ic.check(m, [lv & ~l_raw, lv & two], take)
+        (sr, hitr, wayr, busyr), = rc.check(m, [lv & l_raw], take)
+        miss0 = ~l_raw & ~hit0
         miss1 = two & ~hit1
-        missr = req.raw & ~hitr
-        busy = Mux(req.raw, busyr, busy0 | (two & busy1))
+        missr = l_raw & ~hitr
+        busy = Mux(l_raw, busyr, busy0 | (two & busy1))
 
         # -- AR: two issue slots, loaded by the tag check ----------------------------------------------
         slot_v = [Signal(name=f"ar_valid{j}") for j in range(2)]
@@ -403,6 +474,7 @@ class CachedReader(wiring.Component):
             self.axi.rready.eq(1),
         ]
 
+        check_ready = self.check_ready if self._joint else Signal(name="check_ready")
         # -- the reference FIFO (Q entries) ------------------------------------------------------------
         islot = max(1, ic.slot_bits())
         rslot = max(1, rc.slot_bits())
@@ -431,8 +503,9 @@ class CachedReader(wiring.Component):
         m.d.comb += self.stall_fill.eq((level != 0) & ~head_filled & o_free)
 
         m.d.comb += [
-            self.i.ready.eq(~slot_v[1] & (~slot_v[0] | self.axi.arready) & ((level != Q) | pop) & ~busy),
-            take.eq(self.i.valid & self.i.ready),
+            check_ready.eq(~slot_v[1] & (~slot_v[0] | self.axi.arready) & ((level != Q) | pop) & ~busy),
+            take.eq(lv & (self.check_go if self._joint else check_ready)),
+            self.i.ready.eq(load),
         ]
         # the entry of the request being checked
         # The entry's fields as separate signals, joined only where the FIFO stores them, and there
@@ -450,15 +523,11 @@ class CachedReader(wiring.Component):
             slotr.eq((sr << _log2(rc.ways)) | wayr if rc.ways > 1 else sr),
         ]
         m.d.comb += [
-            new.raw.eq(req.raw),
-            new.slot0.eq(Mux(req.raw, slotr, slot0)),
+            new.raw.eq(l_raw),
+            new.slot0.eq(Mux(l_raw, slotr, slot0)),
             new.slot1.eq(slot1),
-            new.beat0.eq(Mux(req.raw, (ra & (rc.shape.line - 1)) >> _log2(bus),
-                             (a0 & (ic.shape.line - 1)) >> _log2(bus))),
-            new.beat1.eq((a1 & (ic.shape.line - 1)) >> _log2(bus)),
-            new.off0.eq(Mux(req.raw, (ra & (bus - 1)) >> 2, (a0 & (bus - 1)) >> _log2(wb))),
-            new.off1.eq((a1 & (bus - 1)) >> _log2(wb)),
-            new.tag.eq(req.tag),
+            new.beat0.eq(l_beat0), new.beat1.eq(l_beat1), new.off0.eq(l_off0), new.off1.eq(l_off1),
+            new.tag.eq(l_tag),
         ]
         m.d.comb += [fifo_w.addr.eq(tail), fifo_w.en.eq(take)]
         with m.If(take):        # (a gate, not a plain wire: see ``new`` above)
@@ -473,11 +542,11 @@ class CachedReader(wiring.Component):
         burst_addr = [Signal(self._addr_width, name=f"miss_addr{j}") for j in range(2)]
         burst_raw = [Signal(name=f"miss_raw{j}") for j in range(2)]
         nmiss = Signal(2)
-        m.d.comb += nmiss.eq(Mux(req.raw, missr, miss0 + miss1))
+        m.d.comb += nmiss.eq(Mux(l_raw, missr, miss0 + miss1))
         m.d.comb += [
-            burst_addr[0].eq(Mux(req.raw, rline << rl, Mux(miss0, line0 << il, line1 << il))),
-            burst_raw[0].eq(req.raw),
-            burst_addr[1].eq(line1 << il), burst_raw[1].eq(0),
+            burst_addr[0].eq(Mux(l_raw, l_addr[2], Mux(miss0, l_addr[0], l_addr[1]))),
+            burst_raw[0].eq(l_raw),
+            burst_addr[1].eq(l_addr[1]), burst_raw[1].eq(0),
         ]
         with m.If(take & (nmiss != 0)):
             m.d.sync += [slot_v[0].eq(1), slot_addr[0].eq(burst_addr[0]), slot_raw[0].eq(burst_raw[0]),
@@ -504,7 +573,7 @@ class CachedReader(wiring.Component):
         first = Signal(1 + sw)
         second = Signal(1 + sw)
         queue = take & (nmiss != 0)
-        m.d.comb += [first.eq(Mux(req.raw, fl(slotr, 1), Mux(miss0, fl(slot0, 0), fl(slot1, 0)))),
+        m.d.comb += [first.eq(Mux(l_raw, fl(slotr, 1), Mux(miss0, fl(slot0, 0), fl(slot1, 0)))),
                      second.eq(fl(slot1, 0))]
         t1 = (f_tail + 1)[:len(f_tail)]
         for b, (wp, rp) in enumerate(flight):

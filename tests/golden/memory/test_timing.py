@@ -65,16 +65,17 @@ def test_every_request_a_new_line_blocking():
     out = run_requests(ts, req, cfg, L, always)
     per = cfg.latency + 1 + 1                       # AR after the tag check, the latency, 1 beat, readable next
     assert np.diff(out["read"]).tolist() == [per] * 15
-    # first: accepted 0, tag 2, AR 3, beat 23, filled 24 = read
-    assert out["read"][0] == 2 + 1 + cfg.latency + 1
+    # first: accepted 0, lookup 2, tag 3, AR 4, beat 24, filled 25 = read
+    assert out["read"][0] == 3 + 1 + cfg.latency + 1
     assert out["cycles"] == out["read"][-1] + 1 + L + 1
     assert out["stall_cycles"]["miss"] + out["stall_cycles"]["bandwidth"] == 16 * (cfg.latency + 1)
     # prefetching overlaps them: the bursts go out back to back, limited by nothing but the memory
     pre = run_requests(ts, req, MemoryConfig(index_cache=cfg.index_cache, prefetch=16, latency=20), L, always)
-    # tag n at n + 2, AR at n + 3, its beat at n + 23, readable at n + 24
+    # tag n at n + 3, AR at n + 4, its beat at n + 24, readable at n + 25
     assert np.diff(pre["tag"]).tolist() == [1] * 15
-    assert pre["read"].tolist() == (24 + np.arange(16)).tolist()
-    assert pre["cycles"] == 24 + 15 + 1 + L + 1
+    assert pre["tag"][0] == 3
+    assert pre["read"].tolist() == (25 + np.arange(16)).tolist()
+    assert pre["cycles"] == 25 + 15 + 1 + L + 1
 
 
 @pytest.mark.parametrize("name", ["yuv_4x4_b12_mip", "rgba_2x2_b7_mip_w16", "i8_4x2_b5_w64"])
