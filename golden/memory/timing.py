@@ -4,15 +4,17 @@ The unit (docs/memory.md)
 -------------------------
 ::
 
-    requests -> address (2 stages) -> tag check -> reference FIFO -> data read -> output register
-                                         |  (Q entries)             ^              |
-                                         v AR                       | R            v
-                                      AXI4 read master  <------  memory      texel pipeline (LATENCY)
-                                                                                   |
-                                                                                responses
+    requests -> address (2 stages) -> lookup -> tag check -> reference FIFO -> data read -> output register
+                                                   |  (Q entries)             ^              |
+                                                   v AR                       | R            v
+                                                AXI4 read master  <------  memory      texel pipeline (LATENCY)
+                                                                                             |
+                                                                                          responses
 
 The address stages (descriptor, block address) compute the words a request reads; the tag check
-looks up its references (:mod:`golden.memory.system`) in the index or raw cache, allocating a line and
+takes two cycles: the lookup (a stream register of the cache block, ``LOOKUP_STAGES``) reads the
+tag rows of the request's sets and registers them (a row the check writes in that cycle is
+forwarded to it), and the check proper compares them and looks up its references (:mod:`golden.memory.system`) in the index or raw cache, allocating a line and
 issuing its burst on a miss; the reference waits in a FIFO of ``Q = config.prefetch`` entries until
 its lines are filled; the data read takes the words from the cache into an output register, which
 the texel pipeline (``hw.texel_fetch``'s, ``LATENCY`` registers and the skid register, advancing on
@@ -21,10 +23,10 @@ its registered ``advance``) accepts. ``Q = 1`` is the blocking cache.
 The rules, in cycles (each event at the first cycle that meets all its rules; requests are presented
 back to back from cycle 0; ``x[n-k]`` for ``n < k`` imposes nothing):
 
-- ``a[n]`` (request n accepted): ``>= a[n-1] + 1``, ``>= g[n - ADDRESS_STAGES]`` (the address
-  stages are a chain of stream registers that moves as a whole: a stage takes a new item when its
-  item leaves, in the same cycle).
-- ``g[n]`` (tag check): ``>= a[n] + ADDRESS_STAGES``; ``>= g[n-1] + max(1, misses[n-1])`` (one burst
+- ``a[n]`` (request n accepted): ``>= a[n-1] + 1``, ``>= g[n - S]`` with ``S = ADDRESS_STAGES +
+  LOOKUP_STAGES`` (the address stages and the lookup are a chain of stream registers that moves as
+  a whole: a stage takes a new item when its item leaves, in the same cycle).
+- ``g[n]`` (tag check, its second cycle, where it is decided and the state written): ``>= a[n] + S``; ``>= g[n-1] + max(1, misses[n-1])`` (one burst
   issued per cycle); ``>= p[n-Q]`` (a FIFO entry frees when its reference is read); for a miss whose
   victim line has a reference ``v`` not yet read, ``>= p[v] + 1`` (a line is never replaced under a
   waiting reference).
@@ -45,7 +47,7 @@ back to back from cycle 0; ``x[n-k]`` for ``n < k`` imposes nothing):
   backpressure is ``[arrive[n], T[n])`` for every n.
 
 ``cycles = T[N-1] + 1``. With every reference a hit and no backpressure, ``cycles = N + LATENCY +
-ADDRESS_STAGES + 2``.
+ADDRESS_STAGES + LOOKUP_STAGES + 2``.
 
 Stall cycles by cause: ``output_backpressure`` (cycles with ``o.valid & ~o.ready``, as the on-chip
 unit counts them); ``miss`` and ``bandwidth``: the cycles by which a line fill held a data read back
@@ -226,7 +228,7 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
 
     ``ready_pattern(length)`` gives ``o.ready`` for cycles ``0 .. length-1`` (bool array, every
     length a prefix of one sequence). ``address_stages`` = 0 is the cache block alone
-    (``hw.memory``): the input handshake is the tag check (``a[n] = g[n]``, ``g[n] >= g[n-1] + ...``).
+    (``hw.memory``): the input handshake is the lookup's (``a[n]``; the chain is the lookup alone).
     ``consumer`` (default the texel pipeline, :class:`TexelPipeline`) takes each item from the
     output register (``take(s) -> e``; :class:`StreamSink` for the cache block alone, whose
     ``transfer`` are then the output's transfers). Returns a dict: ``cycles``, ``transfer`` (int64 (N,)),

@@ -231,13 +231,22 @@ class _Cache:
                      for b in range(self.banks)]
         self.rtouched = [Signal(name=f"{self.name}{b}_row_touched" if self.banks > 1 else f"{self.name}_row_touched")
                          for b in range(self.banks)]
+        self.rbank = []
         for b in range(self.banks):
             n = f"{self.name}{b}" if self.banks > 1 else self.name
             if self.banks == 1:
                 s = nsets[0]
+                self.rbank.append((self.rset[0], self.rtag[0]))
             else:
+                # the bank's set and tag (of the port whose set has the bank's parity), registered
                 s = Signal(sb, name=f"{n}_next_set")
-                m.d.comb += s.eq(Mux(nsets[0][0] == b, nsets[0], nsets[1]))
+                t = Signal(self.tag_bits, name=f"{n}_next_tag")
+                m.d.comb += [s.eq(Mux(nsets[0][0] == b, nsets[0], nsets[1])),
+                             t.eq(Mux(nsets[0][0] == b, ntags[0], ntags[1]))]
+                rs, rt = Signal(sb, name=f"{n}_set"), Signal(self.tag_bits, name=f"{n}_tag")
+                with m.If(load):
+                    m.d.sync += [rs.eq(s), rt.eq(t)]
+                self.rbank.append((rs, rt))
             rd = self.lines.read(m, b, s, f"{n}_next_row")
             r = self.lines.row(s)
             touched = self.touched[b]
@@ -254,7 +263,10 @@ class _Cache:
         updates the state of the active ports' sets at the clock edge when ``take``."""
         S, W = self.sets, self.ways
         sets, tags = self.rset, self.rtag
-        banked = self._banked(m, [(s, t, act) for s, t, act in zip(sets, tags, actives)], "check")
+        if self.banks == 1:
+            banked = [(sets[0], tags[0], actives[0])]
+        else:           # each bank's set and tag registered by the lookup; the ports' actives by parity
+            banked = [(bs, bt, Mux(sets[0][0] == b, actives[0], actives[1])) for b, (bs, bt) in enumerate(self.rbank)]
         results = []
         for b, (s, t, act) in enumerate(banked):
             n = f"{self.name}{b}" if self.banks > 1 else self.name
@@ -273,23 +285,25 @@ class _Cache:
             way = Signal(max(1, self.way_bits), name=f"{n}_way")
             busy = Signal(name=f"{n}_busy")
             m.d.comb += hit.eq(Cat(*hits).any())
-            # The way: the hit's; else the lowest empty way; else the oldest (age W-1).
-            with m.If(hit):
-                for w in reversed(range(W)):
-                    with m.If(hits[w]):
-                        m.d.comb += way.eq(w)
-            with m.Else():
-                for w in reversed(range(W)):
-                    with m.If(valid[w] & (row[w].age == W - 1)):
-                        m.d.comb += way.eq(w)
-                for w in reversed(range(W)):
-                    with m.If(~valid[w]):
-                        m.d.comb += way.eq(w)
+            # The way: the hit's; else the victim: the lowest empty way, else the oldest (age W-1).
+            # The victim is found from the registered row alone, beside the tag compare.
+            hway = Signal(max(1, self.way_bits), name=f"{n}_hit_way")
+            vway = Signal(max(1, self.way_bits), name=f"{n}_victim_way")
+            for w in reversed(range(W)):
+                with m.If(hits[w]):
+                    m.d.comb += hway.eq(w)
+            for w in reversed(range(W)):
+                with m.If(valid[w] & (row[w].age == W - 1)):
+                    m.d.comb += vway.eq(w)
+            for w in reversed(range(W)):
+                with m.If(~valid[w]):
+                    m.d.comb += vway.eq(w)
+            m.d.comb += way.eq(Mux(hit, hway, vway))
             # a way's references wait when its counts differ (mod 2^n: equal is none waiting), found
-            # for every way beside the tag compare, then chosen by the way (no subtract after it)
+            # for every way beside the tag compare, then chosen by the victim (no subtract after it)
             waiting = Signal(W, name=f"{n}_waiting")
             m.d.comb += waiting.eq(Cat(*(issued[w] != retired[w] for w in range(W))))
-            m.d.comb += busy.eq(~hit & (valid & waiting).bit_select(way, 1))
+            m.d.comb += busy.eq(~hit & (valid & waiting).bit_select(vway, 1))
             # LRU: the accessed way becomes the youngest; younger valid ways age by one. A miss puts
             # the line's tag in the way, rebases its count on what was read out, and clears its fill.
             acc_age = Signal(self.age_bits + 1, name=f"{n}_acc_age")
@@ -485,15 +499,18 @@ class CachedReader(wiring.Component):
         # in LUT RAM: written at the tail by the tag check, read at the head by the data read
         m.submodules.references = fifo = memory.Memory(shape=entry, depth=Q, init=[],
                                                        attrs={"ram_style": "distributed"})
-        fifo_w, fifo_r = fifo.write_port(), fifo.read_port(domain="comb")
+        fifo_w, fifo_r = fifo.write_port(), fifo.read_port(domain="comb")   # fifo_r: the entry after the head
         level = Signal(range(Q + 1))
         head = Signal(range(max(Q, 2)))
         tail = Signal(range(max(Q, 2)))
         pop = Signal()
         o_free = Signal()
         m.d.comb += o_free.eq(~self.o.valid | self.o.ready)
-        headv = Signal(entry)
-        m.d.comb += [fifo_r.addr.eq(head), headv.eq(fifo_r.data)]
+        # The head entry in a register (so the data read starts from flip-flops, not from the FIFO's
+        # LUT RAM read multiplexers): loaded with the entry after it when the head is read, or with
+        # the entry being written when that one becomes the head (the FIFO empty, or about to be).
+        headv = Signal(entry, name="head_entry")
+        m.d.comb += fifo_r.addr.eq(Mux(head == Q - 1, 0, head + 1))
         # the head's lines filled? (a read out of the index cache retires one reference per line)
         i_filled = ic.read_out(m, [headv.slot0[:islot], headv.slot1],
                                [pop & ~headv.raw, pop & ~headv.raw & (headv.slot1 != headv.slot0[:islot])])
@@ -537,6 +554,10 @@ class CachedReader(wiring.Component):
         with m.If(pop):
             m.d.sync += head.eq(Mux(head == Q - 1, 0, head + 1))
         m.d.sync += level.eq(level + take - pop)
+        with m.If(pop):
+            m.d.sync += headv.eq(Mux(level == 1, new.value(entry), fifo_r.data))
+        with m.Elif(level == 0):
+            m.d.sync += headv.eq(new.value(entry))
 
         # AR slots: shift on issue; a tag check with misses loads them (its first burst in slot 0).
         burst_addr = [Signal(self._addr_width, name=f"miss_addr{j}") for j in range(2)]
