@@ -94,7 +94,7 @@ def run(plans: list, config: MemoryConfig, last: np.ndarray, *, start: int = FOO
     burst's AR cycle in issue order, with ``ar_lane``)."""
     lanes = len(plans)
     n = len(last)
-    La, Q, L = ADDRESS_STAGES + LOOKUP_STAGES, config.prefetch, int(latency)
+    La, Q, L = ADDRESS_STAGES, config.prefetch, int(latency)
     mem = config.make_memory()
     d = mem.beat_interval
     arb = Arbiter()
@@ -108,16 +108,22 @@ def run(plans: list, config: MemoryConfig, last: np.ndarray, *, start: int = FOO
     filled = [[0] * len(x) for x in address]
     queued = [[0] * len(x) for x in address]
     burst = [0] * lanes
-    a, g, e = [0] * n, [0] * n, [0] * n
+    a, lk, g, e = [0] * n, [0] * n, [0] * n, [0] * n
     pr = [[0] * n for _ in range(lanes)]
     ar, ar_lane = [], []
     miss_c = bw_c = fifo_c = victim_c = join_c = 0
     K = range(lanes)
     for i in range(n):
         ai = a[i - 1] + 1 if i else start
-        if i >= La and g[i - La] > ai:
-            ai = g[i - La]
-        gi = ai + La
+        if i >= La and lk[i - La] > ai:
+            ai = lk[i - La]
+        bi = ai + La
+        if i and lk[i - 1] + 1 > bi:
+            bi = lk[i - 1] + 1
+        if i >= 2 and g[i - 2] + 1 > bi:
+            bi = g[i - 2] + 1
+        lk[i] = bi
+        gi = bi + LOOKUP_STAGES
         if i and g[i - 1] + max(1, maxmiss[i - 1]) > gi:
             gi = g[i - 1] + max(1, maxmiss[i - 1])
         if i >= Q:
@@ -180,7 +186,7 @@ def run(plans: list, config: MemoryConfig, last: np.ndarray, *, start: int = FOO
                          "victim": victim_c, "arbiter": arb.waited},
         "bursts": int(per_cache.sum()),
         "memory_bytes": {"index": int(per_cache[0]) * line[0], "raw": int(per_cache[1]) * line[1]},
-        "accept": np.array(a, np.int64), "tag": np.array(g, np.int64), "enter": np.array(e, np.int64),
+        "accept": np.array(a, np.int64), "lookup": np.array(lk, np.int64), "tag": np.array(g, np.int64), "enter": np.array(e, np.int64),
         "ar": np.array(ar, np.int64), "ar_lane": np.array(ar_lane, np.int64),
     }
 

@@ -236,7 +236,7 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
     (int64 (B,), the first beat of each burst) and the per-stage event times ``accept``, ``tag``,
     ``read``, ``enter`` (int64 (N,))."""
     n = len(p.misses)
-    La, Q, L = int(address_stages) + LOOKUP_STAGES, config.prefetch, int(pipeline_latency)
+    La, Q, L = int(address_stages), config.prefetch, int(pipeline_latency)
     mem = config.make_memory()
     d = mem.beat_interval
     pipe = consumer if consumer is not None else TexelPipeline(L, ready_pattern, max(64, 2 * n + L + 64, n_hint))
@@ -247,16 +247,22 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
     filled = [0] * nb
     queued = [0] * nb
     first_beat = [0] * nb
-    a, g, pr, e = [0] * n, [0] * n, [0] * n, [0] * n
+    a, b, g, pr, e = [0] * n, [0] * n, [0] * n, [0] * n, [0] * n
     miss_c = bw_c = fifo_c = victim_c = 0
     burst = 0
 
     for i in range(n):
-        # accept and tag check
+        # accept, lookup and tag check
         ai = a[i - 1] + 1 if i else 0
-        if La and i >= La and g[i - La] > ai:
-            ai = g[i - La]
-        gi = ai + La
+        if La and i >= La and b[i - La] > ai:
+            ai = b[i - La]
+        bi = ai + La
+        if i and b[i - 1] + 1 > bi:
+            bi = b[i - 1] + 1
+        if i >= 2 and g[i - 2] + 1 > bi:
+            bi = g[i - 2] + 1
+        b[i] = bi
+        gi = bi + LOOKUP_STAGES
         if i and g[i - 1] + max(1, misses[i - 1]) > gi:
             gi = g[i - 1] + max(1, misses[i - 1])
         if i >= Q and pr[i - Q] > gi:
@@ -267,7 +273,7 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
             victim_c += pr[v] + 1 - gi
             gi = pr[v] + 1
         g[i] = gi
-        a[i] = gi - La if La == 0 else ai
+        a[i] = bi if La == 0 else ai
         for j in range(misses[i]):
             f = mem.read(gi + 1 + j, address[burst], beats[burst])
             first_beat[burst] = f
@@ -303,7 +309,7 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
         "bursts": nb,
         "memory_bytes": {"index": int(per_cache[0]) * line_bytes[0], "raw": int(per_cache[1]) * line_bytes[1]},
         "burst_first": np.array(first_beat, np.int64),
-        "accept": np.array(a, np.int64), "tag": np.array(g, np.int64),
+        "accept": np.array(a, np.int64), "lookup": np.array(b, np.int64), "tag": np.array(g, np.int64),
         "read": np.array(pr, np.int64), "enter": np.array(e, np.int64),
         "memory": mem,
     }

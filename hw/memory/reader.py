@@ -85,6 +85,20 @@ def _log2(v: int) -> int:
     return v.bit_length() - 1
 
 
+def _skid(m, nx, name, load, sv):
+    """The lookup's two places for one field: the main register (returned; the check reads it),
+    loaded when ``load`` from the skid register when that holds a request (``sv``), else from
+    ``nx`` (the request on ``i``); and the skid register, loading ``nx`` whenever it is empty."""
+    nx = Value.cast(nx)
+    r = Signal(len(nx), name=name)
+    sk = Signal(len(nx), name=f"skid_{name}")
+    with m.If(~sv):
+        m.d.sync += sk.eq(nx)
+    with m.If(load):
+        m.d.sync += r.eq(Mux(sv, sk, nx))
+    return r
+
+
 class _Fields:
     """A struct's fields as separate signals (attributes by field name); ``value(layout)`` is their
     concatenation in the layout's bit order."""
@@ -204,20 +218,22 @@ class _Cache:
         """The value of the bank holding set ``s`` (small signals: hit, way, ...)."""
         return per_bank[0] if self.banks == 1 else Mux(s[0], per_bank[1], per_bank[0])
 
-    def lookup(self, m, line, load):
-        """The tag check's first cycle: at the clock edge when ``load``, registers the set and tag of
-        ``line`` (and of ``line + 1``: a second port, when the cache has two banks), and each bank's
-        tag row and touched bit for them, read from the LUT RAM (a bank holds the port whose set has
-        its parity). A row the tag check writes in this same cycle (the request ahead, in its second
-        cycle) is forwarded: the register takes the written row and touched bit, not the memory's old
-        ones. Only the tag check writes these rows, and it writes only when the request it checks
-        leaves, which is when a new one is loaded: so the registered rows are exact while a request
-        waits in the second cycle."""
+    def lookup(self, m, line, load, sv):
+        """The tag check's first cycle: the lookup registers the set and tag of ``line`` (and of
+        ``line + 1``: a second port, when the cache has two banks), and each bank's tag row and
+        touched bit for them, read from the LUT RAM (a bank holds the port whose set has its parity),
+        in two places (:func:`_skid`): the main register, which the check reads, loaded when
+        ``load``; and the skid register, which holds a request that arrived while the main one
+        waited (``sv``). A row the tag check writes in this same cycle (the request ahead, leaving
+        the check) is forwarded into the main register: it takes the written row and touched bit,
+        not the memory's (or the skid register's) old ones. Only the tag check writes these rows,
+        and only when its request leaves, which is when the main register loads: so no register
+        holds a stale row (the skid register is loaded only in cycles without a write, and moves
+        into the main register, forwarded, in the cycle of the next one)."""
         nports = self.banks
         sb = max(1, self.set_bits)
-        self.rset = [Signal(sb, name=f"{self.name}_set{k}") for k in range(nports)]
-        self.rtag = [Signal(self.tag_bits, name=f"{self.name}_line_tag{k}") for k in range(nports)]
         nsets, ntags = [], []
+        self.rset, self.rtag = [], []
         for k in range(nports):
             ln = line if k == 0 else line + 1
             s = Signal(sb, name=f"{self.name}_next_set{k}")
@@ -225,8 +241,8 @@ class _Cache:
             m.d.comb += [s.eq(ln[:self.set_bits] if self.set_bits else 0), t.eq(ln >> self.set_bits)]
             nsets.append(s)
             ntags.append(t)
-            with m.If(load):
-                m.d.sync += [self.rset[k].eq(s), self.rtag[k].eq(t)]
+            self.rset.append(_skid(m, s, f"{self.name}_set{k}", load, sv))
+            self.rtag.append(_skid(m, t, f"{self.name}_line_tag{k}", load, sv))
         self.rrow = [Signal(self.lines.shape, name=f"{self.name}{b}_row" if self.banks > 1 else f"{self.name}_row")
                      for b in range(self.banks)]
         self.rtouched = [Signal(name=f"{self.name}{b}_row_touched" if self.banks > 1 else f"{self.name}_row_touched")
@@ -243,18 +259,25 @@ class _Cache:
                 t = Signal(self.tag_bits, name=f"{n}_next_tag")
                 m.d.comb += [s.eq(Mux(nsets[0][0] == b, nsets[0], nsets[1])),
                              t.eq(Mux(nsets[0][0] == b, ntags[0], ntags[1]))]
-                rs, rt = Signal(sb, name=f"{n}_set"), Signal(self.tag_bits, name=f"{n}_tag")
-                with m.If(load):
-                    m.d.sync += [rs.eq(s), rt.eq(t)]
-                self.rbank.append((rs, rt))
+                self.rbank.append((_skid(m, s, f"{n}_set", load, sv), _skid(m, t, f"{n}_tag", load, sv)))
             rd = self.lines.read(m, b, s, f"{n}_next_row")
             r = self.lines.row(s)
             touched = self.touched[b]
             here = touched.bit_select(r, 1) if len(touched) > 1 else touched
+            # the skid register's row, its address and touched bit
+            sk_row = Signal(self.lines.shape, name=f"skid_{n}_row")
+            sk_addr = Signal(len(r), name=f"skid_{n}_row_addr")
+            sk_t = Signal(name=f"skid_{n}_row_touched")
+            with m.If(~sv):
+                m.d.sync += [sk_row.eq(rd), sk_addr.eq(r), sk_t.eq(here)]
+            src_row = Signal(self.lines.shape, name=f"{n}_src_row")
+            src_addr = Signal(len(r), name=f"{n}_src_row_addr")
+            m.d.comb += [src_row.eq(Mux(sv, sk_row, rd)), src_addr.eq(Mux(sv, sk_addr, r))]
             fwd = Signal(name=f"{n}_fwd")
-            m.d.comb += fwd.eq(self.w_act[b] & (self.w_addr[b] == r) if len(touched) > 1 else self.w_act[b])
+            m.d.comb += fwd.eq(self.w_act[b] & (self.w_addr[b] == src_addr) if len(touched) > 1 else self.w_act[b])
             with m.If(load):
-                m.d.sync += [self.rrow[b].eq(Mux(fwd, self.w_row[b], rd)), self.rtouched[b].eq(here | fwd)]
+                m.d.sync += [self.rrow[b].eq(Mux(fwd, self.w_row[b], src_row)),
+                             self.rtouched[b].eq(Mux(sv, sk_t, here) | fwd)]
 
     def check(self, m, actives, take):
         """The tag check's second cycle, on what :meth:`lookup` registered: ``actives`` is whether each
@@ -438,34 +461,38 @@ class CachedReader(wiring.Component):
         m.d.comb += [a0.eq(req.word * wb), a1.eq((req.word + 1) * wb), ra.eq(self._raw_base + req.word * 4)]
         il, rl = _log2(ic.shape.line), _log2(rc.shape.line)
         line0, line1, rline = a0 >> il, a1 >> il, ra >> rl
-        # the lookup is a stream register: it takes a request when empty or when its request leaves
-        # the check (``take``); the check (the second cycle) works from its registers
+        # The lookup holds up to two requests: the main register (``lv``), which the check works
+        # from, and a skid register (``sv``) that takes the request on ``i`` while the main one waits,
+        # so that ``i.ready`` is a register (``~sv``) and the check's decision (``take``) does not
+        # reach the stages in front. The main register loads when empty or when its request leaves
+        # the check (``take``): from the skid register when that holds one, else from ``i``.
         lv = Signal(name="lookup_valid")
+        sv = Signal(name="skid_valid")
         load = Signal()
         take = Signal()
         m.d.comb += load.eq(~lv | take)
         with m.If(load):
-            m.d.sync += lv.eq(self.i.valid)
-        ic.lookup(m, line0, load)
-        rc.lookup(m, rline, load)
-        l_raw, l_two, l_tag = Signal(name="lookup_raw"), Signal(name="lookup_two"), Signal(max(1, self._tag_width),
-                                                                                      name="lookup_tag")
-        l_beat0, l_beat1 = (Signal(max(1, _log2(max(beats))), name=n) for n in ("lookup_beat0", "lookup_beat1"))
-        l_off0, l_off1 = Signal(max(1, _log2(bus // min(wb, 4)) or 1), name="lookup_off0"), \
-            Signal(max(1, _log2(bus // wb) or 1), name="lookup_off1")
-        l_addr = [Signal(self._addr_width, name=f"lookup_line_addr{j}") for j in range(3)]   # line0, line0 + 1, raw
-        with m.If(load):
-            m.d.sync += [
-                l_raw.eq(req.raw), l_two.eq(~req.raw & req.straddle & (line1 != line0)),
-                l_beat0.eq(Mux(req.raw, (ra & (rc.shape.line - 1)) >> _log2(bus),
-                               (a0 & (ic.shape.line - 1)) >> _log2(bus))),
-                l_beat1.eq((a1 & (ic.shape.line - 1)) >> _log2(bus)),
-                l_off0.eq(Mux(req.raw, (ra & (bus - 1)) >> 2, (a0 & (bus - 1)) >> _log2(wb))),
-                l_off1.eq((a1 & (bus - 1)) >> _log2(wb)),
-                l_addr[0].eq(line0 << il), l_addr[1].eq((line0 + 1) << il), l_addr[2].eq(rline << rl),
-            ]
-            if self._tag_width:
-                m.d.sync += l_tag.eq(req.tag)
+            m.d.sync += lv.eq(sv | self.i.valid)
+        with m.If(sv):
+            m.d.sync += sv.eq(~take)
+        with m.Else():
+            m.d.sync += sv.eq(self.i.valid & lv & ~take)
+        ic.lookup(m, line0, load, sv)
+        rc.lookup(m, rline, load, sv)
+
+        def field(nx, name):
+            return _skid(m, nx, name, load, sv)
+        l_raw = field(req.raw, "lookup_raw")
+        l_two = field(~req.raw & req.straddle & (line1 != line0), "lookup_two")
+        l_tag = field(req.tag, "lookup_tag") if self._tag_width else C(0, 1)
+        l_beat0 = field(Mux(req.raw, (ra & (rc.shape.line - 1)) >> _log2(bus), (a0 & (ic.shape.line - 1)) >> _log2(bus))
+                        [:max(1, _log2(max(beats)))], "lookup_beat0")
+        l_beat1 = field(((a1 & (ic.shape.line - 1)) >> _log2(bus))[:max(1, _log2(max(beats)))], "lookup_beat1")
+        l_off0 = field(Mux(req.raw, (ra & (bus - 1)) >> 2, (a0 & (bus - 1)) >> _log2(wb))[:max(1, _log2(bus // min(wb, 4)) or 1)],
+                       "lookup_off0")
+        l_off1 = field(((a1 & (bus - 1)) >> _log2(wb))[:max(1, _log2(bus // wb) or 1)], "lookup_off1")
+        l_addr = [field((x << sh)[:self._addr_width], f"lookup_line_addr{j}")     # line0, line0 + 1, raw
+                  for j, (x, sh) in enumerate(((line0, il), (line0 + 1, il), (rline, rl)))]
         two = l_two
         # port 1 looks up the line after line0 (line1 when ``two``; unused otherwise)
         (s0, hit0, way0, busy0), (s1, hit1, way1, busy1) = ic.check(m, [lv & ~l_raw, lv & two], take)
@@ -522,7 +549,7 @@ class CachedReader(wiring.Component):
         m.d.comb += [
             check_ready.eq(~slot_v[1] & (~slot_v[0] | self.axi.arready) & ((level != Q) | pop) & ~busy),
             take.eq(lv & (self.check_go if self._joint else check_ready)),
-            self.i.ready.eq(load),
+            self.i.ready.eq(~sv),
         ]
         # the entry of the request being checked
         # The entry's fields as separate signals, joined only where the FIFO stores them, and there
