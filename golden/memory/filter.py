@@ -14,11 +14,11 @@ its slots (``k + lanes g`` of every pixel's group ``g``) through its own index a
 (:func:`golden.memory.timing.plan` of its stream: numpy), and the rules of
 :mod:`golden.memory.timing` hold per group with the lanes joined:
 
-- ``a[n]`` (group n enters the address stages) ``>= a[n-1] + 1``, ``>= g[n - S]`` with ``S =
-  ADDRESS_STAGES + LOOKUP_STAGES`` (the address stages and the lookup, the tag check's first
-  cycle);
+- ``a[n]`` (group n enters the address stages) ``>= a[n-1] + 1``, ``>= b[n - ADDRESS_STAGES]``;
   ``a[0] = FOOTPRINT_LATENCY``;
-- ``g[n]`` (every lane's tag check, the same cycle) ``>= a[n] + S``, ``>= g[n-1] +
+- ``b[n]`` (every lane's lookup, the tag check's first cycle, takes group n; two places, its ready
+  registered) ``>= a[n] + ADDRESS_STAGES``, ``>= b[n-1] + 1``, ``>= g[n-2] + 1``;
+- ``g[n]`` (every lane's tag check, the same cycle) ``>= b[n] + LOOKUP_STAGES``, ``>= g[n-1] +
   max(1, max_k misses_k[n-1])``, and for every lane ``>= p_k[n-Q]`` and ``>= p_k[v_k] + 1`` (its
   victim rule);
 - lane k's j-th burst of group n is offered in ``g[n] + 1 + j`` and issued by the arbiter's rule

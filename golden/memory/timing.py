@@ -12,10 +12,11 @@ The unit (docs/memory.md)
                                                                                           responses
 
 The address stages (descriptor, block address) compute the words a request reads; the tag check
-takes two cycles: the lookup (a stream register of the cache block, ``LOOKUP_STAGES``) reads the
-tag rows of the request's sets and registers them (a row the check writes in that cycle is
-forwarded to it), and the check proper compares them and looks up its references (:mod:`golden.memory.system`) in the index or raw cache, allocating a line and
-issuing its burst on a miss; the reference waits in a FIFO of ``Q = config.prefetch`` entries until
+takes two cycles: the lookup (``LOOKUP_STAGES``: two places, a main and a skid register, so its
+ready is a register) reads the tag rows of the request's sets and registers them (a row the check
+writes in that cycle is forwarded to it), and the check proper compares them for its references
+(:mod:`golden.memory.system`) in the index or raw cache, allocating a line and issuing its burst
+on a miss; the reference waits in a FIFO of ``Q = config.prefetch`` entries until
 its lines are filled; the data read takes the words from the cache into an output register, which
 the texel pipeline (``hw.texel_fetch``'s, ``LATENCY`` registers and the skid register, advancing on
 its registered ``advance``) accepts. ``Q = 1`` is the blocking cache.
@@ -23,10 +24,15 @@ its registered ``advance``) accepts. ``Q = 1`` is the blocking cache.
 The rules, in cycles (each event at the first cycle that meets all its rules; requests are presented
 back to back from cycle 0; ``x[n-k]`` for ``n < k`` imposes nothing):
 
-- ``a[n]`` (request n accepted): ``>= a[n-1] + 1``, ``>= g[n - S]`` with ``S = ADDRESS_STAGES +
-  LOOKUP_STAGES`` (the address stages and the lookup are a chain of stream registers that moves as
-  a whole: a stage takes a new item when its item leaves, in the same cycle).
-- ``g[n]`` (tag check, its second cycle, where it is decided and the state written): ``>= a[n] + S``; ``>= g[n-1] + max(1, misses[n-1])`` (one burst
+- ``a[n]`` (request n accepted): ``>= a[n-1] + 1``, ``>= b[n - ADDRESS_STAGES]`` (the address
+  stages are a chain of stream registers that moves as a whole against the lookup's acceptance: a
+  stage takes a new item when its item leaves, in the same cycle).
+- ``b[n]`` (the lookup, the tag check's first cycle, takes request n): ``>= a[n] + ADDRESS_STAGES``;
+  ``>= b[n-1] + 1``; ``>= g[n-2] + 1`` (the lookup has two places, a main and a skid register, and
+  its ready is the registered ``~skid_valid``: it takes a request when at most one of those it holds
+  was still unchecked at the start of the cycle). With ``address_stages = 0``, ``a[n] = b[n]``.
+- ``g[n]`` (tag check, its second cycle, where it is decided and the state written): ``>= b[n] +
+  LOOKUP_STAGES``; ``>= g[n-1] + max(1, misses[n-1])`` (one burst
   issued per cycle); ``>= p[n-Q]`` (a FIFO entry frees when its reference is read); for a miss whose
   victim line has a reference ``v`` not yet read, ``>= p[v] + 1`` (a line is never replaced under a
   waiting reference).
@@ -228,12 +234,12 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
 
     ``ready_pattern(length)`` gives ``o.ready`` for cycles ``0 .. length-1`` (bool array, every
     length a prefix of one sequence). ``address_stages`` = 0 is the cache block alone
-    (``hw.memory``): the input handshake is the lookup's (``a[n]``; the chain is the lookup alone).
+    (``hw.memory``): the input handshake is the lookup's (``a[n] = b[n]``).
     ``consumer`` (default the texel pipeline, :class:`TexelPipeline`) takes each item from the
     output register (``take(s) -> e``; :class:`StreamSink` for the cache block alone, whose
     ``transfer`` are then the output's transfers). Returns a dict: ``cycles``, ``transfer`` (int64 (N,)),
     ``stall_cycles`` (cause -> cycles), ``bursts``, ``memory_bytes`` (per cache), ``burst_first``
-    (int64 (B,), the first beat of each burst) and the per-stage event times ``accept``, ``tag``,
+    (int64 (B,), the first beat of each burst) and the per-stage event times ``accept``, ``lookup``, ``tag``,
     ``read``, ``enter`` (int64 (N,))."""
     n = len(p.misses)
     La, Q, L = int(address_stages), config.prefetch, int(pipeline_latency)

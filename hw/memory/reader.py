@@ -3,20 +3,25 @@
 The cache block of the cached unit (docs/memory.md), without the address stages in front of it and
 the texel pipeline behind it::
 
-    i (raw, word, straddle, tag) -> tag check -> reference FIFO (Q) -> data read -> o (words, tag)
-                                       | AR (one burst per miss)          ^
-                                       v                                  | R (line fills)
-                                     AXI4 read master  <----------------  memory
+    i (raw, word, straddle, tag) -> lookup (2 places) -> tag check -> reference FIFO (Q) -> data read -> o
+                                                              | AR (one burst per miss)      ^
+                                                              v                              | R (line fills)
+                                                            AXI4 read master  <-----------  memory
 
 Timing (cycle for cycle :mod:`golden.memory.timing` with ``address_stages=0`` and a stream sink as
-consumer; with every reference a hit: one request per cycle, 2 cycles from ``i`` to ``o``):
+consumer; with every reference a hit: one request per cycle, 3 cycles from ``i`` to ``o``):
 
-* **Tag check** (the cycle ``i`` transfers): the request's references are looked up (an index
-  request reads word ``w``, and ``w + 1`` when ``straddle``, a second lookup when it lies in the next
-  line; a raw request one raw word). A miss allocates the LRU way at once (an empty way first) and
-  queues its burst; the reference enters the FIFO. ``i.ready`` is low while the FIFO is full (and not
-  read this cycle), while the second of two bursts of the previous request waits, or while a miss's
-  victim line still has a reference in the FIFO.
+* **Lookup** (the tag check's first cycle; ``i`` transfers in cycle ``b``): the request's lines, sets
+  and tags are computed and each bank's tag row (tags, LRU ages, valid bits) is read from LUT RAM and
+  registered, the row the check writes in that cycle forwarded. The lookup has two places, a main
+  register (read by the check) and a skid register (a request arriving while the main one waits),
+  so ``i.ready`` is a register: ``~skid_valid``, i.e. ``b[n] >= g[n-2] + 1``.
+* **Tag check** (cycle ``g >= b + 1``, from the main register): the request's references are compared
+  (an index request reads word ``w``, and ``w + 1`` when ``straddle``, a second lookup when it lies
+  in the next line; a raw request one raw word). A miss allocates the LRU way at once (an empty way
+  first) and queues its burst; the reference enters the FIFO. The check waits while the FIFO is full
+  (and not read this cycle), while the second of two bursts of the previous request waits, or while
+  a miss's victim line still has a reference in the FIFO.
 * **AR**: the j-th burst of a request checked in cycle ``g`` is on AR in cycle ``g + 1 + j`` (when
   ``arready`` is high, as the golden memory assumes; otherwise it waits and holds the tag check).
   INCR, ``line / bus`` beats, ``araddr`` the line's byte address, never crossing 4 KB.
