@@ -39,6 +39,10 @@
 
 double sc_time_stamp() { return 0; }
 
+// A cycle's evaluation inlined into batch.h's run loop, the model's clocked region included (g++:
+// flatten inlines recursively; clang++ gets sim/backends/verilator.py's CLANG_INLINE as well).
+#define VQ_FLATTEN __attribute__((flatten))
+
 #if VQ_HALVES
 namespace {
 // The two halves, each a Verilated harness (one eval() per cycle, as below), in one context. The
@@ -75,7 +79,7 @@ struct Sim {
         back->tick ^= 1; back->eval();
         back->rst = 0;
     }
-    vq_cycle_out front_cycle(bool i_valid, const vq_payload &p, bool o_ready, uint64_t *strobes,
+    VQ_FLATTEN vq_cycle_out front_cycle(bool i_valid, const vq_payload &p, bool o_ready, uint64_t *strobes,
                              vq_occupancy &occ, uint64_t *occ_sums, Record &rec) {
         Vfront *const top = front.get();
         top->i_valid = i_valid;
@@ -93,7 +97,7 @@ struct Sim {
         occ.add(VQ_GET_VALID(top), occ_sums);
         return r;
     }
-    uint32_t back_cycle(const Record &rec) {
+    VQ_FLATTEN uint32_t back_cycle(const Record &rec) {
         Vback *const top = back.get();
         top->link = rec.link;
         top->tick ^= 1; VQ_EVAL(back, top);
@@ -130,7 +134,7 @@ struct Sim {
         top->tick ^= 1; top->eval();
         top->rst = 0;
     }
-    template<class F> void cycle(F &&sample) {
+    template<class F> VQ_FLATTEN void cycle(F &&sample) {
         top->tick ^= 1; VQ_EVAL(top, top);
         sample();
     }
