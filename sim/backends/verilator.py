@@ -29,7 +29,7 @@ from .toolchain import (ToolchainError, cache_dir, cached_build, digest, find_cx
                         run_tool, source_stamp, tool_version)
 
 __all__ = ["run", "build_verilator", "build_design", "open_verilator", "build_library", "VERILATOR_FLAGS",
-           "CXXFLAGS", "MODEL_OPT", "SLOW_OPT", "MODEL_CXXFLAGS", "CLANG_INLINE", "model_inline_flags",
+           "CXXFLAGS", "MODEL_OPT", "SLOW_OPT", "MODEL_CXXFLAGS", "CLANG_TUNING", "model_tuning_flags",
            "verilator_include_dir", "verilator_runtime",
            "model_sources", "harness_verilog", "top_ports", "HARNESS_NAME", "eval_header", "fast_eval"]
 
@@ -45,13 +45,18 @@ MODEL_OPT = "-O3"
 #: The model's run-once ("slow") C++ holds the memories' initial blocks (one statement per word): at
 #: -O2 g++ spends about two minutes on the default unit's, at -O0 seven seconds.
 SLOW_OPT = "-O0"
-#: The model's per-cycle code inlined into the driver's run loop (batch.h, through the driver's
-#: ``cycle``): clang's inliner otherwise keeps the clocked region (``_nba_sequent``, some 5 KB of
-#: code on the default unit) a call, and the loop around it cannot keep the model's state in
-#: registers across the ports it sets and reads (measured on the default unit: 83-85 -> 75-77 ns a
-#: cycle, thread CPU time; docs/simulation.md). g++ gets the same from the driver's ``flatten``
-#: attribute (recursive in GCC). :func:`model_inline_flags`.
-CLANG_INLINE = ["-mllvm", "-inline-threshold=100000"]
+#: clang++ options for the model's per-cycle C++ (``model.cc``), measured on the default unit
+#: (thread CPU time a cycle, each against the build without it, alternated in one process;
+#: docs/simulation.md, Verilator section): the clocked region inlined into the driver's run loop
+#: (batch.h, through the driver's ``cycle``; clang's inliner otherwise keeps ``_nba_sequent``, some
+#: 5 KB of code, a call, and the loop cannot keep the model's state in registers across the ports
+#: it sets and reads), 83-85 -> 75-77 ns; and if-conversion of larger two-way selects (the bank and
+#: word selects Verilator writes as nested ``?:`` and ``if``: branches on random bits otherwise),
+#: 70-71 -> 68-69.5 ns. LLVM's own options (``-mllvm``): :func:`model_tuning_flags` probes them and
+#: drops them if the compiler refuses them. g++ gets the inlining from the driver's ``flatten``
+#: attribute (recursive in GCC).
+CLANG_TUNING = ["-mllvm", "-inline-threshold=100000", "-mllvm", "-phi-node-folding-threshold=40",
+                "-mllvm", "-two-entry-phi-node-folding-threshold=40"]
 #: What Verilator's makefile (verilated.mk) defines for a model without coverage, SystemC or tracing,
 #: and the warnings it silences in generated code; hidden symbols, so that the model's functions bind
 #: inside the library (no calls through the PLT).
@@ -61,10 +66,23 @@ MODEL_CXXFLAGS = ["-fvisibility=hidden", "-DVERILATOR=1", "-DVM_COVERAGE=0", "-D
                  "-Wno-unused-parameter", "-Wno-unused-variable", "-Wno-shadow"]
 
 
-def model_inline_flags(cxx: str) -> list:
-    """The flags that inline the model's per-cycle code into the run loop (``CLANG_INLINE`` for
-    clang++, none for g++, whose ``flatten`` does it)."""
-    return list(CLANG_INLINE) if "clang" in tool_version(cxx).lower() else []
+_tuning: dict = {}
+
+
+def model_tuning_flags(cxx: str) -> list:
+    """``CLANG_TUNING`` for a clang++ that accepts it (probed once per compiler: an empty
+    translation unit compiled with them), else none (g++, or a clang without those options)."""
+    import subprocess
+    if cxx not in _tuning:
+        ok = "clang" in tool_version(cxx).lower()
+        if ok:
+            try:
+                ok = subprocess.run([cxx, "-x", "c++", "-", "-c", "-o", os.devnull, *CLANG_TUNING], input="",
+                                    capture_output=True, text=True, timeout=60).returncode == 0
+            except (OSError, subprocess.SubprocessError):
+                ok = False
+        _tuning[cxx] = list(CLANG_TUNING) if ok else []
+    return list(_tuning[cxx])
 
 
 def verilator_include_dir(verilator: str) -> str:
@@ -309,7 +327,7 @@ def build_library(folder: str, models, header: str, *, verilator: str, cxx: str,
     with concurrent.futures.ThreadPoolExecutor(2) as pool:     # the two compilers side by side
         slow_job = pool.submit(run_tool, [*common, SLOW_OPT, "-c", "slow.cc", "-o", "slow.o"], folder,
                                f"C++ compilation of {what} (run-once code)", "slow.log")
-        run_tool([*common, MODEL_OPT, *model_inline_flags(cxx), "-c", "model.cc", "-o", "model.o"], folder,
+        run_tool([*common, MODEL_OPT, *model_tuning_flags(cxx), "-c", "model.cc", "-o", "model.o"], folder,
                  f"C++ compilation of {what}", "build.log")
         slow_job.result()
     run_tool([cxx, "-shared", "-fvisibility=hidden", "model.o", "slow.o",
@@ -368,7 +386,7 @@ def build_design(info: DesignInfo, verilog, *, elaborated: float | None = None, 
     steps = {"elaborate": time.perf_counter() - t0}
     drivers = driver_sources("verilator_driver.cc", *SHARED_DRIVER_SOURCES)
     extra = ["--threads", str(threads)] if threads > 1 else []
-    flags = VERILATOR_FLAGS + extra + CXXFLAGS + [MODEL_OPT, SLOW_OPT] + MODEL_CXXFLAGS + model_inline_flags(cxx)
+    flags = VERILATOR_FLAGS + extra + CXXFLAGS + [MODEL_OPT, SLOW_OPT] + MODEL_CXXFLAGS + model_tuning_flags(cxx)
     this = b""
     for mod in (__file__, _verilog_file()):     # (ports_header is part of the build; so is the export)
         with open(os.path.abspath(mod), "rb") as f:

@@ -43,7 +43,7 @@
 double sc_time_stamp() { return 0; }
 
 // A cycle's evaluation inlined into batch.h's run loop, the model's clocked region included (g++:
-// flatten inlines recursively; clang++ gets sim/backends/verilator.py's CLANG_INLINE as well).
+// flatten inlines recursively; clang++ gets sim/backends/verilator.py's CLANG_TUNING as well).
 #define VQ_FLATTEN __attribute__((flatten))
 
 #if VQ_HALVES
