@@ -52,6 +52,22 @@ def test_perfect_cache_no_backpressure(ts):
     assert out["bursts"] == 0 and out["stall_cycles"]["miss"] == 0
 
 
+@pytest.mark.parametrize("prefetch", [1, 4])
+def test_lookup_two_places(ts, prefetch):
+    """The lookup (the tag check's first cycle) takes request n when at most one of the requests it
+    holds is unchecked (``b[n] >= g[n-2] + 1``: two places, its ready registered) and the check follows
+    it (``g[n] >= b[n] + 1``); the address stages move against it (``a[n] >= b[n-2]``). On a stream
+    that stalls (small caches, 60 cycles of memory), each rule binds somewhere."""
+    req = random_requests(ts, 400, seed=5)
+    cfg = MemoryConfig(index_cache=CacheShape(128, 16, 2), raw_cache=CacheShape(64, 16, 2), prefetch=prefetch,
+                       latency=60, bandwidth=16, bus_bytes=16)
+    out = run_requests(ts, req, cfg, L, always)
+    a, b, g = out["accept"], out["lookup"], out["tag"]
+    assert (g >= b + 1).all() and (b >= a + 2).all()
+    assert (b[2:] >= g[:-2] + 1).all() and (b[2:] == g[:-2] + 1).any()
+    assert (a[2:] >= b[:-2]).all() and (a[2:] == b[:-2]).any() and (a[2:] > a[:-2] + 2).any()
+
+
 def test_every_request_a_new_line_blocking():
     """A blocking cache (prefetch 1) and a stream whose every request misses: each request waits for
     its line, issued the cycle after its tag check; worked out from the rules: the data read of n is
