@@ -45,8 +45,8 @@ from .cxxrtl_inplace import inplace_cycle, inplace_rewrite
 from .design import HALVES, DesignInfo, design_info
 from .interface import SimResult
 from .yosys import fragment_rtlil, rtlil_script, run_yosys
-from .toolchain import (ToolchainError, cached_build, digest, find_cxx, index_get, index_put, run_tool,
-                        source_stamp, texture_set_digest, tool_version)
+from .toolchain import (CLANG_INLINE, ToolchainError, cached_build, digest, find_cxx, index_get, index_put,
+                        model_tuning_flags, run_tool, source_stamp, texture_set_digest, tool_version)
 
 __all__ = ["cxxrtl_sources", "cxxrtl_program", "write_cxxrtl", "blank_memories", "memory_initialisers",
            "rewrite", "PASSES", "guarded_writes", "build_cxxrtl", "build_design", "open_design", "driver_sources", "source_stamp",
@@ -472,7 +472,7 @@ def build_design(info: DesignInfo, *, cxxflags=None, compile: bool = True, elabo
     whether it exists). ``elaborated``: the ``perf_counter`` time the elaboration started (for the
     build's ``steps``)."""
     cxx = find_cxx()
-    flags = list(cxxflags or CXXFLAGS)
+    flags = list(cxxflags or CXXFLAGS) + model_tuning_flags(cxx, CLANG_INLINE)
     t0 = time.perf_counter() if elaborated is None else elaborated
     steps = {"elaborate": time.perf_counter() - t0}
     drivers = driver_sources("driver.cc", "vq_ops.h", *SHARED_DRIVER_SOURCES)
