@@ -54,7 +54,8 @@ __all__ = ["cxxrtl_sources", "cxxrtl_program", "write_cxxrtl", "blank_memories",
            "run_unit", "open_cxxrtl", "load_set", "CXXFLAGS", "ready_pattern", "DRIVER_DIR"]
 
 DRIVER_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "drivers")
-#: Compiler flags of the CXXRTL library (see docs/simulation.md for the build time / speed trade).
+#: Compiler flags of the CXXRTL library (see docs/simulation.md for the build time / speed trade);
+#: with clang++, :func:`build_design` adds ``toolchain.CLANG_INLINE``.
 CXXFLAGS = ["-std=c++17", "-O3", "-fPIC", "-shared", "-fvisibility=hidden", "-DNDEBUG"]
 #: batch.h's counter slots: then one per strobe from C_STROBES, then one per stage.
 C_CYCLES, C_ACCEPTED, C_RESPONSES, C_BAD_TAG, C_BAD_TAG_VALUE, C_STROBES = range(6)
@@ -470,7 +471,9 @@ def build_design(info: DesignInfo, *, cxxflags=None, compile: bool = True, elabo
     """The CXXRTL library of any unit (built or taken from the cache). With ``compile=False``
     nothing is compiled: the result names the library the build would produce (``cached`` tells
     whether it exists). ``elaborated``: the ``perf_counter`` time the elaboration started (for the
-    build's ``steps``)."""
+    build's ``steps``). ``cxxflags`` (default ``CXXFLAGS``) are followed by clang++'s inlining
+    threshold (:data:`sim.backends.toolchain.CLANG_INLINE`, probed by
+    :func:`sim.backends.toolchain.model_tuning_flags`: none for g++), part of the library's key."""
     cxx = find_cxx()
     flags = list(cxxflags or CXXFLAGS) + model_tuning_flags(cxx, CLANG_INLINE)
     t0 = time.perf_counter() if elaborated is None else elaborated

@@ -78,19 +78,22 @@ def find_cxx() -> str:
     return find_tool("g++")
 
 
-#: clang++'s inliner told to inline (almost) everything: a model's per-cycle code (the Verilator
-#: model's clocked region, some 5 KB of code; CXXRTL's ``eval``) inlined into the driver's run loop
-#: (batch.h), so the loop keeps the model's state in registers across the ports it sets and reads.
-#: Measured on the default unit, thread CPU time a cycle, each build against the one without it,
-#: alternated in one process (docs/simulation.md, Verilator section): Verilator 83-85 -> 75-77 ns,
-#: CXXRTL 68.8-69.1 -> 65.5 ns. LLVM's own options (``-mllvm``), probed (:func:`model_tuning_flags`).
-CLANG_INLINE = ["-mllvm", "-inline-threshold=100000"]
-#: The Verilator model's options (sim.backends.verilator): the inlining and if-conversion of larger
-#: two-way selects (the bank and word selects Verilator writes as nested ``?:`` and ``if``: branches
-#: on random bits otherwise), 70-71 -> 68-69.5 ns. (On CXXRTL the thresholds cost what they buy
-#: Verilator: 67.0-67.3 ns with them against 65.5 without, so CXXRTL takes ``CLANG_INLINE``.)
-CLANG_TUNING = CLANG_INLINE + ["-mllvm", "-phi-node-folding-threshold=40",
-                               "-mllvm", "-two-entry-phi-node-folding-threshold=40"]
+#: clang++'s options for a compiled model, measured on the default unit (thread CPU time a cycle of
+#: ``vq_run``, each build against the one without, alternated in one process; compile time as CPU
+#: seconds of the one compiler process; docs/simulation.md, "Verilator against CXXRTL, third
+#: pass"). The Verilator model (``CLANG_TUNING``): the inliner told to inline (almost) everything,
+#: so that the clocked region (some 5 KB of code) joins the driver's run loop (batch.h) and the loop
+#: keeps the model's state in registers across the ports it sets and reads, 83-85 -> 75-77 ns; and
+#: if-conversion of larger two-way selects (the bank and word selects Verilator writes as nested
+#: ``?:`` and ``if``: branches on random bits otherwise), 70-71 -> 68-69.5 ns.
+CLANG_TUNING = ["-mllvm", "-inline-threshold=100000", "-mllvm", "-phi-node-folding-threshold=40",
+                "-mllvm", "-two-entry-phi-node-folding-threshold=40"]
+#: The CXXRTL model (``sim.backends.cxxrtl``): the inliner's threshold raised from clang's 225 to
+#: 5000, 68.8 -> 66.7 ns a cycle, compile 3.3 -> 5.8 s on the default unit and 16.4 -> 18.9 s on the
+#: texture filter. (100000, as the Verilator model's: 65.7 ns, but 14.8 s and 45.2 s to compile;
+#: 1000: 68.8 ns, no gain; the if-conversion thresholds on top of the inlining: 66.5 against 65.7,
+#: worse.)
+CLANG_INLINE = ["-mllvm", "-inline-threshold=5000"]
 
 _tuning: dict = {}
 

@@ -31,7 +31,7 @@ from .toolchain import (CLANG_TUNING, ToolchainError, cache_dir, cached_build, d
 __all__ = ["run", "build_verilator", "build_design", "open_verilator", "build_library", "VERILATOR_FLAGS",
            "CXXFLAGS", "MODEL_OPT", "SLOW_OPT", "MODEL_CXXFLAGS", "CLANG_TUNING", "model_tuning_flags",
            "verilator_include_dir", "verilator_runtime",
-           "model_sources", "harness_verilog", "top_ports", "HARNESS_NAME", "eval_header", "fast_eval", "eval_path", "region_calls"]
+           "model_sources", "harness_verilog", "top_ports", "HARNESS_NAME", "eval_header", "fast_eval"]
 
 VERILATOR_FLAGS = ["--cc", "-O3", "--x-assign", "fast", "--x-initial", "fast",
                    "--noassert", "-Wno-fatal", "-Wno-lint", "-Wno-style"]
@@ -45,10 +45,11 @@ MODEL_OPT = "-O3"
 #: The model's run-once ("slow") C++ holds the memories' initial blocks (one statement per word): at
 #: -O2 g++ spends about two minutes on the default unit's, at -O0 seven seconds.
 SLOW_OPT = "-O0"
-#: clang++ options for the model's per-cycle C++ (``model.cc``): :data:`sim.backends.toolchain.CLANG_TUNING`,
-#: probed by :func:`sim.backends.toolchain.model_tuning_flags` (the CXXRTL backend's build takes the
-#: inlining part, ``CLANG_INLINE``). g++ gets the inlining from the driver's ``flatten`` attribute
-#: (recursive in GCC).
+#: clang++ options for the model's per-cycle C++ (``model.cc``): :data:`sim.backends.toolchain.CLANG_TUNING`
+#: (the clocked region inlined into the driver's run loop, and if-conversion of larger two-way
+#: selects), probed by :func:`sim.backends.toolchain.model_tuning_flags`, the helper the CXXRTL
+#: backend's build takes its own clang options through. g++ gets the inlining from the driver's
+#: ``flatten`` attribute (recursive in GCC).
 #: What Verilator's makefile (verilated.mk) defines for a model without coverage, SystemC or tracing,
 #: and the warnings it silences in generated code; hidden symbols, so that the model's functions bind
 #: inside the library (no calls through the PLT).
@@ -222,116 +223,40 @@ def model_sources(obj: str, prefix: str = "Vtop") -> tuple[list[str], list[str]]
     return lists["FAST"], lists["SLOW"]
 
 
-#: Part of the library's cache key: what :func:`eval_header` writes follows from the generated C++,
-#: which the key does not hash, so a change to how it chooses a path must name a new scheme.
-EVAL_SCHEME = "eval.h: regions, eval, eval() (2)"
-
-
-def _bodies(text: str, root: str) -> dict:
-    """{function name after ``{root}___``: its body, without Verilator's boilerplate (the unused
-    guard, the symbol table pointer, debug messages and ``VL_DEBUG`` blocks)}, of every
-    ``void {root}___name({root}* vlSelf)`` defined in ``text``."""
-    out = {}
-    pat = re.compile(rf"^(?:VL_INLINE_OPT )?void {root}___(\w+)\({root}\* vlSelf\) \{{\n(.*?)^\}}\n", re.S | re.M)
-    for name, body in pat.findall(text):
-        body = re.sub(r"^#ifdef VL_DEBUG\n.*?^#endif[^\n]*\n", "", body, flags=re.S | re.M)
-        lines = [ln.strip() for ln in body.splitlines()]
-        out[name] = "\n".join(ln for ln in lines if ln and not ln.startswith(
-            ("if (false && vlSelf)", f"V{root[1:].split('___')[0]}__Syms* const", "VL_DEBUG_IF(", "// Body")))
-    return out
-
-
-def _region_calls(body: str, region: str, root: str):
-    """The functions ``{root}___{region}_sequent__TOP__N`` that ``body`` (the model's
-    ``___eval_{region}``) calls, when it is nothing but those calls under the region's trigger 0;
-    else None."""
-    m = re.fullmatch(rf"if \(vlSelf->__V{region}Triggered\.at\(0U\)\) \{{\n((?:{root}___{region}_sequent__TOP__\d+"
-                     rf"\(vlSelf\);\n)+)\}}", body)
-    return re.findall(rf"({root}___{region}_sequent__TOP__\d+)\(", m.group(1)) if m else None
-
-
-def region_calls(text: str, root: str):
-    """The functions a cycle of the harness must call, in order (the input-combinational region's,
-    then the clocked region's), when the model ``root``'s generated C++ ``text`` has exactly the
-    shape :func:`harness_verilog` gives it with Verilator 5's scheduler: the input region runs
-    once per ``eval()`` (trigger 0: its first iteration) and nothing else triggers it; the active
-    region is empty; the one active trigger is the rising edge of the harness's ``clk``; the NBA
-    region is the clocked functions under that trigger, and they recompute ``clk`` (``tick ^
-    phase``, low again after the edge, so the next ``eval()`` sees no edge left over). Then one
-    ``eval()`` with ``tick`` toggled is exactly those calls, and the scheduler's loops around them
-    (the triggers evaluated twice, the convergence loops) can be skipped. Else None."""
-    b = _bodies(text, root)
-    clk = f"vlSelf->{HARNESS_NAME}__DOT__clk"
-    prev = f"vlSelf->__Vtrigrprev__TOP__{HARNESS_NAME}__DOT__clk"
-    if "eval" not in b or not {"eval_ico", "eval_act", "eval_nba", "eval_triggers__ico",
-                               "eval_triggers__act"} <= set(b):
-        return None
-    if b["eval_triggers__ico"] != "vlSelf->__VicoTriggered.at(0U) = (0U == vlSelf->__VicoIterCount);":
-        return None
-    act = re.sub(r"\s+", " ", b["eval_triggers__act"])
-    if act != (f"vlSelf->__VactTriggered.at(0U) = ((IData)({clk}) & (~ (IData)({prev}))); {prev} = {clk};"):
-        return None
-    if b["eval_act"]:
-        return None
-    ico, nba = _region_calls(b["eval_ico"], "ico", root), _region_calls(b["eval_nba"], "nba", root)
-    if not ico or not nba:
-        return None
-    if not any(re.search(rf"^{re.escape(clk)} =", b.get(f[len(root) + 3:], ""), re.M) for f in nba):
-        return None
-    return ico + nba
-
-
 def eval_header(folder: str, prefixes, *, threads: int = 1) -> str:
     """``eval.h`` for verilator_driver.cc: ``VQ_EVAL(prefix, model, root)``, how a cycle evaluates the
-    model ``V{prefix}`` (``root``: its ``rootp``) verilated into ``folder/obj_{prefix}``. Three paths,
-    fastest first (:func:`eval_path` says which a build took):
-
-    - ``regions``: a one-thread model whose generated C++ has the shape :func:`region_calls`
-      checks (Verilator 5 with this harness) is evaluated by calling its input-combinational and
-      clocked functions (``V{prefix}___024root___ico_sequent__TOP__0``,
-      ``___nba_sequent__TOP__0``) on the root directly: the scheduler's loops and trigger
-      evaluations around them cost about 3-4 ns of the default unit's cycle (docs/simulation.md,
-      Verilator section);
-    - ``eval``: a one-thread model that defines the scheduler's evaluation function
-      ``V{prefix}___024root___eval`` (what ``eval()`` calls inside ``eval_step()``) is evaluated by
-      calling it: ``eval_step()``'s bookkeeping (a thread-local mtask id, the queue of messages
-      from other threads; the first call's initial blocks, which the driver's constructor still
-      runs through ``eval()``) costs about 5 ns;
-    - ``eval()`` otherwise (another Verilator's layout, ``--threads``)."""
+    model ``V{prefix}`` (``root``: its ``rootp``) verilated into ``folder/obj_{prefix}``. A one-thread model whose generated C++
+    defines the scheduler's evaluation function ``V{prefix}___024root___eval`` (what ``eval()``
+    calls inside ``eval_step()``, Verilator 5) is evaluated by calling it on the root directly:
+    ``eval_step()``'s bookkeeping around it (a thread-local mtask id, the queue of messages from
+    other threads; the first call's initial blocks, which the driver's constructor still runs
+    through ``eval()``) cost about 5 ns of the default unit's 90 ns cycle (docs/simulation.md,
+    Verilator section). Otherwise (another Verilator's layout, ``--threads``) ``eval()``. One
+    function of Verilator's internal naming; :func:`fast_eval` says which path a build took."""
     lines = ["// generated by sim/backends/verilator.py (eval_header)", "#define VQ_EVAL(prefix, model, root) VQ_EVAL_##prefix(model, root)"]
     for prefix in prefixes:
         root = f"V{prefix}___024root"
         obj = os.path.join(folder, f"obj_{prefix}")
+        defined = re.compile(rf"^void {root}___eval\({root}\* vlSelf\) \{{$", re.M)
         fast, _ = model_sources(obj, prefix=f"V{prefix}")
-        text = ""
+        found = False
         for src in fast if threads == 1 else ():
             with open(os.path.join(obj, src)) as f:
-                text += f.read()
-        calls = region_calls(text, root)
-        if calls:
-            lines += [f"void {f}({root}* vlSelf);   // (the model's, regions path)" for f in calls]
-            lines.append(f"#define VQ_EVAL_{prefix}(model, root) do {{ {' '.join(f + '(root);' for f in calls)} }} while (0)")
-        elif re.search(rf"^void {root}___eval\({root}\* vlSelf\) \{{$", text, re.M):
-            lines += [f"void {root}___eval({root}* vlSelf);   // (the model's, eval path)",
+                found = found or bool(defined.search(f.read()))
+        if found:
+            lines += [f"void {root}___eval({root}* vlSelf);   // (the model's, fast path)",
                       f"#define VQ_EVAL_{prefix}(model, root) {root}___eval(root)"]
         else:
             lines.append(f"#define VQ_EVAL_{prefix}(model, root) (model)->eval()")
     return "\n".join(lines) + "\n"
 
 
-def eval_path(library: str) -> dict:
-    """{prefix: ``"regions"``, ``"eval"`` or ``"eval()"``}: how the Verilator library at ``library``
-    evaluates each model (:func:`eval_header`)."""
-    with open(os.path.join(os.path.dirname(library), "eval.h")) as f:
-        return {m.group(1): ("regions" if "_sequent__TOP__" in m.group(2) else
-                             "eval" if "___eval(root)" in m.group(2) else "eval()")
-                for m in re.finditer(r"^#define VQ_EVAL_(\w+)\(model, root\) (.*)$", f.read(), re.M)}
-
-
 def fast_eval(library: str) -> dict:
-    """{prefix: True when the Verilator library at ``library`` skips ``eval()`` (either fast path of
-    :func:`eval_header`), False when it calls ``eval()``}."""
-    return {p: path != "eval()" for p, path in eval_path(library).items()}
+    """{prefix: True when the Verilator library at ``library`` calls the model's evaluation function
+    directly (:func:`eval_header`), False when it calls ``eval()``}."""
+    with open(os.path.join(os.path.dirname(library), "eval.h")) as f:
+        return {m.group(1): "___eval(root)" in m.group(2)
+                for m in re.finditer(r"^#define VQ_EVAL_(\w+)\(model, root\) (.*)$", f.read(), re.M)}
 
 
 def build_library(folder: str, models, header: str, *, verilator: str, cxx: str, inc: str, runtime: str,
@@ -455,7 +380,7 @@ def build_design(info: DesignInfo, verilog, *, elaborated: float | None = None, 
     header = ports_header(info, halves=halves)
     steps["export"] = time.perf_counter() - t1
     key = digest("verilator", *[(p, text, harness_verilog(text, name)) for p, text, name in models], header,
-                 *drivers, flags, tool_version(verilator), tool_version(cxx), EVAL_SCHEME)
+                 *drivers, flags, tool_version(verilator), tool_version(cxx))
     inc = verilator_include_dir(verilator)
     t2 = time.perf_counter()
     runtime = verilator_runtime(verilator, cxx, inc)
