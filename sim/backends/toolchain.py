@@ -31,7 +31,8 @@ import time
 
 __all__ = ["ToolchainError", "find_tool", "find_cxx", "tool_version", "cache_dir", "using_cache", "digest", "cached_build",
            "index_get", "index_put", "INSTALL_HINT", "DEFAULT_MAX_MB", "cache_max_bytes", "cache_entries",
-           "cache_info", "cache_clean", "evict_lru", "source_stamp", "texture_set_digest"]
+           "cache_info", "cache_clean", "evict_lru", "source_stamp", "texture_set_digest", "CLANG_TUNING", "CLANG_INLINE",
+           "model_tuning_flags"]
 
 #: The cache's default size bound in megabytes (``$VQTEX_CACHE_MAX_MB`` overrides it). One CXXRTL
 #: entry is 1-5 MB, one Verilator entry 5-15 MB.
@@ -75,6 +76,45 @@ def find_cxx() -> str:
         if path:
             return path
     return find_tool("g++")
+
+
+#: clang++'s options for a compiled model, measured on the default unit (thread CPU time a cycle of
+#: ``vq_run``, each build against the one without, alternated in one process; compile time as CPU
+#: seconds of the one compiler process; docs/simulation.md, "Verilator against CXXRTL, third
+#: pass"). The Verilator model (``CLANG_TUNING``): the inliner told to inline (almost) everything,
+#: so that the clocked region (some 5 KB of code) joins the driver's run loop (batch.h) and the loop
+#: keeps the model's state in registers across the ports it sets and reads, 83-85 -> 75-77 ns; and
+#: if-conversion of larger two-way selects (the bank and word selects Verilator writes as nested
+#: ``?:`` and ``if``: branches on random bits otherwise), 70-71 -> 68-69.5 ns.
+CLANG_TUNING = ["-mllvm", "-inline-threshold=100000", "-mllvm", "-phi-node-folding-threshold=40",
+                "-mllvm", "-two-entry-phi-node-folding-threshold=40"]
+#: The CXXRTL model of the texel-fetch unit (``sim.backends.cxxrtl.INLINED_UNITS``): the inliner's
+#: threshold raised from clang's 225 to 5000, 68.8 -> 66.7 ns a cycle, compile 3.3 -> 5.8 s on the
+#: default unit. (100000, as the Verilator model's: 65.7 ns, but 14.8 s to compile, and the texture
+#: filter's 16.4 -> 45.2 s; 1000: 68.8 ns, no gain; the if-conversion thresholds on top of the
+#: inlining: 66.5 against 65.7, worse. On the texture filter 5000 is 1% slower, 432 against 427 ns,
+#: so the filter is compiled without it.)
+CLANG_INLINE = ["-mllvm", "-inline-threshold=5000"]
+
+_tuning: dict = {}
+
+
+def model_tuning_flags(cxx: str, flags=None) -> list:
+    """``flags`` (default :data:`CLANG_TUNING`) for a clang++ that accepts them (probed once per
+    compiler and set of flags: an empty translation unit compiled with them), else none (g++, or a
+    clang without those options). Both compiled backends take their clang options through here."""
+    flags = list(CLANG_TUNING if flags is None else flags)
+    key = (cxx, tuple(flags))
+    if key not in _tuning:
+        ok = bool(flags) and "clang" in tool_version(cxx).lower()
+        if ok:
+            try:
+                ok = subprocess.run([cxx, "-x", "c++", "-", "-c", "-o", os.devnull, *flags], input="",
+                                    capture_output=True, text=True, timeout=60).returncode == 0
+            except (OSError, subprocess.SubprocessError):
+                ok = False
+        _tuning[key] = flags if ok else []
+    return list(_tuning[key])
 
 
 _versions: dict = {}

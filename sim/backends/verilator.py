@@ -25,8 +25,8 @@ import time
 
 from .cxxrtl import DRIVER_DIR, SHARED_DRIVER_SOURCES, Build, batch_header, driver_sources, open_design, run_unit
 from .design import HALVES, DesignInfo, design_info
-from .toolchain import (ToolchainError, cache_dir, cached_build, digest, find_cxx, find_tool, index_get, index_put,
-                        run_tool, source_stamp, tool_version)
+from .toolchain import (CLANG_TUNING, ToolchainError, cache_dir, cached_build, digest, find_cxx, find_tool, index_get,
+                        index_put, model_tuning_flags, run_tool, source_stamp, tool_version)
 
 __all__ = ["run", "build_verilator", "build_design", "open_verilator", "build_library", "VERILATOR_FLAGS",
            "CXXFLAGS", "MODEL_OPT", "SLOW_OPT", "MODEL_CXXFLAGS", "CLANG_TUNING", "model_tuning_flags",
@@ -45,18 +45,11 @@ MODEL_OPT = "-O3"
 #: The model's run-once ("slow") C++ holds the memories' initial blocks (one statement per word): at
 #: -O2 g++ spends about two minutes on the default unit's, at -O0 seven seconds.
 SLOW_OPT = "-O0"
-#: clang++ options for the model's per-cycle C++ (``model.cc``), measured on the default unit
-#: (thread CPU time a cycle, each against the build without it, alternated in one process;
-#: docs/simulation.md, Verilator section): the clocked region inlined into the driver's run loop
-#: (batch.h, through the driver's ``cycle``; clang's inliner otherwise keeps ``_nba_sequent``, some
-#: 5 KB of code, a call, and the loop cannot keep the model's state in registers across the ports
-#: it sets and reads), 83-85 -> 75-77 ns; and if-conversion of larger two-way selects (the bank and
-#: word selects Verilator writes as nested ``?:`` and ``if``: branches on random bits otherwise),
-#: 70-71 -> 68-69.5 ns. LLVM's own options (``-mllvm``): :func:`model_tuning_flags` probes them and
-#: drops them if the compiler refuses them. g++ gets the inlining from the driver's ``flatten``
-#: attribute (recursive in GCC).
-CLANG_TUNING = ["-mllvm", "-inline-threshold=100000", "-mllvm", "-phi-node-folding-threshold=40",
-                "-mllvm", "-two-entry-phi-node-folding-threshold=40"]
+#: clang++ options for the model's per-cycle C++ (``model.cc``): :data:`sim.backends.toolchain.CLANG_TUNING`
+#: (the clocked region inlined into the driver's run loop, and if-conversion of larger two-way
+#: selects), probed by :func:`sim.backends.toolchain.model_tuning_flags`, the helper the CXXRTL
+#: backend's build takes its own clang options through. g++ gets the inlining from the driver's
+#: ``flatten`` attribute (recursive in GCC).
 #: What Verilator's makefile (verilated.mk) defines for a model without coverage, SystemC or tracing,
 #: and the warnings it silences in generated code; hidden symbols, so that the model's functions bind
 #: inside the library (no calls through the PLT).
@@ -64,25 +57,6 @@ MODEL_CXXFLAGS = ["-fvisibility=hidden", "-DVERILATOR=1", "-DVM_COVERAGE=0", "-D
                  "-DVM_TRACE_FST=0", "-DVM_TRACE_VCD=0", "-faligned-new", "-Wno-bool-operation",
                  "-Wno-sign-compare", "-Wno-uninitialized", "-Wno-unused-but-set-variable",
                  "-Wno-unused-parameter", "-Wno-unused-variable", "-Wno-shadow"]
-
-
-_tuning: dict = {}
-
-
-def model_tuning_flags(cxx: str) -> list:
-    """``CLANG_TUNING`` for a clang++ that accepts it (probed once per compiler: an empty
-    translation unit compiled with them), else none (g++, or a clang without those options)."""
-    import subprocess
-    if cxx not in _tuning:
-        ok = "clang" in tool_version(cxx).lower()
-        if ok:
-            try:
-                ok = subprocess.run([cxx, "-x", "c++", "-", "-c", "-o", os.devnull, *CLANG_TUNING], input="",
-                                    capture_output=True, text=True, timeout=60).returncode == 0
-            except (OSError, subprocess.SubprocessError):
-                ok = False
-        _tuning[cxx] = list(CLANG_TUNING) if ok else []
-    return list(_tuning[cxx])
 
 
 def verilator_include_dir(verilator: str) -> str:

@@ -24,6 +24,14 @@ def test_cache_reused_and_invalidated(tmp_path, monkeypatch, small_set):
     monkeypatch.setenv("VQTEX_CACHE", str(tmp_path / "cache"))
     first = build_cxxrtl(small_set)
     assert not first.cached and os.path.isfile(first.library)
+    # compiled with clang++'s inlining threshold when the compiler is a clang that takes it (one
+    # probe for both compiled backends); the installed clang++ must take it
+    from vqtex.sim.backends.toolchain import CLANG_INLINE, find_cxx, model_tuning_flags
+    with open(os.path.join(os.path.dirname(first.library), "build.log")) as f:
+        command = f.readline()
+    tuning = model_tuning_flags(find_cxx(), CLANG_INLINE)
+    assert (" ".join(CLANG_INLINE) in command) == bool(tuning)
+    assert bool(tuning) == ("clang" in os.path.basename(find_cxx()))
     t = time.perf_counter()
     again = build_cxxrtl(small_set)
     assert again.cached and again.library == first.library and again.seconds == 0.0

@@ -11,7 +11,7 @@ import os
 import pytest
 
 from tests.support import need, random_requests, shared_cache, texture_sets
-from vqtex.sim.backends import verilator as vl
+from vqtex.sim.backends import cxxrtl as cx, toolchain, verilator as vl
 from vqtex.sim.backends.interface import simulate
 
 
@@ -46,14 +46,20 @@ def test_eval_header_fast_path_and_fallbacks(tmp_path):
 
 
 def test_tuning_flags_probed(monkeypatch):
-    """clang++ that takes the options: CLANG_TUNING; g++: none; a clang that refuses them: none."""
-    monkeypatch.setattr(vl, "_tuning", {})
-    monkeypatch.setattr(vl, "tool_version", lambda path: "clang version 1" if "clang" in path else "g++ (Debian) 12")
-    assert vl.model_tuning_flags("/no/such/g++") == []
-    assert vl.model_tuning_flags("/no/such/clang++") == []          # (cannot run: refused)
+    """clang++ that takes the options: CLANG_TUNING (Verilator's model) or CLANG_INLINE (CXXRTL's);
+    g++: none; a clang that refuses them: none. One helper for both backends."""
+    monkeypatch.setattr(toolchain, "_tuning", {})
+    monkeypatch.setattr(toolchain, "tool_version", lambda path: "clang version 1" if "clang" in path else "g++ (Debian) 12")
+    assert toolchain.model_tuning_flags("/no/such/g++") == []
+    assert toolchain.model_tuning_flags("/no/such/g++", toolchain.CLANG_INLINE) == []
+    assert toolchain.model_tuning_flags("/no/such/clang++") == []          # (cannot run: refused)
     clang = next((p for p in ("/usr/bin/clang++",) if os.path.exists(p)), None)
     if clang:
-        assert vl.model_tuning_flags(clang) == vl.CLANG_TUNING
+        assert toolchain.model_tuning_flags(clang) == toolchain.CLANG_TUNING
+        assert toolchain.model_tuning_flags(clang, toolchain.CLANG_INLINE) == toolchain.CLANG_INLINE
+        assert toolchain.model_tuning_flags(clang, ["-mllvm", "-no-such-option-vqtex"]) == []
+    assert vl.model_tuning_flags is toolchain.model_tuning_flags
+    assert cx.model_tuning_flags is toolchain.model_tuning_flags
 
 
 @pytest.fixture(scope="module")
