@@ -130,16 +130,30 @@ class ColorMatrix(wiring.Component):
             by_offset[CONTROL[f"MATRIX_OFFSET_{'YUV'[k]}"][0]] = regs["offset"][k]
         by_offset[CONTROL["MATRIX_FRAC_BITS"][0]] = regs["frac"]
         by_offset[CONTROL["MATRIX_ROUNDING"][0]] = regs["rounding"]
+        # The command decoded into registers of this block's own first (a write strobe and a read
+        # select per register, and the data): the compare and its fan-out to the registers' enables
+        # start from flip-flops (the load command's offset -> compare -> the coefficient registers'
+        # clock enables was the topspin geometry's critical path, docs/area.md). A write lands one
+        # cycle later than the command (K follows 3 cycles after it; the drain rule keeps every
+        # request further behind), a read's answer keeps ANSWER_LATENCY.
         mine = load.region == REGIONS["control"]
+        offsets = list(by_offset)
+        writes = Signal(len(offsets), name="matrix_write")
+        reads = Signal(len(offsets), name="matrix_read")
+        wdata = Signal(max(len(r) for r in by_offset.values()), name="matrix_data")
+        m.d.sync += [
+            writes.eq(Cat(*(load.write & mine & (load.offset == off) for off in offsets))),
+            reads.eq(Cat(*(load.read & mine & (load.offset == off) for off in offsets))),
+            wdata.eq(load.data[:len(wdata)]),
+        ]
         answer = Signal(32, name="matrix_answer")
         m.d.sync += answer.eq(0)
-        for off, reg in by_offset.items():
-            here = mine & (load.offset == off)
-            with m.If(load.write & here):
-                m.d.sync += reg.eq(load.data[:len(reg)])
-            with m.If(load.read & here):                # coefficients read back sign-extended
+        for n, reg in enumerate(by_offset.values()):
+            with m.If(writes[n]):
+                m.d.sync += reg.eq(wdata[:len(reg)])
+            with m.If(reads[n]):                        # coefficients read back sign-extended
                 m.d.sync += answer.eq(reg.as_signed() if reg.shape().signed else reg)
-        m.d.comb += self.load_data.eq(delayed(m, answer, ANSWER_LATENCY - 2, name="matrix_answer"))
+        m.d.comb += self.load_data.eq(delayed(m, answer, ANSWER_LATENCY - 3, name="matrix_answer"))
         return regs
 
     def _loaded_sums(self, m, regs) -> list:
