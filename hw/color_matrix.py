@@ -20,7 +20,6 @@ from vqtex.golden.color import ColorMatrix as ColorMatrixSpec
 from vqtex.golden.format import COLOR_CODES
 from vqtex.golden.register_map import COEFF_BITS, CONTROL, REGIONS
 
-from .banked_rom import pick
 from .bus_port import ANSWER_LATENCY, delayed
 
 from .codebook_rom import SamplesLayout
@@ -207,7 +206,7 @@ class ColorMatrix(wiring.Component):
         """What stage 3 of the loaded matrix needs of ``F``, as registers that follow the loaded
         ``F`` one cycle (or a few) later, as ``K`` does: a copy of ``F`` per output channel, in a
         chain (``F`` -> red -> green -> blue; copies with one source would be merged back into
-        one by Yosys), so that each channel's 32:1 window select has a driver of its own (the
+        one by Yosys), so that each channel's 8-bit shift select has a driver of its own (the
         loaded ``F`` fanned out to all three barrel shifters was the topspin geometry's critical
         net, docs/area.md); and ``above_mask``, the bits of a sum at or above ``F + 8`` (below
         its sign bit): a sum that is not negative clamps to 255 when any of them is set.
@@ -304,15 +303,14 @@ class ColorMatrix(wiring.Component):
                 # The registered sum (bias included) shifted by the loaded F, without a barrel
                 # shifter of the whole sum: the clamp needs the sign (an arithmetic shift keeps
                 # it), whether a bit at or above F + 8 is set (the sum masked by ``above_mask``),
-                # and the 8 bits at F (a 32:1 select of windows by this channel's copy of F). Past
-                # the sum's top the windows read 0: only a sum that is not negative uses them.
+                # and the 8 bits at F (a shift of the sum as unsigned by this channel's copy of F,
+                # 8 bits of it kept). Past the sum's top they read 0: only a sum that is not
+                # negative uses them.
                 total = acc[c].as_unsigned()
-                windows = [Cat(total[f:f + 8], C(0, max(0, f + 8 - len(total)))) if f < len(total) else C(0, 8)
-                           for f in range(32)]
                 m.d.comb += [
                     negative.eq(acc[c][-1]),
                     above.eq((total[:-1] & above_mask).any()),
-                    shifted[c][:8].eq(pick(windows, frac_copies[c])),
+                    shifted[c][:8].eq((total >> frac_copies[c])[:8]),
                 ]
             else:
                 terms = [prod[c][k] for k in range(3) if self._all or mat.coeffs[c][k]]
