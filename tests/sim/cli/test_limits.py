@@ -219,6 +219,8 @@ NOT_APPLYING = [
     (["report", "area", "--builtin", "tiny", "--no-pnr", "--freq", "150"], "--freq"),
     (["report", "area", "--builtin", "tiny", "--no-pnr", "--placer-seed", "1"], "--placer-seed"),
     (["report", "area", "--builtin", "tiny", "--no-pnr", "--router", "router2"], "--router"),
+    (["report", "area", "--builtin", "tiny", "--no-route", "--router", "router2"], "--router"),
+    (["report", "area", "--builtin", "tiny", "--no-pnr", "--no-route"], "--no-route"),
     (["experiments", "table3", "--backend", "golden"], "--backend"),
     (["experiments", "table4", "--requests", "fixed"], "--requests"),
     (["experiments", "table5", "--paper-only"], "--paper-only"),
