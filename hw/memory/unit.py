@@ -17,7 +17,7 @@ words) and the raw word on ``index_response`` and ``raw_in``. The codebook, the 
 and the colour matrix stay on chip (baked from ``texture_set``).
 
 Timing: :func:`golden.memory.timing.run` (``address_stages`` 2, the texel pipeline as consumer),
-cycle for cycle; with every reference a hit, ``LATENCY + 4`` cycles from ``i`` to ``o`` and one
+cycle for cycle; with every reference a hit, ``LATENCY + 5`` cycles from ``i`` to ``o`` and one
 request per cycle. A miss reaches the texel pipeline as cycles without a request, and ``i.ready``
 falls when the address stages and the reference FIFO are full.
 
@@ -71,6 +71,7 @@ class CachedTexelFetch(wiring.Component):
         self._layout = Layout.of(texture_set)
         self._features = Features.for_set(texture_set, True)
         self._tf = TexelFetch(texture_set, tag_width=tag_width, index_port=True, raw_port=True)
+        self._reader_latency = 3                # CachedReader.latency: lookup, tag check, data read
         tb = self._tf.texture_bits
         super().__init__({
             "i": In(stream.Signature(RequestLayout(tb, tag_width))),
@@ -86,8 +87,8 @@ class CachedTexelFetch(wiring.Component):
 
     @property
     def latency(self) -> int:
-        """Cycles from ``i`` to ``o`` when every reference hits: ``LATENCY + 4``."""
-        return LATENCY + ADDRESS_STAGES + 2
+        """Cycles from ``i`` to ``o`` when every reference hits: ``LATENCY + 5``."""
+        return LATENCY + ADDRESS_STAGES + self._reader_latency
 
     def elaborate(self, platform):
         m = Module()
@@ -114,14 +115,15 @@ class CachedTexelFetch(wiring.Component):
         return m
 
 
-def cached_lane(m, prefix: str, ts, feat, config, layout, tf, request, en):
+def cached_lane(m, prefix: str, ts, feat, config, layout, tf, request, en, joint: bool = False):
     """One lane of the cached unit, built into ``m``: the address stages' datapath (descriptor and
     block address, loaded on ``en = (en1, en2)``, the enables of the two stream registers, which the
     caller drives and whose valid bits it keeps), a :class:`hw.memory.reader.CachedReader` (returned;
     the caller drives ``i.valid``, ``o.ready`` and connects ``axi``), and the texel pipeline ``tf``'s
     payload, ``index_response`` and ``raw_in`` (the words riding beside its first seven stages). The
     caller drives ``tf.i.valid``. ``request``: the payload entering the first address stage (a
-    ``hw.pipeline.RequestLayout`` view). Submodules are named with ``prefix``."""
+    ``hw.pipeline.RequestLayout`` view). Submodules are named with ``prefix``. ``joint``: the
+    reader's tag check waits for ``check_go`` (every lane's check together, driven by the caller)."""
     g = tf.geometry
     widths = g.descriptor_widths()
     W = ts.word_bits
@@ -131,7 +133,7 @@ def cached_lane(m, prefix: str, ts, feat, config, layout, tf, request, en):
     ride = data.StructLayout({"request": req_bits, "off": max(1, (W - 1).bit_length()), "b": 5})
     m.submodules[prefix + "reader"] = reader = CachedReader(
         config, word_bits=W, raw_base=layout.raw_base, word_addr_bits=32,
-        tag_width=len(Signal(ride).as_value()))
+        tag_width=len(Signal(ride).as_value()), joint=joint)
 
     # -- the address stages' datapath ------------------------------------------------------------------
     m.submodules[prefix + "descriptor"] = desc = DescriptorTable(ts, features=feat, geometry=g)
