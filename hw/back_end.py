@@ -54,6 +54,9 @@ class BackEnd(wiring.Component):
     features : hw.features.Features, optional
         What to build (default the full back end): the codebook and raw memories and selects, the
         colour formats and the colour matrix's products.
+    summed : bool
+        ``link.index`` is already ``cb_base + index`` (:class:`hw.pipeline.LinkLayout`): the
+        codebook's block RAMs take it as their address, with no adder.
 
     Members
     -------
@@ -65,15 +68,16 @@ class BackEnd(wiring.Component):
 
     def __init__(self, texture_set: TextureSet | None = None, *, bank_depth: int = BANK_DEPTH,
                  features: Features | None = None, geometry: Geometry | None = None, load=None,
-                 raw_port: bool = False):
+                 raw_port: bool = False, summed: bool = False):
         self._ts = texture_set
         self._raw_port = bool(raw_port)
         self._geometry = geometry if geometry is not None else as_geometry(texture_set)
         self._load = load
         self._bank_depth = bank_depth
         self._features = features if features is not None else Features.full(texture_set)
+        self._summed = bool(summed) and self._features.compressed
         super().__init__({
-            "link": In(LinkLayout(self._geometry, self._features)),
+            "link": In(LinkLayout(self._geometry, self._features, summed=self._summed)),
             "rgba": Out(RGBALayout),
             **({} if load is None else {"load": In(load), "load_data": Out(DATA_WIDTH)}),
             **({"raw_in": In(32)} if self._raw_port else {}),
@@ -92,7 +96,8 @@ class BackEnd(wiring.Component):
             ts.raw_words if ts is not None else (), cb_bits=widths["cb_base"], raw_bits=addr_bits(g.raw_words),
             off_bits=widths["texel_off"], bank_depth=self._bank_depth, features=feat,
             color_bits=widths["color"], entries=g.codebook_entries, entry_bytes=g.entry_bytes,
-            raw_depth=g.raw_words, load=load, raw_port=self._raw_port)
+            raw_depth=g.raw_words, load=load, raw_port=self._raw_port,
+            index_bits=len(link.index) if self._summed else None)
         if self._raw_port:
             m.d.comb += rom.raw_in.eq(self.raw_in)
         m.submodules.color_matrix = cm = ColorMatrix(
@@ -106,7 +111,8 @@ class BackEnd(wiring.Component):
         # carry are constants the ROM knows from the features, or fields it does not use.
         carried = {name for name, _ in link.side.shape()}
         m.d.comb += rom.index.eq(link.index)
-        m.d.comb += [getattr(rom, name).eq(getattr(link.side, name)) for name in _ROM_INPUTS if name in carried]
+        m.d.comb += [getattr(rom, name).eq(getattr(link.side, name)) for name in _ROM_INPUTS
+                     if name in carried and not (self._summed and name == "cb_base")]
         m.d.comb += rom.en.eq(link.advance)
         # Stages 12-14: colour matrix.
         m.d.comb += [

@@ -134,6 +134,10 @@ class CodebookROM(wiring.Component):
     load : data.StructLayout, optional
         The bus port's load command (:func:`hw.bus_port.load_layout`): both memories are loadable
         (regions ``codebook`` and ``raw``); members ``load`` and ``load_data``.
+    index_bits : int, optional
+        ``index`` is the codebook address ``cb_base + index`` of this width, summed upstream (the
+        loadable unit's index reader, :class:`hw.pipeline.LinkLayout` ``summed``): the memory is
+        read at ``index``, ``cb_base`` is not read. Default None: ``index`` is the index.
 
     Members
     -------
@@ -164,7 +168,7 @@ class CodebookROM(wiring.Component):
     def __init__(self, codebook, raw_words, *, cb_bits: int, raw_bits: int, off_bits: int,
                  bank_depth: int = BANK_DEPTH, features: Features | None = None, color_bits: int = 2,
                  entries: int | None = None, entry_bytes: int | None = None, raw_depth: int | None = None,
-                 load=None, raw_port: bool = False):
+                 load=None, raw_port: bool = False, index_bits: int | None = None):
         codebook = np.asarray(codebook, dtype=np.uint8)
         if codebook.ndim != 2:
             raise ValueError("codebook memory must be a 2-D uint8 array")
@@ -183,8 +187,9 @@ class CodebookROM(wiring.Component):
         self._features = features if features is not None else Features.full(pvr2=color_bits == 3)
         if color_bits == 2 and max(self._features.color_codes, default=0) > 3:
             raise ValueError("PowerVR2 colour formats need color_bits=3")
+        self._summed = index_bits is not None
         super().__init__({
-            "index": In(self._features.index_bits),
+            "index": In(index_bits if self._summed else self._features.index_bits),
             "cb_base": In(cb_bits),
             "raw_addr": In(raw_bits),
             "compressed": In(1),
@@ -236,7 +241,7 @@ class CodebookROM(wiring.Component):
             m.submodules.codebook = codebook = BankedROM(
                 self._entries, width=nbytes * 8, bank_depth=self._bank_depth, depth=self._depths[0],
                 load=target("codebook", lanes))
-            m.d.comb += [codebook.addr.eq(self.index if _is_zero(cb_base) else cb_base + self.index),
+            m.d.comb += [codebook.addr.eq(self.index if self._summed or _is_zero(cb_base) else cb_base + self.index),
                          codebook.en.eq(self.en)]
             if load is not None:
                 m.d.comb += codebook.load.eq(self.load)

@@ -129,16 +129,30 @@ class ColorMatrix(wiring.Component):
             by_offset[CONTROL[f"MATRIX_OFFSET_{'YUV'[k]}"][0]] = regs["offset"][k]
         by_offset[CONTROL["MATRIX_FRAC_BITS"][0]] = regs["frac"]
         by_offset[CONTROL["MATRIX_ROUNDING"][0]] = regs["rounding"]
+        # The command decoded into registers of this block's own first (a write strobe and a read
+        # select per register, and the data): the compare and its fan-out to the registers' enables
+        # start from flip-flops (the load command's offset -> compare -> the coefficient registers'
+        # clock enables was the topspin geometry's critical path, docs/area.md). A write lands one
+        # cycle later than the command (K follows 3 cycles after it; the drain rule keeps every
+        # request further behind), a read's answer keeps ANSWER_LATENCY.
         mine = load.region == REGIONS["control"]
+        offsets = list(by_offset)
+        writes = Signal(len(offsets), name="matrix_write")
+        reads = Signal(len(offsets), name="matrix_read")
+        wdata = Signal(max(len(r) for r in by_offset.values()), name="matrix_data")
+        m.d.sync += [
+            writes.eq(Cat(*(load.write & mine & (load.offset == off) for off in offsets))),
+            reads.eq(Cat(*(load.read & mine & (load.offset == off) for off in offsets))),
+            wdata.eq(load.data[:len(wdata)]),
+        ]
         answer = Signal(32, name="matrix_answer")
         m.d.sync += answer.eq(0)
-        for off, reg in by_offset.items():
-            here = mine & (load.offset == off)
-            with m.If(load.write & here):
-                m.d.sync += reg.eq(load.data[:len(reg)])
-            with m.If(load.read & here):                # coefficients read back sign-extended
+        for n, reg in enumerate(by_offset.values()):
+            with m.If(writes[n]):
+                m.d.sync += reg.eq(wdata[:len(reg)])
+            with m.If(reads[n]):                        # coefficients read back sign-extended
                 m.d.sync += answer.eq(reg.as_signed() if reg.shape().signed else reg)
-        m.d.comb += self.load_data.eq(delayed(m, answer, ANSWER_LATENCY - 2, name="matrix_answer"))
+        m.d.comb += self.load_data.eq(delayed(m, answer, ANSWER_LATENCY - 3, name="matrix_answer"))
         return regs
 
     def _loaded_sums(self, m, regs) -> list:
@@ -188,6 +202,32 @@ class ColorMatrix(wiring.Component):
                 m.d.sync += acc[c].eq(prod[c][0] + prod[c][1] + prod[c][2] + konst[c])
         return acc
 
+    def _loaded_shift(self, m, regs) -> tuple:
+        """What stage 3 of the loaded matrix needs of ``F``, as registers that follow the loaded
+        ``F`` one cycle (or a few) later, as ``K`` does: a copy of ``F`` per output channel, in a
+        chain (``F`` -> red -> green -> blue; copies with one source would be merged back into
+        one by Yosys), so that each channel's 8-bit shift select has a driver of its own (the
+        loaded ``F`` fanned out to all three barrel shifters was the topspin geometry's critical
+        net, docs/area.md); and ``above_mask``, the bits of a sum at or above ``F + 8`` (below
+        its sign bit): a sum that is not negative clamps to 255 when any of them is set.
+        Returns ``(copies, above_mask)``. All of them settle within 3 cycles of the last write of
+        ``F`` (the drain rule keeps every request further behind)."""
+        mat = self._matrix
+        sbits = _LOADED_SUM_BITS
+        frac = regs["frac"]
+        copies = []
+        source = frac
+        for c in range(3):
+            copy = Signal(5, name=f"frac_{'rgb'[c]}", init=mat.frac_bits, reset_less=True)
+            m.d.sync += copy.eq(source)
+            copies.append(copy)
+            source = copy
+        full = (1 << (sbits - 1)) - 1
+        above_mask = Signal(sbits - 1, name="above_mask", reset_less=True,
+                            init=(full << (mat.frac_bits + 8)) & full)
+        m.d.sync += above_mask.eq((C(full, sbits - 1) << (frac + 8))[:sbits - 1])
+        return copies, above_mask
+
     def elaborate(self, platform):
         m = Module()
         mat = self._matrix
@@ -221,6 +261,7 @@ class ColorMatrix(wiring.Component):
             m.d.sync += carried_r.eq(Cat(self.samples, self.color if not one else C(0, 0)))
         if regs is not None and matrix:
             loaded_sums = self._loaded_sums(m, regs)
+            frac_copies, above_mask = self._loaded_shift(m, regs)
 
         # Stage 2: constant multiplications (the full unit: all nine, the synthesis tool folds the
         # constants; specialised: only the non-zero ones, powers of two as shifts).
@@ -256,8 +297,21 @@ class ColorMatrix(wiring.Component):
         for c in range(3):
             if not matrix:
                 break
-            if regs is not None:            # the registered sum (bias included), shift by F
-                m.d.comb += shifted[c].eq(acc[c] >> regs["frac"])
+            negative = Signal(name=f"negative_{'rgb'[c]}")
+            above = Signal(name=f"above_{'rgb'[c]}")
+            if regs is not None:
+                # The registered sum (bias included) shifted by the loaded F, without a barrel
+                # shifter of the whole sum: the clamp needs the sign (an arithmetic shift keeps
+                # it), whether a bit at or above F + 8 is set (the sum masked by ``above_mask``),
+                # and the 8 bits at F (a shift of the sum as unsigned by this channel's copy of F,
+                # 8 bits of it kept). Past the sum's top they read 0: only a sum that is not
+                # negative uses them.
+                total = acc[c].as_unsigned()
+                m.d.comb += [
+                    negative.eq(acc[c][-1]),
+                    above.eq((total[:-1] & above_mask).any()),
+                    shifted[c][:8].eq((total >> frac_copies[c])[:8]),
+                ]
             else:
                 terms = [prod[c][k] for k in range(3) if self._all or mat.coeffs[c][k]]
                 total = terms[0] if terms else C(0, 1)
@@ -267,14 +321,12 @@ class ColorMatrix(wiring.Component):
                     acc[c].eq(total + mat.bias),
                     shifted[c].eq(acc[c] >> F),
                 ]
-            # Clamp by bit tests (no comparator): negative is the sign bit, above 255 is any bit
-            # between bit 8 and the sign set.
-            negative = Signal(name=f"negative_{'rgb'[c]}")
-            above = Signal(name=f"above_{'rgb'[c]}")
-            m.d.comb += [
-                negative.eq(shifted[c][-1]),
-                above.eq(shifted[c][8:-1] != 0),
-            ]
+                # Clamp by bit tests (no comparator): negative is the sign bit, above 255 is any
+                # bit between bit 8 and the sign set.
+                m.d.comb += [
+                    negative.eq(shifted[c][-1]),
+                    above.eq(shifted[c][8:-1] != 0),
+                ]
             with m.If(negative):
                 m.d.comb += conv[c].eq(0)
             with m.Elif(above):

@@ -90,6 +90,9 @@ class FrontEnd(wiring.Component):
         The index reader is outside the unit (a filter's lanes share banked readers,
         :mod:`hw.filter.index_banks`): the unit sends ``index_request`` and receives the index on
         ``index_response`` ``index_reader.LATENCY`` advancing cycles later; no ``one_port``.
+    summed : bool
+        ``link.index`` is the codebook address ``cb_base + index``, added in the index reader's
+        extract stage (:class:`hw.pipeline.LinkLayout`; the loadable unit); not with ``index_port``.
 
     Members
     -------
@@ -114,9 +117,11 @@ class FrontEnd(wiring.Component):
 
     def __init__(self, texture_set: TextureSet | None = None, *, one_port: bool = False, tag_width: int = 8,
                  bank_depth: int = BANK_DEPTH, features: Features | None = None, index_port: bool = False,
-                 geometry: Geometry | None = None, load=None):
+                 geometry: Geometry | None = None, load=None, summed: bool = False):
         if index_port and one_port:
             raise ValueError("an index reader outside the unit has both word banks: no one_port")
+        if index_port and summed:
+            raise ValueError("an index reader outside the unit returns the index alone: no summed")
         self._ts = texture_set
         self._geometry = geometry if geometry is not None else as_geometry(texture_set)
         self._load = load
@@ -125,6 +130,7 @@ class FrontEnd(wiring.Component):
         self._tag_width = tag_width
         self._bank_depth = bank_depth
         self._features = features if features is not None else Features.full(texture_set)
+        self._summed = bool(summed) and self._features.compressed
         g = self._geometry
         super().__init__({
             "i": In(stream.Signature(RequestLayout(g.texture_bits, tag_width))),
@@ -135,7 +141,7 @@ class FrontEnd(wiring.Component):
             "stall_output": Out(1),
             "valid": Out(len(REGISTERS)),
             "o_tag": Out(tag_width),
-            "link": Out(LinkLayout(g, self._features)),
+            "link": Out(LinkLayout(g, self._features, summed=self._summed)),
             **(index_port_members(g, self._features) if self._index_port else {}),
             **({} if load is None else {"pause": In(1), "load": In(load), "load_data": Out(DATA_WIDTH)}),
         })
@@ -160,7 +166,7 @@ class FrontEnd(wiring.Component):
                 ts.index_words if ts is not None else (), word_bits=g.word_bits, k_bits=kb, base_bits=widths["base"],
                 one_port=self._one_port, bank_depth=self._bank_depth,
                 widths=feat.index_widths if feat.specialised else None, straddle=feat.straddle,
-                depth=g.index_words, load=load)
+                depth=g.index_words, load=load, add_bits=widths["cb_base"] if self._summed else 0)
         else:                               # every level raw: no index reader, the index is 0
             idx = _NoIndex()
 
@@ -253,6 +259,8 @@ class FrontEnd(wiring.Component):
         index_stages = STAGES[2:2 + index_reader.LATENCY]
         for n, name in enumerate(index_stages):
             en = upstream if n + 2 < UPSTREAM_STAGES else advance
+            if self._summed and n == len(index_stages) - 1:
+                m.d.comb += idx.add.eq(side.cb_base)     # the item entering the extract stage
             side = carry(side, en, f"side_{name}")
 
         # The request's tag rides beside the stages: one shift register of a tag per stage, moving

@@ -96,6 +96,11 @@ class IndexReader(wiring.Component):
     straddle : bool
         Some index can cross a word boundary (default). False: one bank, no word pair, ``hold`` and
         ``straddle`` constant 0.
+    add_bits : int
+        0 (default), or the width of an input ``add`` that the extract stage adds to the index
+        before its register (``index`` is then ``index + add``, ``max(index bits, add_bits) + 1``
+        wide): the loadable unit adds the codebook base of the item in the extract stage here, so
+        that the register drives the codebook's block RAM addresses with no adder behind it.
 
     Members
     -------
@@ -116,7 +121,11 @@ class IndexReader(wiring.Component):
     hold : Out(1)
         Combinational, one-port only (else 0): stage 1 spends this cycle on the first of two reads.
     index : Out(index_bits)
-        The index, registered (latency 5): 16 bits, or the widest of ``widths``.
+        The index, registered (latency 5): 16 bits, or the widest of ``widths`` (with ``add_bits``:
+        the index plus ``add``, one bit wider than the wider of the two).
+    add : In(add_bits)
+        Only with ``add_bits``: added to the index in the extract stage (the value for the item
+        entering that stage, i.e. moving in the same cycle as stage 4's register).
 
     Raises
     ------
@@ -126,7 +135,7 @@ class IndexReader(wiring.Component):
 
     def __init__(self, words=(), *, word_bits: int, k_bits: int, base_bits: int, one_port: bool = False,
                  bank_depth: int = BANK_DEPTH, widths=None, straddle: bool = True, depth: int | None = None,
-                 load=None):
+                 load=None, add_bits: int = 0):
         if word_bits not in (16, 32, 64):
             raise ValueError(f"index word width {word_bits} is not 16, 32 or 64")
         if widths is not None:
@@ -142,6 +151,8 @@ class IndexReader(wiring.Component):
         self._bank_depth = bank_depth
         self._widths = widths
         self._straddle = bool(straddle)
+        self._add_bits = int(add_bits)
+        index_bits = INDEX_BITS if widths is None else widths[-1]
         super().__init__({
             "valid": In(1),
             "k": In(k_bits),
@@ -150,7 +161,8 @@ class IndexReader(wiring.Component):
             "en": In(1),
             "straddle": Out(1),
             "hold": Out(1),
-            "index": Out(INDEX_BITS if widths is None else widths[-1]),
+            "index": Out(max(index_bits, self._add_bits) + 1 if self._add_bits else index_bits),
+            **({"add": In(self._add_bits)} if self._add_bits else {}),
             **({} if load is None else {"load": In(load), "load_data": Out(DATA_WIDTH)}),
         })
 
@@ -204,8 +216,12 @@ class IndexReader(wiring.Component):
         mask = Signal(INDEX_BITS)
         m.d.comb += mask.eq(~(C((1 << INDEX_BITS) - 1, INDEX_BITS) << b4)[:INDEX_BITS])
         with m.If(self.en):
-            m.d.sync += self.index.eq((Cat(lo, hi) >> off4)[:INDEX_BITS] & mask)
+            m.d.sync += self.index.eq(self._added((Cat(lo, hi) >> off4)[:INDEX_BITS] & mask))
         return m
+
+    def _added(self, index):
+        """The value the extract stage registers: the index, plus ``add`` with ``add_bits``."""
+        return index + self.add if self._add_bits else index
 
     def _memory(self, m, name: str, stride: int = 1, phase: int = 0) -> BankedROM:
         """The index memory, or its even (``phase`` 0) or odd bank (``stride`` 2), as submodule
@@ -344,5 +360,5 @@ class IndexReader(wiring.Component):
             m.d.comb += mask.eq(~(C((1 << ib) - 1, ib) << b4)[:ib])
             value = value & mask
         with m.If(self.en):
-            m.d.sync += self.index.eq(value)
+            m.d.sync += self.index.eq(self._added(value))
         return m

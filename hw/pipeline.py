@@ -28,7 +28,7 @@ from .descriptor import LEVEL_BITS, as_geometry
 from .features import Features
 
 __all__ = ["STAGES", "LATENCY", "UPSTREAM_STAGES", "REGISTERS", "FRONT_STAGES", "RequestLayout",
-           "ResponseLayout", "RGBALayout", "SideLayout", "LinkLayout", "pack", "addr_bits", "side_fields",
+           "ResponseLayout", "RGBALayout", "SideLayout", "LinkLayout", "summed_index_bits", "pack", "addr_bits", "side_fields",
            "SIDE_DESCRIPTOR_FIELDS"]
 
 #: Pipeline registers in order, one per cycle of latency; bit ``k`` of ``TexelFetch.valid`` is the
@@ -154,13 +154,26 @@ class LinkLayout(data.StructLayout):
     ts : TextureSet
     features : Features, optional
         Default: the full unit (a 16-bit index and every side field).
+    summed : bool
+        ``index`` is the codebook address ``cb_base + index`` (:func:`summed_index_bits` wide), added
+        by the index reader's extract stage (the loadable unit: no adder between the link and the
+        codebook's block RAMs); ``side.cb_base`` is then not read.
     """
 
-    def __init__(self, ts, features: Features | None = None):
+    def __init__(self, ts, features: Features | None = None, *, summed: bool = False):
         index = index_reader.INDEX_BITS if features is None or not features.specialised else features.index_bits
+        if summed:
+            index = summed_index_bits(ts, features)
         super().__init__({
             "advance": 1, "skid_valid": 1, "index": index, "side": SideLayout(ts, features),
         })
+
+
+def summed_index_bits(ts, features: Features | None = None) -> int:
+    """Width of ``cb_base + index`` (:class:`LinkLayout` with ``summed``): one bit more than the
+    wider of the two."""
+    index = index_reader.INDEX_BITS if features is None or not features.specialised else features.index_bits
+    return max(index, as_geometry(ts).descriptor_widths()["cb_base"]) + 1
 
 
 def pack(layout: data.StructLayout, fields: dict) -> Value:

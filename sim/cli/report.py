@@ -71,6 +71,10 @@ def cmd_report_area(args) -> int:
     resolve(args, "freq", 150.0, not args.no_pnr, "is the clock nextpnr places for: it does not go with --no-pnr")
     resolve(args, "seed", 1, not args.no_pnr, "seeds nextpnr's placement: it does not go with --no-pnr",
             "--placer-seed")
+    resolve(args, "router", "router1", not args.no_pnr and not args.no_route,
+            "is nextpnr's router: it does not go with --no-pnr or --no-route")
+    if args.no_route and args.no_pnr:
+        raise CliError("--no-route places without routing: it does not go with --no-pnr")
     if args.filter_lanes is not None and args.one_port:
         raise ReportError("report area: --filter-lanes: the filter's lanes have two-bank index memories (no --one-port)")
     if args.keep:
@@ -101,7 +105,7 @@ def cmd_report_area(args) -> int:
         workdir = os.path.join(args.keep, unit) if args.keep and len(units) > 1 else args.keep
         reps[unit] = synth.area_report(
             ts, one_port=args.one_port, tag_width=args.tag_width, place=not args.no_pnr, freq=args.freq,
-            seed=args.seed, workdir=workdir, timeout=args.timeout, name=name, specialise=unit == "specialised",
+            seed=args.seed, router=args.router, route=not args.no_route, workdir=workdir, timeout=args.timeout, name=name, specialise=unit == "specialised",
             progress=lambda m, u=unit: progress_line(f"report area: {u + ' unit: ' if len(units) > 1 else ''}{m}"),
             filter_lanes=args.filter_lanes, index_banks=args.index_banks, geometry=geometry, memory=memory)
         if t_set is not None:
@@ -154,6 +158,12 @@ def add_parser(sub) -> None:
                    help=number_help("clock constraint of place and route", limits.FREQ, 150))
     a.add_argument("--placer-seed", "--seed", dest="seed", type=limits.PLACER_SEED, default=None,
                    help=number_help("nextpnr's placement seed (--seed is the old spelling)", limits.PLACER_SEED, 1))
+    a.add_argument("--router", choices=["router1", "router2"], default=None,
+                   help=with_default("nextpnr's router: router2 routes the loadable presets in minutes where "
+                                     "router1 takes an hour (docs/area.md)", "router1"))
+    a.add_argument("--no-route", action="store_true",
+                   help="place only: Fmax is nextpnr's estimate after placement, no critical path (minutes where "
+                        "routing a loadable preset takes an hour; default: place and route)")
     a.add_argument("--no-pnr", action="store_true",
                    help="synthesis only: utilisation, no Fmax (default: also place and route)")
     a.add_argument("--keep", metavar="DIR", default=None,

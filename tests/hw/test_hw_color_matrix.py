@@ -78,6 +78,26 @@ def test_loadable_matrix_initial_contents(matrix):
     assert np.array_equal(out, convert_color(_FakeSet(matrix), colors, s))
 
 
+@pytest.mark.parametrize("frac_bits", [1, 3, 8, 11, 15])
+def test_loadable_matrix_every_shift(frac_bits):
+    """The loaded matrix's stage 3 takes the 8 bits at ``F`` by a window select and the clamp from
+    the sign and a mask of the bits at or above ``F + 8``: random coefficients of that scale (sums
+    that clamp both ways and land in range), equal to golden."""
+    rng = np.random.default_rng(frac_bits)
+    scale = 1 << frac_bits
+    coeffs = rng.integers(-2 * scale, 2 * scale + 1, (3, 3))
+    matrix = Spec(coeffs=tuple(map(tuple, coeffs.tolist())), offsets=tuple(rng.integers(0, 256, 3).tolist()),
+                  frac_bits=frac_bits, rounding=bool(frac_bits % 2))
+    s = _inputs(rng, 100)
+    colors = np.full(len(s), COLOR_CODES["yuv411"])
+    packed = (s.astype(np.int64) << (8 * np.arange(4))).sum(axis=1)
+    res = run_lockstep(_loadable(matrix), {"samples": packed.tolist(), "color": colors.tolist()}, ["rgba"], LATENCY)
+    out = ((np.array(res["rgba"], dtype=np.int64)[:, None] >> (8 * np.arange(4))) & 0xFF).astype(np.uint8)
+    want = convert_color(_FakeSet(matrix), colors, s)
+    assert np.array_equal(out, want)
+    assert {0, 255} <= set(np.unique(want[:, :3])) and len(np.unique(want[:, :3])) > 20
+
+
 @pytest.mark.parametrize("before,after", [(JFIF_BT601, WIDE), (WIDE, ODD), (ODD, DREAMCAST_YUV422)],
                          ids=["jfif_to_wide", "wide_to_odd", "odd_to_dreamcast"])
 def test_loadable_matrix_reloaded(before, after):

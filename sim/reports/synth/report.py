@@ -18,7 +18,7 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
                 seed: int = 1, workdir: str | None = None, timeout: float | None = None,
                 name: str | None = None, progress=None, specialise: bool = True,
                 filter_lanes: int | None = None, index_banks: str = "parity", geometry=None,
-                memory=None) -> dict:
+                memory=None, router: str = "router1", route: bool = True) -> dict:
     """Synthesize (and unless ``place`` is false, place and route) the unit holding ``ts``: the
     specialised texel-fetch unit (:class:`hw.features.Features`), or with ``specialise=False`` the
     full one; or with ``filter_lanes`` the texture filter (``hw.filter.TextureFilter``) with that many
@@ -28,6 +28,10 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
     :class:`golden.memory.system.MemoryConfig`), the cached unit (``hw.memory.unit.CachedTexelFetch``:
     the index map and raw levels in external memory behind its caches, its AXI4 read master as ports;
     only the cache shapes, FIFO depth and bus width shape the hardware).
+
+    ``router`` is nextpnr's router (``router1``, its default, or ``router2``: much faster on the
+    loadable presets, :data:`.tools.ROUTERS`). ``route=False``: placement only, Fmax is nextpnr's
+    estimate after placement (``timing.routed`` false, no critical path).
 
     ``progress(message)``, when given, is called as each long step starts (elaboration, synthesis,
     place and route).
@@ -108,11 +112,13 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
                              "address_stages": ADDRESS_STAGES}
         if place:
             progress(f"place and route (nextpnr, {freq:g} MHz), typically 20-40 s")
-            pnr = run_nextpnr(folder, freq=freq, seed=seed, timeout=timeout)
+            pnr = run_nextpnr(folder, freq=freq, seed=seed, timeout=timeout, router=router, route=route)
             rep["seconds"]["place_and_route"] = round(pnr.pop("seconds"), 2)
             pnr.pop("log", None)
             pnr["met"] = pnr["fmax_mhz"] >= pnr["target_mhz"]
             pnr["seed"] = seed
+            pnr["router"] = router
+            pnr["routed"] = route
             rep["timing"] = pnr
         return rep
 

@@ -30,7 +30,8 @@ def area_text(rep: dict) -> str:
     t = rep.get("timing")
     if t:
         lines.append(f"  Fmax {t['fmax_mhz']:.1f} MHz ({'meets' if t['met'] else 'misses'} "
-                     f"{t['target_mhz']:.0f} MHz; clock {t['clock']}, seed {t['seed']})")
+                     f"{t['target_mhz']:.0f} MHz; clock {t['clock']}, seed {t['seed']}, "
+                     + (f"{t.get('router', 'router1')})" if t.get("routed", True) else "placement estimate, not routed)"))
         cp = t.get("critical_path")
         if cp:
             lines.append(f"  critical path {cp['delay_ns']:.2f} ns ({cp['logic_ns']:.2f} logic, "

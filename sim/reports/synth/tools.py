@@ -16,7 +16,7 @@ from .parsers import (count_memory_blocks, parse_memory_mapping, parse_nextpnr_l
 from .stages import signal_of, stage_of
 from .target import DEVICE, HARNESS_NAME, INSTALL_HINT, UNIT_NAME, SynthError
 
-__all__ = ["tools_available", "run_yowasp", "yosys_script", "run_yosys", "run_nextpnr"]
+__all__ = ["tools_available", "run_yowasp", "yosys_script", "run_yosys", "run_nextpnr", "ROUTERS"]
 
 
 def tools_available() -> dict:
@@ -97,13 +97,36 @@ def run_yosys(rtlil_text: str, workdir: str, *, timeout: float | None = None) ->
             "netlist": os.path.join(workdir, "netlist.json"), "log": os.path.join(workdir, "yosys.log")}
 
 
-def run_nextpnr(workdir: str, *, freq: float = 150.0, seed: int = 1, timeout: float | None = None) -> dict:
-    """Place and route ``workdir/netlist.json`` on the LFE5U-85F-8 (CABGA381), target ``freq`` MHz.
-    Returns :func:`parse_nextpnr_report` of its JSON report plus ``seconds`` and ``log``."""
+#: nextpnr's routers: ``router1`` (its default, timing-driven; slow to converge on a congested
+#: design) and ``router2`` (negotiated congestion; minutes where router1 took an hour on the loadable
+#: presets, docs/area.md).
+ROUTERS = ("router1", "router2")
+
+
+def run_nextpnr(workdir: str, *, freq: float = 150.0, seed: int = 1, timeout: float | None = None,
+                router: str = "router1", route: bool = True) -> dict:
+    """Place and route ``workdir/netlist.json`` on the LFE5U-85F-8 (CABGA381), target ``freq`` MHz,
+    with nextpnr's ``router`` (:data:`ROUTERS`). Returns :func:`parse_nextpnr_report` of its JSON
+    report plus ``seconds`` and ``log``. With ``route=False``, placement only (``--no-route``):
+    ``fmax_mhz`` is nextpnr's estimate after placement (its log's ``Max frequency`` line) and
+    ``critical_path`` is None (this nextpnr reports none before routing)."""
+    if router not in ROUTERS:
+        raise SynthError(f"router {router!r} is not one of {', '.join(ROUTERS)}")
     args = [DEVICE["nextpnr_device"], "--speed", str(DEVICE["speed"]), "--package", DEVICE["package"],
             "--json", "netlist.json", "--freq", f"{freq:g}", "--seed", str(seed), "--timing-allow-fail",
-            "--report", "report.json", "-l", "nextpnr.log", "-q"]
+            "--router", router, "--report", "report.json", "-l", "nextpnr.log", "-q"]
+    if not route:
+        args = [a for a in args if a not in ("--report", "report.json")] + ["--no-route"]
     _, dt = _run("nextpnr", args, workdir, "nextpnr.out", timeout)
+    if not route:
+        with open(os.path.join(workdir, "nextpnr.log")) as f:
+            log = parse_nextpnr_log(f.read())
+        if not log["clocks"]:
+            raise SynthError("nextpnr wrote no Max frequency line after placement")
+        clock = min(log["clocks"], key=lambda c: log["clocks"][c]["fmax_mhz"])
+        c = log["clocks"][clock]
+        return {"clock": clock, "fmax_mhz": c["fmax_mhz"], "target_mhz": c["target_mhz"], "utilisation": {},
+                "critical_path": None, "seconds": dt, "log": os.path.join(workdir, "nextpnr.log")}
     path = os.path.join(workdir, "report.json")
     if os.path.isfile(path):
         with open(path) as f:

@@ -162,6 +162,31 @@ def test_run_nextpnr_reads_report_or_falls_back_to_log(monkeypatch, tmp_path):
     assert rep["fmax_mhz"] == 87.28 and len(rep["critical_path"]["steps"]) == 7
 
 
+def test_run_nextpnr_router(monkeypatch, tmp_path):
+    calls = []
+    monkeypatch.setattr(tools, "_run", lambda tool, args, *a, **k: calls.append(args) or ("", 1.0))
+    (tmp_path / "report.json").write_text(json.dumps(REPORT_SAMPLE))
+    synth.run_nextpnr(str(tmp_path))
+    synth.run_nextpnr(str(tmp_path), router="router2")
+    routers = [args[args.index("--router") + 1] for args in calls]
+    assert routers == ["router1", "router2"]
+    with pytest.raises(synth.SynthError, match="router3"):
+        synth.run_nextpnr(str(tmp_path), router="router3")
+
+
+def test_run_nextpnr_place_only_reads_the_placement_estimate(monkeypatch, tmp_path):
+    calls = []
+    monkeypatch.setattr(tools, "_run", lambda tool, args, *a, **k: calls.append(args) or ("", 2.0))
+    (tmp_path / "nextpnr.log").write_text(LOG_SAMPLE)
+    (tmp_path / "report.json").write_text(json.dumps(REPORT_SAMPLE))     # a stale report is not read
+    rep = synth.run_nextpnr(str(tmp_path), route=False)
+    assert "--no-route" in calls[0] and "--report" not in calls[0]
+    assert rep["fmax_mhz"] == 87.28 and rep["critical_path"] is None and rep["seconds"] == 2.0
+    (tmp_path / "nextpnr.log").write_text("Info: placed\n")
+    with pytest.raises(synth.SynthError, match="Max frequency"):
+        synth.run_nextpnr(str(tmp_path), route=False)
+
+
 @pytest.mark.parametrize("cell, signal, stage", [
     ("unit.fetch.front.address.k_TRELLIS_FF_Q_5", "unit.fetch.front.address.k", "block address"),
     ("unit.fetch.back.codebook_rom.codebook.0.27_DOA9_LUT4_C_Z_PFUMX_BLUT_Z", "unit.fetch.back.codebook_rom.codebook",
