@@ -190,14 +190,17 @@ def _pysim(dut, phases, config, stall, seed) -> list:
     return results
 
 
-def run_phases(geometry, config, phases, *, backend: str, stall: float = 0.0, seed: int = 0) -> list:
+def run_phases(geometry, config, phases, *, backend: str, stall: float = 0.0, seed: int = 0,
+               trace: bool = False) -> list:
     """One simulation of the loadable cached unit of ``geometry`` (one compiled library on cxxrtl and
     verilator) through ``phases``, each ``(ts, requests, layout)`` (``layout``: where the host puts
     the set in external memory; None: ``Layout.of(ts)``): ``ts`` is loaded by the bus writes of
     :func:`golden.register_map.load_writes` (matrix, base registers, descriptors, codebook), the
     memory model holds ``layout.image(ts)``, then the requests run. One dict per phase:
     ``responses``, ``cycles`` (from the phase's first request, as golden's model), ``load_cycles``,
-    ``backpressure``, ``fill_waits``, ``bursts`` (per cache), ``ar`` (cycles) and ``addresses``."""
+    ``backpressure``, ``fill_waits``, ``bursts`` (per cache), ``ar`` (cycles) and ``addresses``; on
+    pysim, and with ``trace`` on the compiled backends, ``accept`` and ``transfer`` (every input
+    acceptance's and response transfer's cycle)."""
     from vqtex.golden.register_map import load_writes
     program = []
     for ts, req, layout in phases:
@@ -219,7 +222,7 @@ def run_phases(geometry, config, phases, *, backend: str, stall: float = 0.0, se
             _, err, load = lib.bus(ops)
             if err.any():
                 raise ToolchainError(f"bus write {int(np.argmax(err))} of the load answered with err")
-            got = _run_loaded(lib, info, ts, req, config, layout, stall, seed, trace=False)
+            got = _run_loaded(lib, info, ts, req, config, layout, stall, seed, trace=trace)
             got["load_cycles"] = load
             out.append(got)
         return out
