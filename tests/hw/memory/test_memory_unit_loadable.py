@@ -207,6 +207,7 @@ def test_drain_rule_with_misses_in_flight():
     sim.add_testbench(bench)
     sim.add_testbench(host)
     sim.run()
+    assert log["ack"], "the second load never got in"
     first_ack = min(log["ack"])
     k = sum(t < first_ack for t in log["accept"])      # requests accepted before the writes
     assert 0 < k < n and len(log["rgba"]) == n
