@@ -22,6 +22,12 @@ past an entry's bytes, a control word that does not exist) and a write to a read
 Wishbone's error response (``err`` instead of ``ack``). Bits of a word beyond a field's width are
 dropped on write and read back as 0.
 
+The loadable cached unit (``hw.memory.unit.CachedTexelFetch(geometry=..., loadable=True)``: the
+index and raw memories in external memory behind caches) has the map ``RegisterMap(geometry,
+external=True)``: the index and raw regions hold no words (every access is an error: the host
+writes those memories into external memory, ``golden.memory.system.Layout.image``) and the control
+region has two more registers, :data:`BASE_REGISTERS` (``INDEX_BASE``, ``RAW_BASE``: where they are).
+
 :func:`load_writes` is what a CPU driver does to load a set: one write per descriptor word of every
 row of the geometry (rows the set does not use are written 0, not valid, so nothing of a previous
 set stays visible), then the index, codebook and raw memories and the colour matrix. :func:`markdown`

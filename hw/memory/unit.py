@@ -25,8 +25,10 @@ external=True)``), added to the words' numbers in the address stage. The index a
 are not on chip (an access is an error): the host writes ``Layout.image`` into the external
 memory. Every accepted bus write empties the caches (the reader is reset in the cycle the write
 reaches the unit; the drain rule has emptied it), so a stream after a load starts from empty
-caches, as golden's cycle model does. Same timing as the baked unit; the bus's, the loadable
-unit's (a load of N writes: ``golden.register_map.load_cycles``).
+caches, as golden's cycle model does. The requests' timing is the baked unit's (below, with the
+layout the base registers give); the bus's is the loadable unit's (:mod:`hw.bus_port`: a load of N
+writes takes ``golden.register_map.load_cycles(N)``), and its drain rule counts the address
+stages, the reader (its reference FIFO and output register) and the texel pipeline as in flight.
 
 Timing: :func:`golden.memory.timing.run` (``address_stages`` 2, the texel pipeline as consumer),
 cycle for cycle; with every reference a hit, ``LATENCY + 4`` cycles from ``i`` to ``o`` and one
@@ -69,7 +71,7 @@ from vqtex.golden.register_map import BASE_REGISTERS, REGIONS, RegisterMap, base
 
 from ..address import BlockAddress
 from ..banked_rom import addr_bits
-from ..bus_port import ANSWER_LATENCY, BusPort, delayed, load_layout, or_all, wishbone_signature
+from ..bus_port import ANSWER_LATENCY, BusPort, delayed, or_all, wishbone_signature
 from ..descriptor import DescriptorTable
 from ..features import Features
 from ..pipeline import RequestLayout, ResponseLayout
@@ -231,8 +233,8 @@ def cached_lane(m, prefix: str, ts, feat, config, layout, tf, request, en, *, lo
     m.submodules[prefix + "reader"] = reader if flush is None else ResetInserter({"sync": flush})(reader)
 
     # -- the address stages' datapath ------------------------------------------------------------------
-    m.submodules[prefix + "descriptor"] = desc = DescriptorTable(ts, features=feat, geometry=g, load=None if load is None
-                                                                 else load.shape())
+    m.submodules[prefix + "descriptor"] = desc = DescriptorTable(
+        ts, features=feat, geometry=g, load=None if load is None else load.shape())
     if load is not None:
         m.d.comb += desc.load.eq(load)          # (its read answer is the texel pipeline's copy's)
     m.submodules[prefix + "address"] = addr = BlockAddress(

@@ -68,6 +68,8 @@ def run(ts, requests, config, *, backend: str = "golden", stall: float = 0.0, se
     from .cycle_model import straddle_flags
     req = np.asarray(requests, np.int64).reshape(-1, 4)
     n = len(req)
+    if layout is not None and geometry is None:
+        raise ValueError("the baked cached unit's set is at Layout.of(ts): a layout needs the loadable unit (geometry)")
     layout = layout or Layout.of(ts)
     p = plan(ts, req, config, layout=layout)
     load = None
