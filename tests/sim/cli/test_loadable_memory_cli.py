@@ -113,3 +113,13 @@ def test_bad_combinations(capsys, trace, argv, pattern):
     names = {"T": d / "t.vqt", "R": d / "r.npy", "X.npy": d / "x.npy", "X.sv": d / "x.sv", "TB": d / "tb"}
     assert_one_error(capsys, [names.get(a, a) for a in argv], pattern)
     assert not (d / "x.npy").exists() and not (d / "x.sv").exists()
+
+
+def test_export_lints_clean(capsys, trace):
+    """The loadable cached unit's Verilog (the set's own geometry) passes Verilator's lint (--lint)."""
+    need("verilator")
+    d, _, _ = trace
+    code, text, err = run_cli(capsys, "export", d / "t.vqt", "--unit", "loadable", "--memory", "external",
+                              "--cache-size", "1024", "--raw-cache-size", "256", "-o", d / "lint.sv", "--lint", "--json")
+    assert code == 0, err
+    assert json.loads(text)["lint"] == "clean"
