@@ -467,6 +467,9 @@ def cmd_render(args) -> int:
     elif args.backend != "golden":
         text.append(f"RTL frames identical to golden: {'yes' if not mismatches else 'NO, frames ' + str(mismatches)}; "
                     f"{report['cycles_per_frame']:.0f} cycles per frame")
+    loads = [f["load_cycles"] for f in per_frame if f.get("load_cycles") is not None]
+    if loads:
+        text.append(f"loadable unit: the set loaded over its bus in {loads[0]:,} cycles before each frame's requests")
     if memory is not None and args.filter_in_rtl:
         m = report["memory"]
         text.append(f"external memory ({m['configuration']}), a cache per lane: {m['bytes_per_pixel']:.4f} bytes read "

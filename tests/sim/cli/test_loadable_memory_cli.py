@@ -80,7 +80,15 @@ def test_render_scene_frame_on_cxxrtl(capsys, tmp_path):
     frame = rep["frames"][0]
     assert rep["unit"] == "loadable" and frame["identical_to_golden"]
     assert frame["cycles"] == model["cycles"] and model["bursts"] > 0
-    assert frame["load_cycles"] == load_cycles(len(load_writes(ts, preset("paper"), Layout.of(ts))))
+    want = load_cycles(len(load_writes(ts, preset("paper"), Layout.of(ts))))
+    assert frame["load_cycles"] == want
+    with shared_cache():                    # the text names the load
+        code, out, err = run_cli(capsys, "render", scene_file, "--frames", "0", "-o", tmp_path / "g.png",
+                                 "--memory", "external", "--unit", "loadable", "--geometry", "paper",
+                                 "--cache-size", "1024", "--raw-cache-size", "512", "--cache-ways", "2",
+                                 "--prefetch", "16", "--backend", "cxxrtl")
+    assert code == 0, err
+    assert f"the set loaded over its bus in {want:,} cycles" in out and "identical to golden: yes" in out
 
 
 def test_export_writes_the_register_map(capsys, tmp_path):
