@@ -91,10 +91,15 @@ def test_render_scene_frame_on_cxxrtl(capsys, tmp_path):
     assert f"the set loaded over its bus in {want:,} cycles" in out and "identical to golden: yes" in out
 
 
-def test_export_writes_the_register_map(capsys, tmp_path):
+def test_export_writes_the_register_map(capsys, trace, tmp_path):
+    """No texture data; the Verilog has the bus and AXI ports; the map and header name the base
+    registers and no index or raw words; the on-chip loadable unit's map has no base registers."""
+    from vqtex.golden.register_map import RegisterMap
+    d, ts, _ = trace
     out = tmp_path / "lc.sv"
-    code, text, err = run_cli(capsys, "export", "--unit", "loadable", "--geometry", "paper", "--memory", "external",
-                              "-o", out, "--json")
+    small = ["--cache-size", "1024", "--raw-cache-size", "256"]
+    code, text, err = run_cli(capsys, "export", d / "t.vqt", "--unit", "loadable", "--memory", "external", *small,
+                              "-o", out, "--json")        # (the set's own geometry; its contents not written)
     assert code == 0, err
     rep = json.loads(text)
     verilog = out.read_text()
@@ -102,10 +107,9 @@ def test_export_writes_the_register_map(capsys, tmp_path):
     regs, header = (tmp_path / "lc.regs.md").read_text(), (tmp_path / "lc.h").read_text()
     assert "| INDEX_BASE | 0x1e | rw |" in regs and "| RAW_BASE | 0x1f | rw |" in regs
     assert "VQTEX_REG_INDEX_BASE" in header and "#define VQTEX_INDEX_WORDS 0u" in header
-    baked = tmp_path / "paper.regs.md"
-    assert run_cli(capsys, "export", "--unit", "loadable", "--geometry", "paper", "-o", tmp_path / "paper.sv")[0] == 0
-    assert "INDEX_BASE" not in baked.read_text()
-    assert rep["bus_addr_bits"] == 19
+    assert rep["bus_addr_bits"] == RegisterMap(Geometry.of(ts), external=True).addr_bits
+    assert run_cli(capsys, "export", d / "t.vqt", "--unit", "loadable", "-o", tmp_path / "chip.sv")[0] == 0
+    assert "INDEX_BASE" not in (tmp_path / "chip.regs.md").read_text()
 
 
 @pytest.mark.parametrize("argv,pattern", [
