@@ -141,8 +141,6 @@ class CachedTexelFetch(wiring.Component):
         m = Module()
         m.submodules.texel = tf = self._tf
         en1, en2 = Signal(), Signal()
-        v1, v2 = Signal(), Signal()
-        pause = C(0, 1)
         lane = {}
         if self._loadable:
             m.submodules.bus_port = port = BusPort(self.geometry, external=True)
@@ -154,21 +152,23 @@ class CachedTexelFetch(wiring.Component):
                          tf.load.data.eq(port.load.data)]
             bases, answer = _base_registers(m, port.load, self._map, self._layout)
             m.d.comb += port.load_data.eq(or_all([tf.load_data, answer]))
-            pause = port.pause
             # any accepted write empties the caches (the drain rule has emptied the unit)
             lane = {"load": tf.load, "bases": bases, "flush": port.load.write}
         reader = cached_lane(m, "", self._ts, self._features, self._config, self._layout, tf, self.i.p, (en1, en2),
                              **lane)
         wiring.connect(m, reader.axi, wiring.flipped(self.axi))
         # -- the address stages: two stream registers, moving as a chain ----------------------------
+        # (a loadable unit takes no request while the host holds the bus: the drain rule)
+        v1, v2 = Signal(), Signal()
+        taken = self.i.valid & ~port.pause if self._loadable else self.i.valid
         m.d.comb += [
             en2.eq(~v2 | reader.i.ready),
             en1.eq(~v1 | en2),
-            self.i.ready.eq(en1 & ~pause),
+            self.i.ready.eq(en1 & ~port.pause if self._loadable else en1),
             reader.i.valid.eq(v2),
         ]
         with m.If(en1):
-            m.d.sync += v1.eq(self.i.valid & ~pause)
+            m.d.sync += v1.eq(taken)
         with m.If(en2):
             m.d.sync += v2.eq(v1)
         # -- the texel pipeline takes the reader's output when it advances --------------------------
