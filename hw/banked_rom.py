@@ -167,6 +167,13 @@ class BankedROM(wiring.Component):
         for k in range(self._banks):
             part = self._init[k * d:(k + 1) * d]
             depth = min(d, self._depth - k * d) if load is not None or self._depth > len(self._init) else len(part)
+            if load is None:
+                # A read-only bank is as deep as its read address reaches (every address decodes,
+                # the rows past the contents zero; as hw.descriptor's table): a simulator then
+                # reads it with one indexed load, not a bounds check, a branch on the address that
+                # mispredicts on random addresses (Verilator: the last, partial bank of the index
+                # and raw memories; docs/simulation.md). Same block RAMs.
+                depth = 1 << ceil_log2(max(1, depth))
             # (a loadable bank: a read in the cycle of a write may read anything, so that Yosys can
             # put the bus's read and write on one port of the block RAM: hw.bus_port.attach_memory)
             m.submodules[f"bank{k}"] = mem = memory.Memory(shape=stored, depth=depth, init=part,

@@ -136,6 +136,26 @@ def test_banked_rom_reads_every_word(depth, bank_depth):
     assert res["word"] == [init[a] for a in addr]
 
 
+@pytest.mark.parametrize("depth,bank_depth", [(37, 8), (5, 512), (161, 512)])
+def test_banked_rom_every_address_decodes(depth, bank_depth):
+    """A read-only bank is as deep as its read address reaches (a power of two), the rows past the
+    contents zero: an address past the last word reads 0 (one indexed load in a simulator, no
+    bounds check); the contents and the bank count are unchanged."""
+    from vqtex.hw.memories import elaborate, memories
+    init = list(range(1, depth + 1))
+    dut = BankedROM(init, width=12, bank_depth=bank_depth)
+    mems = memories(elaborate(dut))
+    assert len(mems) == -(-depth // bank_depth)
+    for k, mem in enumerate(mems):
+        part = init[k * bank_depth:(k + 1) * bank_depth]
+        assert mem.depth == 1 << (len(part) - 1).bit_length()
+        assert mem.words[:len(part)] == part and not any(mem.words[len(part):])
+    top = (1 << len(dut.addr)) if len(mems) == 1 else (len(mems) - 1) * bank_depth + mems[-1].depth
+    addr = list(range(depth, top)) + [depth - 1, 0]
+    res = run_lockstep(dut, {"addr": addr}, ["word"], banked_rom.LATENCY)
+    assert res["word"] == [0] * (top - depth) + [init[-1], init[0]]
+
+
 def test_banked_rom_rejects_bad_bank_depth():
     with pytest.raises(ValueError):
         BankedROM([1, 2, 3], width=8, bank_depth=12)

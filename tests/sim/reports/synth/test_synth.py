@@ -237,13 +237,14 @@ def test_report_area_tiny(tmp_path, capsys, monkeypatch):
     assert u["luts"] == rep["cells"]["LUT4"] and u["brams"] == rep["cells"]["DP16KD"]
     # every port bit but the clock and reset has a harness flip-flop (constant ones may be removed)
     assert 0 < rep["harness_ffs"] <= rep["port_bits"]
-    # Block RAM inference: the raw memory (682 x 32 bits, banks of 512 and 170 words) is worth
-    # DP16KDs; the descriptor table (32 rows) and the tiny codebook (32 entries) are ROM logic
-    # (Yosys's cost model, docs/area.md).
+    # Block RAM inference: the raw memory (682 x 32 bits, banks of 512 and 170 words; the second
+    # declared 256 deep, as far as its read address reaches: hw.banked_rom) is worth DP16KDs; the
+    # descriptor table (32 rows) and the tiny codebook (32 entries) are ROM logic (Yosys's cost
+    # model, docs/area.md).
     mem = rep["memories"]
     raw0 = mem["fetch.back.codebook_rom.raw.bank0"]
     assert raw0["mapped_to"] == "block RAM" and raw0["DP16KD"] > 0 and (raw0["depth"], raw0["width"]) == (512, 32)
-    assert mem["fetch.back.codebook_rom.raw.bank1"]["depth"] == 170
+    assert mem["fetch.back.codebook_rom.raw.bank1"]["depth"] == 256
     assert mem["fetch.front.descriptor.table"]["mapped_to"] == "logic"
     assert rep["latency"] == 14
     assert sum(m["DP16KD"] for m in mem.values()) == u["brams"]
