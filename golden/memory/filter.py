@@ -14,9 +14,11 @@ its slots (``k + lanes g`` of every pixel's group ``g``) through its own index a
 (:func:`golden.memory.timing.plan` of its stream: numpy), and the rules of
 :mod:`golden.memory.timing` hold per group with the lanes joined:
 
-- ``a[n]`` (group n enters the address stages) ``>= a[n-1] + 1``, ``>= g[n - ADDRESS_STAGES]``;
+- ``a[n]`` (group n enters the address stages) ``>= a[n-1] + 1``, ``>= b[n - ADDRESS_STAGES]``;
   ``a[0] = FOOTPRINT_LATENCY``;
-- ``g[n]`` (every lane's tag check, the same cycle) ``>= a[n] + ADDRESS_STAGES``, ``>= g[n-1] +
+- ``b[n]`` (every lane's lookup, the tag check's first cycle, takes group n; two places, its ready
+  registered) ``>= a[n] + ADDRESS_STAGES``, ``>= b[n-1] + 1``, ``>= g[n-2] + 1``;
+- ``g[n]`` (every lane's tag check, the same cycle) ``>= b[n] + LOOKUP_STAGES``, ``>= g[n-1] +
   max(1, max_k misses_k[n-1])``, and for every lane ``>= p_k[n-Q]`` and ``>= p_k[v_k] + 1`` (its
   victim rule);
 - lane k's j-th burst of group n is offered in ``g[n] + 1 + j`` and issued by the arbiter's rule
@@ -29,8 +31,8 @@ its slots (``k + lanes g`` of every pixel's group ``g``) through its own index a
 - the lanes' outputs ``T[n] = e[n] + LATENCY`` (the texel pipeline's), and pixel m's colour
   transfers ``BLEND_LATENCY`` cycles after its last group's: ``cycles = T[last] + BLEND_LATENCY + 1``.
 
-With every reference a hit: ``cycles = groups + FOOTPRINT_LATENCY + ADDRESS_STAGES + 2 + LATENCY +
-BLEND_LATENCY`` = ``groups + 27`` (the on-chip filter: ``groups + 23``). With one lane the rules are
+With every reference a hit: ``cycles = groups + FOOTPRINT_LATENCY + ADDRESS_STAGES + LOOKUP_STAGES
++ 2 + LATENCY + BLEND_LATENCY`` = ``groups + 28`` (the on-chip filter: ``groups + 23``). With one lane the rules are
 :func:`golden.memory.timing.run`'s exactly (the tests hold them equal).
 
 Not modelled: output backpressure (``o.ready`` low). Why a loop over groups: as in
@@ -45,7 +47,7 @@ from .. import filter as spec
 from ..format import TextureSet
 from .arbiter import Arbiter
 from .system import MemoryConfig
-from .timing import ADDRESS_STAGES, plan
+from .timing import ADDRESS_STAGES, LOOKUP_STAGES, plan
 
 __all__ = ["FOOTPRINT_LATENCY", "BLEND_LATENCY", "FETCH_LATENCY", "lane_requests", "run", "run_pixels"]
 
@@ -106,16 +108,22 @@ def run(plans: list, config: MemoryConfig, last: np.ndarray, *, start: int = FOO
     filled = [[0] * len(x) for x in address]
     queued = [[0] * len(x) for x in address]
     burst = [0] * lanes
-    a, g, e = [0] * n, [0] * n, [0] * n
+    a, lk, g, e = [0] * n, [0] * n, [0] * n, [0] * n
     pr = [[0] * n for _ in range(lanes)]
     ar, ar_lane = [], []
     miss_c = bw_c = fifo_c = victim_c = join_c = 0
     K = range(lanes)
     for i in range(n):
         ai = a[i - 1] + 1 if i else start
-        if i >= La and g[i - La] > ai:
-            ai = g[i - La]
-        gi = ai + La
+        if i >= La and lk[i - La] > ai:
+            ai = lk[i - La]
+        bi = ai + La
+        if i and lk[i - 1] + 1 > bi:
+            bi = lk[i - 1] + 1
+        if i >= 2 and g[i - 2] + 1 > bi:
+            bi = g[i - 2] + 1
+        lk[i] = bi
+        gi = bi + LOOKUP_STAGES
         if i and g[i - 1] + max(1, maxmiss[i - 1]) > gi:
             gi = g[i - 1] + max(1, maxmiss[i - 1])
         if i >= Q:
@@ -178,7 +186,7 @@ def run(plans: list, config: MemoryConfig, last: np.ndarray, *, start: int = FOO
                          "victim": victim_c, "arbiter": arb.waited},
         "bursts": int(per_cache.sum()),
         "memory_bytes": {"index": int(per_cache[0]) * line[0], "raw": int(per_cache[1]) * line[1]},
-        "accept": np.array(a, np.int64), "tag": np.array(g, np.int64), "enter": np.array(e, np.int64),
+        "accept": np.array(a, np.int64), "lookup": np.array(lk, np.int64), "tag": np.array(g, np.int64), "enter": np.array(e, np.int64),
         "ar": np.array(ar, np.int64), "ar_lane": np.array(ar_lane, np.int64),
     }
 

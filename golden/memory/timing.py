@@ -4,16 +4,19 @@ The unit (docs/memory.md)
 -------------------------
 ::
 
-    requests -> address (2 stages) -> tag check -> reference FIFO -> data read -> output register
-                                         |  (Q entries)             ^              |
-                                         v AR                       | R            v
-                                      AXI4 read master  <------  memory      texel pipeline (LATENCY)
-                                                                                   |
-                                                                                responses
+    requests -> address (2 stages) -> lookup -> tag check -> reference FIFO -> data read -> output register
+                                                   |  (Q entries)             ^              |
+                                                   v AR                       | R            v
+                                                AXI4 read master  <------  memory      texel pipeline (LATENCY)
+                                                                                             |
+                                                                                          responses
 
 The address stages (descriptor, block address) compute the words a request reads; the tag check
-looks up its references (:mod:`golden.memory.system`) in the index or raw cache, allocating a line and
-issuing its burst on a miss; the reference waits in a FIFO of ``Q = config.prefetch`` entries until
+takes two cycles: the lookup (``LOOKUP_STAGES``: two places, a main and a skid register, so its
+ready is a register) reads the tag rows of the request's sets and registers them (a row the check
+writes in that cycle is forwarded to it), and the check proper compares them for its references
+(:mod:`golden.memory.system`) in the index or raw cache, allocating a line and issuing its burst
+on a miss; the reference waits in a FIFO of ``Q = config.prefetch`` entries until
 its lines are filled; the data read takes the words from the cache into an output register, which
 the texel pipeline (``hw.texel_fetch``'s, ``LATENCY`` registers and the skid register, advancing on
 its registered ``advance``) accepts. ``Q = 1`` is the blocking cache.
@@ -21,10 +24,15 @@ its registered ``advance``) accepts. ``Q = 1`` is the blocking cache.
 The rules, in cycles (each event at the first cycle that meets all its rules; requests are presented
 back to back from cycle 0; ``x[n-k]`` for ``n < k`` imposes nothing):
 
-- ``a[n]`` (request n accepted): ``>= a[n-1] + 1``, ``>= g[n - ADDRESS_STAGES]`` (the address
-  stages are a chain of stream registers that moves as a whole: a stage takes a new item when its
-  item leaves, in the same cycle).
-- ``g[n]`` (tag check): ``>= a[n] + ADDRESS_STAGES``; ``>= g[n-1] + max(1, misses[n-1])`` (one burst
+- ``a[n]`` (request n accepted): ``>= a[n-1] + 1``, ``>= b[n - ADDRESS_STAGES]`` (the address
+  stages are a chain of stream registers that moves as a whole against the lookup's acceptance: a
+  stage takes a new item when its item leaves, in the same cycle).
+- ``b[n]`` (the lookup, the tag check's first cycle, takes request n): ``>= a[n] + ADDRESS_STAGES``;
+  ``>= b[n-1] + 1``; ``>= g[n-2] + 1`` (the lookup has two places, a main and a skid register, and
+  its ready is the registered ``~skid_valid``: it takes a request when at most one of those it holds
+  was still unchecked at the start of the cycle). With ``address_stages = 0``, ``a[n] = b[n]``.
+- ``g[n]`` (tag check, its second cycle, where it is decided and the state written): ``>= b[n] +
+  LOOKUP_STAGES``; ``>= g[n-1] + max(1, misses[n-1])`` (one burst
   issued per cycle); ``>= p[n-Q]`` (a FIFO entry frees when its reference is read); for a miss whose
   victim line has a reference ``v`` not yet read, ``>= p[v] + 1`` (a line is never replaced under a
   waiting reference).
@@ -45,7 +53,7 @@ back to back from cycle 0; ``x[n-k]`` for ``n < k`` imposes nothing):
   backpressure is ``[arrive[n], T[n])`` for every n.
 
 ``cycles = T[N-1] + 1``. With every reference a hit and no backpressure, ``cycles = N + LATENCY +
-ADDRESS_STAGES + 2``.
+ADDRESS_STAGES + LOOKUP_STAGES + 2``.
 
 Stall cycles by cause: ``output_backpressure`` (cycles with ``o.valid & ~o.ready``, as the on-chip
 unit counts them); ``miss`` and ``bandwidth``: the cycles by which a line fill held a data read back
@@ -72,13 +80,16 @@ from ..format import TextureSet
 from .cache import classify
 from .system import Layout, MemoryConfig, references
 
-__all__ = ["ADDRESS_STAGES", "FRONT_LATENCY", "Plan", "plan", "run", "run_requests", "TexelPipeline", "StreamSink"]
+__all__ = ["ADDRESS_STAGES", "LOOKUP_STAGES", "FRONT_LATENCY", "Plan", "plan", "run", "run_requests", "TexelPipeline", "StreamSink"]
 
-#: Stages before the tag check (descriptor, block address).
+#: The unit's address stages before the cache block (descriptor, block address).
 ADDRESS_STAGES = 2
+#: The tag check's first cycle (the lookup: the set's tag row read and registered), a stream
+#: register of the cache block in the chain in front of the tag check.
+LOOKUP_STAGES = 1
 #: Cycles from accepting a request to offering it to the texel pipeline when every reference hits:
-#: the address stages, the tag check and the data read.
-FRONT_LATENCY = ADDRESS_STAGES + 2
+#: the address stages, the lookup, the tag check and the data read.
+FRONT_LATENCY = ADDRESS_STAGES + LOOKUP_STAGES + 2
 
 
 @dataclass
@@ -225,12 +236,12 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
 
     ``ready_pattern(length)`` gives ``o.ready`` for cycles ``0 .. length-1`` (bool array, every
     length a prefix of one sequence). ``address_stages`` = 0 is the cache block alone
-    (``hw.memory``): the input handshake is the tag check (``a[n] = g[n]``, ``g[n] >= g[n-1] + ...``).
+    (``hw.memory``): the input handshake is the lookup's (``a[n] = b[n]``).
     ``consumer`` (default the texel pipeline, :class:`TexelPipeline`) takes each item from the
     output register (``take(s) -> e``; :class:`StreamSink` for the cache block alone, whose
     ``transfer`` are then the output's transfers). Returns a dict: ``cycles``, ``transfer`` (int64 (N,)),
     ``stall_cycles`` (cause -> cycles), ``bursts``, ``memory_bytes`` (per cache), ``burst_first``
-    (int64 (B,), the first beat of each burst) and the per-stage event times ``accept``, ``tag``,
+    (int64 (B,), the first beat of each burst) and the per-stage event times ``accept``, ``lookup``, ``tag``,
     ``read``, ``enter`` (int64 (N,))."""
     n = len(p.misses)
     La, Q, L = int(address_stages), config.prefetch, int(pipeline_latency)
@@ -244,16 +255,22 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
     filled = [0] * nb
     queued = [0] * nb
     first_beat = [0] * nb
-    a, g, pr, e = [0] * n, [0] * n, [0] * n, [0] * n
+    a, b, g, pr, e = [0] * n, [0] * n, [0] * n, [0] * n, [0] * n
     miss_c = bw_c = fifo_c = victim_c = 0
     burst = 0
 
     for i in range(n):
-        # accept and tag check
+        # accept, lookup and tag check
         ai = a[i - 1] + 1 if i else 0
-        if La and i >= La and g[i - La] > ai:
-            ai = g[i - La]
-        gi = ai + La
+        if La and i >= La and b[i - La] > ai:
+            ai = b[i - La]
+        bi = ai + La
+        if i and b[i - 1] + 1 > bi:
+            bi = b[i - 1] + 1
+        if i >= 2 and g[i - 2] + 1 > bi:
+            bi = g[i - 2] + 1
+        b[i] = bi
+        gi = bi + LOOKUP_STAGES
         if i and g[i - 1] + max(1, misses[i - 1]) > gi:
             gi = g[i - 1] + max(1, misses[i - 1])
         if i >= Q and pr[i - Q] > gi:
@@ -264,7 +281,7 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
             victim_c += pr[v] + 1 - gi
             gi = pr[v] + 1
         g[i] = gi
-        a[i] = gi - La if La == 0 else ai
+        a[i] = bi if La == 0 else ai
         for j in range(misses[i]):
             f = mem.read(gi + 1 + j, address[burst], beats[burst])
             first_beat[burst] = f
@@ -300,7 +317,7 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
         "bursts": nb,
         "memory_bytes": {"index": int(per_cache[0]) * line_bytes[0], "raw": int(per_cache[1]) * line_bytes[1]},
         "burst_first": np.array(first_beat, np.int64),
-        "accept": np.array(a, np.int64), "tag": np.array(g, np.int64),
+        "accept": np.array(a, np.int64), "lookup": np.array(b, np.int64), "tag": np.array(g, np.int64),
         "read": np.array(pr, np.int64), "enter": np.array(e, np.int64),
         "memory": mem,
     }

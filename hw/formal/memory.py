@@ -236,10 +236,8 @@ DATA_READ_EARLY = SeededBug("data_read_early", "the data read does not wait for 
 def wrong_lane(bus: int, word_bits: int) -> SeededBug:
     """Negative control: the tag check stores, for an index word, the neighbouring lane of its bus
     word (``off0`` with its low bit flipped), so ``word0`` is another word of the same line."""
-    wb_log = (word_bits // 8).bit_length() - 1
-
     def assign(s):
-        lane = ((s("a0") & (bus - 1)) >> wb_log) ^ 1
-        raw_lane = (s("ra") & (bus - 1)) >> 2
-        return [("comb", s("new_off0").eq(Mux(s("new_raw"), raw_lane, lane)))]
+        # the FIFO entry's lane, as the lookup registered it, with its low bit flipped (index words)
+        lane = s("lookup_off0")
+        return [("comb", s("new_off0").eq(Mux(s("new_raw"), lane, lane ^ 1)))]
     return SeededBug("wrong_lane", "word0 taken from the neighbouring lane of its bus word", (), assign)

@@ -75,7 +75,7 @@ from .unit import ADDRESS_STAGES, cached_lane
 __all__ = ["CachedTextureFilter", "LATENCY"]
 
 #: Cycles from a one-group pixel's acceptance to its colour when every reference hits.
-LATENCY = footprint.LATENCY + ADDRESS_STAGES + 2 + FETCH_LATENCY + blend.LATENCY
+LATENCY = footprint.LATENCY + ADDRESS_STAGES + 3 + FETCH_LATENCY + blend.LATENCY
 
 
 class CachedTextureFilter(wiring.Component):
@@ -151,7 +151,8 @@ class CachedTextureFilter(wiring.Component):
         for k in range(lanes):
             tf = self._tf[k]
             m.submodules[f"lane{k}"] = tf
-            r = cached_lane(m, f"lane{k}_", ts, self._features, self._config, layout, tf, front[k], (en1, en2))
+            r = cached_lane(m, f"lane{k}_", ts, self._features, self._config, layout, tf, front[k], (en1, en2),
+                            joint=True)
             wiring.connect(m, r.axi, arb.ports[k])
             readers.append(r)
         # -- the fork: one valid chain for every lane's address stages; every tag check together ---------
@@ -166,8 +167,12 @@ class CachedTextureFilter(wiring.Component):
             m.d.sync += v1.eq(front_valid)
         with m.If(en2):
             m.d.sync += v2.eq(v1)
+        # every lane's tag check takes its request in the same cycle: when every lane's check can
+        # (the lookups load together, so they hold the same group)
+        all_check = Signal(name="readers_check_ready")
+        m.d.comb += all_check.eq(Cat(*(r.check_ready for r in readers)).all())
         for r in readers:
-            m.d.comb += r.i.valid.eq(v2 & all_in)
+            m.d.comb += [r.i.valid.eq(v2 & all_in), r.check_go.eq(all_check)]
         sequencer(m, fp, lanes, en1, [(front_valid if k == 0 else Signal(name=f"lane{k}_valid"), front[k])
                                       for k in range(lanes)], tw)
         # -- the join: the texel pipelines take a group when every reader holds it ------------------------

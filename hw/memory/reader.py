@@ -3,20 +3,25 @@
 The cache block of the cached unit (docs/memory.md), without the address stages in front of it and
 the texel pipeline behind it::
 
-    i (raw, word, straddle, tag) -> tag check -> reference FIFO (Q) -> data read -> o (words, tag)
-                                       | AR (one burst per miss)          ^
-                                       v                                  | R (line fills)
-                                     AXI4 read master  <----------------  memory
+    i (raw, word, straddle, tag) -> lookup (2 places) -> tag check -> reference FIFO (Q) -> data read -> o
+                                                              | AR (one burst per miss)      ^
+                                                              v                              | R (line fills)
+                                                            AXI4 read master  <-----------  memory
 
 Timing (cycle for cycle :mod:`golden.memory.timing` with ``address_stages=0`` and a stream sink as
-consumer; with every reference a hit: one request per cycle, 2 cycles from ``i`` to ``o``):
+consumer; with every reference a hit: one request per cycle, 3 cycles from ``i`` to ``o``):
 
-* **Tag check** (the cycle ``i`` transfers): the request's references are looked up (an index
-  request reads word ``w``, and ``w + 1`` when ``straddle``, a second lookup when it lies in the next
-  line; a raw request one raw word). A miss allocates the LRU way at once (an empty way first) and
-  queues its burst; the reference enters the FIFO. ``i.ready`` is low while the FIFO is full (and not
-  read this cycle), while the second of two bursts of the previous request waits, or while a miss's
-  victim line still has a reference in the FIFO.
+* **Lookup** (the tag check's first cycle; ``i`` transfers in cycle ``b``): the request's lines, sets
+  and tags are computed and each bank's tag row (tags, LRU ages, valid bits) is read from LUT RAM and
+  registered, the row the check writes in that cycle forwarded. The lookup has two places, a main
+  register (read by the check) and a skid register (a request arriving while the main one waits),
+  so ``i.ready`` is a register: ``~skid_valid``, i.e. ``b[n] >= g[n-2] + 1``.
+* **Tag check** (cycle ``g >= b + 1``, from the main register): the request's references are compared
+  (an index request reads word ``w``, and ``w + 1`` when ``straddle``, a second lookup when it lies
+  in the next line; a raw request one raw word). A miss allocates the LRU way at once (an empty way
+  first) and queues its burst; the reference enters the FIFO. The check waits while the FIFO is full
+  (and not read this cycle), while the second of two bursts of the previous request waits, or while
+  a miss's victim line still has a reference in the FIFO.
 * **AR**: the j-th burst of a request checked in cycle ``g`` is on AR in cycle ``g + 1 + j`` (when
   ``arready`` is high, as the golden memory assumes; otherwise it waits and holds the tag check).
   INCR, ``line / bus`` beats, ``araddr`` the line's byte address, never crossing 4 KB.
@@ -83,6 +88,20 @@ __all__ = ["CachedReader"]
 
 def _log2(v: int) -> int:
     return v.bit_length() - 1
+
+
+def _skid(m, nx, name, load, sv):
+    """The lookup's two places for one field: the main register (returned; the check reads it),
+    loaded when ``load`` from the skid register when that holds a request (``sv``), else from
+    ``nx`` (the request on ``i``); and the skid register, loading ``nx`` whenever it is empty."""
+    nx = Value.cast(nx)
+    r = Signal(len(nx), name=name)
+    sk = Signal(len(nx), name=f"skid_{name}")
+    with m.If(~sv):
+        m.d.sync += sk.eq(nx)
+    with m.If(load):
+        m.d.sync += r.eq(Mux(sv, sk, nx))
+    return r
 
 
 class _Fields:
@@ -168,6 +187,12 @@ class _Cache:
         self.retired = _Rows(m, f"{name}_retired", data.ArrayLayout(count_bits, W), S, banks)
         self.alloc = _Rows(m, f"{name}_alloc", W, S, banks)
         self.fill = _Rows(m, f"{name}_fill", W, S, banks)
+        # what the tag check writes into each bank's tag row this cycle (for the lookup's forwarding):
+        # the row, its address, and whether the bank's port is active (a request is being checked)
+        rb = max(1, _log2(S // banks))
+        self.w_addr = [Signal(rb, name=f"{name}_fwd_addr{b}") for b in range(banks)]
+        self.w_act = [Signal(name=f"{name}_fwd_act{b}") for b in range(banks)]
+        self.w_row = [Signal(self.lines.shape, name=f"{name}_fwd_row{b}") for b in range(banks)]
 
     def slot_bits(self):
         return max(1, _log2(self.sets * self.ways))
@@ -198,23 +223,82 @@ class _Cache:
         """The value of the bank holding set ``s`` (small signals: hit, way, ...)."""
         return per_bank[0] if self.banks == 1 else Mux(s[0], per_bank[1], per_bank[0])
 
-    def check(self, m, ports):
-        """The tag check: ``ports`` is (line, active) per lookup (two lookups: consecutive lines).
-        Returns (set, hit, way, busy victim) per port, combinational; updates the state of the active
-        ports' sets at the clock edge."""
+    def lookup(self, m, line, load, sv):
+        """The tag check's first cycle: the lookup registers the set and tag of ``line`` (and of
+        ``line + 1``: a second port, when the cache has two banks), and each bank's tag row and
+        touched bit for them, read from the LUT RAM (a bank holds the port whose set has its parity),
+        in two places (:func:`_skid`): the main register, which the check reads, loaded when
+        ``load``; and the skid register, which holds a request that arrived while the main one
+        waited (``sv``). A row the tag check writes in this same cycle (the request ahead, leaving
+        the check) is forwarded into the main register: it takes the written row and touched bit,
+        not the memory's (or the skid register's) old ones. Only the tag check writes these rows,
+        and only when its request leaves, which is when the main register loads: so no register
+        holds a stale row (the skid register is loaded only in cycles without a write, and moves
+        into the main register, forwarded, in the cycle of the next one)."""
+        nports = self.banks
+        sb = max(1, self.set_bits)
+        nsets, ntags = [], []
+        self.rset, self.rtag = [], []
+        for k in range(nports):
+            ln = line if k == 0 else line + 1
+            s = Signal(sb, name=f"{self.name}_next_set{k}")
+            t = Signal(self.tag_bits, name=f"{self.name}_next_tag{k}")
+            m.d.comb += [s.eq(ln[:self.set_bits] if self.set_bits else 0), t.eq(ln >> self.set_bits)]
+            nsets.append(s)
+            ntags.append(t)
+            self.rset.append(_skid(m, s, f"{self.name}_set{k}", load, sv))
+            self.rtag.append(_skid(m, t, f"{self.name}_line_tag{k}", load, sv))
+        self.rrow = [Signal(self.lines.shape, name=f"{self.name}{b}_row" if self.banks > 1 else f"{self.name}_row")
+                     for b in range(self.banks)]
+        self.rtouched = [Signal(name=f"{self.name}{b}_row_touched" if self.banks > 1 else f"{self.name}_row_touched")
+                         for b in range(self.banks)]
+        self.rbank = []
+        for b in range(self.banks):
+            n = f"{self.name}{b}" if self.banks > 1 else self.name
+            if self.banks == 1:
+                s = nsets[0]
+                self.rbank.append((self.rset[0], self.rtag[0]))
+            else:
+                # the bank's set and tag (of the port whose set has the bank's parity), registered
+                s = Signal(sb, name=f"{n}_next_set")
+                t = Signal(self.tag_bits, name=f"{n}_next_tag")
+                m.d.comb += [s.eq(Mux(nsets[0][0] == b, nsets[0], nsets[1])),
+                             t.eq(Mux(nsets[0][0] == b, ntags[0], ntags[1]))]
+                self.rbank.append((_skid(m, s, f"{n}_set", load, sv), _skid(m, t, f"{n}_tag", load, sv)))
+            rd = self.lines.read(m, b, s, f"{n}_next_row")
+            r = self.lines.row(s)
+            touched = self.touched[b]
+            here = touched.bit_select(r, 1) if len(touched) > 1 else touched
+            # the skid register's row, its address and touched bit
+            sk_row = Signal(self.lines.shape, name=f"skid_{n}_row")
+            sk_addr = Signal(len(r), name=f"skid_{n}_row_addr")
+            sk_t = Signal(name=f"skid_{n}_row_touched")
+            with m.If(~sv):
+                m.d.sync += [sk_row.eq(rd), sk_addr.eq(r), sk_t.eq(here)]
+            src_row = Signal(self.lines.shape, name=f"{n}_src_row")
+            src_addr = Signal(len(r), name=f"{n}_src_row_addr")
+            m.d.comb += [src_row.eq(Mux(sv, sk_row, rd)), src_addr.eq(Mux(sv, sk_addr, r))]
+            fwd = Signal(name=f"{n}_fwd")
+            m.d.comb += fwd.eq(self.w_act[b] & (self.w_addr[b] == src_addr) if len(touched) > 1 else self.w_act[b])
+            with m.If(load):
+                m.d.sync += [self.rrow[b].eq(Mux(fwd, self.w_row[b], src_row)),
+                             self.rtouched[b].eq(Mux(sv, sk_t, here) | fwd)]
+
+    def check(self, m, actives, take):
+        """The tag check's second cycle, on what :meth:`lookup` registered: ``actives`` is whether each
+        port is looked up (the request is valid and reads that line), ``take`` whether the request
+        leaves the check this cycle. Returns (set, hit, way, busy victim) per port, combinational;
+        updates the state of the active ports' sets at the clock edge when ``take``."""
         S, W = self.sets, self.ways
-        sets, tags = [], []
-        for k, (line, act) in enumerate(ports):
-            s = Signal(max(1, self.set_bits), name=f"{self.name}_set{k}")
-            t = Signal(self.tag_bits, name=f"{self.name}_line_tag{k}")
-            m.d.comb += [s.eq(line[:self.set_bits] if self.set_bits else 0), t.eq(line >> self.set_bits)]
-            sets.append(s)
-            tags.append(t)
-        banked = self._banked(m, [(s, t, act) for s, t, (_, act) in zip(sets, tags, ports)], "check")
+        sets, tags = self.rset, self.rtag
+        if self.banks == 1:
+            banked = [(sets[0], tags[0], actives[0])]
+        else:           # each bank's set and tag registered by the lookup; the ports' actives by parity
+            banked = [(bs, bt, Mux(sets[0][0] == b, actives[0], actives[1])) for b, (bs, bt) in enumerate(self.rbank)]
         results = []
         for b, (s, t, act) in enumerate(banked):
             n = f"{self.name}{b}" if self.banks > 1 else self.name
-            lines = self.lines.read(m, b, s, f"{n}_row")
+            lines = self.rrow[b]
             issued = self.issued.read(m, b, s, f"{n}_issued_row")
             retired = self.retired.read(m, b, s, f"{n}_retired_check")
             alloc = self.alloc.read(m, b, s, f"{n}_alloc_check")
@@ -222,31 +306,32 @@ class _Cache:
             touched = self.touched[b]
             # the row's valid bits count once its set has been written since reset
             valid = Signal(W, name=f"{n}_valid")
-            here_touched = touched.bit_select(self.lines.row(s), 1) if len(touched) > 1 else touched
-            m.d.comb += valid.eq(Mux(here_touched, lines.valid, 0))
+            m.d.comb += valid.eq(Mux(self.rtouched[b], lines.valid, 0))
             row = lines.way
             hits = [valid[w] & (row[w].tag == t) for w in range(W)]
             hit = Signal(name=f"{n}_hit")
             way = Signal(max(1, self.way_bits), name=f"{n}_way")
             busy = Signal(name=f"{n}_busy")
             m.d.comb += hit.eq(Cat(*hits).any())
-            # The way: the hit's; else the lowest empty way; else the oldest (age W-1).
-            with m.If(hit):
-                for w in reversed(range(W)):
-                    with m.If(hits[w]):
-                        m.d.comb += way.eq(w)
-            with m.Else():
-                for w in reversed(range(W)):
-                    with m.If(valid[w] & (row[w].age == W - 1)):
-                        m.d.comb += way.eq(w)
-                for w in reversed(range(W)):
-                    with m.If(~valid[w]):
-                        m.d.comb += way.eq(w)
+            # The way: the hit's; else the victim: the lowest empty way, else the oldest (age W-1).
+            # The victim is found from the registered row alone, beside the tag compare.
+            hway = Signal(max(1, self.way_bits), name=f"{n}_hit_way")
+            vway = Signal(max(1, self.way_bits), name=f"{n}_victim_way")
+            for w in reversed(range(W)):
+                with m.If(hits[w]):
+                    m.d.comb += hway.eq(w)
+            for w in reversed(range(W)):
+                with m.If(valid[w] & (row[w].age == W - 1)):
+                    m.d.comb += vway.eq(w)
+            for w in reversed(range(W)):
+                with m.If(~valid[w]):
+                    m.d.comb += vway.eq(w)
+            m.d.comb += way.eq(Mux(hit, hway, vway))
             # a way's references wait when its counts differ (mod 2^n: equal is none waiting), found
-            # for every way beside the tag compare, then chosen by the way (no subtract after it)
+            # for every way beside the tag compare, then chosen by the victim (no subtract after it)
             waiting = Signal(W, name=f"{n}_waiting")
             m.d.comb += waiting.eq(Cat(*(issued[w] != retired[w] for w in range(W))))
-            m.d.comb += busy.eq(~hit & (valid & waiting).bit_select(way, 1))
+            m.d.comb += busy.eq(~hit & (valid & waiting).bit_select(vway, 1))
             # LRU: the accessed way becomes the youngest; younger valid ways age by one. A miss puts
             # the line's tag in the way, rebases its count on what was read out, and clears its fill.
             acc_age = Signal(self.age_bits + 1, name=f"{n}_acc_age")
@@ -265,9 +350,10 @@ class _Cache:
             # each row assigned in one piece (CXXRTL would assemble a row written field by field)
             m.d.comb += [new_row.eq(Cat(Cat(*ways), valid | (C(1, W) << way)[:W])), new_issued.eq(Cat(*counts)),
                          new_alloc.eq(Cat(*allocs))]
-            addr, en = self.lines.write(m, b, s, act, new_row)
-            self.issued.write(m, b, s, act, new_issued)
-            self.alloc.write(m, b, s, act, new_alloc)
+            addr, en = self.lines.write(m, b, s, act & take, new_row)
+            self.issued.write(m, b, s, act & take, new_issued)
+            self.alloc.write(m, b, s, act & take, new_alloc)
+            m.d.comb += [self.w_addr[b].eq(self.lines.row(s)), self.w_act[b].eq(act), self.w_row[b].eq(new_row)]
             # a set is touched when its row is written (a decoder of the bank's write address)
             with m.If(en):
                 m.d.sync += (touched.bit_select(addr, 1) if len(touched) > 1 else touched).eq(1)
@@ -324,7 +410,7 @@ class CachedReader(wiring.Component):
     __doc__ = __doc__
 
     def __init__(self, config, *, word_bits: int = 32, raw_base: int = 0, word_addr_bits: int = 24,
-                 tag_width: int = 8, addr_width: int = 32):
+                 tag_width: int = 8, addr_width: int = 32, joint: bool = False):
         if word_bits not in (16, 32, 64):
             raise ValueError(f"index word of {word_bits} bits: 16, 32 or 64")
         if config.index_cache.sets < 2:
@@ -337,6 +423,7 @@ class CachedReader(wiring.Component):
         self._tag_width = tag_width
         self._addr_width = addr_width
         self._bus = config.bus_bytes
+        self._joint = bool(joint)
         self.request_layout = data.StructLayout({
             "raw": 1, "word": word_addr_bits, "straddle": 1, "tag": tag_width})
         wide = max(word_bits, 32)
@@ -346,12 +433,13 @@ class CachedReader(wiring.Component):
             "o": Out(stream.Signature(self.response_layout)),
             "stall_fill": Out(1),
             "axi": Out(axi4_read_signature(addr_width, 8 * self._bus)),
+            **({"check_ready": Out(1), "check_go": In(1)} if joint else {}),
         })
 
     @property
     def latency(self) -> int:
-        """Cycles from ``i`` to ``o`` when every reference hits (tag check, data read): 2."""
-        return 2
+        """Cycles from ``i`` to ``o`` when every reference hits (lookup, tag check, data read): 3."""
+        return 3
 
     def elaborate(self, platform):
         m = Module()
@@ -371,24 +459,53 @@ class CachedReader(wiring.Component):
         beats = [ic.shape.line // bus, rc.shape.line // bus]
         req = self.i.p
 
-        # -- the references of the request on i -----------------------------------------------------
+        # -- the references of the request on i, registered by the lookup (the tag check's first cycle) --
         a0 = Signal(self._addr_width + 8)
         a1 = Signal(self._addr_width + 8)
         ra = Signal(self._addr_width + 8)
         m.d.comb += [a0.eq(req.word * wb), a1.eq((req.word + 1) * wb), ra.eq(self._raw_base + req.word * 4)]
         il, rl = _log2(ic.shape.line), _log2(rc.shape.line)
         line0, line1, rline = a0 >> il, a1 >> il, ra >> rl
-        two = Signal()
-        m.d.comb += two.eq(~req.raw & req.straddle & (line1 != line0))
+        # The lookup holds up to two requests: the main register (``lv``), which the check works
+        # from, and a skid register (``sv``) that takes the request on ``i`` while the main one waits,
+        # so that ``i.ready`` is a register (``~sv``) and the check's decision (``take``) does not
+        # reach the stages in front. The main register loads when empty or when its request leaves
+        # the check (``take``): from the skid register when that holds one, else from ``i``.
+        lv = Signal(name="lookup_valid")
+        sv = Signal(name="skid_valid")
+        load = Signal()
         take = Signal()
+        m.d.comb += load.eq(~lv | take)
+        with m.If(load):
+            m.d.sync += lv.eq(sv | self.i.valid)
+        with m.If(sv):
+            m.d.sync += sv.eq(~take)
+        with m.Else():
+            m.d.sync += sv.eq(self.i.valid & lv & ~take)
+        ic.lookup(m, line0, load, sv)
+        rc.lookup(m, rline, load, sv)
+
+        def field(nx, name):
+            return _skid(m, nx, name, load, sv)
+        l_raw = field(req.raw, "lookup_raw")
+        l_two = field(~req.raw & req.straddle & (line1 != line0), "lookup_two")
+        l_tag = field(req.tag, "lookup_tag") if self._tag_width else C(0, 1)
+        l_beat0 = field(Mux(req.raw, (ra & (rc.shape.line - 1)) >> _log2(bus), (a0 & (ic.shape.line - 1)) >> _log2(bus))
+                        [:max(1, _log2(max(beats)))], "lookup_beat0")
+        l_beat1 = field(((a1 & (ic.shape.line - 1)) >> _log2(bus))[:max(1, _log2(max(beats)))], "lookup_beat1")
+        l_off0 = field(Mux(req.raw, (ra & (bus - 1)) >> 2, (a0 & (bus - 1)) >> _log2(wb))[:max(1, _log2(bus // min(wb, 4)) or 1)],
+                       "lookup_off0")
+        l_off1 = field(((a1 & (bus - 1)) >> _log2(wb))[:max(1, _log2(bus // wb) or 1)], "lookup_off1")
+        l_addr = [field((x << sh)[:self._addr_width], f"lookup_line_addr{j}")     # line0, line0 + 1, raw
+                  for j, (x, sh) in enumerate(((line0, il), (line0 + 1, il), (rline, rl)))]
+        two = l_two
         # port 1 looks up the line after line0 (line1 when ``two``; unused otherwise)
-        (s0, hit0, way0, busy0), (s1, hit1, way1, busy1) = ic.check(
-            m, [(line0, take & ~req.raw), (line0 + 1, take & two)])
-        (sr, hitr, wayr, busyr), = rc.check(m, [(rline, take & req.raw)])
-        miss0 = ~req.raw & ~hit0
+        (s0, hit0, way0, busy0), (s1, hit1, way1, busy1) = ic.check(m, [lv & ~l_raw, lv & two], take)
+        (sr, hitr, wayr, busyr), = rc.check(m, [lv & l_raw], take)
+        miss0 = ~l_raw & ~hit0
         miss1 = two & ~hit1
-        missr = req.raw & ~hitr
-        busy = Mux(req.raw, busyr, busy0 | (two & busy1))
+        missr = l_raw & ~hitr
+        busy = Mux(l_raw, busyr, busy0 | (two & busy1))
 
         # -- AR: two issue slots, loaded by the tag check ----------------------------------------------
         slot_v = [Signal(name=f"ar_valid{j}") for j in range(2)]
@@ -403,6 +520,7 @@ class CachedReader(wiring.Component):
             self.axi.rready.eq(1),
         ]
 
+        check_ready = self.check_ready if self._joint else Signal(name="check_ready")
         # -- the reference FIFO (Q entries) ------------------------------------------------------------
         islot = max(1, ic.slot_bits())
         rslot = max(1, rc.slot_bits())
@@ -413,15 +531,18 @@ class CachedReader(wiring.Component):
         # in LUT RAM: written at the tail by the tag check, read at the head by the data read
         m.submodules.references = fifo = memory.Memory(shape=entry, depth=Q, init=[],
                                                        attrs={"ram_style": "distributed"})
-        fifo_w, fifo_r = fifo.write_port(), fifo.read_port(domain="comb")
+        fifo_w, fifo_r = fifo.write_port(), fifo.read_port(domain="comb")   # fifo_r: the entry after the head
         level = Signal(range(Q + 1))
         head = Signal(range(max(Q, 2)))
         tail = Signal(range(max(Q, 2)))
         pop = Signal()
         o_free = Signal()
         m.d.comb += o_free.eq(~self.o.valid | self.o.ready)
-        headv = Signal(entry)
-        m.d.comb += [fifo_r.addr.eq(head), headv.eq(fifo_r.data)]
+        # The head entry in a register (so the data read starts from flip-flops, not from the FIFO's
+        # LUT RAM read multiplexers): loaded with the entry after it when the head is read, or with
+        # the entry being written when that one becomes the head (the FIFO empty, or about to be).
+        headv = Signal(entry, name="head_entry")
+        m.d.comb += fifo_r.addr.eq(Mux(head == Q - 1, 0, head + 1))
         # the head's lines filled? (a read out of the index cache retires one reference per line)
         i_filled = ic.read_out(m, [headv.slot0[:islot], headv.slot1],
                                [pop & ~headv.raw, pop & ~headv.raw & (headv.slot1 != headv.slot0[:islot])])
@@ -431,8 +552,9 @@ class CachedReader(wiring.Component):
         m.d.comb += self.stall_fill.eq((level != 0) & ~head_filled & o_free)
 
         m.d.comb += [
-            self.i.ready.eq(~slot_v[1] & (~slot_v[0] | self.axi.arready) & ((level != Q) | pop) & ~busy),
-            take.eq(self.i.valid & self.i.ready),
+            check_ready.eq(~slot_v[1] & (~slot_v[0] | self.axi.arready) & ((level != Q) | pop) & ~busy),
+            take.eq(lv & (self.check_go if self._joint else check_ready)),
+            self.i.ready.eq(~sv),
         ]
         # the entry of the request being checked
         # The entry's fields as separate signals, joined only where the FIFO stores them, and there
@@ -450,15 +572,11 @@ class CachedReader(wiring.Component):
             slotr.eq((sr << _log2(rc.ways)) | wayr if rc.ways > 1 else sr),
         ]
         m.d.comb += [
-            new.raw.eq(req.raw),
-            new.slot0.eq(Mux(req.raw, slotr, slot0)),
+            new.raw.eq(l_raw),
+            new.slot0.eq(Mux(l_raw, slotr, slot0)),
             new.slot1.eq(slot1),
-            new.beat0.eq(Mux(req.raw, (ra & (rc.shape.line - 1)) >> _log2(bus),
-                             (a0 & (ic.shape.line - 1)) >> _log2(bus))),
-            new.beat1.eq((a1 & (ic.shape.line - 1)) >> _log2(bus)),
-            new.off0.eq(Mux(req.raw, (ra & (bus - 1)) >> 2, (a0 & (bus - 1)) >> _log2(wb))),
-            new.off1.eq((a1 & (bus - 1)) >> _log2(wb)),
-            new.tag.eq(req.tag),
+            new.beat0.eq(l_beat0), new.beat1.eq(l_beat1), new.off0.eq(l_off0), new.off1.eq(l_off1),
+            new.tag.eq(l_tag),
         ]
         m.d.comb += [fifo_w.addr.eq(tail), fifo_w.en.eq(take)]
         with m.If(take):        # (a gate, not a plain wire: see ``new`` above)
@@ -468,16 +586,20 @@ class CachedReader(wiring.Component):
         with m.If(pop):
             m.d.sync += head.eq(Mux(head == Q - 1, 0, head + 1))
         m.d.sync += level.eq(level + take - pop)
+        with m.If(pop):
+            m.d.sync += headv.eq(Mux(level == 1, new.value(entry), fifo_r.data))
+        with m.Elif(level == 0):
+            m.d.sync += headv.eq(new.value(entry))
 
         # AR slots: shift on issue; a tag check with misses loads them (its first burst in slot 0).
         burst_addr = [Signal(self._addr_width, name=f"miss_addr{j}") for j in range(2)]
         burst_raw = [Signal(name=f"miss_raw{j}") for j in range(2)]
         nmiss = Signal(2)
-        m.d.comb += nmiss.eq(Mux(req.raw, missr, miss0 + miss1))
+        m.d.comb += nmiss.eq(Mux(l_raw, missr, miss0 + miss1))
         m.d.comb += [
-            burst_addr[0].eq(Mux(req.raw, rline << rl, Mux(miss0, line0 << il, line1 << il))),
-            burst_raw[0].eq(req.raw),
-            burst_addr[1].eq(line1 << il), burst_raw[1].eq(0),
+            burst_addr[0].eq(Mux(l_raw, l_addr[2], Mux(miss0, l_addr[0], l_addr[1]))),
+            burst_raw[0].eq(l_raw),
+            burst_addr[1].eq(l_addr[1]), burst_raw[1].eq(0),
         ]
         with m.If(take & (nmiss != 0)):
             m.d.sync += [slot_v[0].eq(1), slot_addr[0].eq(burst_addr[0]), slot_raw[0].eq(burst_raw[0]),
@@ -504,7 +626,7 @@ class CachedReader(wiring.Component):
         first = Signal(1 + sw)
         second = Signal(1 + sw)
         queue = take & (nmiss != 0)
-        m.d.comb += [first.eq(Mux(req.raw, fl(slotr, 1), Mux(miss0, fl(slot0, 0), fl(slot1, 0)))),
+        m.d.comb += [first.eq(Mux(l_raw, fl(slotr, 1), Mux(miss0, fl(slot0, 0), fl(slot1, 0)))),
                      second.eq(fl(slot1, 0))]
         t1 = (f_tail + 1)[:len(f_tail)]
         for b, (wp, rp) in enumerate(flight):

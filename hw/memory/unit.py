@@ -31,7 +31,7 @@ writes takes ``golden.register_map.load_cycles(N)``), and its drain rule counts 
 stages, the reader (its reference FIFO and output register) and the texel pipeline as in flight.
 
 Timing: :func:`golden.memory.timing.run` (``address_stages`` 2, the texel pipeline as consumer),
-cycle for cycle; with every reference a hit, ``LATENCY + 4`` cycles from ``i`` to ``o`` and one
+cycle for cycle; with every reference a hit, ``LATENCY + 5`` cycles from ``i`` to ``o`` and one
 request per cycle. A miss reaches the texel pipeline as cycles without a request, and ``i.ready``
 falls when the address stages and the reference FIFO are full.
 
@@ -102,6 +102,7 @@ class CachedTexelFetch(wiring.Component):
             unit["geometry"] = geometry
         self._tf = TexelFetch(texture_set, tag_width=tag_width, index_port=True, raw_port=True, **unit)
         self._features = self._tf.features
+        self._reader_latency = 3                # CachedReader.latency: lookup, tag check, data read
         tb = self._tf.texture_bits
         members = {
             "i": In(stream.Signature(RequestLayout(tb, tag_width))),
@@ -134,8 +135,8 @@ class CachedTexelFetch(wiring.Component):
 
     @property
     def latency(self) -> int:
-        """Cycles from ``i`` to ``o`` when every reference hits: ``LATENCY + 4``."""
-        return LATENCY + ADDRESS_STAGES + 2
+        """Cycles from ``i`` to ``o`` when every reference hits: ``LATENCY + 5``."""
+        return LATENCY + ADDRESS_STAGES + self._reader_latency
 
     def elaborate(self, platform):
         m = Module()
@@ -179,7 +180,7 @@ class CachedTexelFetch(wiring.Component):
             # the drain rule: nothing in the address stages, the reader (requests in minus out: its
             # FIFO and output register; no burst is in flight without a reference waiting on it) or
             # the texel pipeline
-            held = Signal(range(self._config.prefetch + 4), name="reader_held")
+            held = Signal(range(self._config.prefetch + 8), name="reader_held")
             m.d.sync += held.eq(held + (reader.i.valid & reader.i.ready) - (reader.o.valid & reader.o.ready))
             m.d.comb += port.idle.eq(~v1 & ~v2 & (held == 0) & (tf.valid == 0))
         return m
@@ -208,14 +209,16 @@ def _base_registers(m, load, rmap: RegisterMap, layout: Layout | None):
             delayed(m, answer, ANSWER_LATENCY - 2, name="base_answer"))
 
 
-def cached_lane(m, prefix: str, ts, feat, config, layout, tf, request, en, *, load=None, bases=None, flush=None):
+def cached_lane(m, prefix: str, ts, feat, config, layout, tf, request, en, joint: bool = False, *, load=None,
+                bases=None, flush=None):
     """One lane of the cached unit, built into ``m``: the address stages' datapath (descriptor and
     block address, loaded on ``en = (en1, en2)``, the enables of the two stream registers, which the
     caller drives and whose valid bits it keeps), a :class:`hw.memory.reader.CachedReader` (returned;
     the caller drives ``i.valid``, ``o.ready`` and connects ``axi``), and the texel pipeline ``tf``'s
     payload, ``index_response`` and ``raw_in`` (the words riding beside its first seven stages). The
     caller drives ``tf.i.valid``. ``request``: the payload entering the first address stage (a
-    ``hw.pipeline.RequestLayout`` view). Submodules are named with ``prefix``.
+    ``hw.pipeline.RequestLayout`` view). Submodules are named with ``prefix``. ``joint``: the
+    reader's tag check waits for ``check_go`` (every lane's check together, driven by the caller).
 
     The loadable cached unit's lane: ``load``, the load command its descriptor table takes (the
     texel pipeline's, whose copy answers the bus's reads); ``bases``, the base registers (``index``
@@ -229,7 +232,7 @@ def cached_lane(m, prefix: str, ts, feat, config, layout, tf, request, en, *, lo
     # what rides through the reader beside the words: the request, the bit offset and width
     ride = data.StructLayout({"request": req_bits, "off": max(1, (W - 1).bit_length()), "b": 5})
     reader = CachedReader(config, word_bits=W, raw_base=layout.raw_base if bases is None else 0, word_addr_bits=32,
-                          tag_width=len(Signal(ride).as_value()))
+                          tag_width=len(Signal(ride).as_value()), joint=joint)
     m.submodules[prefix + "reader"] = reader if flush is None else ResetInserter({"sync": flush})(reader)
 
     # -- the address stages' datapath ------------------------------------------------------------------

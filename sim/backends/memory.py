@@ -31,7 +31,7 @@ import numpy as np
 
 from vqtex.golden.fetch import fetch
 from vqtex.golden.memory.system import Layout
-from vqtex.golden.memory.timing import plan
+from vqtex.golden.memory.timing import FRONT_LATENCY, plan
 
 from ..streams import ready_pattern
 from .interface import GOLDEN_CHUNK, SimResult
@@ -89,7 +89,7 @@ def run(ts, requests, config, *, backend: str = "golden", stall: float = 0.0, se
         memory["stall_detail"] = {k: int(sc[k]) for k in ("miss", "bandwidth", "fifo_full", "victim")}
         memory["zero_latency_cycles"] = model["zero_latency_cycles"]
         memory["of_zero_latency"] = model["of_zero_latency"]
-        return SimResult(responses, model["cycles"], n, LATENCY + 4,
+        return SimResult(responses, model["cycles"], n, LATENCY + FRONT_LATENCY,
                          {"output_backpressure": int(sc["output_backpressure"]),
                           "memory": int(sc["miss"] + sc["bandwidth"])}, straddles, memory=memory, load_cycles=load)
     if backend not in BACKENDS:
@@ -101,7 +101,7 @@ def run(ts, requests, config, *, backend: str = "golden", stall: float = 0.0, se
     else:
         out = run_compiled(ts, req, config, backend, stall, seed)
     memory = _memory_report(p, config, out["bursts"], n)
-    return SimResult(out["responses"], out["cycles"], n, LATENCY + 4,
+    return SimResult(out["responses"], out["cycles"], n, LATENCY + FRONT_LATENCY,
                      {"output_backpressure": out["backpressure"], "memory": out["fill_waits"]}, straddles,
                      memory=memory, load_cycles=out.get("load_cycles"))
 

@@ -80,7 +80,7 @@ def run(caches=CACHES, backends=("cxxrtl", "verilator"), json_out: bool = False)
         print(json.dumps(out))
     else:
         print(f"{out['frame']}: {out['requests']:,} requests; memory 100 cycles, 16 B/clock; 32-byte lines, 4 ways, "
-              "16-entry FIFO")
+              f"{MemoryConfig().prefetch}-entry FIFO")
         print(f"{'caches (index+raw)':>19} {'backend':>19} {'cycles':>9} {'build s':>8} {'C++ bytes':>10} "
               f"{'run s':>6} {'rate':>12}")
         for r in rows:

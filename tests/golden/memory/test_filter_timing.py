@@ -1,6 +1,6 @@
 """golden.memory.filter: the texture filter's cycle model through the memory system (numpy lane
 streams, the per-group loop): its lane streams are the footprints' slots; a perfect cache gives
-``groups + 27``; one lane is golden.memory.timing.run's model exactly (shifted by the footprint);
+``groups + 28``; one lane is golden.memory.timing.run's model exactly (shifted by the footprint);
 the arbiter's order; never faster than a perfect cache, never faster with a longer latency."""
 
 import numpy as np
@@ -47,10 +47,10 @@ def test_lane_streams_are_the_footprint_slots(lanes):
 
 
 @pytest.mark.parametrize("lanes", [1, 2, 4, 8])
-def test_perfect_cache_is_groups_plus_27(lanes):
+def test_perfect_cache_is_groups_plus_28(lanes):
     ts, px, frac = setup()
     r = gf.run_pixels(ts, px, config(), lanes, frac, ideal=True)
-    assert r["cycles"] == r["groups"] + 27 == r["on_chip_cycles"] + 4
+    assert r["cycles"] == r["groups"] + 28 == r["on_chip_cycles"] + 5
     assert r["bursts"] == 0 and r["stall_cycles"]["miss"] == 0
     # the colours leave one group apart, in order
     assert (np.diff(r["transfer"]) >= 1).all()

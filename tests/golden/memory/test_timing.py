@@ -52,6 +52,22 @@ def test_perfect_cache_no_backpressure(ts):
     assert out["bursts"] == 0 and out["stall_cycles"]["miss"] == 0
 
 
+@pytest.mark.parametrize("prefetch", [1, 4])
+def test_lookup_two_places(ts, prefetch):
+    """The lookup (the tag check's first cycle) takes request n when at most one of the requests it
+    holds is unchecked (``b[n] >= g[n-2] + 1``: two places, its ready registered) and the check follows
+    it (``g[n] >= b[n] + 1``); the address stages move against it (``a[n] >= b[n-2]``). On a stream
+    that stalls (small caches, 60 cycles of memory), each rule binds somewhere."""
+    req = random_requests(ts, 400, seed=5)
+    cfg = MemoryConfig(index_cache=CacheShape(128, 16, 2), raw_cache=CacheShape(64, 16, 2), prefetch=prefetch,
+                       latency=60, bandwidth=16, bus_bytes=16)
+    out = run_requests(ts, req, cfg, L, always)
+    a, b, g = out["accept"], out["lookup"], out["tag"]
+    assert (g >= b + 1).all() and (b >= a + 2).all()
+    assert (b[2:] >= g[:-2] + 1).all() and (b[2:] == g[:-2] + 1).any()
+    assert (a[2:] >= b[:-2]).all() and (a[2:] == b[:-2]).any() and (a[2:] > a[:-2] + 2).any()
+
+
 def test_every_request_a_new_line_blocking():
     """A blocking cache (prefetch 1) and a stream whose every request misses: each request waits for
     its line, issued the cycle after its tag check; worked out from the rules: the data read of n is
@@ -65,16 +81,17 @@ def test_every_request_a_new_line_blocking():
     out = run_requests(ts, req, cfg, L, always)
     per = cfg.latency + 1 + 1                       # AR after the tag check, the latency, 1 beat, readable next
     assert np.diff(out["read"]).tolist() == [per] * 15
-    # first: accepted 0, tag 2, AR 3, beat 23, filled 24 = read
-    assert out["read"][0] == 2 + 1 + cfg.latency + 1
+    # first: accepted 0, lookup 2, tag 3, AR 4, beat 24, filled 25 = read
+    assert out["read"][0] == 3 + 1 + cfg.latency + 1
     assert out["cycles"] == out["read"][-1] + 1 + L + 1
     assert out["stall_cycles"]["miss"] + out["stall_cycles"]["bandwidth"] == 16 * (cfg.latency + 1)
     # prefetching overlaps them: the bursts go out back to back, limited by nothing but the memory
     pre = run_requests(ts, req, MemoryConfig(index_cache=cfg.index_cache, prefetch=16, latency=20), L, always)
-    # tag n at n + 2, AR at n + 3, its beat at n + 23, readable at n + 24
+    # tag n at n + 3, AR at n + 4, its beat at n + 24, readable at n + 25
     assert np.diff(pre["tag"]).tolist() == [1] * 15
-    assert pre["read"].tolist() == (24 + np.arange(16)).tolist()
-    assert pre["cycles"] == 24 + 15 + 1 + L + 1
+    assert pre["tag"][0] == 3
+    assert pre["read"].tolist() == (25 + np.arange(16)).tolist()
+    assert pre["cycles"] == 25 + 15 + 1 + L + 1
 
 
 @pytest.mark.parametrize("name", ["yuv_4x4_b12_mip", "rgba_2x2_b7_mip_w16", "i8_4x2_b5_w64"])

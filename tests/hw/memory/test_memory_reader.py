@@ -1,7 +1,8 @@
 """hw.memory.reader.CachedReader on pysim: its AXI master answered by the golden memory models
 (golden.memory.external, dram), its responses equal to what memory holds (the texture set's index and
 raw words), its cycles equal to golden.memory.timing's (address_stages=0, a stream sink behind it):
-input acceptance, every AR, every response transfer."""
+input acceptance (into the lookup, the tag check's first cycle), every AR (the cycle after its tag
+check), every response transfer."""
 
 import numpy as np
 import pytest
@@ -112,7 +113,8 @@ def check(ts, req, cfg, stall, seed, prelude=None):
     sink = StreamSink(lambda m: ready_pattern(seed, stall, m))
     p = plan(ts, req, cfg)
     model = run(p, cfg, 0, None, address_stages=0, consumer=sink)
-    assert got["accept"] == model["tag"].tolist()
+    assert got["accept"] == model["accept"].tolist()
+    assert (model["tag"] >= model["accept"] + 1).all()       # the lookup takes a cycle
     assert len(got["ar"]) == model["bursts"]
     ar = [g + 1 + j for g, m in zip(model["tag"].tolist(), p.misses.tolist()) for j in range(m)]
     assert got["ar"] == ar
