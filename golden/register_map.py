@@ -22,6 +22,12 @@ past an entry's bytes, a control word that does not exist) and a write to a read
 Wishbone's error response (``err`` instead of ``ack``). Bits of a word beyond a field's width are
 dropped on write and read back as 0.
 
+The loadable cached unit (``hw.memory.unit.CachedTexelFetch(geometry=..., loadable=True)``: the
+index and raw memories in external memory behind caches) has the map ``RegisterMap(geometry,
+external=True)``: the index and raw regions hold no words (every access is an error: the host
+writes those memories into external memory, ``golden.memory.system.Layout.image``) and the control
+region has two more registers, :data:`BASE_REGISTERS` (``INDEX_BASE``, ``RAW_BASE``: where they are).
+
 :func:`load_writes` is what a CPU driver does to load a set: one write per descriptor word of every
 row of the geometry (rows the set does not use are written 0, not valid, so nothing of a previous
 set stays visible), then the index, codebook and raw memories and the colour matrix. :func:`markdown`
@@ -37,7 +43,7 @@ import numpy as np
 from .constants import DESCRIPTOR_FIELDS, MAX_LEVELS
 from .geometry import Geometry, entry_lanes, index_lanes
 
-__all__ = ["RegisterMap", "REGIONS", "DESCRIPTOR_WORDS", "CONTROL", "ID_VALUE", "VERSION", "load_writes",
+__all__ = ["RegisterMap", "REGIONS", "DESCRIPTOR_WORDS", "CONTROL", "BASE_REGISTERS", "base_words", "ID_VALUE", "VERSION", "load_writes",
            "descriptor_words", "memory_words", "markdown", "c_header", "LoadError", "load_cycles", "expected_reads",
            "mapped", "mapped_words"]
 
@@ -80,6 +86,14 @@ CONTROL = {
     "MATRIX_FRAC_BITS": (0x1C, "rw", "colour matrix fractional bits F, 0..16 (5 bits)"),
     "MATRIX_ROUNDING": (0x1D, "rw", "1: bias 2^(F-1), round to nearest; 0: floor"),
 }
+#: The loadable cached unit's extra control registers (``RegisterMap(g, external=True)``): where the
+#: host put the set in external memory (byte addresses, :class:`golden.memory.system.Layout`). The
+#: index base keeps bits ``log2(word_bits / 8)`` and up, the raw base bits 2 and up (the low bits
+#: read back as 0). A write to either (any accepted write) empties the unit's caches.
+BASE_REGISTERS = {
+    "INDEX_BASE": (0x1E, "rw", "external memory: byte address of index word 0 (a multiple of the word's bytes)"),
+    "RAW_BASE": (0x1F, "rw", "external memory: byte address of raw word 0 (a multiple of 4)"),
+}
 #: Control-region words: the first one past the last register.
 CONTROL_WORDS = 0x20
 #: Width of a matrix coefficient register.
@@ -97,8 +111,23 @@ class RegisterMap:
     Members
     -------
     geometry : Geometry
+    external : bool
+        The loadable cached unit's map (:class:`hw.memory.unit.CachedTexelFetch`): the index and raw
+        memories are in external memory (the host writes them there, ``Layout.image``), so their
+        regions hold no words (every access is an error), and the control region has the base
+        registers :data:`BASE_REGISTERS`.
     """
     geometry: Geometry
+    external: bool = False
+
+    @property
+    def control(self) -> dict:
+        """The control registers of this map: :data:`CONTROL`, and :data:`BASE_REGISTERS` when external."""
+        return {**CONTROL, **BASE_REGISTERS} if self.external else CONTROL
+
+    def base_bits(self) -> dict:
+        """Base register -> its lowest stored bit (external maps only)."""
+        return {"INDEX_BASE": (self.geometry.word_bits // 8).bit_length() - 1, "RAW_BASE": 2}
 
     @property
     def index_lanes(self) -> int:
@@ -118,9 +147,10 @@ class RegisterMap:
     def region_words(self) -> dict:
         """Region -> the words it spans (its offsets that answer)."""
         g = self.geometry
+        ext = not self.external
         return {"control": CONTROL_WORDS, "descriptors": g.descriptor_rows * len(DESCRIPTOR_WORDS),
-                "index": g.index_words * self.index_lanes, "codebook": g.codebook_entries * self.entry_lanes,
-                "raw": g.raw_words}
+                "index": g.index_words * self.index_lanes * ext, "codebook": g.codebook_entries * self.entry_lanes,
+                "raw": g.raw_words * ext}
 
     @property
     def offset_bits(self) -> int:
@@ -206,10 +236,20 @@ def geometry_words(g: Geometry) -> dict:
             "RAW_WORDS": g.raw_words}
 
 
-def load_writes(ts, geometry: Geometry) -> np.ndarray:
+def base_words(layout) -> dict:
+    """Base register -> value for a set placed by ``layout`` (:class:`golden.memory.system.Layout`)."""
+    return {"INDEX_BASE": int(layout.index_base), "RAW_BASE": int(layout.raw_base)}
+
+
+def load_writes(ts, geometry: Geometry, layout=None) -> np.ndarray:
     """The bus writes that load ``ts`` into a unit of ``geometry``: an (N, 2) uint32 array of (word
     address, data), in the order a driver issues them: the colour matrix, every descriptor row of the
     geometry, then the index, codebook and raw memories.
+
+    With ``layout`` (:class:`golden.memory.system.Layout`), the loadable cached unit's load
+    (``RegisterMap(geometry, external=True)``): the colour matrix, the base registers (``INDEX_BASE``,
+    ``RAW_BASE``: where the host put the set's index and raw memories in external memory, whose bytes
+    are ``layout.image(ts)``), every descriptor row, then the codebook; no index or raw words.
 
     Raises
     ------
@@ -219,29 +259,41 @@ def load_writes(ts, geometry: Geometry) -> np.ndarray:
     misfit = geometry.fits(ts)
     if misfit:
         raise LoadError("the texture set does not fit the unit's geometry: " + "; ".join(misfit))
-    rmap = RegisterMap(geometry)
+    rmap = RegisterMap(geometry, external=layout is not None)
     parts = []
     regs = matrix_words(ts.matrix)
-    parts.append((rmap.address("control", [CONTROL[n][0] for n in regs]),
+    if layout is not None:
+        if layout.word_bytes * 8 != geometry.word_bits:
+            raise LoadError(f"the layout's {8 * layout.word_bytes}-bit index words are not the unit's "
+                            f"{geometry.word_bits}-bit words")
+        regs.update(base_words(layout))
+    control = rmap.control
+    parts.append((rmap.address("control", [control[n][0] for n in regs]),
                   np.array(list(regs.values()), np.uint32)))
     desc = descriptor_words(ts, rmap)
     parts.append((rmap.address("descriptors", np.arange(desc.size, dtype=np.uint64)), desc.reshape(-1)))
     for region, (offsets, data) in memory_words(ts, rmap).items():
-        parts.append((rmap.address(region, offsets), data))
+        if rmap.region_words()[region]:
+            parts.append((rmap.address(region, offsets), data))
     addr = np.concatenate([a.astype(np.uint64) for a, _ in parts])
     data = np.concatenate([d.astype(np.uint32) for _, d in parts])
     return np.stack([addr.astype(np.uint32), data], axis=1)
 
 
-def expected_reads(ts, geometry: Geometry, addresses) -> tuple:
-    """What reads of ``addresses`` return from a unit loaded with ``ts`` (:func:`load_writes`):
-    (data uint32, err bool) per address. Only the words the load wrote, the read-only registers and
-    unmapped addresses are known (any other word reads as 0 here: ask only known ones)."""
-    rmap = RegisterMap(geometry)
+def expected_reads(ts, geometry: Geometry, addresses, layout=None) -> tuple:
+    """What reads of ``addresses`` return from a unit loaded with ``ts`` (:func:`load_writes`, with
+    ``layout`` the loadable cached unit's): (data uint32, err bool) per address. Only the words the
+    load wrote, the read-only registers and unmapped addresses are known (any other word reads as 0
+    here: ask only known ones)."""
+    rmap = RegisterMap(geometry, external=layout is not None)
     regs = {**geometry_words(geometry), **matrix_words(ts.matrix)}
-    writes = load_writes(ts, geometry)
-    # every known word, once (the load's matrix writes are the matrix registers' values again)
-    known_addr = np.concatenate([rmap.address("control", [CONTROL[n][0] for n in regs]),
+    if layout is not None:
+        low = rmap.base_bits()
+        regs.update({n: v >> low[n] << low[n] for n, v in base_words(layout).items()})
+    writes = load_writes(ts, geometry, layout)
+    control = rmap.control
+    # every known word, once (the load's control writes are those registers' values again, first)
+    known_addr = np.concatenate([rmap.address("control", [control[n][0] for n in regs]),
                                  writes[:, 0].astype(np.uint64)])
     known_data = np.concatenate([np.array(list(regs.values()), np.uint64), writes[:, 1].astype(np.uint64)])
     known_addr, first = np.unique(known_addr, return_index=True)
@@ -264,7 +316,7 @@ def mapped_words(rmap: RegisterMap, addresses, write: bool = False) -> np.ndarra
     for name, code in REGIONS.items():
         here = inside & (region == code) & (offset < words[name])
         if name == "control":
-            allowed = [off for off, acc, _ in CONTROL.values() if not write or "w" in acc]
+            allowed = [off for off, acc, _ in rmap.control.values() if not write or "w" in acc]
             here &= np.isin(offset, allowed)
         elif name == "codebook":
             here &= offset % rmap.entry_lanes < rmap.used_entry_lanes
@@ -279,9 +331,10 @@ def mapped(rmap: RegisterMap, address: int, write: bool = False) -> bool:
     return bool(mapped_words(rmap, [int(address)], write)[0])
 
 
-def markdown(geometry: Geometry) -> str:
-    """The register map as a Markdown document (what ``vqtex export --unit loadable`` writes)."""
-    rmap = RegisterMap(geometry)
+def markdown(geometry: Geometry, external: bool = False) -> str:
+    """The register map as a Markdown document (what ``vqtex export --unit loadable`` writes; with
+    ``external``, the loadable cached unit's: ``--memory external``)."""
+    rmap = RegisterMap(geometry, external)
     ob = rmap.offset_bits
     lines = ["# vqtex loadable unit: register map", "",
              f"Geometry: {geometry.describe()}.", "",
@@ -290,6 +343,10 @@ def markdown(geometry: Geometry) -> str:
              "addresses and writes to read-only registers answer with `err`. Writes and reads wait "
              "(`stall`) until the texel requests in flight have left the pipeline; no request is "
              "accepted while `cyc` is high.", "",
+             *(["External memory (the loadable cached unit): the host writes the index and raw memories "
+                "into the memory behind the unit's AXI4 read master (`Layout.image`) and their byte "
+                "addresses into `INDEX_BASE` and `RAW_BASE`; the index and raw regions hold no words here. "
+                "Any accepted write empties the unit's caches.", ""] if external else []),
              "| region | code | word address | words | contents |", "|---|---|---|---|---|"]
     words = rmap.region_words()
     contents = {"control": "registers below",
@@ -302,7 +359,7 @@ def markdown(geometry: Geometry) -> str:
     for name, code in REGIONS.items():
         lines.append(f"| {name} | {code} | 0x{code << ob:08x} | {words[name]} | {contents[name]} |")
     lines += ["", "## Control registers", "", "| register | word offset | access | meaning |", "|---|---|---|---|"]
-    for name, (off, acc, what) in CONTROL.items():
+    for name, (off, acc, what) in rmap.control.items():
         lines.append(f"| {name} | 0x{off:02x} | {acc} | {what} |")
     widths = rmap.field_widths()
     lines += ["", "## Descriptor row (4 words)", "", "| word | field | bits | meaning |", "|---|---|---|---|"]
@@ -314,12 +371,13 @@ def markdown(geometry: Geometry) -> str:
     return "\n".join(lines) + "\n"
 
 
-def c_header(geometry: Geometry, prefix: str = "VQTEX") -> str:
+def c_header(geometry: Geometry, prefix: str = "VQTEX", external: bool = False) -> str:
     """The register map as a C header: byte offsets of the regions (``VQTEX_<REGION>_BASE``) and of
     the control registers (``VQTEX_REG_<NAME>``), descriptor word addresses
     (``VQTEX_DESCRIPTOR(texture, level, word)``) and field shifts and masks (``VQTEX_D_<FIELD>_...``),
-    the geometry (``VQTEX_GEOMETRY_...``): what a CPU driver includes."""
-    rmap = RegisterMap(geometry)
+    the geometry (``VQTEX_GEOMETRY_...``): what a CPU driver includes. ``external``: the loadable
+    cached unit's map (the base registers ``VQTEX_REG_INDEX_BASE``, ``VQTEX_REG_RAW_BASE``)."""
+    rmap = RegisterMap(geometry, external)
     ob = rmap.offset_bits
     p = prefix
     lines = ["/* Generated by vqtex (golden/register_map.py): register map of the loadable texel-fetch unit.",
@@ -335,7 +393,7 @@ def c_header(geometry: Geometry, prefix: str = "VQTEX") -> str:
     lines.append(f"#define {p}_ENTRY_LANES {rmap.entry_lanes}u /* bus words per codebook entry */")
     lines.append(f"#define {p}_INDEX_LANES {rmap.index_lanes}u /* bus words per index memory word */")
     lines.append("")
-    for name, (off, acc, what) in CONTROL.items():
+    for name, (off, acc, what) in rmap.control.items():
         lines.append(f"#define {p}_REG_{name} ({p}_CONTROL_BASE + 0x{off * 4:03x}u) /* {acc}: {what} */")
     lines.append("")
     lines.append(f"#define {p}_DESCRIPTOR(texture, level, word) ({p}_DESCRIPTORS_BASE + "

@@ -246,9 +246,10 @@ class FrontEnd(wiring.Component):
                 idx.en.eq(advance),
             ]
         if load is not None:                # the read answers of the table and the index memory
-            m.d.comb += self.load_data.eq(or_all([desc.load_data] + ([idx.load_data] if feat.compressed else [])))
+            inside = feat.compressed and not self._index_port       # an index memory here
+            m.d.comb += self.load_data.eq(or_all([desc.load_data] + ([idx.load_data] if inside else [])))
             m.d.comb += desc.load.eq(self.load)
-            if feat.compressed:
+            if inside:
                 m.d.comb += idx.load.eq(self.load)
         side = Signal(SideLayout(g, feat))
         m.d.comb += side.eq(pack(side.shape(), {

@@ -111,8 +111,11 @@ class TexelFetch(wiring.Component):
         (the request at stage 7, as ``index_response`` is); ignored without raw levels.
     index_port : bool
         The index reader is outside the unit (the lanes of a texture filter share index memories
-        banked by block parity, :mod:`hw.filter.index_banks`): members ``index_request`` and
-        ``index_response`` (see :class:`hw.front_end.FrontEnd`); ignored when every level is raw.
+        banked by block parity, :mod:`hw.filter.index_banks`; the cached unit's index words come
+        from external memory): members ``index_request`` and ``index_response`` (see
+        :class:`hw.front_end.FrontEnd`); ignored when every level is raw. A loadable unit takes it
+        only without its own bus port (``bus_port=False``: the loadable cached unit, whose index
+        memory is not on chip, :class:`hw.memory.unit.CachedTexelFetch`).
 
     Members
     -------
@@ -171,8 +174,8 @@ class TexelFetch(wiring.Component):
         if index_port and one_port:
             raise ValueError("an index reader outside the unit has both word banks: no one_port")
         self._loadable = bool(loadable)
-        if self._loadable and index_port:
-            raise ValueError("a loadable unit keeps its index reader (no index_port)")
+        if self._loadable and index_port and bus_port:
+            raise ValueError("a loadable unit with its own bus port keeps its index reader (no index_port)")
         if texture_set is not None and geometry is not None:
             misfit = self._geometry.fits(texture_set)
             if misfit:

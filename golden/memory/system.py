@@ -141,6 +141,32 @@ class Layout:
         raw_base = -(-index_bytes // 4096) * 4096
         return cls(0, raw_base, wb, raw_base + len(ts.raw_words) * RAW_WORD_BYTES)
 
+    @classmethod
+    def at(cls, ts: TextureSet, index_base: int, raw_base: int | None = None) -> "Layout":
+        """``ts`` placed by a host at byte ``index_base`` (a multiple of the index word's bytes) and
+        ``raw_base`` (a multiple of 4; default: the first 4 KB boundary after the index memory), as the
+        loadable cached unit's ``INDEX_BASE`` and ``RAW_BASE`` registers say (:mod:`golden.register_map`).
+        The index memory must lie below the raw memory and both inside the AXI master's 4 GB.
+
+        Raises ValueError (one line) on a misaligned or overlapping placement."""
+        wb = ts.word_bits // 8
+        index_bytes = len(ts.index_words) * wb
+        if not isinstance(index_base, int) or index_base < 0 or index_base % wb:
+            raise ValueError(f"index base {index_base!r} must be a non-negative multiple of {wb} bytes")
+        if raw_base is None:
+            raw_base = -(-(index_base + index_bytes) // 4096) * 4096
+        if not isinstance(raw_base, int) or raw_base % RAW_WORD_BYTES or raw_base < index_base + index_bytes:
+            raise ValueError(f"raw base {raw_base!r} must be a multiple of 4 at or above the index memory's end "
+                             f"({index_base + index_bytes:#x})")
+        end = raw_base + len(ts.raw_words) * RAW_WORD_BYTES
+        if -(-end // 4096) * 4096 > 1 << 32:
+            raise ValueError(f"the texture set ends at byte {end:#x}, past the AXI master's 4 GB")
+        return cls(index_base, raw_base, wb, end)
+
+    def raw_bursts(self, addresses) -> np.ndarray:
+        """Which of the bursts at byte ``addresses`` read the raw memory (bool array; else the index)."""
+        return np.asarray(addresses, np.int64) >= self.raw_base
+
 
 @dataclass
 class References:

@@ -110,11 +110,13 @@ class Plan:
     hits: tuple
 
 
-def plan(ts: TextureSet, requests: np.ndarray, config: MemoryConfig, ideal: bool = False) -> Plan:
+def plan(ts: TextureSet, requests: np.ndarray, config: MemoryConfig, ideal: bool = False,
+         layout: Layout | None = None) -> Plan:
     """Classify the references of ``requests`` in the two caches and number the bursts.
 
-    ``ideal``: every reference hits (the zero-latency figure: the same unit with a perfect cache)."""
-    refs = references(ts, requests, config, Layout.of(ts))
+    ``ideal``: every reference hits (the zero-latency figure: the same unit with a perfect cache).
+    ``layout``: where the set lies in external memory (default ``Layout.of(ts)``)."""
+    refs = references(ts, requests, config, layout or Layout.of(ts))
     n = len(np.asarray(requests).reshape(-1, 4))
     m = len(refs.line)
     hit = np.ones(m, bool)
@@ -322,10 +324,11 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
 
 
 def run_requests(ts: TextureSet, requests: np.ndarray, config: MemoryConfig, pipeline_latency: int,
-                 ready_pattern, ideal: bool = False) -> dict:
+                 ready_pattern, ideal: bool = False, layout: Layout | None = None) -> dict:
     """:func:`plan` then :func:`run`, with the hit rates and bytes per texel added: ``hit_rate`` and
-    ``references`` per cache, ``bytes_per_texel`` (memory bytes read per request)."""
-    p = plan(ts, requests, config, ideal=ideal)
+    ``references`` per cache, ``bytes_per_texel`` (memory bytes read per request). ``layout``: as
+    for :func:`plan`."""
+    p = plan(ts, requests, config, ideal=ideal, layout=layout)
     out = run(p, config, pipeline_latency, ready_pattern)
     n = len(p.misses)
     out["references"] = {"index": p.references[0], "raw": p.references[1]}

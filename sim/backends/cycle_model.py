@@ -176,24 +176,26 @@ def _occupancy(n, bubbles, ov, ready, cycles, latency):
 
 
 def run_cached(ts: TextureSet, requests: np.ndarray, config, *, stall: float = 0.0, seed: int = 0,
-               zero_latency: bool = True) -> dict:
+               zero_latency: bool = True, layout=None) -> dict:
     """The exact cycles of ``requests`` on the cached unit of ``config``
     (:class:`golden.memory.system.MemoryConfig`): this pipeline (``LATENCY``) behind the caches and
     memory of :mod:`golden.memory.timing`, with the shared backpressure pattern.
 
     Returns :func:`golden.memory.timing.run_requests`'s dict, plus ``texels_per_clock`` and, with
     ``zero_latency``, ``zero_latency_cycles`` (the same stream and backpressure with every reference a
-    hit) and ``of_zero_latency`` (the ratio of texels per clock, cached against zero latency)."""
+    hit) and ``of_zero_latency`` (the ratio of texels per clock, cached against zero latency).
+    ``layout``: where the set lies in external memory (:class:`golden.memory.system.Layout`; default
+    ``Layout.of(ts)``, the baked unit's; the loadable cached unit's is its base registers')."""
     from vqtex.golden.memory.timing import run_requests
 
     def pattern(n):
         return ready_pattern(seed, stall, n)
 
-    out = run_requests(ts, requests, config, LATENCY, pattern)
+    out = run_requests(ts, requests, config, LATENCY, pattern, layout=layout)
     n = out["requests"]
     out["texels_per_clock"] = n / out["cycles"] if out["cycles"] else 0.0
     if zero_latency:
-        ideal = run_requests(ts, requests, config, LATENCY, pattern, ideal=True)
+        ideal = run_requests(ts, requests, config, LATENCY, pattern, ideal=True, layout=layout)
         out["zero_latency_cycles"] = ideal["cycles"]
         out["of_zero_latency"] = ideal["cycles"] / out["cycles"] if out["cycles"] else 1.0
     return out

@@ -409,7 +409,7 @@ def _filter_design_info(ts, *, lanes, frac, tag_width, index_banks, bank_depth, 
 CACHED_STROBES = ("stall_memory", "stall_output")
 
 
-def cached_design_info(ts, config, *, tag_width: int = 8) -> DesignInfo:
+def cached_design_info(ts, config, *, tag_width: int = 8, geometry=None) -> DesignInfo:
     """Elaborate :class:`hw.memory.unit.CachedTexelFetch` (``ts`` baked; its index map and raw
     levels in the external memory of ``config``, :class:`golden.memory.system.MemoryConfig`) and
     describe it as :func:`design_info` does the texel-fetch unit: one model (no halves), a request
@@ -417,16 +417,22 @@ def cached_design_info(ts, config, *, tag_width: int = 8) -> DesignInfo:
     stage's valid bit ("output"), and the AXI4 read master as ``axi__*`` (``axi_bytes``; the
     drivers answer it, drivers/axi_slave.h). Its Verilog top is :class:`CachedTexelFetchTop`. What
     names the build: the cache shapes, the FIFO depth and the bus width (the RTL's structure) and
-    the set's contents; the memory model is the driver's, set per run."""
+    the set's contents; the memory model is the driver's, set per run. With ``geometry``: the
+    loadable cached unit of that geometry (no contents; ``ts`` is loaded over its bus, the ``bus__*``
+    ports), one build per geometry and cache configuration for every set it holds."""
+    contents = texture_set_digest(ts) if geometry is None else ("loadable", geometry.dumps())
     key = ("cached_texel_fetch", tag_width, config.index_cache, config.raw_cache, config.prefetch, config.bus_bytes,
-           texture_set_digest(ts))
-    return _memoised(key, lambda: _cached_design_info(ts, config, tag_width))
+           contents)
+    return _memoised(key, lambda: _cached_design_info(ts, config, tag_width, geometry, contents))
 
 
-def _cached_design_info(ts, config, tag_width: int) -> DesignInfo:
+def _cached_design_info(ts, config, tag_width: int, geometry=None, contents=None) -> DesignInfo:
     from vqtex.hw.memories import elaborate, memories
     from vqtex.hw.memory.unit import CachedTexelFetch
-    top = CachedTexelFetch(ts, config, tag_width=tag_width)
+    if geometry is not None:
+        top = CachedTexelFetch(None, config, tag_width=tag_width, geometry=geometry, loadable=True)
+    else:
+        top = CachedTexelFetch(ts, config, tag_width=tag_width)
     frag = elaborate(top)
     req, resp = top.i.p.shape(), top.o.p.shape()
     info = DesignInfo(
@@ -438,9 +444,8 @@ def _cached_design_info(ts, config, tag_width: int) -> DesignInfo:
         latency=int(top.latency), unit="cached_texel_fetch", valid="o__valid", verilog_name="cached_texel_fetch",
         verilog_request=[(f"i_{n}", off, w) for n, (off, w) in _fields(req).items() if w],
         verilog_response=[(f"o_{n}", off, w) for n, (off, w) in _fields(resp).items() if w],
-        options=(tag_width, config.index_cache, config.raw_cache, config.prefetch, config.bus_bytes,
-                 texture_set_digest(ts)),
-        axi_bytes=config.bus_bytes)
+        options=(tag_width, config.index_cache, config.raw_cache, config.prefetch, config.bus_bytes, contents),
+        axi_bytes=config.bus_bytes, geometry=geometry)
     return _checked(info)
 
 
@@ -516,22 +521,29 @@ class CachedTexelFetchTop(wiring.Component):
     ``axi_arlen``, ..., ``axi_rready`` (AMBA's names after ``axi_``, what bus models such as
     cocotbext-axi find by prefix), with ``axi_arid`` tied to 0 and ``axi_rid`` ignored (one ID).
 
+    The loadable cached unit (``geometry``) has its Wishbone port as ``bus_adr``, ..., ``bus_stall``,
+    as :class:`TexelFetchTop`.
+
     Arguments
     ---------
-    texture_set : TextureSet
+    texture_set : TextureSet or None
     config : golden.memory.system.MemoryConfig
     tag_width : int
+    geometry : Geometry, optional
+        The loadable cached unit of this geometry (``texture_set``, if given, its initial contents).
     """
 
-    def __init__(self, texture_set, config, *, tag_width: int = 8):
+    def __init__(self, texture_set, config, *, tag_width: int = 8, geometry=None):
         from vqtex.hw.memory.unit import CachedTexelFetch
-        self._unit = CachedTexelFetch(texture_set, config, tag_width=tag_width)
+        unit = {} if geometry is None else {"geometry": geometry, "loadable": True}
+        self._unit = CachedTexelFetch(texture_set, config, tag_width=tag_width, **unit)
         u = self._unit
         members = {"i_valid": In(1), "i_ready": Out(1), "o_valid": Out(1), "o_ready": In(1),
                    "stall_memory": Out(1), "stall_output": Out(1)}
         members.update({f"i_{n}": In(f.width) for n, f in u.i.p.shape() if f.width})
         members.update({f"o_{n}": Out(f.width) for n, f in u.o.p.shape() if f.width})
         members.update(axi_members(u))
+        members.update(bus_members(u))
         super().__init__(members)
 
     @property
@@ -547,6 +559,7 @@ class CachedTexelFetchTop(wiring.Component):
         m.d.comb += [getattr(u.i.p, n).eq(getattr(self, f"i_{n}")) for n, f in u.i.p.shape() if f.width]
         m.d.comb += [getattr(self, f"o_{n}").eq(getattr(u.o.p, n)) for n, f in u.o.p.shape() if f.width]
         connect_axi(m, self, u)
+        connect_bus(m, self, u)
         return m
 
 

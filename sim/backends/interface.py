@@ -107,7 +107,9 @@ def simulate(ts: TextureSet, requests, *, backend: str = "golden", stall: float 
     loaded over its bus port first and ``load_cycles`` reports the load (the golden backend gives
     :func:`golden.register_map.load_cycles`); the requests' cycles are the baked unit's. With
     ``memory`` (:class:`golden.memory.system.MemoryConfig`), the cached unit, its index map and raw
-    levels in external memory (:mod:`sim.backends.memory`: every backend).
+    levels in external memory (:mod:`sim.backends.memory`: every backend); with both, the loadable
+    cached unit of ``geometry``, ``ts`` loaded over its bus (``load_cycles``) and its memory image at
+    ``Layout.of(ts)``.
 
     Raises
     ------
@@ -125,10 +127,11 @@ def simulate(ts: TextureSet, requests, *, backend: str = "golden", stall: float 
     if len(req):
         check_requests(ts, req[:, 0], req[:, 1], req[:, 2], req[:, 3])
     if memory is not None:
-        if geometry is not None or one_port or not specialise:
-            raise ValueError("the cached unit is the specialised baked unit: no geometry, one-port or full unit")
+        if one_port or (not specialise and geometry is None):
+            raise ValueError("the cached unit is the specialised baked unit or the loadable one: no one-port or "
+                             "full unit")
         cached = importlib.import_module("vqtex.sim.backends.memory")     # a backend module, like the others
-        return cached.run(ts, req, memory, backend=backend, stall=stall, seed=seed)
+        return cached.run(ts, req, memory, backend=backend, stall=stall, seed=seed, geometry=geometry)
     load = None
     if geometry is not None:
         from vqtex.golden.register_map import load_cycles, load_writes
@@ -161,7 +164,7 @@ def prepare(ts: TextureSet, *, backend: str, one_port: bool = False, specialise:
         return 0.0
     t0 = time.perf_counter()
     if memory is not None:                  # the cached unit (sim.backends.memory)
-        importlib.import_module("vqtex.sim.backends.memory").build_cached(ts, memory, backend)
+        importlib.import_module("vqtex.sim.backends.memory").build_cached(ts, memory, backend, geometry=geometry)
         return time.perf_counter() - t0
     build = getattr(importlib.import_module(f"vqtex.sim.backends.{backend}"), f"build_{backend}")  # (as simulate)
     build(ts, one_port=one_port, specialise=specialise, geometry=geometry)

@@ -12,6 +12,12 @@
   the drivers' slave (``drivers/axi_slave.h``) from the C++ twin of the same memory model
   (``drivers/memory_model.h``), for long streams and scene frames.
 
+The loadable cached unit (``geometry``: :class:`hw.memory.unit.CachedTexelFetch` with
+``loadable=True``) runs the same way after a load: :func:`run_phases` loads each set by the bus
+writes of :func:`golden.register_map.load_writes` (descriptors, codebook, matrix, base registers) in
+simulated cycles, puts ``layout.image(ts)`` behind the AXI master, then runs its requests; several
+sets in one simulation (pysim) or one compiled library (cxxrtl, verilator).
+
 Both report the same ``cycles``, ``stall_cycles`` (``output_backpressure``: ``o.valid & ~o.ready``;
 ``memory``: cycles the cache block's data read waited for a line fill, which the golden model splits
 into ``miss`` and ``bandwidth`` in ``memory["stall_detail"]``), and ``memory``: ``bursts``,
@@ -30,7 +36,7 @@ from vqtex.golden.memory.timing import FRONT_LATENCY, plan
 from ..streams import ready_pattern
 from .interface import GOLDEN_CHUNK, SimResult
 
-__all__ = ["run", "run_pysim", "run_compiled", "build_cached", "BACKENDS"]
+__all__ = ["run", "run_pysim", "run_compiled", "run_phases", "build_cached", "BACKENDS"]
 
 #: Backends that run the cached unit.
 BACKENDS = ("golden", "pysim", "cxxrtl", "verilator")
@@ -52,17 +58,28 @@ def _memory_report(p, config, bursts_by_cache, n) -> dict:
     }
 
 
-def run(ts, requests, config, *, backend: str = "golden", stall: float = 0.0, seed: int = 0) -> SimResult:
-    """See the module docstring. Raises ValueError for a backend that does not run the cached unit."""
+def run(ts, requests, config, *, backend: str = "golden", stall: float = 0.0, seed: int = 0, geometry=None,
+        layout: Layout | None = None) -> SimResult:
+    """See the module docstring. With ``geometry``: the loadable cached unit of that geometry, ``ts``
+    loaded over its bus first and placed in external memory by ``layout`` (default ``Layout.of``);
+    ``load_cycles`` reports the load (golden: :func:`golden.register_map.load_cycles`). Raises
+    ValueError for a backend that does not run the cached unit."""
     from vqtex.hw.texel_fetch import LATENCY
     from .cycle_model import straddle_flags
     req = np.asarray(requests, np.int64).reshape(-1, 4)
     n = len(req)
-    p = plan(ts, req, config)
+    if layout is not None and geometry is None:
+        raise ValueError("the baked cached unit's set is at Layout.of(ts): a layout needs the loadable unit (geometry)")
+    layout = layout or Layout.of(ts)
+    p = plan(ts, req, config, layout=layout)
+    load = None
+    if geometry is not None:
+        from vqtex.golden.register_map import load_cycles, load_writes
+        load = load_cycles(len(load_writes(ts, geometry, layout)))
     straddles = int(straddle_flags(ts, req).sum())          # a property of the stream (both words read)
     if backend == "golden":
         from .cycle_model import run_cached
-        model = run_cached(ts, req, config, stall=stall, seed=seed)
+        model = run_cached(ts, req, config, stall=stall, seed=seed, layout=layout)
         responses = np.empty((n, 4), np.uint8)
         for s in range(0, n, GOLDEN_CHUNK):
             r = req[s:s + GOLDEN_CHUNK]
@@ -74,40 +91,52 @@ def run(ts, requests, config, *, backend: str = "golden", stall: float = 0.0, se
         memory["of_zero_latency"] = model["of_zero_latency"]
         return SimResult(responses, model["cycles"], n, LATENCY + FRONT_LATENCY,
                          {"output_backpressure": int(sc["output_backpressure"]),
-                          "memory": int(sc["miss"] + sc["bandwidth"])}, straddles, memory=memory)
+                          "memory": int(sc["miss"] + sc["bandwidth"])}, straddles, memory=memory, load_cycles=load)
     if backend not in BACKENDS:
         raise ValueError(f"the cached unit (--memory external) runs on {', '.join(BACKENDS)}, not on {backend}")
-    out = run_pysim(ts, req, config, stall, seed) if backend == "pysim" else run_compiled(ts, req, config, backend,
-                                                                                          stall, seed)
+    if geometry is not None:
+        out = run_phases(geometry, config, [(ts, req, layout)], backend=backend, stall=stall, seed=seed)[0]
+    elif backend == "pysim":
+        out = run_pysim(ts, req, config, stall, seed)
+    else:
+        out = run_compiled(ts, req, config, backend, stall, seed)
     memory = _memory_report(p, config, out["bursts"], n)
     return SimResult(out["responses"], out["cycles"], n, LATENCY + FRONT_LATENCY,
                      {"output_backpressure": out["backpressure"], "memory": out["fill_waits"]}, straddles,
-                     memory=memory)
+                     memory=memory, load_cycles=out.get("load_cycles"))
 
 
 def run_pysim(ts, req, config, stall, seed) -> dict:
     """Run the cached unit on pysim; responses, cycles, measured stalls, bursts per cache, and the
     cycles of every input acceptance, AR and output transfer (tests compare them with the model)."""
+    from vqtex.hw.memory.unit import CachedTexelFetch
+    layout = Layout.of(ts)
+    return _pysim(CachedTexelFetch(ts, config, tag_width=8), [(None, ts, req, layout)], config, stall, seed)[0]
+
+
+def _pysim(dut, phases, config, stall, seed) -> list:
+    """``dut`` (a :class:`hw.memory.unit.CachedTexelFetch`) in one pysim simulation through ``phases``,
+    each ``(bus writes or None, ts, requests, layout)``: the writes by the Wishbone master of
+    :func:`sim.backends.pysim.bus_transfers`, then the requests with a fresh memory model holding
+    ``layout.image(ts)`` (cycles counted from the phase's first request, as golden's model counts
+    them). One dict per phase, as :func:`run_pysim`'s, with ``load_cycles``."""
     from amaranth import Module
     from amaranth.sim import Simulator
 
-    from vqtex.hw.memory.unit import CachedTexelFetch
-
     from .axi_memory import AxiMemory
-    from .pysim import SimulationError, pack_rows
+    from .pysim import SimulationError, bus_transfers, pack_rows
 
-    dut = CachedTexelFetch(ts, config, tag_width=8)
-    layout = Layout.of(ts)
-    slave = AxiMemory(layout.image(ts), config.make_memory(), config.bus_bytes)
-    n = len(req)
-    packed = pack_rows(dut.i.p.shape(), ("texture", "level", "i", "j"), req, 8)
     rlay = dut.o.p.shape()
-    got = {"accept": [], "transfer": [], "responses": np.zeros((n, 4), np.uint8), "backpressure": 0,
-           "fill_waits": 0, "cycles": 0}
     top = Module()
     top.submodules.dut = dut
+    results = []
 
-    async def bench(ctx):
+    async def phase(ctx, ts, req, layout):
+        n = len(req)
+        packed = pack_rows(dut.i.p.shape(), ("texture", "level", "i", "j"), req, 8)
+        slave = AxiMemory(layout.image(ts), config.make_memory(), config.bus_bytes)
+        got = {"accept": [], "transfer": [], "responses": np.zeros((n, 4), np.uint8), "backpressure": 0,
+               "fill_waits": 0, "cycles": 0}
         ready = ready_pattern(seed, stall, 4 * n + 1024).tolist()
         n_in = n_out = cycle = 0
         slave.start(ctx, dut.axi)
@@ -136,31 +165,88 @@ def run_pysim(ts, req, config, stall, seed) -> dict:
                 n_in += 1
             cycle += 1
             await ctx.tick()
+        ctx.set(dut.i.valid, 0)
+        ctx.set(dut.o.ready, 0)
         got["cycles"] = cycle
+        got["ar"] = slave.ar
+        got["addresses"] = slave.addresses
+        got["bursts"] = np.bincount(layout.raw_bursts(slave.addresses).astype(np.int64), minlength=2)
+        return got
+
+    async def bench(ctx):
+        for writes, ts, req, layout in phases:
+            load = None
+            if writes is not None:
+                ops = np.concatenate([writes, np.ones((len(writes), 1), writes.dtype)], axis=1)
+                _, err, load = await bus_transfers(ctx, dut.bus, ops)
+                if any(err):
+                    raise SimulationError(f"bus write {err.index(True)} of the load answered with err")
+            got = await phase(ctx, ts, np.asarray(req, np.int64).reshape(-1, 4), layout)
+            got["load_cycles"] = load
+            results.append(got)
 
     sim = Simulator(top)
     sim.add_clock(1e-6)
     sim.add_testbench(bench)
     sim.run()
-    got["ar"] = slave.ar
-    raw_base = layout.raw_base
-    got["bursts"] = np.bincount([int(a >= raw_base) for a in slave.addresses], minlength=2)
-    return got
+    return results
 
 
-def build_cached(ts, config, backend: str, *, tag_width: int = 8):
+def run_phases(geometry, config, phases, *, backend: str, stall: float = 0.0, seed: int = 0,
+               trace: bool = False) -> list:
+    """One simulation of the loadable cached unit of ``geometry`` (one compiled library on cxxrtl and
+    verilator) through ``phases``, each ``(ts, requests, layout)`` (``layout``: where the host puts
+    the set in external memory; None: ``Layout.of(ts)``): ``ts`` is loaded by the bus writes of
+    :func:`golden.register_map.load_writes` (matrix, base registers, descriptors, codebook), the
+    memory model holds ``layout.image(ts)``, then the requests run. One dict per phase:
+    ``responses``, ``cycles`` (from the phase's first request, as golden's model), ``load_cycles``,
+    ``backpressure``, ``fill_waits``, ``bursts`` (per cache), ``ar`` (cycles) and ``addresses``; on
+    pysim, and with ``trace`` on the compiled backends, ``accept`` and ``transfer`` (every input
+    acceptance's and response transfer's cycle)."""
+    from vqtex.golden.register_map import load_writes
+    program = []
+    for ts, req, layout in phases:
+        layout = layout or Layout.of(ts)
+        program.append((load_writes(ts, geometry, layout).astype(np.int64), ts,
+                        np.asarray(req, np.int64).reshape(-1, 4), layout))
+    if backend == "pysim":
+        from vqtex.hw.memory.unit import CachedTexelFetch
+        dut = CachedTexelFetch(None, config, tag_width=8, geometry=geometry, loadable=True)
+        return _pysim(dut, program, config, stall, seed)
+    if backend not in ("cxxrtl", "verilator"):
+        raise ValueError(f"the loadable cached unit runs on pysim, cxxrtl and verilator, not on {backend}")
+    from .cxxrtl import ToolchainError, open_design
+    lib, info, _ = open_design(build_cached(None, config, backend, geometry=geometry))
+    try:
+        out = []
+        for writes, ts, req, layout in program:
+            ops = np.concatenate([writes, np.ones((len(writes), 1), np.int64)], axis=1)
+            _, err, load = lib.bus(ops)
+            if err.any():
+                raise ToolchainError(f"bus write {int(np.argmax(err))} of the load answered with err")
+            got = _run_loaded(lib, info, ts, req, config, layout, stall, seed, trace=trace)
+            got["load_cycles"] = load
+            out.append(got)
+        return out
+    finally:
+        lib.close()
+
+
+def build_cached(ts, config, backend: str, *, tag_width: int = 8, geometry=None):
     """The compiled library (``sim.backends.cxxrtl.Build``) of the cached unit on ``backend``
     (``cxxrtl`` or ``verilator``), built or from the cache: one build per cache shape, FIFO depth,
-    bus width and texture set (the memory model is the driver's, chosen per run)."""
+    bus width and texture set (the memory model is the driver's, chosen per run); with
+    ``geometry``, the loadable cached unit's: one build per geometry and cache configuration."""
     from .design import cached_design_info
-    info = cached_design_info(ts, config, tag_width=tag_width)
+    info = cached_design_info(ts, config, tag_width=tag_width, geometry=geometry)
     if backend == "cxxrtl":
         from .cxxrtl import build_design
         return build_design(info)
     if backend == "verilator":
         from .verilator import build_design
         from .verilog import export_cached_verilog
-        return build_design(info, lambda: export_cached_verilog(ts, config, tag_width=tag_width)[0])
+        return build_design(info, lambda: export_cached_verilog(ts, config, tag_width=tag_width,
+                                                                geometry=geometry)[0])
     raise ValueError(f"no compiled backend {backend!r} (cxxrtl, verilator)")
 
 
@@ -177,36 +263,42 @@ def run_compiled(ts, req, config, backend: str, stall: float, seed: int, *, trac
     :func:`run_pysim` (responses, cycles, ``backpressure``, ``fill_waits``, bursts per cache, and
     ``ar``, the cycle of every AR, with its byte ``addresses``); with ``trace`` also ``accept`` and
     ``transfer``, the cycle of every input acceptance and response transfer (int64 arrays)."""
-    from .cxxrtl import batch_layout, open_design, run_checked, strobe_sums, C_CYCLES
+    from .cxxrtl import open_design
+    lib, info, _ = open_design(build_cached(ts, config, backend))
+    try:
+        return _run_loaded(lib, info, ts, req, config, Layout.of(ts), stall, seed, trace=trace)
+    finally:
+        lib.close()
+
+
+def _run_loaded(lib, info, ts, req, config, layout, stall, seed, *, trace: bool) -> dict:
+    """One run of the cached unit's library ``lib`` (contents baked or loaded): the memory model of
+    ``config`` holding ``layout.image(ts)``, then the requests; the dict of :func:`run_compiled`."""
+    from .cxxrtl import batch_layout, run_checked, strobe_sums, C_CYCLES
     from .memory_model_cxx import model_params
     req = np.asarray(req, np.int64).reshape(-1, 4)
     n = len(req)
-    lib, info, _ = open_design(build_cached(ts, config, backend))
-    try:
-        layout = Layout.of(ts)
-        kind, params = model_params(config.make_memory())
-        lib.configure_axi(layout.image(ts), config.bus_bytes, kind, params)
-        accept = transfer = None
-        if trace:
-            accept, transfer = np.zeros(n, np.uint64), np.zeros(n, np.uint64)
-        lib.set_trace(accept, transfer)
-        if n == 0:
-            return {"responses": np.zeros((0, 4), np.uint8), "cycles": 0, "backpressure": 0, "fill_waits": 0,
-                    "bursts": np.zeros(2, np.int64), "ar": [], "addresses": np.zeros(0, np.int64),
-                    **({"accept": np.zeros(0, np.int64), "transfer": np.zeros(0, np.int64)} if trace else {})}
-        rgba, counters = run_checked(lib, req, batch_layout(info), n=n, transfers=n, latency=info.latency,
-                                     worst=_worst_cycles(n, config), stall=stall, seed=seed,
-                                     tag_width=info.tag_width)
-        lib.set_trace(None, None)
-        strobes = strobe_sums(info, counters)
-        ar, addresses = lib.axi_bursts()
-        addresses = addresses.astype(np.int64)
-        out = {"responses": rgba.copy(), "cycles": int(counters[C_CYCLES]),
-               "backpressure": strobes["stall_output"], "fill_waits": strobes["stall_memory"],
-               "bursts": np.bincount((addresses >= layout.raw_base).astype(np.int64), minlength=2),
-               "ar": ar.astype(np.int64).tolist(), "addresses": addresses}
-        if trace:
-            out["accept"], out["transfer"] = accept.astype(np.int64), transfer.astype(np.int64)
-        return out
-    finally:
-        lib.close()
+    kind, params = model_params(config.make_memory())
+    lib.configure_axi(layout.image(ts), config.bus_bytes, kind, params)
+    accept = transfer = None
+    if trace:
+        accept, transfer = np.zeros(n, np.uint64), np.zeros(n, np.uint64)
+    lib.set_trace(accept, transfer)
+    if n == 0:
+        return {"responses": np.zeros((0, 4), np.uint8), "cycles": 0, "backpressure": 0, "fill_waits": 0,
+                "bursts": np.zeros(2, np.int64), "ar": [], "addresses": np.zeros(0, np.int64),
+                **({"accept": np.zeros(0, np.int64), "transfer": np.zeros(0, np.int64)} if trace else {})}
+    rgba, counters = run_checked(lib, req, batch_layout(info), n=n, transfers=n, latency=info.latency,
+                                 worst=_worst_cycles(n, config), stall=stall, seed=seed,
+                                 tag_width=info.tag_width)
+    lib.set_trace(None, None)
+    strobes = strobe_sums(info, counters)
+    ar, addresses = lib.axi_bursts()
+    addresses = addresses.astype(np.int64)
+    out = {"responses": rgba.copy(), "cycles": int(counters[C_CYCLES]),
+           "backpressure": strobes["stall_output"], "fill_waits": strobes["stall_memory"],
+           "bursts": np.bincount(layout.raw_bursts(addresses).astype(np.int64), minlength=2),
+           "ar": ar.astype(np.int64).tolist(), "addresses": addresses}
+    if trace:
+        out["accept"], out["transfer"] = accept.astype(np.int64), transfer.astype(np.int64)
+    return out

@@ -259,13 +259,14 @@ def run_icarus(ts, requests, *, stall: float = 0.0, seed: int = 0, one_port: boo
 
 
 def export_cached_verilog(ts, config, *, tag_width: int = 8, name: str = "cached_texel_fetch",
-                          ports: dict | None = None):
+                          ports: dict | None = None, geometry=None):
     """SystemVerilog of :class:`sim.backends.design.CachedTexelFetchTop` (the cached unit, its AXI4
     read master as ``axi_*``), written as :func:`export_verilog` writes the on-chip unit. If
     ``ports`` is a dict, it receives the top's port names and widths. Returns (the text, the
-    CachedTexelFetchTop: ``top.unit.latency`` is the latency when every reference hits)."""
+    CachedTexelFetchTop: ``top.unit.latency`` is the latency when every reference hits). With
+    ``geometry``: the loadable cached unit (no texture data; its Wishbone port as ``bus_*``)."""
     from .design import CachedTexelFetchTop
-    top = CachedTexelFetchTop(ts, config, tag_width=tag_width)
+    top = CachedTexelFetchTop(None if geometry is not None else ts, config, tag_width=tag_width, geometry=geometry)
     if ports is not None:
         ports.update({n: len(getattr(top, n)) for n in top.signature.members})
     head = (f"// {name}: vqtex texel-fetch unit with its index map and raw levels in external memory behind "

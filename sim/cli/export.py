@@ -12,6 +12,10 @@ options do not apply: the memory is whatever answers the master).
 unit into DIR (:mod:`vqtex.sim.testbench.write`: ``tb_texel_fetch.py``, ``run_tb.py``,
 ``tb_config.json``, ``tb_set.vqt``; docs/verification.md), staged with the other outputs.
 
+With ``--unit loadable --memory external`` it is the loadable cached unit: no texture data, the
+Wishbone port (``bus_*``) and the AXI4 read master (``axi_*``), and the register map with the base
+registers (``INDEX_BASE``, ``RAW_BASE``) and no index or raw regions.
+
 The loadable unit (``--unit loadable``) holds no texture data: its Verilog is the geometry's (the
 named one, or the smallest that holds FILE), and beside it go its register map, ``OUT.regs.md``,
 and the C header a CPU driver includes, ``OUT.h`` (:mod:`golden.register_map`).
@@ -125,9 +129,9 @@ def cmd_export(args) -> int:
         if geometry is not None:
             from vqtex.golden.register_map import c_header, markdown
             with open(outs.path(regs), "w") as f:
-                f.write(markdown(geometry))
+                f.write(markdown(geometry, external=memory is not None))
             with open(outs.path(header), "w") as f:
-                f.write(c_header(geometry))
+                f.write(c_header(geometry, external=memory is not None))
         if bench is not None:
             from vqtex.sim.testbench.write import write_testbench
             write_testbench({name: outs.path(p) for name, p in bench.items()}, verilog=out, ts=ts,
@@ -147,7 +151,8 @@ def cmd_export(args) -> int:
     if geometry is not None:
         from vqtex.golden.register_map import RegisterMap
         report.update(geometry=geometry.to_dict(), register_map=register_map_paths(args.output)[0],
-                      c_header=register_map_paths(args.output)[1], bus_addr_bits=RegisterMap(geometry).addr_bits)
+                      c_header=register_map_paths(args.output)[1],
+                      bus_addr_bits=RegisterMap(geometry, external=memory is not None).addr_bits)
         also = f", its register map {register_map_paths(args.output)[0]} and C header {register_map_paths(args.output)[1]}"
     if bench is not None:
         report["testbench"] = {name: p for name, p in bench.items()}
@@ -175,9 +180,12 @@ def _memory(args):
     memory = memory_config(args)                    # a CliError (one line, exit 2) if refused
     if memory is None:
         return None
-    if args.filter_lanes is not None or args.one_port or args.unit != "specialised" or args.dialect != "sv":
-        raise ExportError("--memory external exports the cached unit: specialised, two index banks, "
-                          "SystemVerilog (no --filter-lanes, --one-port, --unit full|loadable or --dialect v2005)")
+    if args.filter_lanes is not None or args.one_port or args.unit == "full" or args.dialect != "sv":
+        raise ExportError("--memory external exports the cached unit: specialised or loadable, two index banks, "
+                          "SystemVerilog (no --filter-lanes, --one-port, --unit full or --dialect v2005)")
+    if args.unit == "loadable" and args.testbench is not None:
+        raise ExportError("--testbench: the generated cocotb bench drives the baked cached unit, not the loadable one "
+                          "(--unit loadable --memory external)")
     return memory
 
 
@@ -200,7 +208,8 @@ def _export(args, out, memory=None):
     ports = {}
     if memory is not None:
         from vqtex.sim.backends.verilog import export_cached_verilog
-        text, top = export_cached_verilog(ts, memory, tag_width=args.tag_width, name=args.name, ports=ports)
+        text, top = export_cached_verilog(ts, memory, tag_width=args.tag_width, name=args.name, ports=ports,
+                                          geometry=geometry)
         latency = top.unit.latency
     elif args.filter_lanes is not None:
         from vqtex.hw.filter import LATENCY as latency

@@ -119,7 +119,7 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
     its own simulation."""
     unit_kw = {"specialise": unit != "full", "geometry": geometry}
     if memory is not None:
-        unit_kw = {"memory": memory}
+        unit_kw = {"memory": memory, "geometry": geometry}      # (geometry: the loadable cached unit)
     if filter_in_rtl and compare_fixed:
         raise ValueError("compare_fixed runs request streams through the texel-fetch unit, not the RTL filter")
     from vqtex.golden.fetch import check_requests, fetch
@@ -183,7 +183,7 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
             if (cycle_model or compare_fixed or memory is not None) and len(reqs):
                 from vqtex.sim.backends import simulate
                 out["sim"] = simulate(ts, reqs, backend="golden", stall=stall, seed=seed, one_port=one_port,
-                                      memory=memory)
+                                      memory=memory, geometry=geometry if memory is not None else None)
                 out["rtl_seconds"] = 0.0
         else:
             from vqtex.sim.backends import simulate
@@ -375,7 +375,7 @@ def cmd_render(args) -> int:
         elif memory is not None:
             bad = [opt for opt, on in (("--filter-in-rtl", args.filter_in_rtl), ("--compare-fixed", args.compare_fixed),
                                        ("--fovea", fovea is not None), ("--one-port", args.one_port),
-                                       ("--unit", args.unit is not None)) if on]
+                                       (f"--unit {args.unit}", args.unit not in (None, "loadable"))) if on]
             if bad:
                 raise CliError(f"--memory external renders with the cached texel-fetch unit: not with {bad[0]}")
         _options_that_apply(args, fovea, memory is not None)
@@ -399,7 +399,7 @@ def cmd_render(args) -> int:
         if args.filter_in_rtl and (ts.present_blocks is not None or any(t.absent_levels for t in ts.textures)):
             raise CliError(f"--filter-in-rtl fetches every texel of a footprint, zero weights too: {args.texture_set} "
                            "is pruned (vqtex prune); use an unpruned set")
-        resolve(args, "unit", "specialised", args.backend != "golden",
+        resolve(args, "unit", "specialised", args.backend != "golden" or (memory is not None and args.unit == "loadable"),
                 "chooses the RTL unit: it needs an RTL --backend (pysim, cxxrtl, verilator)")
         if args.filter_in_rtl and args.unit == "full":
             raise CliError("--filter-in-rtl: the filter's lanes are specialised or loadable (no --unit full)")
@@ -467,6 +467,9 @@ def cmd_render(args) -> int:
     elif args.backend != "golden":
         text.append(f"RTL frames identical to golden: {'yes' if not mismatches else 'NO, frames ' + str(mismatches)}; "
                     f"{report['cycles_per_frame']:.0f} cycles per frame")
+    loads = [f["load_cycles"] for f in per_frame if f.get("load_cycles") is not None]
+    if loads:
+        text.append(f"loadable unit: the set loaded over its bus in {loads[0]:,} cycles before each frame's requests")
     if memory is not None and args.filter_in_rtl:
         m = report["memory"]
         text.append(f"external memory ({m['configuration']}), a cache per lane: {m['bytes_per_pixel']:.4f} bytes read "

@@ -60,9 +60,9 @@ def cmd_report_area(args) -> int:
         if timing:
             raise CliError(f"report area: --{timing[0].replace('_', '-')} is the memory's timing, not the unit's "
                            "hardware (give the caches, --prefetch and --bus-bytes)")
-        if args.one_port or args.unit is not None or args.filter_lanes is not None:
-            raise CliError("report area: --memory external is the specialised baked unit behind caches: no "
-                           "--one-port, --unit or --filter-lanes")
+        if args.one_port or args.unit not in (None, "loadable") or args.filter_lanes is not None:
+            raise CliError("report area: --memory external is the specialised baked unit behind caches (or, with "
+                           "--unit loadable, the loadable one): no --one-port, --unit or --filter-lanes")
     lanes = args.filter_lanes is not None
     resolve(args, "index_banks", "parity", lanes, "is how the texture filter's lanes hold the index memory: "
             "it needs --filter-lanes")

@@ -47,12 +47,14 @@ def run_trace(args):
     args.seed = stall_seed(args)
     memory = memory_config(args)
     if memory is not None:
-        if args.one_port or args.unit is not None:
-            raise CliError("--memory external is the specialised baked unit: no --one-port or --unit")
-    resolve(args, "unit", "specialised", args.backend != "golden",
+        if args.one_port or args.unit not in (None, "loadable"):
+            bad = "--one-port" if args.one_port else f"--unit {args.unit}"
+            raise CliError(f"--memory external is the specialised baked unit behind caches or the loadable one "
+                           f"(--unit loadable): no {bad}")
+    resolve(args, "unit", "specialised", args.backend != "golden" or (memory is not None and args.unit == "loadable"),
             "chooses the RTL unit: it does not apply to --backend golden (the cycle model)")
     ts = load_set(args.file)
-    geometry = None if memory is not None else unit_geometry(args, ts, args.file)
+    geometry = unit_geometry(args, ts, args.file)
     req = read_requests(args.requests)
     check_requests(ts, req[:, 0], req[:, 1], req[:, 2], req[:, 3])
     warn_slow(args.backend, len(req))

@@ -527,3 +527,34 @@ def test_load_cycles():
     ts, g, _, w, _, _ = loaded("combined", "own")
     assert load_cycles(len(w)) == len(w) + 3 == 14 + g.descriptor_rows * 4 + len(ts.index_words) + \
         len(ts.codebook) * 16 + len(ts.raw_words) + 3
+
+
+def test_external_map_of_the_loadable_cached_unit():
+    """RegisterMap(g, external=True): the base registers at 0x1E and 0x1F (rw), no index or raw words;
+    load_writes with a Layout writes the matrix, the bases, every descriptor row and the codebook, and
+    nothing else; the publications name the bases only for this map."""
+    from vqtex.golden.memory.system import Layout
+    ts = texture_set("yuv_4x4_b12_mip")
+    g = Geometry.of(ts)
+    layout = Layout.at(ts, 0x2000, 0x8000)
+    rmap = RegisterMap(g, external=True)
+    assert rmap.region_words()["index"] == rmap.region_words()["raw"] == 0
+    assert rmap.control["INDEX_BASE"] == (0x1E, "rw", rmap.control["INDEX_BASE"][2])
+    assert rmap.control["RAW_BASE"][:2] == (0x1F, "rw") and "INDEX_BASE" not in RegisterMap(g).control
+    writes = load_writes(ts, g, layout)
+    region = writes[:, 0].astype(np.int64) >> rmap.offset_bits
+    assert set(region.tolist()) == {CODES["control"], CODES["descriptors"], CODES["codebook"]}
+    control = dict(zip((writes[region == 0, 0] & ((1 << rmap.offset_bits) - 1)).tolist(), writes[region == 0, 1].tolist()))
+    assert control[0x1E] == 0x2000 and control[0x1F] == 0x8000 and len(control) == 16
+    on_chip = load_writes(ts, g)
+    assert len(writes) == len(on_chip) + 2 - len(ts.index_words) - len(ts.raw_words)
+    assert mapped(rmap, int(rmap.address("control", 0x1E)), True) and not mapped(RegisterMap(g), int(
+        RegisterMap(g).address("control", 0x1E)), False)
+    assert not mapped(rmap, int(rmap.address("index", 0))) and not mapped(rmap, int(rmap.address("raw", 0)))
+    assert "INDEX_BASE" in markdown(g, external=True) and "INDEX_BASE" not in markdown(g)
+    assert "VQTEX_REG_RAW_BASE" in c_header(g, external=True) and "RAW_BASE" not in c_header(g).replace(
+        "VQTEX_RAW_BASE", "")
+    data, err = expected_reads(ts, g, [int(rmap.address("control", 0x1E))], layout)
+    assert data.tolist() == [0x2000] and not err.any()
+    with pytest.raises(LoadError, match="16-bit index words"):
+        load_writes(ts, g, Layout(0, 0x1000, 2, 0x2000))

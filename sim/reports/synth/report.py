@@ -27,6 +27,7 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
     unit of that geometry (``ts`` is not used: the unit holds no texture data). With ``memory`` (a
     :class:`golden.memory.system.MemoryConfig`), the cached unit (``hw.memory.unit.CachedTexelFetch``:
     the index map and raw levels in external memory behind its caches, its AXI4 read master as ports;
+    with ``geometry`` too, the loadable cached unit of that geometry;
     only the cache shapes, FIFO depth and bus width shape the hardware).
 
     ``router`` is nextpnr's router (``router1``, its default, or ``router2``: much faster on the
@@ -56,7 +57,8 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
     elif memory is not None:
         from vqtex.hw.memory.unit import ADDRESS_STAGES
         from vqtex.sim.backends.design import CachedTexelFetchTop
-        unit = CachedTexelFetchTop(ts, memory, tag_width=tag_width)
+        unit = CachedTexelFetchTop(None if geometry is not None else ts, memory, tag_width=tag_width,
+                                   geometry=geometry)
         LATENCY = unit.unit.latency
     harness = Harness(ts, one_port=one_port, tag_width=tag_width, specialise=specialise, unit=unit, geometry=geometry)
     il = harness.rtlil()
@@ -79,7 +81,8 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
         top = syn["stat"].get(HARNESS_NAME) or {}
         rep = {
             "design": name or "texture set",
-            "top": ("texel fetch, external memory (cached)" if memory is not None else
+            "top": (f"texel fetch, external memory (cached{', loadable' if geometry is not None else ''})"
+                    if memory is not None else
                     "texel fetch" if filter_lanes is None else
                     f"texture filter, {filter_lanes} lane(s), index memory "
                     + ("banked by block parity" if index_banks == "parity" else "per lane")),

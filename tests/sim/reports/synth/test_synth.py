@@ -370,10 +370,33 @@ def test_cached_harness_and_memories():
     assert synth.stage_of("unit.unit.texel.back.codebook_rom.window1") == "codebook ROM"
 
 
+
+def test_loadable_cached_harness_and_memories():
+    """The loadable cached unit in the harness: its bus and AXI ports, both descriptor tables (the
+    address stages' and the pipeline's, loadable, in LUT RAM), the loadable codebook, no index or
+    raw memory; the same caches as the baked unit's."""
+    from vqtex.golden.geometry import Geometry
+    from vqtex.sim.backends.design import CachedTexelFetchTop
+    ts = builtin_set("tiny")
+    g = Geometry.of(ts)
+    cfg = _small_caches()
+    top = CachedTexelFetchTop(None, cfg, geometry=g)
+    assert {"bus_adr", "bus_stall", "axi_araddr"} <= set(top.signature.members)
+    harness = synth.Harness(None, unit=top, geometry=g)
+    assert "vqtex_harness.unit" in harness.rtlil()
+    mems = synth.design_memories(ts, memory=cfg, geometry=g)
+    baked = synth.design_memories(ts, memory=cfg)
+    assert {n: v for n, v in mems.items() if ".reader." in n} == {n: v for n, v in baked.items() if ".reader." in n}
+    assert any(n.startswith("unit.descriptor.word") for n in mems)
+    assert any(n.startswith("unit.texel.front.descriptor.word") for n in mems)
+    assert any(n.startswith("unit.texel.back.codebook_rom.codebook") for n in mems)
+    assert not any(".index_reader." in n or ".codebook_rom.raw." in n for n in mems)
+
 @pytest.mark.parametrize("extra, pattern", [
     (["--memory-latency", "40"], "--memory-latency is the memory's timing"),
     (["--memory-model", "dram"], "--memory-model is the memory's timing"),
     (["--unit", "full"], "no --one-port, --unit or --filter-lanes"),
+    (["--unit", "loadable", "--one-port"], "no --one-port, --unit or --filter-lanes"),
     (["--one-port"], "no --one-port, --unit or --filter-lanes"),
     (["--filter-lanes", "2"], "no --one-port, --unit or --filter-lanes"),
     (["--cache-line", "128", "--cache-size", "256"], "--memory external: a 256-byte cache cannot hold"),
