@@ -259,15 +259,18 @@ class TexelFetch(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         load = self._load
+        # The loadable unit adds the codebook address cb_base + index in its index reader's last
+        # stage; with the index reader outside (the cached unit's index_port) the codebook adds it.
+        summed = self._loadable and not self._index_port
         m.submodules.front = front = FrontEnd(self._ts, one_port=self._one_port, tag_width=self._tag_width,
                                               bank_depth=self._bank_depth, features=self._features,
                                               index_port=self._index_port, geometry=self._geometry, load=load,
-                                              summed=self._loadable)
+                                              summed=summed)
         if self._index_port:
             m.d.comb += [self.index_request.eq(front.index_request), front.index_response.eq(self.index_response)]
         m.submodules.back = back = BackEnd(self._ts, bank_depth=self._bank_depth, features=self._features,
                                            geometry=self._geometry, load=load, raw_port=self._raw_port,
-                                           summed=self._loadable)
+                                           summed=summed)
         if self._raw_port:
             m.d.comb += back.raw_in.eq(self.raw_in)
         if load is not None and not self._bus_port:     # the parent's port (a filter's lanes)
