@@ -60,9 +60,12 @@ def cmd_report_area(args) -> int:
         if timing:
             raise CliError(f"report area: --{timing[0].replace('_', '-')} is the memory's timing, not the unit's "
                            "hardware (give the caches, --prefetch and --bus-bytes)")
-        if args.one_port or args.unit not in (None, "loadable") or args.filter_lanes is not None:
+        bad = [opt for opt, on in (("--one-port", args.one_port),
+                                   (f"--unit {args.unit}", args.unit not in (None, "loadable")),
+                                   ("--filter-lanes", args.filter_lanes is not None)) if on]
+        if bad:
             raise CliError("report area: --memory external is the specialised baked unit behind caches (or, with "
-                           "--unit loadable, the loadable one): no --one-port, --unit or --filter-lanes")
+                           f"--unit loadable, the loadable one): not with {bad[0]}")
     lanes = args.filter_lanes is not None
     resolve(args, "index_banks", "parity", lanes, "is how the texture filter's lanes hold the index memory: "
             "it needs --filter-lanes")
