@@ -162,8 +162,8 @@ def add_parser(sub) -> None:
     a.add_argument("--placer-seed", "--seed", dest="seed", type=limits.PLACER_SEED, default=None,
                    help=number_help("nextpnr's placement seed (--seed is the old spelling)", limits.PLACER_SEED, 1))
     a.add_argument("--router", choices=["router1", "router2"], default=None,
-                   help=with_default("nextpnr's router: router2 routes the loadable presets in minutes where "
-                                     "router1 takes an hour (docs/area.md)", "router1"))
+                   help=with_default("nextpnr's router: router2 routed the loadable unit of topspin's geometry in "
+                                     "minutes where router1 took an hour (docs/area.md)", "router1"))
     a.add_argument("--no-route", action="store_true",
                    help="place only: Fmax is nextpnr's estimate after placement, no critical path (minutes where "
                         "routing a loadable preset takes an hour; default: place and route)")

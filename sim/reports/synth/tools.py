@@ -99,7 +99,7 @@ def run_yosys(rtlil_text: str, workdir: str, *, timeout: float | None = None) ->
 
 #: nextpnr's routers: ``router1`` (its default, timing-driven; slow to converge on a congested
 #: design) and ``router2`` (negotiated congestion; minutes where router1 took an hour on the loadable
-#: presets, docs/area.md).
+#: unit of topspin's geometry; it did not finish the ``paper`` preset either, docs/area.md).
 ROUTERS = ("router1", "router2")
 
 
