@@ -56,8 +56,8 @@ class ColorMatrix(wiring.Component):
     Loadable (``load``): the coefficients (18-bit signed), offsets (8 bits), ``F`` (5 bits) and the
     rounding bit are registers the host writes over the bus port (control region, offsets
     ``golden.register_map.CONTROL``), initialised from ``matrix`` and kept through a reset (they
-    are contents, not pipeline state); all nine products are 18 x 9-bit multipliers and the shift
-    by ``F`` is a barrel shifter. Same latency and throughput.
+    are contents, not pipeline state); all nine products are 18 x 9-bit multipliers; stage 3 keeps
+    8 bits of the sum shifted by ``F``, clamping from a registered mask. Same latency, throughput.
 
     Arguments
     ---------

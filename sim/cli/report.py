@@ -60,9 +60,12 @@ def cmd_report_area(args) -> int:
         if timing:
             raise CliError(f"report area: --{timing[0].replace('_', '-')} is the memory's timing, not the unit's "
                            "hardware (give the caches, --prefetch and --bus-bytes)")
-        if args.one_port or args.unit not in (None, "loadable") or args.filter_lanes is not None:
+        bad = [opt for opt, on in (("--one-port", args.one_port),
+                                   (f"--unit {args.unit}", args.unit not in (None, "loadable")),
+                                   ("--filter-lanes", args.filter_lanes is not None)) if on]
+        if bad:
             raise CliError("report area: --memory external is the specialised baked unit behind caches (or, with "
-                           "--unit loadable, the loadable one): no --one-port, --unit or --filter-lanes")
+                           f"--unit loadable, the loadable one): not with {bad[0]}")
     lanes = args.filter_lanes is not None
     resolve(args, "index_banks", "parity", lanes, "is how the texture filter's lanes hold the index memory: "
             "it needs --filter-lanes")
@@ -159,8 +162,8 @@ def add_parser(sub) -> None:
     a.add_argument("--placer-seed", "--seed", dest="seed", type=limits.PLACER_SEED, default=None,
                    help=number_help("nextpnr's placement seed (--seed is the old spelling)", limits.PLACER_SEED, 1))
     a.add_argument("--router", choices=["router1", "router2"], default=None,
-                   help=with_default("nextpnr's router: router2 routes the loadable presets in minutes where "
-                                     "router1 takes an hour (docs/area.md)", "router1"))
+                   help=with_default("nextpnr's router: router2 routed the loadable unit of topspin's geometry in "
+                                     "minutes where router1 took an hour (docs/area.md)", "router1"))
     a.add_argument("--no-route", action="store_true",
                    help="place only: Fmax is nextpnr's estimate after placement, no critical path (minutes where "
                         "routing a loadable preset takes an hour; default: place and route)")

@@ -31,7 +31,7 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
     only the cache shapes, FIFO depth and bus width shape the hardware).
 
     ``router`` is nextpnr's router (``router1``, its default, or ``router2``: much faster on the
-    loadable presets, :data:`.tools.ROUTERS`). ``route=False``: placement only, Fmax is nextpnr's
+    loadable topspin geometry, :data:`.tools.ROUTERS`). ``route=False``: placement only, Fmax is nextpnr's
     estimate after placement (``timing.routed`` false, no critical path).
 
     ``progress(message)``, when given, is called as each long step starts (elaboration, synthesis,

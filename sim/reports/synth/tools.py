@@ -99,8 +99,19 @@ def run_yosys(rtlil_text: str, workdir: str, *, timeout: float | None = None) ->
 
 #: nextpnr's routers: ``router1`` (its default, timing-driven; slow to converge on a congested
 #: design) and ``router2`` (negotiated congestion; minutes where router1 took an hour on the loadable
-#: presets, docs/area.md).
+#: unit of topspin's geometry; it did not finish the ``paper`` preset either, docs/area.md).
 ROUTERS = ("router1", "router2")
+
+
+def _slowest_clock(workdir: str, missing: str) -> tuple:
+    """``workdir/nextpnr.log`` parsed (:func:`parse_nextpnr_log`), its slowest clock's name and
+    figures: ``(log, clock, {"fmax_mhz", "target_mhz"})``; SynthError(``missing``) when it has none."""
+    with open(os.path.join(workdir, "nextpnr.log")) as f:
+        log = parse_nextpnr_log(f.read())
+    if not log["clocks"]:
+        raise SynthError(missing)
+    clock = min(log["clocks"], key=lambda c: log["clocks"][c]["fmax_mhz"])
+    return log, clock, log["clocks"][clock]
 
 
 def run_nextpnr(workdir: str, *, freq: float = 150.0, seed: int = 1, timeout: float | None = None,
@@ -119,12 +130,7 @@ def run_nextpnr(workdir: str, *, freq: float = 150.0, seed: int = 1, timeout: fl
         args = [a for a in args if a not in ("--report", "report.json")] + ["--no-route"]
     _, dt = _run("nextpnr", args, workdir, "nextpnr.out", timeout)
     if not route:
-        with open(os.path.join(workdir, "nextpnr.log")) as f:
-            log = parse_nextpnr_log(f.read())
-        if not log["clocks"]:
-            raise SynthError("nextpnr wrote no Max frequency line after placement")
-        clock = min(log["clocks"], key=lambda c: log["clocks"][c]["fmax_mhz"])
-        c = log["clocks"][clock]
+        log, clock, c = _slowest_clock(workdir, "nextpnr wrote no Max frequency line after placement")
         return {"clock": clock, "fmax_mhz": c["fmax_mhz"], "target_mhz": c["target_mhz"], "utilisation": {},
                 "critical_path": None, "seconds": dt, "log": os.path.join(workdir, "nextpnr.log")}
     path = os.path.join(workdir, "report.json")
@@ -132,12 +138,7 @@ def run_nextpnr(workdir: str, *, freq: float = 150.0, seed: int = 1, timeout: fl
         with open(path) as f:
             rep = parse_nextpnr_report(json.load(f))
     else:                                   # a nextpnr without --report: the log's summary only
-        with open(os.path.join(workdir, "nextpnr.log")) as f:
-            log = parse_nextpnr_log(f.read())
-        if not log["clocks"]:
-            raise SynthError("nextpnr wrote neither a report nor a Max frequency line")
-        clock = min(log["clocks"], key=lambda c: log["clocks"][c]["fmax_mhz"])
-        c = log["clocks"][clock]
+        log, clock, c = _slowest_clock(workdir, "nextpnr wrote neither a report nor a Max frequency line")
         src, dst = log["critical_from"] or "", log["critical_to"] or ""
         rep = {"clock": clock, "fmax_mhz": c["fmax_mhz"], "target_mhz": c["target_mhz"], "utilisation": {},
                "critical_path": {"from": src, "to": dst, "from_signal": signal_of(src.rsplit(".", 1)[0]),

@@ -395,10 +395,11 @@ def test_loadable_cached_harness_and_memories():
 @pytest.mark.parametrize("extra, pattern", [
     (["--memory-latency", "40"], "--memory-latency is the memory's timing"),
     (["--memory-model", "dram"], "--memory-model is the memory's timing"),
-    (["--unit", "full"], "no --one-port, --unit or --filter-lanes"),
-    (["--unit", "loadable", "--one-port"], "no --one-port, --unit or --filter-lanes"),
-    (["--one-port"], "no --one-port, --unit or --filter-lanes"),
-    (["--filter-lanes", "2"], "no --one-port, --unit or --filter-lanes"),
+    (["--unit", "full"], "the loadable one): not with --unit full"),
+    (["--unit", "both"], "the loadable one): not with --unit both"),
+    (["--unit", "loadable", "--one-port"], "the loadable one): not with --one-port"),
+    (["--one-port"], "the loadable one): not with --one-port"),
+    (["--filter-lanes", "2"], "the loadable one): not with --filter-lanes"),
     (["--cache-line", "128", "--cache-size", "256"], "--memory external: a 256-byte cache cannot hold"),
 ])
 def test_memory_external_refuses(capsys, extra, pattern):
