@@ -436,10 +436,14 @@ class CachedReader(wiring.Component):
             **({"check_ready": Out(1), "check_go": In(1)} if joint else {}),
         })
 
+    #: Cycles from ``i`` to ``o`` when every reference hits: lookup, tag check, data read
+    #: (golden's ``FRONT_LATENCY`` is the unit's address stages plus this).
+    LATENCY = 3
+
     @property
     def latency(self) -> int:
         """Cycles from ``i`` to ``o`` when every reference hits (lookup, tag check, data read): 3."""
-        return 3
+        return self.LATENCY
 
     def elaborate(self, platform):
         m = Module()

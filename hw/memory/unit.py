@@ -102,7 +102,6 @@ class CachedTexelFetch(wiring.Component):
             unit["geometry"] = geometry
         self._tf = TexelFetch(texture_set, tag_width=tag_width, index_port=True, raw_port=True, **unit)
         self._features = self._tf.features
-        self._reader_latency = 3                # CachedReader.latency: lookup, tag check, data read
         tb = self._tf.texture_bits
         members = {
             "i": In(stream.Signature(RequestLayout(tb, tag_width))),
@@ -136,7 +135,7 @@ class CachedTexelFetch(wiring.Component):
     @property
     def latency(self) -> int:
         """Cycles from ``i`` to ``o`` when every reference hits: ``LATENCY + 5``."""
-        return LATENCY + ADDRESS_STAGES + self._reader_latency
+        return LATENCY + ADDRESS_STAGES + CachedReader.LATENCY
 
     def elaborate(self, platform):
         m = Module()

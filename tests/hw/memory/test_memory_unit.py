@@ -51,3 +51,16 @@ def test_cached_unit_dram_and_300_cycles():
     ic, rc = CacheShape(128, 16, 2), CacheShape(64, 16, 2)
     check(ts, req, MemoryConfig(index_cache=ic, raw_cache=rc, prefetch=8, latency=300, bus_bytes=16), 0.2, 3)
     check(ts, req, MemoryConfig(index_cache=ic, raw_cache=rc, prefetch=4, kind="dram", bus_bytes=16), 0.4, 4)
+
+
+def test_latency_is_golden_front_latency():
+    """The cached unit's all-hit latency (its address stages and the reader's lookup, tag check and
+    data read) is the texel pipeline's plus golden's ``FRONT_LATENCY``: one definition each side,
+    tied here (19 today)."""
+    from vqtex.golden.memory.timing import FRONT_LATENCY
+    from vqtex.hw.memory.reader import CachedReader
+    from vqtex.hw.memory.unit import ADDRESS_STAGES, CachedTexelFetch
+    cfg = MemoryConfig()
+    unit = CachedTexelFetch(texture_set("rgba_2x2_b7_mip_w16"), cfg)
+    assert ADDRESS_STAGES + CachedReader.LATENCY == FRONT_LATENCY
+    assert unit.latency == LATENCY + FRONT_LATENCY == 19

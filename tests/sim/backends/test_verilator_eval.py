@@ -7,6 +7,7 @@ path uses turns these tests red instead of silently costing the speed; the respo
 checked against golden by every Verilator test (test_backends.py, test_verilator_halves.py)."""
 
 import os
+import shutil
 
 import pytest
 
@@ -53,13 +54,19 @@ def test_tuning_flags_probed(monkeypatch):
     assert toolchain.model_tuning_flags("/no/such/g++") == []
     assert toolchain.model_tuning_flags("/no/such/g++", toolchain.CLANG_INLINE) == []
     assert toolchain.model_tuning_flags("/no/such/clang++") == []          # (cannot run: refused)
-    clang = next((p for p in ("/usr/bin/clang++",) if os.path.exists(p)), None)
-    if clang:
-        assert toolchain.model_tuning_flags(clang) == toolchain.CLANG_TUNING
-        assert toolchain.model_tuning_flags(clang, toolchain.CLANG_INLINE) == toolchain.CLANG_INLINE
-        assert toolchain.model_tuning_flags(clang, ["-mllvm", "-no-such-option-vqtex"]) == []
     assert vl.model_tuning_flags is toolchain.model_tuning_flags
     assert cx.model_tuning_flags is toolchain.model_tuning_flags
+
+
+def test_tuning_flags_taken_by_the_installed_clang(monkeypatch):
+    """The installed clang++ (scripts/install-sim-tools) takes both option sets and refuses an option
+    it does not know (so the probe can say no)."""
+    need("clang++")
+    monkeypatch.setattr(toolchain, "_tuning", {})
+    clang = shutil.which("clang++")
+    assert toolchain.model_tuning_flags(clang) == toolchain.CLANG_TUNING
+    assert toolchain.model_tuning_flags(clang, toolchain.CLANG_INLINE) == toolchain.CLANG_INLINE
+    assert toolchain.model_tuning_flags(clang, ["-mllvm", "-no-such-option-vqtex"]) == []
 
 
 @pytest.fixture(scope="module")
