@@ -116,15 +116,15 @@ def run_pysim(ts, req, config, stall, seed) -> dict:
 
 def _pysim(dut, phases, config, stall, seed) -> list:
     """``dut`` (a :class:`hw.memory.unit.CachedTexelFetch`) in one pysim simulation through ``phases``,
-    each ``(bus writes or None, ts, requests, layout)``: the writes by the Wishbone master of
-    :func:`sim.backends.pysim.bus_transfers`, then the requests with a fresh memory model holding
+    each ``(bus writes or None, ts, requests, layout)``: the writes by
+    :func:`sim.backends.pysim.load_over_bus`, then the requests with a fresh memory model holding
     ``layout.image(ts)`` (cycles counted from the phase's first request, as golden's model counts
     them). One dict per phase, as :func:`run_pysim`'s, with ``load_cycles``."""
     from amaranth import Module
     from amaranth.sim import Simulator
 
     from .axi_memory import AxiMemory
-    from .pysim import SimulationError, bus_transfers, pack_rows
+    from .pysim import SimulationError, load_over_bus, pack_rows
 
     rlay = dut.o.p.shape()
     top = Module()
@@ -177,10 +177,7 @@ def _pysim(dut, phases, config, stall, seed) -> list:
         for writes, ts, req, layout in phases:
             load = None
             if writes is not None:
-                ops = np.concatenate([writes, np.ones((len(writes), 1), writes.dtype)], axis=1)
-                _, err, load = await bus_transfers(ctx, dut.bus, ops)
-                if any(err):
-                    raise SimulationError(f"bus write {err.index(True)} of the load answered with err")
+                load = await load_over_bus(ctx, dut.bus, writes)
             got = await phase(ctx, ts, np.asarray(req, np.int64).reshape(-1, 4), layout)
             got["load_cycles"] = load
             results.append(got)

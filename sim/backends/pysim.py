@@ -24,7 +24,7 @@ from vqtex.hw.texel_fetch import REGISTERS, TexelFetch
 from .interface import SimResult
 from ..streams import pattern_length, ready_pattern
 
-__all__ = ["run", "run_phases", "run_stream", "pack_rows", "bus_transfers", "SimulationError", "TAG_WIDTH"]
+__all__ = ["run", "run_phases", "run_stream", "pack_rows", "bus_transfers", "load_over_bus", "SimulationError", "TAG_WIDTH"]
 
 #: Tag width of the simulated unit: request n carries tag ``n mod 2**TAG_WIDTH``.
 TAG_WIDTH = 8
@@ -135,6 +135,17 @@ async def bus_transfers(ctx, bus, ops) -> tuple:
     return data, err, cycles + 1
 
 
+
+async def load_over_bus(ctx, bus, writes) -> int:
+    """The host's load: ``writes`` ((N, 2) ints: word address, data, as
+    ``golden.register_map.load_writes`` gives them) by :func:`bus_transfers`; returns the cycles
+    spent. A write the unit answers with ``err`` raises :class:`SimulationError`."""
+    ops = np.concatenate([writes, np.ones((len(writes), 1), writes.dtype)], axis=1)
+    _, err, cycles = await bus_transfers(ctx, bus, ops)
+    if any(err):
+        raise SimulationError(f"bus write {err.index(True)} of the load answered with err")
+    return cycles
+
 def run_stream(dut, program, *, columns, tag_width: int, strobes, valid, stall: float, seed: int,
                vcd: str | None = None, name: str = "dut", step=None) -> list:
     """Run ``program`` on ``dut`` (a unit with ``i``/``o`` streams, ``i.payload`` holding the
@@ -222,10 +233,7 @@ def run_stream(dut, program, *, columns, tag_width: int, strobes, valid, stall: 
         for writes, requests in program:
             load_cycles = None
             if writes is not None:
-                ops = np.concatenate([writes, np.ones((len(writes), 1), writes.dtype)], axis=1)
-                _, err, load_cycles = await bus_transfers(ctx, dut.bus, ops)
-                if any(err):
-                    raise SimulationError(f"bus write {err.index(True)} of the load answered with err")
+                load_cycles = await load_over_bus(ctx, dut.bus, writes)
             out, stats = await requests_phase(ctx, np.asarray(requests, dtype=np.int64).reshape(-1, len(columns)))
             results.append({"responses": out, "load_cycles": load_cycles, **stats})
 

@@ -231,3 +231,26 @@ def test_drain_rule():
     for c, t, r, gch in log["responses"]:
         want = old[t] if t < 4 else new[t]
         assert (r, gch) == (int(want[0]), int(want[1])), (t, r, gch, want)
+
+
+def test_load_over_bus_counts_cycles_and_refuses_err():
+    """``pysim.load_over_bus``, the host's load of every pysim run: the writes of a set take
+    ``golden.register_map.load_cycles`` of them; a write answered with err (an unmapped word) is a
+    SimulationError naming the write, not a silently half-loaded unit."""
+    ts = texture_set("yuv_4x4_b12_mip")
+    g = _geometry(ts)
+    writes = load_writes(ts, g).astype(np.int64)
+    bad = np.array([[5 << RegisterMap(g).offset_bits, 7]], np.int64)
+    out = {}
+
+    async def bench(ctx):
+        out["cycles"] = await pysim.load_over_bus(ctx, dut.bus, writes)
+        with pytest.raises(pysim.SimulationError, match=f"bus write {len(writes[:3])} of the load answered with err"):
+            await pysim.load_over_bus(ctx, dut.bus, np.concatenate([writes[:3], bad]))
+
+    dut = TexelFetch(geometry=g, loadable=True)
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    sim.add_testbench(bench)
+    sim.run()
+    assert out["cycles"] == load_cycles(len(writes))
