@@ -7,7 +7,8 @@
   ``scene_set``, ``filter_set``, ``SPECIALISE_CASES``);
 - :mod:`tests.support.requests`: request streams (``random_requests``, ``adversarial_requests``,
   ``straddle_offsets``, ``back_to_back_requests``);
-- :mod:`tests.support.compare`: a backend against golden (``assert_same``, ``compare_with_golden``);
+- :mod:`tests.support.compare`: a backend against golden (``assert_same``, ``compare_with_golden``;
+  the cached unit's traced run: ``assert_cached_run``, ``locality_stream``);
 - :mod:`tests.support.hdl`: Amaranth testbench helpers (``stream_put``, ``stream_get``, ``run_lockstep``);
 - :mod:`tests.support.scenes`: tiny versions of the paper's scenes for the experiment tests, and the
   scenes several commands' and analyses' tests share (``TINY_SCENE``, ``NEED_SCENE``,
@@ -23,7 +24,7 @@ test module (``tests/test_layout.py`` checks it).
 
 from vqtex.golden.color import JFIF_BT601
 
-from .compare import assert_same, compare_with_golden
+from .compare import assert_cached_run, assert_same, compare_with_golden, locality_stream
 from .hdl import run_lockstep, stream_get, stream_put
 from .hostile import HOSTILE_CASES, edit_descriptor, edit_header, hostile_files, set_key
 from .pixels import edge_pixels, fragments
@@ -37,7 +38,7 @@ from .tools import (PVRTEX_DATA, REPO, assert_one_error, need, need_python, need
 __all__ = ["REPO", "PVRTEX_DATA", "need", "need_python", "shared_cache", "need_synth_tools", "builtin_set", "run_cli",
            "assert_one_error", "shared_cache_dir", "image", "CONFIGS", "texture_set", "combined_set", "texture_sets",
            "levels", "random_requests", "random_dt", "adversarial_requests", "back_to_back_requests", "straddle_offsets",
-           "assert_same", "compare_with_golden", "stream_put", "stream_get", "run_lockstep", "pvr2_small_sets",
+           "assert_same", "compare_with_golden", "assert_cached_run", "locality_stream", "stream_put", "stream_get", "run_lockstep", "pvr2_small_sets",
            "JFIF_BT601", "get_set", "scene_set", "filter_set", "SPECIALISE_CASES", "TINY_SCENE", "NEED_SCENE",
            "PRUNE_SCENES", "small_scene", "crates_scene", "CRATE_YUV_MIP", "CRATE_ARGB", "fragments", "edge_pixels",
            "HOSTILE_CASES", "hostile_files", "edit_header", "edit_descriptor", "set_key"]

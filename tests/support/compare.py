@@ -34,3 +34,33 @@ def compare_with_golden(ts, req, backend, **kw):
     assert r.occupancy.keys() == g.occupancy.keys() == set(REGISTERS)
     assert r.cycles == len(req) + LATENCY + r.stall_cycles["output_backpressure"] + r.stall_cycles["one_port_straddle"]
     return r
+
+
+def locality_stream(ts, n: int, seed: int) -> np.ndarray:
+    """``n`` random requests with locality (runs of one request, 1-4 long): what a cache sees."""
+    from vqtex.golden.fetch import random_requests
+    rng = np.random.default_rng(seed)
+    req = random_requests(ts, n // 3, seed=seed)
+    return np.repeat(req, rng.integers(1, 5, len(req)), axis=0)[:n]
+
+
+def assert_cached_run(got: dict, ts, req, cfg, stall: float, seed: int, layout=None) -> dict:
+    """A traced run of the cached unit (``sim.backends.memory``: ``trace=True``) equals golden in
+    everything: responses (golden.fetch), every acceptance, every AR's cycle and address, every
+    transfer, the cycles, backpressure and fill waits of ``golden.memory.timing.run`` under the
+    same ready pattern. ``layout``: where the set sits (``Layout.of(ts)`` when None). Returns the
+    model's dict."""
+    from vqtex.golden.memory.timing import plan, run
+    from vqtex.sim.streams import ready_pattern
+    assert (got["responses"] == fetch(ts, *np.asarray(req).T)).all()
+    p = plan(ts, req, cfg, **({} if layout is None else {"layout": layout}))
+    model = run(p, cfg, LATENCY, lambda m: ready_pattern(seed, stall, m))
+    assert (got["accept"] == model["accept"]).all()
+    ar = np.repeat(model["tag"], p.misses) + 1 + np.concatenate([np.arange(m) for m in p.misses.tolist()] or [[]])
+    assert got["ar"] == ar.astype(np.int64).tolist()
+    assert got["addresses"].tolist() == p.address.tolist()
+    assert (got["transfer"] == model["transfer"]).all()
+    assert got["cycles"] == model["cycles"]
+    assert got["backpressure"] == model["stall_cycles"]["output_backpressure"]
+    assert got["fill_waits"] == model["stall_cycles"]["miss"] + model["stall_cycles"]["bandwidth"]
+    return model

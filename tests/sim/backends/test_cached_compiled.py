@@ -10,18 +10,13 @@ model is the driver's, chosen per run, so one build per cache shape serves every
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
-from tests.support import need, shared_cache, texture_set
-from vqtex.golden.fetch import fetch, random_requests
+from tests.support import assert_cached_run, locality_stream, need, shared_cache, texture_set
 from vqtex.golden.memory.cache import CacheShape
 from vqtex.golden.memory.system import Layout, MemoryConfig
-from vqtex.golden.memory.timing import plan, run
-from vqtex.hw.texel_fetch import LATENCY
 from vqtex.sim.backends.memory import run_compiled
 from vqtex.sim.backends.toolchain import ToolchainError
-from vqtex.sim.streams import ready_pattern
 
 BACKENDS = ["cxxrtl", "verilator"]
 #: Caches smaller than the set's index and raw memories (lines are replaced, under waiting references
@@ -41,36 +36,17 @@ def _need(backend):
     need("g++", *(["verilator"] if backend == "verilator" else []))
 
 
-def stream(ts, n, seed):
-    """Random requests with locality: runs of the same request and short walks (what a cache sees)."""
-    rng = np.random.default_rng(seed)
-    req = random_requests(ts, n // 3, seed=seed)
-    req = np.repeat(req, rng.integers(1, 5, len(req)), axis=0)
-    return req[:n]
-
-
 def check(ts, req, cfg, backend, stall, seed):
     """Run on ``backend`` and compare everything with golden; returns the model's dict."""
     got = run_compiled(ts, req, cfg, backend, stall, seed, trace=True)
-    assert (got["responses"] == fetch(ts, *np.asarray(req).T)).all()
-    p = plan(ts, req, cfg)
-    model = run(p, cfg, LATENCY, lambda m: ready_pattern(seed, stall, m))
-    assert (got["accept"] == model["accept"]).all()
-    ar = np.repeat(model["tag"], p.misses) + 1 + np.concatenate([np.arange(m) for m in p.misses.tolist()] or [[]])
-    assert got["ar"] == ar.astype(np.int64).tolist()
-    assert got["addresses"].tolist() == p.address.tolist()
-    assert (got["transfer"] == model["transfer"]).all()
-    assert got["cycles"] == model["cycles"]
-    assert got["backpressure"] == model["stall_cycles"]["output_backpressure"]
-    assert got["fill_waits"] == model["stall_cycles"]["miss"] + model["stall_cycles"]["bandwidth"]
-    return model
+    return assert_cached_run(got, ts, req, cfg, stall, seed)
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_prefetching_equals_golden(backend):
     _need(backend)
     ts = texture_set("yuv_4x4_b12_mip")             # 12-bit indices (straddles) and raw levels
-    req = stream(ts, 3000, seed=5)
+    req = locality_stream(ts, 3000, seed=5)
     for latency, bandwidth, stall in ((1, 16, 0.0), (37, 4, 0.4), (300, 16, 0.2)):
         m = check(ts, req, MemoryConfig(**SMALL, prefetch=16, latency=latency, bandwidth=bandwidth), backend, stall,
                   latency)
@@ -83,7 +59,7 @@ def test_prefetching_equals_golden(backend):
 def test_blocking_equals_golden(backend):
     _need(backend)
     ts = texture_set("yuv_4x4_b12_mip")
-    req = stream(ts, 1500, seed=8)
+    req = locality_stream(ts, 1500, seed=8)
     for latency, stall in ((1, 0.5), (300, 0.0)):
         m = check(ts, req, MemoryConfig(**SMALL, prefetch=1, latency=latency), backend, stall, latency)
         assert m["stall_cycles"]["fifo_full"] > 0
@@ -117,7 +93,7 @@ def test_default_caches_equal_golden():
     ts = encode([image((256, 256), 20), image((256, 256), 21)], block=(2, 2), codebook_size=16, color="rgb",
                 index_bits=12, mipmaps=True, raw_below=64, seed=3)
     assert len(ts.index_words) * 4 > 2 * 16384 and len(ts.raw_words) * 4 > 2 * 4096
-    req = stream(ts, 8000, seed=9)
+    req = locality_stream(ts, 8000, seed=9)
     for latency, stall in ((1, 0.0), (60, 0.3)):
         m = check(ts, req, MemoryConfig(latency=latency), "cxxrtl", stall, latency)
         assert m["bursts"] > (16384 + 4096) // 32 and m["stall_cycles"]["miss"] > 0     # more fills than lines
@@ -132,7 +108,7 @@ def test_axi_slave_refuses_what_it_does_not_hold():
     from vqtex.sim.backends.memory_model_cxx import model_params
     ts = texture_set("yuv_4x4_b12_mip")
     cfg = MemoryConfig(**SMALL, prefetch=16, latency=5)
-    req = stream(ts, 200, seed=1)
+    req = locality_stream(ts, 200, seed=1)
     lib, info, _ = open_design(build_cached(ts, cfg, "cxxrtl"))
     try:
         with pytest.raises(ToolchainError, match="no external memory configured"):

@@ -11,19 +11,14 @@ from __future__ import annotations
 
 import dataclasses
 
-import numpy as np
 import pytest
 
-from tests.support import need, scene_set, shared_cache, texture_set
-from vqtex.golden.fetch import fetch, random_requests
+from tests.support import assert_cached_run, locality_stream, need, scene_set, shared_cache, texture_set
 from vqtex.golden.geometry import Geometry, preset
 from vqtex.golden.memory.cache import CacheShape
 from vqtex.golden.memory.system import Layout, MemoryConfig
-from vqtex.golden.memory.timing import plan, run
 from vqtex.golden.register_map import load_cycles, load_writes
-from vqtex.hw.texel_fetch import LATENCY
 from vqtex.sim.backends.memory import run_phases
-from vqtex.sim.streams import ready_pattern
 
 
 #: The CXXRTL tests' one build: the ``paper`` geometry behind 1 KB and 512-byte caches (32-byte lines,
@@ -37,29 +32,12 @@ def cache():
         yield
 
 
-def stream(ts, n, seed):
-    """Random requests with locality (runs of one request), as tests/sim/backends/test_cached_compiled.py."""
-    rng = np.random.default_rng(seed)
-    req = random_requests(ts, n // 3, seed=seed)
-    return np.repeat(req, rng.integers(1, 5, len(req)), axis=0)[:n]
-
-
 def check_phases(geometry, cfg, phases, backend, stall, seed):
     out = run_phases(geometry, cfg, phases, backend=backend, stall=stall, seed=seed, trace=True)
     assert len(out) == len(phases)
     for (ts, req, layout), got in zip(phases, out):
         layout = layout or Layout.of(ts)
-        assert (got["responses"] == fetch(ts, *np.asarray(req).T)).all()
-        p = plan(ts, req, cfg, layout=layout)
-        model = run(p, cfg, LATENCY, lambda m: ready_pattern(seed, stall, m))
-        assert (got["accept"] == model["accept"]).all()
-        ar = np.repeat(model["tag"], p.misses) + 1 + np.concatenate([np.arange(m) for m in p.misses.tolist()] or [[]])
-        assert got["ar"] == ar.astype(np.int64).tolist()
-        assert got["addresses"].tolist() == p.address.tolist()
-        assert (got["transfer"] == model["transfer"]).all()
-        assert got["cycles"] == model["cycles"]
-        assert got["backpressure"] == model["stall_cycles"]["output_backpressure"]
-        assert got["fill_waits"] == model["stall_cycles"]["miss"] + model["stall_cycles"]["bandwidth"]
+        model = assert_cached_run(got, ts, req, cfg, stall, seed, layout)
         assert got["load_cycles"] == load_cycles(len(load_writes(ts, geometry, layout)))
         assert model["bursts"] > 0
     return out
@@ -70,8 +48,8 @@ def test_topspin_then_town_one_cxxrtl_build():
     fetched, then town's (another codebook, descriptor table, matrix, and a layout 1 MB up)."""
     need("g++")
     a, b = scene_set("topspin"), scene_set("town")
-    out = check_phases(preset("paper"), PAPER, [(a, stream(a, 3000, 1), None),
-                                              (b, stream(b, 3000, 2), Layout.at(b, 0x100000))], "cxxrtl", 0.2, 4)
+    out = check_phases(preset("paper"), PAPER, [(a, locality_stream(a, 3000, 1), None),
+                                              (b, locality_stream(b, 3000, 2), Layout.at(b, 0x100000))], "cxxrtl", 0.2, 4)
     assert min(out[1]["addresses"]) >= 0x100000
 
 
@@ -88,7 +66,7 @@ def test_small_sets_reloaded(backend):
         g = Geometry.of(a).union(Geometry.of(b))
         cfg = MemoryConfig(index_cache=CacheShape(128, 16, 2), raw_cache=CacheShape(64, 16, 2), bus_bytes=16,
                            prefetch=16)
-    phases = [(a, stream(a, 1500, 1), Layout.at(a, 0x3000)), (b, stream(b, 1500, 2), None),
-              (a, stream(a, 1500, 3), None)]
+    phases = [(a, locality_stream(a, 1500, 1), Layout.at(a, 0x3000)), (b, locality_stream(b, 1500, 2), None),
+              (a, locality_stream(a, 1500, 3), None)]
     check_phases(g, dataclasses.replace(cfg, latency=100), phases, backend, 0.3, 4)
     check_phases(g, dataclasses.replace(cfg, kind="dram"), phases[:2], backend, 0.1, 5)
