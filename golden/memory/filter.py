@@ -47,7 +47,7 @@ from .. import filter as spec
 from ..format import TextureSet
 from .arbiter import Arbiter
 from .system import MemoryConfig
-from .timing import ADDRESS_STAGES, LOOKUP_STAGES, plan
+from .timing import ADDRESS_STAGES, LOOKUP_STAGES, accept_and_lookup, plan
 
 __all__ = ["FOOTPRINT_LATENCY", "BLEND_LATENCY", "FETCH_LATENCY", "lane_requests", "run", "run_pixels"]
 
@@ -114,14 +114,7 @@ def run(plans: list, config: MemoryConfig, last: np.ndarray, *, start: int = FOO
     miss_c = bw_c = fifo_c = victim_c = join_c = 0
     K = range(lanes)
     for i in range(n):
-        ai = a[i - 1] + 1 if i else start
-        if i >= La and lk[i - La] > ai:
-            ai = lk[i - La]
-        bi = ai + La
-        if i and lk[i - 1] + 1 > bi:
-            bi = lk[i - 1] + 1
-        if i >= 2 and g[i - 2] + 1 > bi:
-            bi = g[i - 2] + 1
+        ai, bi = accept_and_lookup(i, a, lk, g, La, start)
         lk[i] = bi
         gi = bi + LOOKUP_STAGES
         if i and g[i - 1] + max(1, maxmiss[i - 1]) > gi:

@@ -80,7 +80,7 @@ from ..format import TextureSet
 from .cache import classify
 from .system import Layout, MemoryConfig, references
 
-__all__ = ["ADDRESS_STAGES", "LOOKUP_STAGES", "FRONT_LATENCY", "Plan", "plan", "run", "run_requests", "TexelPipeline", "StreamSink"]
+__all__ = ["ADDRESS_STAGES", "LOOKUP_STAGES", "FRONT_LATENCY", "Plan", "plan", "accept_and_lookup", "run", "run_requests", "TexelPipeline", "StreamSink"]
 
 #: The unit's address stages before the cache block (descriptor, block address).
 ADDRESS_STAGES = 2
@@ -230,6 +230,24 @@ class StreamSink:
         return t
 
 
+
+def accept_and_lookup(i: int, a: list, b: list, g: list, La: int, start: int) -> tuple:
+    """Request (or group) ``i``'s accept and lookup cycles ``(a[i], b[i])`` from its predecessors'
+    (the rules of the module docstring; one definition for :func:`run` and the filter's
+    :func:`golden.memory.filter.run`): ``a[i] >= a[i-1] + 1`` (``start`` for the first),
+    ``>= b[i - La]`` (the address stages move against the lookup); ``b[i] >= a[i] + La``, ``>= b[i-1]
+    + 1``, ``>= g[i-2] + 1`` (the lookup's two places). ``La``: the address stages (0: the cache
+    block alone). Lists of ints, filled up to ``i - 1``."""
+    ai = a[i - 1] + 1 if i else start
+    if La and i >= La and b[i - La] > ai:
+        ai = b[i - La]
+    bi = ai + La
+    if i and b[i - 1] + 1 > bi:
+        bi = b[i - 1] + 1
+    if i >= 2 and g[i - 2] + 1 > bi:
+        bi = g[i - 2] + 1
+    return ai, bi
+
 def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_hint: int = 0,
         address_stages: int = ADDRESS_STAGES, consumer=None) -> dict:
     """Walk the rules of the module docstring over a :class:`Plan`.
@@ -261,14 +279,7 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
 
     for i in range(n):
         # accept, lookup and tag check
-        ai = a[i - 1] + 1 if i else 0
-        if La and i >= La and b[i - La] > ai:
-            ai = b[i - La]
-        bi = ai + La
-        if i and b[i - 1] + 1 > bi:
-            bi = b[i - 1] + 1
-        if i >= 2 and g[i - 2] + 1 > bi:
-            bi = g[i - 2] + 1
+        ai, bi = accept_and_lookup(i, a, b, g, La, 0)
         b[i] = bi
         gi = bi + LOOKUP_STAGES
         if i and g[i - 1] + max(1, misses[i - 1]) > gi:
