@@ -5,9 +5,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from vqtex.golden.fetch import fetch
+from vqtex.golden.fetch import fetch, random_requests
+from vqtex.golden.memory.timing import plan, run
 from vqtex.hw.texel_fetch import LATENCY, REGISTERS
 from vqtex.sim.backends import simulate
+from vqtex.sim.streams import ready_pattern
 
 
 def assert_same(a, b, what=""):
@@ -38,7 +40,6 @@ def compare_with_golden(ts, req, backend, **kw):
 
 def locality_stream(ts, n: int, seed: int) -> np.ndarray:
     """``n`` random requests with locality (runs of one request, 1-4 long): what a cache sees."""
-    from vqtex.golden.fetch import random_requests
     rng = np.random.default_rng(seed)
     req = random_requests(ts, n // 3, seed=seed)
     return np.repeat(req, rng.integers(1, 5, len(req)), axis=0)[:n]
@@ -50,8 +51,6 @@ def assert_cached_run(got: dict, ts, req, cfg, stall: float, seed: int, layout=N
     transfer, the cycles, backpressure and fill waits of ``golden.memory.timing.run`` under the
     same ready pattern. ``layout``: where the set sits (``Layout.of(ts)`` when None). Returns the
     model's dict."""
-    from vqtex.golden.memory.timing import plan, run
-    from vqtex.sim.streams import ready_pattern
     assert (got["responses"] == fetch(ts, *np.asarray(req).T)).all()
     p = plan(ts, req, cfg, **({} if layout is None else {"layout": layout}))
     model = run(p, cfg, LATENCY, lambda m: ready_pattern(seed, stall, m))
