@@ -26,10 +26,6 @@ from .descriptor import as_geometry
 from .features import Features
 from .pipeline import ADVANCE_COPIES, LinkLayout, RGBALayout, addr_bits
 
-#: The copies of ``advance`` (other than the codebook ROM's own) that enable the codebook banks'
-#: copies of the word picks' selects, bank ``k`` on ``PICK_COPIES[k % 5]``.
-PICK_COPIES = ("color_matrix", "skid", "address", "side", "index_reader")
-
 __all__ = ["BackEnd"]
 
 #: The codebook ROM's inputs from the side fields, in the order they are connected.
@@ -102,8 +98,7 @@ class BackEnd(wiring.Component):
             off_bits=widths["texel_off"], bank_depth=self._bank_depth, features=feat,
             color_bits=widths["color"], entries=g.codebook_entries, entry_bytes=g.entry_bytes,
             raw_depth=g.raw_words, load=load, raw_port=self._raw_port,
-            index_bits=len(link.index) if self._summed else None,
-            pick_enables=len(PICK_COPIES) if load is not None else 0)
+            index_bits=len(link.index) if self._summed else None)
         if self._raw_port:
             m.d.comb += rom.raw_in.eq(self.raw_in)
         m.submodules.color_matrix = cm = ColorMatrix(
@@ -123,8 +118,6 @@ class BackEnd(wiring.Component):
         en = ({name: link.copies[k] for k, name in enumerate(ADVANCE_COPIES)} if load is not None
               else dict.fromkeys(ADVANCE_COPIES, link.advance))
         m.d.comb += rom.en.eq(en["codebook_rom"])
-        if load is not None:                # the picks' selects, a copy per bank (up to five)
-            m.d.comb += rom.en_picks.eq(Cat(*(en[name] for name in PICK_COPIES)))
         # Stages 12-14: colour matrix.
         m.d.comb += [
             cm.samples.eq(rom.samples), cm.color.eq(rom.color_out), cm.en.eq(en["color_matrix"]),

@@ -159,12 +159,6 @@ class CodebookROM(wiring.Component):
         Byte offsets of this sub-level's planes in the entry.
     en : In(1)
         Pipeline advance.
-    en_picks : In(pick_enables)
-        Only with ``pick_enables``: copies of ``en`` (equal to it whenever a stage holds data,
-        :func:`hw.pipeline.advance_copies`), each enabling its own copy of the word picks' selects
-        for the codebook banks ``k`` with ``k % pick_enables`` its number, so that no one register
-        drives the picks of every bank (copies of a register with one enable would be merged by
-        synthesis).
     samples : Out(SamplesLayout)
         Registered raw samples.
     color_out : Out(2)
@@ -174,7 +168,7 @@ class CodebookROM(wiring.Component):
     def __init__(self, codebook, raw_words, *, cb_bits: int, raw_bits: int, off_bits: int,
                  bank_depth: int = BANK_DEPTH, features: Features | None = None, color_bits: int = 2,
                  entries: int | None = None, entry_bytes: int | None = None, raw_depth: int | None = None,
-                 load=None, raw_port: bool = False, index_bits: int | None = None, pick_enables: int = 0):
+                 load=None, raw_port: bool = False, index_bits: int | None = None):
         codebook = np.asarray(codebook, dtype=np.uint8)
         if codebook.ndim != 2:
             raise ValueError("codebook memory must be a 2-D uint8 array")
@@ -194,7 +188,6 @@ class CodebookROM(wiring.Component):
         if color_bits == 2 and max(self._features.color_codes, default=0) > 3:
             raise ValueError("PowerVR2 colour formats need color_bits=3")
         self._summed = index_bits is not None
-        self._pick_enables = int(pick_enables)
         super().__init__({
             "index": In(index_bits if self._summed else self._features.index_bits),
             "cb_base": In(cb_bits),
@@ -208,7 +201,6 @@ class CodebookROM(wiring.Component):
             "u_off": In(off_bits),
             "v_off": In(off_bits),
             "en": In(1),
-            **({"en_picks": In(self._pick_enables)} if self._pick_enables else {}),
             "samples": Out(SamplesLayout),
             "color_out": Out(2),
             **({} if load is None else {"load": In(load), "load_data": Out(DATA_WIDTH)}),
@@ -335,32 +327,17 @@ class CodebookROM(wiring.Component):
         # words; no shifter). The entry is padded with three copies of its last byte, so that every
         # byte address up to last + 3 reads what the golden model's clamp reads, then with zeros.
         windows, u_words, v_words = [], [], []
-        selects = {}                        # enable number -> that copy of the selects
-
-        def selects_of(k):
-            if not self._pick_enables:
-                return start, ustart, vstart
-            e = k % self._pick_enables
-            if e not in selects:
-                sel = Cat(f1.start[2:], *((f1.ustart[2:], f1.vstart[2:]) if yuv else ()))
-                r = enabled_register(m, self.en_picks[e], sel, f"selects{e}")
-                w = len(f1.start) - 2
-                selects[e] = (Cat(C(0, 2), r[:w]), Cat(C(0, 2), r[w:2 * w]) if yuv else None,
-                              Cat(C(0, 2), r[2 * w:]) if yuv else None)
-            return selects[e]
-
         for k in range(codebook.banks if feat.compressed else 0):
-            start_k, ustart_k, vstart_k = selects_of(k)
             entry = codebook.data[k]
             last = entry[(nbytes - 1) * 8:]
             padded = Cat(entry, last, last, last)
             words = [Cat(padded[32 * n:32 * n + 32], C(0, max(0, 32 * n + 32 - len(padded))))
                      for n in range(nwords - 1)] + [C(0, 32)]
-            windows.append(reg(pick([Cat(words[n], words[n + 1]) for n in range(nwords - 1)], start_k[2:]),
+            windows.append(reg(pick([Cat(words[n], words[n + 1]) for n in range(nwords - 1)], start[2:]),
                                f"window{k}"))
             if yuv:
-                u_words.append(reg(pick(words, ustart_k[2:]), f"u_word{k}"))
-                v_words.append(reg(pick(words, vstart_k[2:]), f"v_word{k}"))
+                u_words.append(reg(pick(words, ustart[2:]), f"u_word{k}"))
+                v_words.append(reg(pick(words, vstart[2:]), f"v_word{k}"))
         bank = reg(codebook.bank, "bank_window") if feat.compressed else None
         raw_word = reg(raw.word, "raw_window") if feat.raw else None
         low = {"start": start[:2]}
