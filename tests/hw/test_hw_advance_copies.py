@@ -85,3 +85,23 @@ def test_synthesis_keeps_every_copy(tmp_path):
     ffs = [c for c in top["cells"].values() if c["type"] == "TRELLIS_FF"]
     # advance, its N copies, and the N registers they enable
     assert len(ffs) == 1 + N + N, len(ffs)
+
+
+def test_loadable_unit_with_many_banks_under_backpressure():
+    """The loadable unit on its copies of ``advance`` with 4-word banks (several codebook banks,
+    the bank select behind the block RAMs) and the output stalled 40% of the time: every response
+    bit for bit as golden's, cycles as its model's."""
+    from vqtex.golden.fetch import fetch, random_requests
+    from vqtex.golden.geometry import Geometry
+    from vqtex.sim.backends import pysim
+    from vqtex.sim.backends.interface import simulate
+    from ..support import texture_set
+
+    ts = texture_set("yuv_4x4_b12_mip")
+    g = Geometry.of(ts)
+    assert g.codebook_entries > 3 * 4           # at least four banks of 4 entries
+    req = random_requests(ts, 120, seed=5)
+    (r,) = pysim.run_phases(g, [(ts, req)], stall=0.4, seed=3, bank_depth=4)
+    assert np.array_equal(r.responses, fetch(ts, req[:, 0], req[:, 1], req[:, 2], req[:, 3]))
+    golden = simulate(ts, req, backend="golden", stall=0.4, seed=3)
+    assert (r.cycles, r.stall_cycles) == (golden.cycles, golden.stall_cycles)
