@@ -46,7 +46,7 @@ import numpy as np
 from .. import filter as spec
 from ..format import TextureSet
 from .arbiter import Arbiter
-from .system import MemoryConfig
+from .system import Layout, MemoryConfig
 from .timing import ADDRESS_STAGES, LOOKUP_STAGES, accept_and_lookup, plan
 
 __all__ = ["FOOTPRINT_LATENCY", "BLEND_LATENCY", "FETCH_LATENCY", "lane_requests", "run", "run_pixels"]
@@ -185,13 +185,15 @@ def run(plans: list, config: MemoryConfig, last: np.ndarray, *, start: int = FOO
 
 
 def run_pixels(ts: TextureSet, pixels: dict, config: MemoryConfig, lanes: int, frac: int,
-               ideal: bool = False) -> dict:
-    """:func:`lane_requests`, a :func:`golden.memory.timing.plan` per lane, then :func:`run`; adds
+               ideal: bool = False, layout: Layout | None = None) -> dict:
+    """:func:`lane_requests`, a :func:`golden.memory.timing.plan` per lane (``layout``: where the set
+    lies in external memory, default ``Layout.of(ts)``; the loadable filter's base registers), then
+    :func:`run`; adds
     ``pixels``, ``groups``, ``pixels_per_clock``, ``on_chip_cycles`` (the on-chip filter's ``groups +
     23``), ``references``/``hit_rate`` per cache (over all lanes), ``bytes_per_pixel`` and
     ``bytes_per_texel`` (per texel slot fetched). ``ideal``: every reference hits."""
     req, last = lane_requests(ts, pixels, lanes, frac)
-    plans = [plan(ts, req[k], config, ideal=ideal) for k in range(lanes)]
+    plans = [plan(ts, req[k], config, ideal=ideal, layout=layout) for k in range(lanes)]
     out = run(plans, config, last)
     m, groups = int(last.sum()), len(last)
     refs = [sum(p.references[c] for p in plans) for c in (0, 1)]

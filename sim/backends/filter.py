@@ -81,6 +81,8 @@ class FilterResult:
     bank_conflicts: int = 0
     #: Through the memory system (:mod:`sim.backends.filter_memory`): bursts, bytes, hit rates.
     memory: dict | None = None
+    #: A loadable filter's load: the cycles of the bus writes before the pixels (None: baked).
+    load_cycles: int | None = None
 
     @property
     def pixels_per_clock(self) -> float:
