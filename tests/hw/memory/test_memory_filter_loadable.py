@@ -108,3 +108,76 @@ def test_refusals():
     from vqtex.golden.register_map import LoadError
     with pytest.raises(LoadError, match="codebook"):
         simulate_cached_filter(ts, px, CONFIG, backend="pysim", geometry=small)
+
+
+def test_drain_rule_with_misses_in_flight():
+    """A host reloads the set at another place in external memory 20 cycles into a stream whose
+    references wait on 100-cycle fills: no write is accepted until every pixel accepted before it
+    has left the filter; no pixel enters during the load; every colour is golden's, in order; the
+    bursts before the load read the old place, those after it the new one. (Without the pixel count
+    in the drain rule the writes go in, and empty the caches, while references wait: this fails.)"""
+    from vqtex.hw.address import COORD_BITS
+    from vqtex.sim.backends.axi_memory import AxiMemory
+    from vqtex.sim.backends.design import FIELDS
+    ts = filter_set()
+    g = Geometry.of(ts)
+    old, new = Layout.of(ts), Layout.at(ts, 0x10000)
+    image = bytearray(new.image(ts))                # one external memory holding the set twice
+    image[:old.end] = old.image(ts)[:old.end]
+    cfg = MemoryConfig(index_cache=CacheShape(128, 16, 2), raw_cache=CacheShape(64, 16, 2), prefetch=4,
+                       latency=100, bus_bytes=16)
+    dut = CachedTextureFilter(None, cfg, lanes=2, tag_width=16, geometry=g, loadable=True)
+    px, frac = _pixels(ts, 24, 9)
+    shift = spec.coordinate_frac_bits(COORD_BITS) - frac
+    rows = np.stack([np.asarray(px[f], np.int64) << (shift if f in ("s", "t") else 0) for f in FIELDS], 1)
+    packed = pysim.pack_rows(dut.i.p.shape(), FIELDS, rows, 16)
+    n = len(rows)
+    rlay = dut.o.p.shape()
+    slave = AxiMemory(bytes(image), cfg.make_memory(), cfg.bus_bytes)
+    first = load_writes(ts, g, old).astype(np.int64)
+    log = {"accept": [], "transfer": [], "rgba": [], "ack": []}
+
+    async def bench(ctx):
+        await pysim.load_over_bus(ctx, dut.bus, first)
+        n_in = n_out = cycle = 0
+        slave.start(ctx, dut.axi)
+        ctx.set(dut.o.ready, 1)
+        while n_out < n:
+            assert cycle < 30000, "hung"
+            ctx.set(dut.i.valid, int(n_in < n))
+            if n_in < n:
+                ctx.set(dut.i.p.as_value(), packed[n_in])
+            slave.step(ctx, dut.axi, cycle)
+            if ctx.get(dut.o.valid):
+                p = ctx.get(dut.o.p.as_value())
+                assert (p >> rlay["tag"].offset) & 0xFFFF == n_out
+                log["rgba"].append([(p >> rlay[c].offset) & 255 for c in "rgba"])
+                log["transfer"].append(cycle)
+                n_out += 1
+            if n_in < n and ctx.get(dut.i.ready):
+                log["accept"].append(cycle)
+                n_in += 1
+            if ctx.get(dut.bus.ack):
+                log["ack"].append(cycle)
+            cycle += 1
+            await ctx.tick()
+
+    async def host(ctx):                    # the reload, 20 cycles into the pixels
+        await ctx.tick().repeat(load_cycles(len(first)) + 20)
+        await pysim.load_over_bus(ctx, dut.bus, load_writes(ts, g, new).astype(np.int64))
+
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    sim.add_testbench(bench)
+    sim.add_testbench(host)
+    sim.run()
+    assert log["ack"], "the reload never got in"
+    first_ack = min(log["ack"])
+    k = sum(t < first_ack for t in log["accept"])      # pixels accepted before the writes
+    assert 0 < k < n and len(log["rgba"]) == n
+    assert max(log["transfer"][:k]) < first_ack        # drained first
+    assert min(log["accept"][k:]) > max(log["ack"])      # none entered during the load
+    assert (np.array(log["rgba"], np.uint8) == golden_colors(ts, px, frac)).all()
+    ar, addresses = np.array(slave.ar), np.array(slave.addresses)
+    assert (addresses[ar < first_ack] < 0x10000).all() and (addresses[ar > max(log["ack"])] >= 0x10000).all()
+    assert (ar > max(log["ack"])).any()
