@@ -64,10 +64,10 @@ def simulate_cached_filter(ts, pixels: dict, config, *, backend: str = "golden",
         from vqtex.golden.register_map import load_cycles, load_writes
         load = load_cycles(len(load_writes(ts, geometry, layout or Layout.of(ts))))
     if backend == "golden":
-        if stall:
-            raise ValueError("the filter's cycle model through memory has no output backpressure: stall 0")
         from vqtex.golden.memory.filter import run_pixels
-        model = run_pixels(ts, p, config, lanes, frac, layout=layout)
+        from ..streams import ready_pattern
+        pattern = (lambda m: ready_pattern(seed, stall, m)) if stall else None
+        model = run_pixels(ts, p, config, lanes, frac, layout=layout, ready_pattern=pattern)
         sc = model["stall_cycles"]
         memory = {k: model[k] for k in ("bursts", "memory_bytes", "bytes_per_pixel", "bytes_per_texel",
                                         "references", "hit_rate", "on_chip_cycles", "ar")}
@@ -76,7 +76,8 @@ def simulate_cached_filter(ts, pixels: dict, config, *, backend: str = "golden",
         memory["configuration"] = config.describe()
         return FilterResult(golden_colors(ts, p, frac), model["cycles"], model["pixels"],
                             texel_slots(p["mode"], lanes), lanes, LATENCY,
-                            {"output_backpressure": 0, "memory": memory["fill_waits"]}, 0, memory, load)
+                            {"output_backpressure": int(sc["output_backpressure"]), "memory": memory["fill_waits"]}, 0,
+                            memory, load)
     if backend not in BACKENDS:
         raise ValueError(f"the filter through memory runs on {', '.join(BACKENDS)}, not on {backend}")
     if geometry is not None:

@@ -372,9 +372,6 @@ def cmd_render(args) -> int:
             if bad:
                 raise CliError(f"--filter-in-rtl --memory external: the filter's lanes read through their own caches, "
                                f"not with {bad[0]}")
-            if args.backend == "golden" and args.stall:
-                raise CliError("--filter-in-rtl --memory external: the golden cycle model has no output backpressure "
-                               "(--stall needs --backend pysim or cxxrtl)")
         elif memory is not None:
             bad = [opt for opt, on in (("--filter-in-rtl", args.filter_in_rtl), ("--compare-fixed", args.compare_fixed),
                                        ("--fovea", fovea is not None), ("--one-port", args.one_port),

@@ -6,7 +6,8 @@ slave holding each set's memory image at the layout its base registers name; eve
 equal golden's, and the cycles, every AR's cycle, the bytes read and the lanes' fill waits equal the
 cycle model of the cached filter (golden.memory.filter) with that layout; each load takes golden's
 load_cycles. CXXRTL: topspin's then town's pixels on one build of the ``paper`` geometry; Verilator:
-small sets, the first reloaded after the second, fixed latency and DDR3."""
+small sets, the first reloaded after the second, fixed latency and DDR3; with output backpressure
+(the model's ready pattern) on both."""
 
 from __future__ import annotations
 
@@ -50,14 +51,14 @@ def frame_pixels(name, n, mode="bilinear"):
     return ts, {k: np.asarray(v)[start:start + n] for k, v in px.items()}, sampler.frac
 
 
-def check_phases(geometry, cfg, phases, backend, lanes):
-    out = run_phases(geometry, cfg, phases, backend=backend, lanes=lanes)
+def check_phases(geometry, cfg, phases, backend, lanes, stall=0.0, seed=0):
+    out = run_phases(geometry, cfg, phases, backend=backend, lanes=lanes, stall=stall, seed=seed)
     assert len(out) == len(phases)
     for (ts, px, layout, frac), got in zip(phases, out):
         model = simulate_cached_filter(ts, px, cfg, backend="golden", lanes=lanes, frac=frac, geometry=geometry,
-                                       layout=layout)
+                                       layout=layout, stall=stall, seed=seed)
         assert (got.colors == golden_colors(ts, px, frac)).all()
-        assert got.cycles == model.cycles
+        assert got.cycles == model.cycles and got.stall_cycles == model.stall_cycles
         assert got.memory["ar"].tolist() == model.memory["ar"].tolist()
         assert got.memory["memory_bytes"] == model.memory["memory_bytes"]
         assert got.memory["fill_waits"] == model.memory["fill_waits"] > 0
@@ -73,7 +74,8 @@ def test_topspin_then_town_one_cxxrtl_build():
     need("g++")
     a, pa, fa = frame_pixels("topspin", 1000)
     b, pb, fb = frame_pixels("town", 600, "trilinear")
-    check_phases(preset("paper"), PAPER, [(a, pa, None, fa), (b, pb, Layout.at(b, 0x100000), fb)], "cxxrtl", 1)
+    check_phases(preset("paper"), PAPER, [(a, pa, None, fa), (b, pb, Layout.at(b, 0x100000), fb)], "cxxrtl", 1,
+                 stall=0.2, seed=5)
 
 
 def test_verilator_small_sets_reloaded():
@@ -91,5 +93,5 @@ def test_verilator_small_sets_reloaded():
 
     (pa, fa), (pb, fb) = pixels(a, 300, 1), pixels(b, 300, 2)
     phases = [(a, pa, Layout.at(a, 0x3000), fa), (b, pb, None, fb), (a, pa, Layout.at(a, 0x44, 0x9000), fa)]
-    check_phases(g, cfg, phases, "verilator", 4)
+    check_phases(g, cfg, phases, "verilator", 4, stall=0.3, seed=4)
     check_phases(g, dataclasses.replace(cfg, kind="dram"), phases[:2], "verilator", 4)
