@@ -26,8 +26,8 @@ its slots (``k + lanes g`` of every pixel's group ``g``) through its own index a
   its line is filled the cycle after its last beat;
 - ``p_k[n]`` (lane k's data read) ``>= g[n] + 1``, ``>= p_k[n-1] + 1``, ``>= e[n-1]``, and ``>=``
   the fills of its lines;
-- ``e[n]`` (the texel pipelines take group n): ``max(max_k p_k[n] + 1, e[n-1] + 1)`` (``o.ready``
-  high always: every cycle advances);
+- ``e[n]`` (the texel pipelines take group n): ``max(max_k p_k[n] + 1, e[n-1] + 1)`` (with
+  ``o.ready`` high always every cycle advances; output backpressure: below);
 - the lanes' outputs ``T[n] = e[n] + LATENCY`` (the texel pipeline's), and pixel m's colour
   transfers ``BLEND_LATENCY`` cycles after its last group's: ``cycles = T[last] + BLEND_LATENCY + 1``.
 
@@ -35,7 +35,13 @@ With every reference a hit: ``cycles = groups + FOOTPRINT_LATENCY + ADDRESS_STAG
 + 2 + LATENCY + BLEND_LATENCY`` = ``groups + 28`` (the on-chip filter: ``groups + 23``). With one lane the rules are
 :func:`golden.memory.timing.run`'s exactly (the tests hold them equal).
 
-Not modelled: output backpressure (``o.ready`` low). Why a loop over groups: as in
+Output backpressure (``run(..., ready_pattern=)``): ``o.ready`` low holds the blend (its output
+register, then its stages: :class:`BlendStages`, stepped cycle by cycle), whose ``i.ready`` is the
+texel pipelines' ``o.ready``; the texel pipelines then take group n as
+:class:`golden.memory.timing.TexelPipeline` says (``e[n]``: the first advancing cycle; their
+``advance`` is registered), the data read keeps ``p_k[n] >= e[n-1]``, and each colour transfers
+when the blend's output register holds it and ``o.ready`` is high. With ``o.ready`` high always the
+two give the same cycles (a test holds them equal). Why a loop over groups: as in
 :mod:`golden.memory.timing`, each group's times chain to its predecessors' and to the memory's state.
 """
 

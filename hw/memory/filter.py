@@ -32,13 +32,13 @@ Every accepted write empties every lane's caches (each reader reset as the write
 unit). The pixels' timing is the baked filter's (:func:`golden.memory.filter.run` with the
 bases' layout); a load of N writes takes ``golden.register_map.load_cycles(N)``.
 
-Timing (``o.ready`` high): :func:`golden.memory.filter.run`, cycle for cycle; with every reference a
+Timing: :func:`golden.memory.filter.run` (with output backpressure too), cycle for cycle; with every reference a
 hit, one group of ``lanes`` texel slots per clock (a bilinear pixel per clock with 4 lanes) and
 ``LATENCY`` = 27 cycles from a one-group pixel's acceptance to its colour (the on-chip filter's 23,
 plus the address stages, the tag check and the data read). A miss in any lane holds the group
 (the pixel) until its line is filled; the hits behind it keep being checked, up to each reader's
 FIFO depth (``config.prefetch``; 1 is blocking). Colours leave in order, with stream backpressure
-throughout (not modelled by the cycle model).
+throughout (the cycle model's ``ready_pattern``).
 
 Arguments
 ---------

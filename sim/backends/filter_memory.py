@@ -2,8 +2,8 @@
 ``simulate_cached_filter(ts, pixels, config, backend=..., lanes=...) -> FilterResult`` with ``memory``.
 
 - ``golden``: colours from :func:`sim.backends.filter.golden_colors`, cycles from the exact cycle
-  model :func:`golden.memory.filter.run_pixels` (``stall`` must be 0: output backpressure is not
-  modelled);
+  model :func:`golden.memory.filter.run_pixels` (``stall``: output backpressure from
+  :func:`sim.streams.ready_pattern`, the RTL backends' pattern);
 - ``pysim``: :class:`hw.memory.filter.CachedTextureFilter` in Amaranth's simulator through the
   filter's test bench (:func:`sim.backends.pysim.run_stream`), its AXI master answered each cycle by
   :class:`sim.backends.axi_memory.AxiMemory` from the same memory model: tiny cases;
