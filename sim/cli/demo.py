@@ -32,8 +32,8 @@ def cmd_demo(args) -> int:
     from vqtex.golden.render.scene import load_scene
     t_start = time.perf_counter()
     memory = memory_config(args)
-    if memory is not None and args.unit is not None:
-        raise CliError("--memory external is the specialised baked unit behind caches: no --unit")
+    if memory is not None and args.unit not in (None, "loadable"):
+        raise CliError(f"--memory external is the cached unit, baked or loadable: no --unit {args.unit}")
     with Outputs() as outs:
         out_dir = outs.folder(args.out_dir)
         scene = load_scene("topspin")
@@ -42,7 +42,7 @@ def cmd_demo(args) -> int:
                                      for n in ("topspin.vqt", "report.json", COMPARE_NAME))
         frame_paths = {f: outs.add(os.path.join(out_dir, f"topspin_{f:04d}.png")) for f in frames}
         images = [img for img, _ in scene.load_textures()]
-        resolve(args, "unit", "specialised", args.backend != "golden",
+        resolve(args, "unit", "specialised", args.backend != "golden" or (memory is not None and args.unit == "loadable"),
                 "chooses the RTL texel-fetch unit: it needs an RTL --backend (pysim, cxxrtl, verilator)")
         t0 = time.perf_counter()
         ts = encode_scene(scene, images)
@@ -56,7 +56,7 @@ def cmd_demo(args) -> int:
         report = _report(args, ts, per_frame, mismatches, encode_s)
         report["unit"] = args.unit
         if memory is not None:
-            report["unit"] = "cached"
+            report["unit"] = "loadable cached" if geometry is not None else "cached"
             report["memory"] = memory_summary(memory, per_frame)
         if geometry is not None:
             report["geometry"] = geometry.to_dict()
