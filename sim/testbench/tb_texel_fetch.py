@@ -383,17 +383,18 @@ async def _start(dut, memory_bytes: int = 0):
 
 def placements(sets: list, rng) -> list:
     """Where the host puts each load's set in external memory (the loadable cached unit; its
-    ``INDEX_BASE`` and ``RAW_BASE``): ``Layout.at`` with the index base a few index words past 4 KB
-    (in general not on a cache line) and the raw base a few words past the index memory, both moving
-    from one load to the next while the regions overlap: the host reuses its buffer, so a line the
-    caches kept from the previous load holds other bytes at the same address, and only emptied caches
-    give golden's texels and golden's bursts."""
+    ``INDEX_BASE`` and ``RAW_BASE``): ``Layout.at`` with the index base an odd number of index words
+    past 4 KB and the raw base an odd number of 4-byte words past the next 64-byte boundary after the
+    index memory (so neither is on a cache line of two words or more), both moving from one load to
+    the next while the regions overlap: the host reuses its buffer, so a line the caches kept from
+    the previous load holds other bytes at the same address, and only emptied caches give golden's
+    texels and golden's bursts."""
     out = []
     for k, ts in enumerate(sets):
         wb = ts.word_bits // 8
-        index_base = 4096 + wb * int(1 + 8 * k + rng.integers(0, 8))
+        index_base = 4096 + wb * int(1 + 8 * k + 2 * rng.integers(0, 4))
         index_end = index_base + len(ts.index_words) * wb
-        raw_base = -(-index_end // 4) * 4 + 4 * int(1 + 8 * k + rng.integers(0, 8))
+        raw_base = -(-index_end // 64) * 64 + 4 * int(1 + 8 * k + 2 * rng.integers(0, 4))
         out.append(Layout.at(ts, index_base, raw_base))
     return out
 
