@@ -2,7 +2,10 @@
 
 Encodes the bundled textures of the built-in ``topspin`` scene, renders a few frames with the golden
 model and with the compiled RTL, checks they are identical, writes the frames, the texture set and a
-report, and prints a summary. The files appear together when the demo succeeds, or not at all
+report, and prints a summary. ``--unit``/``--geometry`` choose the RTL unit (the loadable one loads
+the set over its bus before each frame); ``--memory external`` puts the index map and raw levels
+behind caches (the baked cached unit, or with ``--unit loadable`` the loadable cached unit, whose
+load writes the base registers; the report's ``unit`` is ``cached`` or ``loadable cached``). The files appear together when the demo succeeds, or not at all
 (:class:`~vqtex.sim.cli.common.Outputs`): a new output folder appears with one rename.
 """
 
@@ -97,8 +100,8 @@ def _summary(args, scene, frames, report, per_frame, mismatches) -> str:
     else:
         rtl = (f"  RTL ({args.backend}, {report['unit']} unit) frames identical to golden: "
                f"{'yes' if not mismatches else 'NO ' + str(mismatches)}")
-        if report.get("load_cycles_per_frame") is not None:
-            rtl += f"\n  loaded over the bus port before each frame: {report['load_cycles_per_frame']} cycles"
+    if report.get("load_cycles_per_frame") is not None:
+        rtl += f"\n  loaded over the bus port before each frame: {report['load_cycles_per_frame']} cycles"
     return "\n".join([
         f"vqtex demo: topspin, {len(frames)} frames {scene.width}x{scene.height}, trilinear mipmapping",
         "  textures: " + ", ".join(f"{n} {r:.1f}:1" for n, r in report["texture_rates"].items())
