@@ -4,13 +4,22 @@ Run it with ``python run_tb.py`` beside it (``SIM=icarus`` or ``SIM=verilator``;
 it does, in one cocotb test, ``texel_fetch_against_golden``:
 
 1. **Reset** (``rst`` high for three clock edges; nothing is driven at time 0, see :func:`_start`).
-2. **Load** (the loadable unit only): every bus write of ``golden.register_map.load_writes(set,
+2. **Load** (the loadable units only): every bus write of ``golden.register_map.load_writes(set,
    geometry)`` (colour matrix, every descriptor row, the index, codebook and raw memories) through the
    ``bus_*`` Wishbone port by cocotbext-wishbone's ``WishboneMaster``; every write must be acked.
+   Then the **port check** (:meth:`Host.check_port`): reads of the control registers and a few
+   words answer ``golden.register_map.expected_reads``, addresses beyond the map answer ``err``.
    The baked units hold the set in their ROMs already (the bench checks the set is the one baked in).
-   **Memory** (the external-memory unit, ``unit`` ``external``): cocotbext-axi's ``AxiRamRead``
-   answers the ``axi_*`` master from the set's memory image (``golden.memory.system.Layout.image``:
-   the index map at 0, the raw levels from the next 4 KB), with its own ``arready`` and R timing.
+   **Memory** (the external-memory units, ``memory`` in the configuration): cocotbext-axi's
+   ``AxiRamRead`` answers the ``axi_*`` master, with its own ``arready`` and R timing, from the set's
+   memory image (``golden.memory.system.Layout.image``): the baked cached unit's at ``Layout.of``
+   (the index map at 0, the raw levels from the next 4 KB); the loadable cached unit's where the
+   bench puts it (:func:`placements`) and tells the unit by the ``INDEX_BASE``/``RAW_BASE`` writes
+   of its load.
+   **Several loads** (the loadable units): steps 2-5 run for each set given (``VQTEX_TB_SET``, a
+   path list) in turn, in one simulation; the loadable cached unit given one set loads it twice, the
+   second time at other, overlapping bases (:func:`loads`), so a line kept from the first load
+   would hold other bytes.
 3. **Random phase**: ``requests`` requests; every bin the set can reach (``vqtex.sim.testbench.bins``)
    gets ``per_bin`` requests drawn from its blocks, the rest are ``golden.fetch.random_requests``,
    shuffled. The **driver** offers them on ``i_*`` with random idle cycles (``gap``), holding valid
@@ -28,7 +37,8 @@ it does, in one cocotb test, ``texel_fetch_against_golden``:
    external-memory unit: every AR is an INCR burst of the bus width that stays inside a 4 KB page
    and inside the memory image (checked at its handshake; AxiRamRead itself asserts the 4 KB rule
    but wraps an address past its size, so the bench checks that), and the bursts are exactly the
-   golden caches' misses of the whole stream, in order (``golden.memory.timing.plan``: the lines,
+   golden caches' misses of the stream since the load, in order (``golden.memory.timing.plan`` with
+   the load's layout: the lines,
    each read once while it stays cached); its latency is a lower bound (``latency``, every
    reference a hit), a miss takes what the memory takes.
 6. **Coverage** (cocotb-coverage): cover points colour, index width, straddle, level group, stall and
@@ -40,8 +50,9 @@ it does, in one cocotb test, ``texel_fetch_against_golden``:
 
 Configuration: ``tb_config.json`` beside this file (written by the export), overridden by the
 environment the runner sets: ``VQTEX_TB_REQUESTS``, ``VQTEX_TB_SEED``, ``VQTEX_TB_STALL``,
-``VQTEX_TB_GAP``, ``VQTEX_TB_PER_BIN``, ``VQTEX_TB_SET`` (another texture set: the loadable unit
-loads it; a baked unit refuses any set but its own), ``VQTEX_TB_REPORT`` (the coverage JSON).
+``VQTEX_TB_GAP``, ``VQTEX_TB_PER_BIN``, ``VQTEX_TB_SET`` (other texture sets, ``os.pathsep``
+between them: the loadable unit loads each in turn; a baked unit refuses any set but its own),
+``VQTEX_TB_REPORT`` (the coverage JSON).
 """
 
 from __future__ import annotations
@@ -413,7 +424,7 @@ class Host:
         self.wb = WishboneMaster(dut, "bus", dut.clk, width=32, timeout=BUS_TIMEOUT, signals_dict=self.SIGNALS)
         self.geometry, self.rmap = geometry, RegisterMap(geometry, external=external)
 
-    async def load(self, ts: TextureSet, layout, log) -> int:
+    async def load(self, ts: TextureSet, name: str, layout, log) -> int:
         """Every write of ``load_writes(ts, geometry, layout)``; each must be acked. Returns their number."""
         from cocotbext.wishbone.driver import WBOp
         from vqtex.golden.register_map import load_writes
@@ -422,7 +433,7 @@ class Host:
         results = await self.wb.send_cycle(ops)
         refused = [f"0x{int(r.adr):x}" for r in results if int(r.ack) != 1]
         assert len(results) == len(ops) and not refused, f"bus load: {len(refused)} write(s) not acked: {refused[:8]}"
-        log.info("loaded %s: %d Wishbone writes, all acked%s", getattr(ts, "_tb_name", "the set"), len(ops),
+        log.info("loaded %s: %d Wishbone writes, all acked%s", name, len(ops),
                  f"; index base 0x{layout.index_base:x}, raw base 0x{layout.raw_base:x}" if layout else "")
         return len(ops)
 
@@ -494,12 +505,12 @@ def loads(cfg: dict, sets: list) -> list:
 @cocotb.test()
 async def texel_fetch_against_golden(dut):
     cfg = settings()
-    sets = []
+    sets, names = [], {}
     for path in cfg["set_paths"]:
         ts = TextureSet.load(path)
         _check_set(ts, cfg, path)
-        ts._tb_name = os.path.basename(path)
         sets.append(ts)
+        names[id(ts)] = os.path.basename(path)
     run = loads(cfg, sets)
     rng = np.random.default_rng(cfg["seed"])
     cands = [candidates(ts) for ts in run]
@@ -523,12 +534,12 @@ async def texel_fetch_against_golden(dut):
 
     per_load, closure_total, random_total, after_random = [], 0, 0, set()
     for k, (ts, layout, cand) in enumerate(zip(run, layouts, cands)):
-        entry = {"set": ts._tb_name}
+        entry = {"set": names[id(ts)]}
         if ram is not None:                 # the host writes the set's bytes where its bases say
             ram.write(layout.index_base, layout.image(ts)[layout.index_base:layout.end])
             entry.update(index_base=layout.index_base, raw_base=layout.raw_base)
         if host is not None:
-            entry["writes"] = await host.load(ts, layout if external else None, dut._log)
+            entry["writes"] = await host.load(ts, entry["set"], layout if external else None, dut._log)
             entry["port"] = await host.check_port(ts, layout if external else None, bench.mismatches)
         bench.begin(ts, layout)
         req = random_phase(ts, cand, cfg["requests"], cfg["per_bin"], rng)
@@ -568,7 +579,7 @@ async def texel_fetch_against_golden(dut):
               "hit_by_random": len(after_random), "hit_by_closure": len((coverage.hit() & reachable) - after_random),
               "mismatches": len(bench.mismatches), "responses": bench.received,
               "straddling_requests": bench.straddling, "straddle_strobes": bench.strobes["straddle"], **timing,
-              "set": os.path.basename(cfg["set_path"]), "sets": [ts._tb_name for ts in sets],
+              "set": os.path.basename(cfg["set_path"]), "sets": [names[id(ts)] for ts in sets],
               "unit": cfg["unit"], "seed": cfg["seed"], "stall": cfg["stall"], "simulator": cocotb.SIM_NAME,
               **memory, **({"loads": per_load} if loadable else {})}
     summary = coverage.report(dut._log, cfg["report"], phases)
