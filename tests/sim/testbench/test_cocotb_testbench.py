@@ -405,3 +405,27 @@ def test_loadable_external_reload_check_can_fail(capsys, tmp_path):
     assert code == 1 and "(golden.fetch)" in out and "golden's caches miss" in out, out[-4000:]
     first, second = cov["loads"]
     assert first["bursts"] == first["golden_bursts"] and second["bursts"] < second["golden_bursts"]
+
+
+def test_port_check_catches_ack_for_err(capsys, tmp_path):
+    """Negative control of the port check: the loadable cached unit's Verilog answering ``ack`` where
+    its port says ``err`` (an address beyond the map, the index and raw regions): the load passes (its
+    writes are acked), the port check fails on the 8 ``err`` answers of each load, naming golden's
+    map; nothing else fails."""
+    _need("icarus")
+    folder = _loadable_external(capsys, tmp_path)
+    path = os.path.join(folder, "texel_fetch.sv")
+    with open(path) as f:
+        text = f.read()
+    for old in ("    .bus__ack(bus_ack),\n", "    .bus__err(bus_err),\n", "  wire bus_err;\n"):
+        assert text.count(old) == 1, old
+    text = (text.replace("    .bus__ack(bus_ack),\n", "    .bus__ack(bus_ack_port),\n")
+                .replace("    .bus__err(bus_err),\n", "    .bus__err(bus_err_port),\n")
+                .replace("  wire bus_err;\n", "  wire bus_err;\n  wire bus_ack_port, bus_err_port;\n"
+                         "  assign bus_ack = bus_ack_port | bus_err_port;\n  assign bus_err = 1'h0;\n"))
+    with open(path, "w") as f:
+        f.write(text)
+    code, out, cov = _run(folder, "icarus", "--requests", 20)
+    assert code == 1 and "answered ack" in out and "expected err" in out and "(golden.register_map)" in out, out[-4000:]
+    assert [load["port"]["errors"] for load in cov["loads"]] == [0, 0]
+    assert cov["mismatches"] == 16 and cov["responses"] == cov["requests"]["random"] + cov["requests"]["closure"]
