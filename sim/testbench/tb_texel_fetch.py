@@ -322,6 +322,8 @@ class Bench:
                                    f"{got[first] if first < len(got) else None} != "
                                    f"{want[first] if first < len(want) else None} (address, beats)")
         return {"bursts": len(got), "golden_bursts": len(want),
+                "references": {"index": int(p.references[0]), "raw": int(p.references[1])},
+                "hits": {"index": int(p.hits[0]), "raw": int(p.hits[1])},
                 "hit_rate": {"index": round(p.hits[0] / max(1, p.references[0]), 4),
                              "raw": round(p.hits[1] / max(1, p.references[1]), 4)}}
 
@@ -564,9 +566,11 @@ async def texel_fetch_against_golden(dut):
     memory = {}
     if ar is not None:
         ar.cancel()
-        last = per_load[-1]
+        refs = {c: sum(e["references"][c] for e in per_load) for c in ("index", "raw")}
+        hits = {c: sum(e["hits"][c] for e in per_load) for c in ("index", "raw")}
         memory = {"bursts": sum(e["bursts"] for e in per_load), "golden_bursts": sum(e["golden_bursts"] for e in per_load),
-                  "hit_rate": last["hit_rate"], "memory_bins": dict(bench.memory_hits)}
+                  "hit_rate": {c: round(hits[c] / max(1, refs[c]), 4) for c in refs},      # (golden's, over every load)
+                  "memory_bins": dict(bench.memory_hits)}
         for outcome, count in bench.memory_hits.items():
             if not count:
                 bench.mismatches.append(f"memory coverage: no request {'missed' if outcome == 'miss' else 'hit'}")
