@@ -181,3 +181,21 @@ def test_drain_rule_with_misses_in_flight():
     ar, addresses = np.array(slave.ar), np.array(slave.addresses)
     assert (addresses[ar < first_ack] < 0x10000).all() and (addresses[ar > max(log["ack"])] >= 0x10000).all()
     assert (ar > max(log["ack"])).any()
+
+
+def test_initial_contents_serve_without_a_load():
+    """A loadable filter given a set as initial contents (tables, codebook, matrix, level table, the
+    bases of ``Layout.of``) filters it before any load, in the baked filter's cycles."""
+    from vqtex.hw.address import COORD_BITS
+    from vqtex.sim.backends.design import FIELDS
+    from vqtex.sim.backends.filter_memory import _pysim
+    ts = filter_set()
+    px, frac = _pixels(ts, 10, 4)
+    dut = CachedTextureFilter(ts, CONFIG, lanes=2, tag_width=16, geometry=Geometry.of(ts), loadable=True)
+    shift = spec.coordinate_frac_bits(COORD_BITS) - frac
+    rows = np.stack([np.asarray(px[f], np.int64) << (shift if f in ("s", "t") else 0) for f in FIELDS], 1)
+    got = _pysim(dut, [(None, ts, rows, Layout.of(ts), px["mode"])], CONFIG, 2, 0.0, 0)[0]
+    baked = simulate_cached_filter(ts, px, CONFIG, backend="golden", lanes=2, frac=frac)
+    assert (got.colors == golden_colors(ts, px, frac)).all()
+    assert got.cycles == baked.cycles and got.memory["ar"].tolist() == baked.memory["ar"].tolist()
+    assert got.load_cycles is None
