@@ -58,7 +58,7 @@ def test_cached_filter_equals_the_cycle_model(lanes, n, latency, prefetch, kind)
     (4, 30, 9, 4, 0.4, "fixed"),
     (4, 24, 1, 4, 0.8, "dram"),
     (1, 16, 7, 1, 0.9, "fixed"),
-    (8, 16, 60, 8, 0.5, "fixed"),
+    (8, 8, 60, 8, 0.5, "fixed"),
 ])
 def test_cached_filter_with_backpressure_equals_the_cycle_model(lanes, n, latency, prefetch, stall, kind):
     """Random output backpressure: colours and order, and the cycles, every AR, the fill waits and
