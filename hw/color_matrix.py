@@ -342,10 +342,11 @@ class ColorMatrix(wiring.Component):
         if one:
             m.d.comb += out.eq(expand[present[0]])
         else:
-            # Each format's bytes masked by its decoded code (the last format: no other code), ORed:
-            # the AND-OR a multi-way multiplexer is in the fabric; a simulator masks where it
-            # branched on the format (random per texel: Verilator's model 4 ns a cycle faster than
-            # with a case statement, docs/simulation.md).
+            # Each format's bytes where its decoded code holds, else 0 (the last format: where no
+            # other code holds), ORed: the AND-OR a multi-way multiplexer is in the fabric; a
+            # simulator selects each by its own condition where it branched on the format (random
+            # per texel: Verilator's model about 3 ns a cycle faster than with a case statement,
+            # docs/simulation.md).
             hits = [color_p == code for code in present[:-1]]
             hits.append(~Cat(*hits).any())
             value = 0
