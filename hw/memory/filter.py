@@ -96,7 +96,7 @@ from ..texel_fetch import LATENCY as FETCH_LATENCY
 from ..texel_fetch import TexelFetch
 from .arbiter import AxiArbiter
 from .axi import axi4_read_signature
-from .unit import ADDRESS_STAGES, _base_registers, cached_lane
+from .unit import ADDRESS_STAGES, base_registers, cached_lane
 
 __all__ = ["CachedTextureFilter", "LATENCY"]
 
@@ -202,7 +202,7 @@ class CachedTextureFilter(wiring.Component):
                          load.region.eq(port.load.region), load.offset.eq(port.load.offset),
                          load.data.eq(port.load.data)]
             m.d.comb += [tf.load.eq(load) for tf in self._tf]
-            bases, answer = _base_registers(m, port.load, self._map, layout)
+            bases, answer = base_registers(m, port.load, self._map, layout)
             m.d.comb += port.load_data.eq(or_all([self._tf[0].load_data, answer]))
             # any accepted write empties every lane's caches (the drain rule has emptied the filter)
             lane_kw = [{"load": tf.load, "bases": bases, "flush": port.load.write} for tf in self._tf]
