@@ -90,7 +90,7 @@ from ..features import Features
 from ..filter import blend, footprint
 from ..filter.blend import Blend
 from ..filter.footprint import WEIGHT_WIDTH, FilterRequestLayout, Footprint, level_table
-from ..filter.texture_filter import LANES, gather, sequencer
+from ..filter.texture_filter import LANES, gather, pixel_drain, sequencer
 from ..pipeline import RequestLayout, ResponseLayout
 from ..texel_fetch import LATENCY as FETCH_LATENCY
 from ..texel_fetch import TexelFetch
@@ -254,18 +254,9 @@ class CachedTextureFilter(wiring.Component):
                          getattr(self, f"stall_memory{k}").eq(r.stall_fill)]
         gather(m, bl, [tf.o for tf in self._tf])
         if self._loadable:
-            # The drain rule in pixels, as the on-chip loadable filter's: none accepted while the
-            # host holds the bus, a transfer only when every accepted pixel's colour has left
-            taken, given = Signal(), Signal()
+            # The drain rule in pixels, the on-chip loadable filter's
             most = footprint.LATENCY + ADDRESS_STAGES + 4 * self._config.prefetch + FETCH_LATENCY + 64
-            in_flight = Signal(range(most), name="pixels_in_flight")
-            m.d.comb += [
-                fp.i.valid.eq(self.i.valid & ~port.pause), self.i.ready.eq(fp.i.ready & ~port.pause),
-                fp.i.p.eq(self.i.p),
-                taken.eq(self.i.valid & self.i.ready), given.eq(self.o.valid & self.o.ready),
-                port.idle.eq(in_flight == 0),
-            ]
-            m.d.sync += in_flight.eq(in_flight + taken - given)
+            pixel_drain(m, self.i, fp.i, self.o, port, most)
         else:
             wiring.connect(m, wiring.flipped(self.i), fp.i)
         wiring.connect(m, bl.o, wiring.flipped(self.o))
