@@ -65,9 +65,11 @@ def simulate_cached_filter(ts, pixels: dict, config, *, backend: str = "golden",
         load = load_cycles(len(load_writes(ts, geometry, layout or Layout.of(ts))))
     if backend == "golden":
         from vqtex.golden.memory.filter import run_pixels
+        from vqtex.hw.texel_fetch import LATENCY as FETCH_LATENCY
         from ..streams import ready_pattern
         pattern = (lambda m: ready_pattern(seed, stall, m)) if stall else None
-        model = run_pixels(ts, p, config, lanes, frac, layout=layout, ready_pattern=pattern)
+        model = run_pixels(ts, p, config, lanes, frac, layout=layout, ready_pattern=pattern,
+                           latency=FETCH_LATENCY)
         sc = model["stall_cycles"]
         memory = {k: model[k] for k in ("bursts", "memory_bytes", "bytes_per_pixel", "bytes_per_texel",
                                         "references", "hit_rate", "on_chip_cycles", "ar")}

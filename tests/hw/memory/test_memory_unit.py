@@ -63,4 +63,4 @@ def test_latency_is_golden_front_latency():
     cfg = MemoryConfig()
     unit = CachedTexelFetch(texture_set("rgba_2x2_b7_mip_w16"), cfg)
     assert ADDRESS_STAGES + CachedReader.LATENCY == FRONT_LATENCY
-    assert unit.latency == LATENCY + FRONT_LATENCY == 19
+    assert unit.latency == LATENCY + FRONT_LATENCY == 20

@@ -331,7 +331,7 @@ def test_report_area_tiny(tmp_path, capsys, monkeypatch):
     assert raw0["mapped_to"] == "block RAM" and raw0["DP16KD"] > 0 and (raw0["depth"], raw0["width"]) == (512, 32)
     assert mem["fetch.back.codebook_rom.raw.bank1"]["depth"] == 256
     assert mem["fetch.front.descriptor.table"]["mapped_to"] == "logic"
-    assert rep["latency"] == 14
+    assert rep["latency"] == 15
     assert sum(m["DP16KD"] for m in mem.values()) == u["brams"]
     t = rep["timing"]
     assert 10 < t["fmax_mhz"] < 500 and t["target_mhz"] == 150 and t["met"] == (t["fmax_mhz"] >= 150)
@@ -476,7 +476,7 @@ def test_report_area_memory_external_synthesis(tmp_path, capsys):
                           "--no-pnr", "--json")
     assert code == 0, err
     rep = json.loads(out)
-    assert rep["top"] == "texel fetch, external memory (cached)" and rep["latency"] == 19
+    assert rep["top"] == "texel fetch, external memory (cached)" and rep["latency"] == 20
     assert rep["memory"]["index_cache"]["size"] == 512 and rep["memory"]["prefetch"] == 4
     mem = rep["memories"]
     lut_ram = [n for n in mem if n.startswith("unit.reader.") and "_lines" not in n]
