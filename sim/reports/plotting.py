@@ -17,6 +17,7 @@ INSTALL_HINT = "pip install '.[plot]' (matplotlib)"
 #: What each part of the cycle bar means, in order: (key, label, colour).
 CYCLE_PARTS = (
     ("requests", "one cycle per request (the unit's throughput)", "#3ca03c"),
+    ("groups", "a group of lanes texel slots per clock (the filter)", "#50a050"),
     ("latency", "pipeline fill: the latency of the first response", "#7878dc"),
     ("output_backpressure", "stall: the consumer held ready low (--stall)", "#dc5a3c"),
     ("one_port_straddle", "stall: a straddling index on a one-port index memory", "#e6b428"),
@@ -44,7 +45,12 @@ def cycle_figure(rep: dict):
     went: one horizontal bar, the cycles split by cause, every part in the legend with its count and
     share; the title names the backend, the index reader and the texels per clock."""
     plt = require()
-    values = {"requests": rep["requests"], "latency": rep["latency"], **rep["stall_cycles"]}
+    if "pixels" in rep:             # the filter through memory: a group of lanes texels a clock, at best
+        held = rep["stall_cycles"]["output_backpressure"]
+        values = {"groups": rep["groups"], "latency": rep["latency"], "output_backpressure": held,
+                  "memory": max(0, rep["cycles"] - rep["groups"] - rep["latency"] - held)}
+    else:
+        values = {"requests": rep["requests"], "latency": rep["latency"], **rep["stall_cycles"]}
     known = {k for k, _, _ in CYCLE_PARTS}
     parts = [(k, label, col) for k, label, col in CYCLE_PARTS if k in values]
     parts += [(k, f"stall: {k.replace('_', ' ')}", "#9650b4") for k in values if k not in known]
@@ -62,8 +68,12 @@ def cycle_figure(rep: dict):
     ax.set_xlim(0, total)
     ax.set_yticks([])
     ax.set_xlabel("clock cycles")
-    ax.set_title(f"Where the {rep['cycles']} cycles went: {rep['requests']} requests, {rep['backend']} backend, "
-                 f"{rep['index_reader']} index reader, {rep['texels_per_clock']:.3f} texels/clock", fontsize=9)
+    if "pixels" in rep:
+        ax.set_title(f"Where the {rep['cycles']} cycles went: {rep['pixels']} pixels, {rep['top']}, "
+                     f"{rep['backend']} backend, {rep['pixels_per_clock']:.3f} pixels/clock", fontsize=9)
+    else:
+        ax.set_title(f"Where the {rep['cycles']} cycles went: {rep['requests']} requests, {rep['backend']} backend, "
+                     f"{rep['index_reader']} index reader, {rep['texels_per_clock']:.3f} texels/clock", fontsize=9)
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.35), fontsize=8, frameon=False)
     fig.tight_layout()
     return fig
