@@ -89,10 +89,12 @@ def _run_filter_trace(args, memory):
     if memory is None:
         raise CliError("--filter-lanes needs --memory external: vqtex sim runs the texture filter through memory; "
                        "the on-chip filter runs in vqtex render --filter-in-rtl")
-    if args.one_port or args.unit not in (None, "loadable"):
+    if args.one_port or args.unit == "full":
         bad = "--one-port" if args.one_port else f"--unit {args.unit}"
         raise CliError(f"--filter-lanes: the filter's lanes are specialised baked units or loadable ones (--unit "
                        f"loadable): no {bad}")
+    resolve(args, "unit", "specialised", args.backend != "golden" or args.unit == "loadable",
+            "chooses the RTL lanes: it does not apply to --backend golden (the cycle model)")
     ts = load_set(args.file)
     geometry = unit_geometry(args, ts, args.file)
     if not os.path.isfile(args.requests):
@@ -108,7 +110,7 @@ def _run_filter_trace(args, memory):
     warn_slow(args.backend, len(rows) * 8 // args.filter_lanes)
     res = simulate_cached_filter(ts, pixels, memory, backend=args.backend, lanes=args.filter_lanes, frac=frac,
                                  stall=args.stall, seed=args.seed, geometry=geometry)
-    extra = {"unit": args.unit or "specialised", "frac": frac}
+    extra = {"unit": args.unit, "frac": frac}
     if geometry is not None:
         extra.update(geometry=args.geometry or "the set's own", load_cycles=res.load_cycles)
     return res, filter_cycle_report(res, backend=args.backend, stall=args.stall, extra=extra)

@@ -127,6 +127,7 @@ def test_report_cycles_and_plot(capsys, vqt, pixel_file, tmp_path):
 @pytest.mark.parametrize("argv,pattern", [
     (["--filter-lanes", "2"], "needs --memory external"),
     (["--filter-lanes", "2", *SMALL, "--unit", "full"], "no --unit full"),
+    (["--filter-lanes", "2", *SMALL, "--unit", "specialised"], "does not apply to --backend golden"),
     (["--filter-lanes", "2", *SMALL, "--one-port"], "no --one-port"),
     (["--filter-lanes", "2", *SMALL, "FOUR"], "columns"),
     (["--filter-lanes", "2", *SMALL, "BADTEX"], "texture id out of range"),
