@@ -173,6 +173,11 @@ class CachedTextureFilter(wiring.Component):
         return self._loadable
 
     @property
+    def features(self) -> Features:
+        """What every lane's texel pipeline is built for (``hw.features``)."""
+        return self._features
+
+    @property
     def geometry(self) -> Geometry:
         return self._tf[0].geometry
 

@@ -117,7 +117,7 @@ def test_export_writes_the_register_map(capsys, trace, tmp_path):
     (["sim", "T", "R", "-o", "X.npy", "--memory", "external", "--unit", "full"], "no --unit full"),
     (["sim", "T", "R", "-o", "X.npy", "--memory", "external", "--unit", "loadable", "--one-port"], "no --one-port"),
     (["sim", "T", "R", "-o", "X.npy", "--memory", "external", "--geometry", "paper"], "--geometry applies"),
-    (["export", "T", "-o", "X.sv", "--memory", "external", "--unit", "full"], "no --filter-lanes, --one-port, --unit full"),
+    (["export", "T", "-o", "X.sv", "--memory", "external", "--unit", "full"], "no --one-port, --unit full"),
 ])
 def test_bad_combinations(capsys, trace, argv, pattern):
     d, _, _ = trace
