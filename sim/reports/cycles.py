@@ -32,7 +32,7 @@ def filter_cycle_report(res, *, backend: str, stall: float = 0.0, extra: dict | 
     pixels, groups of ``lanes`` texel slots, cycles, pixels and texels per clock, latency, stall
     cycles (``memory``: the lanes' fill waits summed over the lanes, lane-cycles), and the memory
     figures (bursts, bytes, bytes per pixel; golden: references, hit rates, the stall detail). The
-    on-chip filter's cycles on the same pixels (``groups + 23``, golden's model) and its pixels per
+    on-chip filter's cycles on the same pixels (``groups + hw.filter.LATENCY``, 24, golden's model) and its pixels per
     clock."""
     from vqtex.hw.filter import LATENCY
     groups = int(res.texels // res.lanes)
