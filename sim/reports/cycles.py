@@ -58,6 +58,16 @@ def filter_cycle_report(res, *, backend: str, stall: float = 0.0, extra: dict | 
     return rep
 
 
+def _cache_lines(mem: dict, noun: str) -> list:
+    """One line per cache (index, raw): its references and, if it had any, its hit rate."""
+    lines = []
+    for name in ("index", "raw"):
+        hr = mem["hit_rate"][name]
+        lines.append(f"{name + ' ' + noun:<18} {mem['references'][name]} references"
+                     + (f", hit rate {100 * hr:.2f}%" if hr is not None else ""))
+    return lines
+
+
 def _filter_text(rep: dict) -> list:
     mem = rep["memory"]
     lines = [
@@ -73,10 +83,7 @@ def _filter_text(rep: dict) -> list:
         lines.insert(1, f"unit               loadable, geometry {rep['geometry']}")
         lines.append(f"load (bus writes)  {rep['load_cycles']} cycles, before the pixels")
     if "references" in mem:
-        for name in ("index", "raw"):
-            hr = mem["hit_rate"][name]
-            lines.append(f"{name + ' caches':<18} {mem['references'][name]} references"
-                         + (f", hit rate {100 * hr:.2f}%" if hr is not None else ""))
+        lines += _cache_lines(mem, "caches")
     lines.append(f"memory read        {mem['bursts']} bursts, {sum(mem['memory_bytes'].values())} bytes, "
                  f"{mem['bytes_per_pixel']:.4f} bytes per pixel")
     lines.append(f"stalls: output     {rep['stall_cycles']['output_backpressure']} cycles")
@@ -106,10 +113,7 @@ def cycle_text(rep: dict) -> str:
     mem = rep.get("memory")
     if mem:
         lines.append(f"memory             {mem['configuration']}")
-        for name in ("index", "raw"):
-            hr = mem["hit_rate"][name]
-            lines.append(f"{name + ' cache':<18} {mem['references'][name]} references"
-                         + (f", hit rate {100 * hr:.2f}%" if hr is not None else ""))
+        lines += _cache_lines(mem, "cache")
         lines.append(f"memory read        {mem['bursts']} bursts, {sum(mem['memory_bytes'].values())} bytes, "
                      f"{mem['bytes_per_texel']:.4f} bytes per texel")
         if "of_zero_latency" in mem:
