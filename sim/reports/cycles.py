@@ -68,6 +68,13 @@ def _cache_lines(mem: dict, noun: str) -> list:
     return lines
 
 
+def _load_lines(rep: dict, lines: list, what: str) -> None:
+    """A loadable unit's lines (its geometry second, the load's cycles before ``what``), in place."""
+    if rep.get("load_cycles") is not None:
+        lines.insert(1, f"unit               loadable, geometry {rep['geometry']}")
+        lines.append(f"load (bus writes)  {rep['load_cycles']} cycles, before the {what}")
+
+
 def _filter_text(rep: dict) -> list:
     mem = rep["memory"]
     lines = [
@@ -79,9 +86,7 @@ def _filter_text(rep: dict) -> list:
         f"latency            {rep['latency']} cycles when every reference hits",
         f"memory             {mem['configuration']}, a cache per lane",
     ]
-    if rep.get("load_cycles") is not None:
-        lines.insert(1, f"unit               loadable, geometry {rep['geometry']}")
-        lines.append(f"load (bus writes)  {rep['load_cycles']} cycles, before the pixels")
+    _load_lines(rep, lines, "pixels")
     if "references" in mem:
         lines += _cache_lines(mem, "caches")
     lines.append(f"memory read        {mem['bursts']} bursts, {sum(mem['memory_bytes'].values())} bytes, "
@@ -107,9 +112,7 @@ def cycle_text(rep: dict) -> str:
         f"latency            {rep['latency']} cycles",
         f"straddling reads   {rep['straddling_index_reads']}",
     ]
-    if rep.get("load_cycles") is not None:
-        lines.insert(1, f"unit               loadable, geometry {rep['geometry']}")
-        lines.append(f"load (bus writes)  {rep['load_cycles']} cycles, before the requests")
+    _load_lines(rep, lines, "requests")
     mem = rep.get("memory")
     if mem:
         lines.append(f"memory             {mem['configuration']}")
