@@ -108,11 +108,15 @@ def cmd_report_area(args) -> int:
     reps = {}
     for unit in units:
         workdir = os.path.join(args.keep, unit) if args.keep and len(units) > 1 else args.keep
-        reps[unit] = synth.area_report(
+        try:
+            reps[unit] = synth.area_report(
             ts, one_port=args.one_port, tag_width=args.tag_width, place=not args.no_pnr, freq=args.freq,
             seed=args.seed, router=args.router, route=not args.no_route, workdir=workdir, timeout=args.timeout, name=name, specialise=unit == "specialised",
             progress=lambda m, u=unit: progress_line(f"report area: {u + ' unit: ' if len(units) > 1 else ''}{m}"),
-            filter_lanes=args.filter_lanes, index_banks=args.index_banks, geometry=geometry, memory=memory)
+            filter_lanes=args.filter_lanes, index_banks=args.index_banks, geometry=geometry, memory=memory,
+            stage=args.stage)
+        except synth.StageError as e:   # a --stage that is not a block of this unit
+            raise CliError(f"report area: {e}") from None
         if t_set is not None:
             reps[unit]["seconds"] = {"encode": t_set, **reps[unit]["seconds"]}
     if len(units) == 1:
@@ -171,6 +175,10 @@ def add_parser(sub) -> None:
                         "routing a loadable preset takes an hour; default: place and route)")
     a.add_argument("--no-pnr", action="store_true",
                    help="synthesis only: utilisation, no Fmax (default: also place and route)")
+    a.add_argument("--stage", metavar="NAME", default=None,
+                   help=with_default("one block of the unit alone, out of context, a flip-flop on each of its ports "
+                                     "(its path inside the unit, fetch.back.codebook_rom, or a unique tail, "
+                                     "codebook_rom; docs/area.md, 'Block by block')", "the whole unit"))
     a.add_argument("--keep", metavar="DIR", default=None,
                    help=with_default("keep the tools' files (RTLIL, netlist, logs, nextpnr report) in DIR",
                                      "a temporary folder, removed"))

@@ -35,7 +35,8 @@ synth; synth.area_report(ts)`` is the way in:
 
 - :mod:`.texture_sets`: the built-in sets of ``--builtin NAME`` (``four_texture_set``, ...).
 - :mod:`.target`: the part (``DEVICE``), the module names Yosys sees, :class:`SynthError`.
-- :mod:`.harness`: :class:`Harness`, :func:`design_rtlil`, :func:`design_memories`.
+- :mod:`.harness`: :class:`Harness`, :func:`design_rtlil`, :func:`design_memories`, and one block of
+  the unit alone (:func:`stage_rtlil`, ``--stage NAME``).
 - :mod:`.tools`: running Yosys and nextpnr (:func:`tools_available`, :func:`run_yosys`, ...).
 - :mod:`.parsers`: reading what they write (:func:`parse_yosys_stat`, :func:`parse_nextpnr_report`, ...).
 - :mod:`.stages`: netlist names to signals and pipeline stages (:func:`signal_of`, :func:`stage_of`).
@@ -45,7 +46,7 @@ synth; synth.area_report(ts)`` is the way in:
 
 from __future__ import annotations
 
-from .harness import Harness, design_memories, design_rtlil
+from .harness import Harness, StageError, design_memories, design_rtlil, stage_names, stage_rtlil
 from .parsers import (HEADLINE, count_memory_blocks, parse_memory_mapping, parse_nextpnr_log, parse_nextpnr_report,
                       parse_yosys_stat)
 from .report import area_report
@@ -57,7 +58,7 @@ from .texture_sets import (bundled_image, four_texture_set, pvr2_texture_set, rg
 from .tools import run_nextpnr, run_yosys, run_yowasp, tools_available, yosys_script
 
 __all__ = [
-    "SynthError", "INSTALL_HINT", "DEVICE", "Harness", "four_texture_set", "tiny_texture_set", "pvr2_texture_set",
+    "SynthError", "StageError", "stage_names", "stage_rtlil", "INSTALL_HINT", "DEVICE", "Harness", "four_texture_set", "tiny_texture_set", "pvr2_texture_set",
     "design_rtlil", "yosys_script", "run_yosys", "run_yowasp", "parse_yosys_stat", "run_nextpnr",
     "parse_nextpnr_report", "parse_nextpnr_log", "parse_memory_mapping", "count_memory_blocks", "stage_of",
     "signal_of", "design_memories", "area_report", "area_text", "tools_available", "scene_texture_set",

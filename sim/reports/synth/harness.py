@@ -7,9 +7,10 @@ from amaranth import Module
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from .target import HARNESS_NAME
+from .target import HARNESS_NAME, UNIT_NAME
 
-__all__ = ["Harness", "design_rtlil", "design_memories"]
+__all__ = ["Harness", "design_rtlil", "design_memories", "stage_names", "resolve_stage", "stage_rtlil",
+           "StageError"]
 
 
 class Harness(wiring.Component):
@@ -83,3 +84,95 @@ def design_memories(ts, *, one_port: bool = False, tag_width: int = 8, specialis
         top, prefix = TexelFetch(None if geometry is not None else ts, one_port=one_port, tag_width=tag_width,
                                  specialise=specialise, **unit), "fetch"
     return {".".join((prefix,) + mem.path): (mem.depth, mem.width) for mem in memories(elaborate(top))}
+
+
+# ---------------------------------------------------------------------------------------------
+# one block of the unit alone (``vqtex report area ... --stage NAME``)
+
+class StageError(ValueError):
+    """``--stage NAME`` names no block of the unit, or more than one. ``str()`` is one line."""
+
+
+def _rtlil_modules(il: str) -> dict:
+    """RTLIL text -> {module name (without the backslash): its text, the attribute lines before it
+    included}, in order."""
+    modules, pending, current, name = {}, [], None, None
+    for line in il.splitlines(keepends=True):
+        if current is None:
+            if line.startswith("module "):
+                name, current = line.split()[1].lstrip("\\"), pending + [line]
+                pending = []
+            elif line.startswith("attribute "):
+                pending.append(line)
+            continue
+        current.append(line)
+        if line.rstrip("\n") == "end":
+            modules[name], current = "".join(current), None
+    return modules
+
+
+def _ports(module_text: str) -> list:
+    """A module's ports in order: ``(name, width, "input"|"output")``."""
+    ports = []
+    for line in module_text.splitlines():
+        f = line.split()
+        if f and f[0] == "wire" and ("input" in f or "output" in f):
+            width = int(f[f.index("width") + 1]) if "width" in f else 1
+            way = "input" if "input" in f else "output"
+            ports.append((int(f[f.index(way) + 1]), f[-1].lstrip("\\"), width, way))
+    return [p[1:] for p in sorted(ports)]
+
+
+def stage_names(il: str) -> list:
+    """The blocks of the unit in ``il`` (RTLIL of :class:`Harness`) that ``--stage`` can take: every
+    submodule of the unit, by its path inside the unit (``fetch.back.codebook_rom``)."""
+    prefix = UNIT_NAME + "."
+    return [n[len(prefix):] for n in _rtlil_modules(il) if n.startswith(prefix)]
+
+
+def resolve_stage(il: str, stage: str) -> str:
+    """``stage`` as a path inside the unit: the path itself, or a unique tail of one
+    (``codebook_rom`` -> ``fetch.back.codebook_rom``). :class:`StageError` (one line, the blocks listed) if
+    none or more than one matches."""
+    names = stage_names(il)
+    hits = [n for n in names if n == stage] or [n for n in names if n.endswith("." + stage)]
+    if len(hits) != 1:
+        what = "is ambiguous" if hits else "is not a block of this unit"
+        raise StageError(f"--stage {stage!r} {what} (blocks: {', '.join(names)})")
+    return hits[0]
+
+
+def stage_rtlil(il: str, stage: str) -> tuple:
+    """One block of the unit alone, out of context: ``il`` (RTLIL of :class:`Harness`) cut down to
+    the block at ``stage`` (:func:`resolve_stage`) and its submodules, the block renamed to the
+    unit's module (``vqtex_harness.unit``, so that the flow counts it as it counts a unit) inside a
+    new harness with a flip-flop on every port but ``clk`` and ``rst`` (as :class:`Harness` does for
+    the unit): only the block's own paths count in Fmax. What the rest of the unit drives into the
+    block (a constant included) becomes a free, registered input. Returns ``(rtlil, path,
+    port_bits)``: the RTLIL, the block's path and the flip-flops the new harness adds."""
+    path = resolve_stage(il, stage)
+    old = f"{UNIT_NAME}.{path}"
+    modules = _rtlil_modules(il)
+    keep = {n: t for n, t in modules.items() if n == old or n.startswith(old + ".")}
+    ports = _ports(keep[old])
+    out = []
+    for n, text in keep.items():            # the block becomes vqtex_harness.unit, its submodules under it
+        out.append(text.replace(f"\\{old}", f"\\{UNIT_NAME}").replace("attribute \\top 1\n", ""))
+    wrapper = ["attribute \\top 1\n", f"module \\{HARNESS_NAME}\n"]
+    cell = [f"  cell \\{UNIT_NAME} \\unit\n"]
+    bits = 0
+    for k, (name, width, way) in enumerate(ports):
+        wrapper.append(f"  wire width {width} {way} {k} \\{name}\n")
+        if name in ("clk", "rst"):
+            cell.append(f"    connect \\{name} \\{name}\n")
+            continue
+        inner = f"\\{name}$q"
+        wrapper.append(f"  wire width {width} {inner}\n")
+        d, q = (f"\\{name}", inner) if way == "input" else (inner, f"\\{name}")
+        wrapper += [f"  cell $dff $port_ff{k}\n", f"    parameter \\WIDTH {width}\n",
+                    "    parameter \\CLK_POLARITY 1\n", "    connect \\CLK \\clk\n",
+                    f"    connect \\D {d}\n", f"    connect \\Q {q}\n", "  end\n"]
+        cell.append(f"    connect \\{name} {inner}\n")
+        bits += width
+    wrapper += cell + ["  end\n", "end\n"]
+    return "".join(out) + "".join(wrapper), path, bits

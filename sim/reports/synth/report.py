@@ -7,7 +7,7 @@ import os
 import tempfile
 import time
 
-from .harness import Harness, design_memories
+from .harness import Harness, design_memories, stage_rtlil
 from .target import DEVICE, HARNESS_NAME, INSTALL_HINT, UNIT_NAME, SynthError
 from .tools import run_nextpnr, run_yosys, tools_available
 
@@ -18,7 +18,7 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
                 seed: int = 1, workdir: str | None = None, timeout: float | None = None,
                 name: str | None = None, progress=None, specialise: bool = True,
                 filter_lanes: int | None = None, index_banks: str = "parity", geometry=None,
-                memory=None, router: str = "router1", route: bool = True) -> dict:
+                memory=None, router: str = "router1", route: bool = True, stage: str | None = None) -> dict:
     """Synthesize (and unless ``place`` is false, place and route) the unit holding ``ts``: the
     specialised texel-fetch unit (:class:`hw.features.Features`), or with ``specialise=False`` the
     full one; or with ``filter_lanes`` the texture filter (``hw.filter.TextureFilter``) with that many
@@ -36,6 +36,13 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
     ``router`` is nextpnr's router (``router1``, its default, or ``router2``: much faster on the
     loadable topspin geometry, :data:`.tools.ROUTERS`). ``route=False``: placement only, Fmax is nextpnr's
     estimate after placement (``timing.routed`` false, no critical path).
+
+    ``stage`` (a block of the unit by its path inside it, ``fetch.back.codebook_rom``, or a unique
+    tail of one, ``codebook_rom``: :func:`.harness.stage_rtlil`): that block alone, out of context,
+    a flip-flop on each of its ports, so that only its own paths count (``stage`` in the report is
+    its path; ``port_bits`` its ports'; the memories and the critical path's names are the unit's,
+    ``unit.fetch.back.codebook_rom...``). :class:`.harness.StageError` (one line, the blocks listed)
+    for a name that is not a block.
 
     ``progress(message)``, when given, is called as each long step starts (elaboration, synthesis,
     place and route).
@@ -71,10 +78,15 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
         LATENCY = unit.unit.latency
     harness = Harness(ts, one_port=one_port, tag_width=tag_width, specialise=specialise, unit=unit, geometry=geometry)
     il = harness.rtlil()
+    port_bits = harness.port_bits
+    if stage is not None:
+        il, stage, port_bits = stage_rtlil(il, stage)
     t_rtlil = time.perf_counter() - t0
     shapes = design_memories(ts, one_port=one_port, tag_width=tag_width, specialise=specialise,
                              filter_lanes=filter_lanes, index_banks=index_banks, geometry=geometry,
                              memory=memory)
+    if stage is not None:               # the block's memories, named inside it (as Yosys sees them)
+        shapes = {m[len(stage) + 1:]: v for m, v in shapes.items() if m.startswith(stage + ".")}
     if memory is not None and filter_lanes is not None:
         features = harness.unit.unit.features
     elif memory is not None:
@@ -116,13 +128,15 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
             "utilisation": unit.get("headline", {}),
             "cells": unit.get("cells", {}),
             "harness_ffs": (top.get("headline") or {}).get("ffs", 0),
-            "port_bits": harness.port_bits,
-            "memories": _memory_shapes(shapes, syn["memories"]),
+            "port_bits": port_bits,
+            "memories": _memory_shapes(shapes, syn["memories"], stage),
             "seconds": {"rtlil": round(t_rtlil, 2), "synthesis": round(syn["seconds"], 2)},
             "mapper": syn["mapper"],
         }
         if geometry is not None:
             rep["geometry"] = geometry.to_dict()
+        if stage is not None:
+            rep["stage"] = stage
         if memory is not None:
             rep["memory"] = {"index_cache": vars(memory.index_cache) | {"sets": memory.index_cache.sets},
                              "raw_cache": vars(memory.raw_cache) | {"sets": memory.raw_cache.sets},
@@ -137,6 +151,8 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
             pnr["seed"] = seed
             pnr["router"] = router
             pnr["routed"] = route
+            if stage is not None and pnr.get("critical_path"):
+                pnr["critical_path"] = _in_unit(pnr["critical_path"], stage)
             rep["timing"] = pnr
         return rep
 
@@ -147,13 +163,34 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
         return go(folder)
 
 
-def _memory_shapes(shapes: dict, mapped: dict) -> dict:
-    """Add each memory's depth and width (``design_memories``) to Yosys's mapping."""
+def _memory_shapes(shapes: dict, mapped: dict, stage: str | None = None) -> dict:
+    """Add each memory's depth and width (``design_memories``) to Yosys's mapping; with ``stage``,
+    the block's memories renamed as the unit's (``codebook.bank0`` -> ``fetch.back.codebook_rom.codebook.bank0``)."""
     out = {}
     for mem, info in mapped.items():
         d = dict(info)
         if mem in shapes:
             d["depth"], d["width"] = shapes[mem]
             d["bits"] = d["depth"] * d["width"]
-        out[mem] = d
+        out[mem if stage is None else f"{stage}.{mem}"] = d
     return out
+
+
+def _in_unit(cp: dict, stage: str) -> dict:
+    """A block's critical path (:func:`.parsers.parse_nextpnr_report`) with its names as the whole
+    unit's (``unit.row`` -> ``unit.fetch.front.descriptor.row``) and their stages named again."""
+    from .stages import signal_of, stage_of
+
+    def name(n):
+        return f"unit.{stage}.{n[5:]}" if n.startswith("unit.") else n
+
+    cp = dict(cp)
+    for key in ("from", "to", "from_signal", "to_signal"):
+        cp[key] = name(cp[key])
+    cp["cells"] = [name(c) for c in cp.get("cells", [])]
+    cp["from_stage"], cp["to_stage"] = stage_of(cp["from_signal"]), stage_of(cp["to_signal"])
+    cp["steps"] = [dict(s, **{"from": name(s["from"]), "to": name(s["to"]),
+                              "stage": stage_of(signal_of(name(s["to"]).rsplit(".", 1)[0]))}) for s in cp["steps"]]
+    stages = [cp["from_stage"]] + [s["stage"] for s in cp["steps"]]
+    cp["stages"] = [s for k, s in enumerate(stages) if k == 0 or stages[k - 1] != s]
+    return cp

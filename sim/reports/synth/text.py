@@ -9,7 +9,9 @@ __all__ = ["area_text", "COMPARE_ROWS", "compare_units", "compare_text"]
 def area_text(rep: dict) -> str:
     u = rep["utilisation"]
     lines = [
-        f"{rep['design']}: {rep.get('top', 'texel fetch')}, {rep['textures']} texture(s), {rep.get('unit', 'full')} unit, "
+        f"{rep['design']}: {rep.get('top', 'texel fetch')}"
+        + (f" (block {rep['stage']} alone, a flip-flop on each of its ports)" if rep.get("stage") else "")
+        + f", {rep['textures']} texture(s), {rep.get('unit', 'full')} unit, "
         f"{rep['index_reader']} index reader, "
         f"tag width {rep['tag_width']}, latency {rep.get('latency', '?')}, on {rep['device']}",
         f"  LUT4 {u.get('luts', 0)}  FF {u.get('ffs', 0)}  DP16KD {u.get('brams', 0)}  "
