@@ -100,8 +100,9 @@ class CodebookROM(wiring.Component):
 
     1. *read*: the codebook memory at ``cb_base + index`` and the raw memory at ``raw_addr``; the
        byte addresses ``start``, ``u_off + ct``, ``v_off + ct`` (``tb * t`` as shifts and an add),
-       registered beside the block RAMs' read registers.
-    2. *data*: the read data, registered per 512-entry bank.
+       registered beside the block RAMs' read registers (loadable, ``load``: their parts, ``tb * t``,
+       ``ct`` and the offsets, are registered here and added in stage 2).
+    2. *data*: the read data, registered per 512-entry bank (loadable: and the byte addresses).
     3. *window*: in every codebook bank, the two 4-byte-aligned words of the entry that hold the
        texel's bytes (a 64-bit window) and the words holding U and V; the raw word of the selected
        raw bank. Registered.
@@ -306,15 +307,39 @@ class CodebookROM(wiring.Component):
         if feat.variable("color"):
             ride["color"] = len(self.color)
         carried = data.StructLayout(ride)
-        values = {"start": (tbt if _is_zero(texel_off) else texel_off + tbt)[:addr_bits],
-                  "ustart": (u_off + ct)[:addr_bits], "vstart": (v_off + ct)[:addr_bits],
-                  "compressed": compressed_in, "color": color_in}
-        f1 = Signal(carried, name="fields_read")
-        with m.If(self.en):
-            m.d.sync += f1.eq(Cat(*(values[name] for name in ride)))
 
-        # Stage 2: the banks' data registers (in BankedROM); the fields follow.
-        f2 = reg(f1, "fields_data")
+        def sums(p):
+            """The byte addresses from their parts (``p``: name -> value)."""
+            return {"start": (p["tbt"] if _is_zero(p["texel_off"]) else p["texel_off"] + p["tbt"])[:addr_bits],
+                    "ustart": (p["u_off"] + p["ct"])[:addr_bits], "vstart": (p["v_off"] + p["ct"])[:addr_bits],
+                    "compressed": p["compressed"], "color": p["color"]}
+
+        parts = {"tbt": tbt, "texel_off": texel_off, "ct": ct, "u_off": u_off, "v_off": v_off,
+                 "compressed": compressed_in, "color": color_in}
+        values = sums(parts)
+        if load is None:
+            f1 = Signal(carried, name="fields_read")
+            with m.If(self.en):
+                m.d.sync += f1.eq(Cat(*(values[name] for name in ride)))
+            # Stage 2: the banks' data registers (in BankedROM); the fields follow.
+            f2 = reg(f1, "fields_data")
+        else:
+            # The loadable unit: stage 1 registers the sums' parts (``tb * t``, ``ct`` and the
+            # offsets), stage 2 adds them beside the banks' data registers, so the request's
+            # ``x, y -> t -> tb * t -> + texel_off`` is not one cycle (the codebook ROM's own
+            # critical path out of context, docs/area.md "Block by block"). Same values, same stage 3.
+            names = ["tbt"] + (["texel_off"] if not isinstance(texel_off, Const) else [])
+            if yuv:
+                names += ["ct"] + [n for n in ("u_off", "v_off") if not isinstance(parts[n], Const)]
+            names += [n for n in ("compressed", "color") if n in ride]
+            f1 = Signal(data.StructLayout({n: len(parts[n]) for n in names}), name="fields_read")
+            with m.If(self.en):
+                m.d.sync += f1.eq(Cat(*(parts[n] for n in names)))
+            # Stage 2: the banks' data registers (in BankedROM); the byte addresses beside them.
+            registered = sums({n: getattr(f1, n) if n in names else parts[n] for n in parts})
+            f2 = Signal(carried, name="fields_data")
+            with m.If(self.en):
+                m.d.sync += f2.eq(Cat(*(registered[name] for name in ride)))
 
         def field(view, name):
             return getattr(view, name) if name in ride else values[name]
