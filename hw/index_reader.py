@@ -208,7 +208,8 @@ class IndexReader(wiring.Component):
             self.straddle.eq(valid1 & (off + b1 > W)),
         ]
 
-        lo, hi, fields3 = self._read_words(m, w, Cat(off, b1), straddle=True)
+        lo, hi, fields3 = self._read_words(m, w, Cat(off, b1), straddle=True,
+                                           w_next=self._next_word(m, self.en & ~self.hold, bit >> log2W, len(w)))
 
         # Stage 5: {hi, lo} >> off, masked to b bits.
         fields4 = enabled_register(m, self.en, fields3, "fields_pair")
@@ -238,14 +239,29 @@ class IndexReader(wiring.Component):
             self._answers.append(mem.load_data)
         return mem
 
-    def _read_words(self, m, w, carried, *, straddle: bool):
+    def _next_word(self, m, en, words, width: int):
+        """``w + 1`` (``w = base + words``) for the even bank's address, as one sum: the loadable
+        reader registers ``base + 1`` in stage 1 beside ``base`` (enable ``en``), so that stage 2
+        has one carry chain in front of the block RAMs' address, not ``w`` and then ``w + 1`` (the
+        index reader's own critical path out of context at ``max``, docs/area.md "Block by block").
+        None for a baked reader (its RTLIL as before)."""
+        if self._load is None:
+            return None
+        base_next = Signal(len(self.base) + 1, name="base_next")
+        with m.If(en):
+            m.d.sync += base_next.eq(self.base + 1)
+        w_next = Signal(width + 1, name="w_next")           # as wide as w + 1
+        m.d.comb += w_next.eq(base_next + words)
+        return w_next
+
+    def _read_words(self, m, w, carried, *, straddle: bool, w_next=None):
         """Stages 2-4, the memory organisation both readers share: the read of word ``w`` (and
         ``w + 1`` with ``straddle``), and ``carried`` (the fields stage 5 needs) registered twice
         beside it. Returns ``(lo, hi, fields)``: ``lo`` = word[w] and ``hi`` = word[w + 1]
         registered in stage 4 (``hi`` a 0-bit constant without ``straddle``), ``fields`` the carried
         value after stage 3. Two banks (even and odd words, read together); with ``one_port`` one
         bank read twice for a straddling index (``hold`` high for the first); without ``straddle``
-        one bank, one word."""
+        one bank, one word. ``w_next``, when given, is ``w + 1`` (:meth:`_next_word`)."""
         W = self._word_bits
 
         def reg(value, name):
@@ -264,7 +280,7 @@ class IndexReader(wiring.Component):
             even = self._memory(m, "even_bank", 2, 0)
             odd = self._memory(m, "odd_bank", 2, 1)
             m.d.comb += [
-                even.addr.eq((w + 1) >> 1), even.en.eq(self.en),
+                even.addr.eq((w + 1 if w_next is None else w_next) >> 1), even.en.eq(self.en),
                 odd.addr.eq(w >> 1), odd.en.eq(self.en),
             ]
             fields3 = reg(reg(Cat(carried, w[0]), "fields_word"), "fields_data")
@@ -345,7 +361,8 @@ class IndexReader(wiring.Component):
         if straddle:
             m.d.comb += self.straddle.eq(valid1 & ((off << log2u) + b1 > W))
 
-        lo, hi, fields3 = self._read_words(m, w, Cat(off, b1[:bw_bits]), straddle=straddle)
+        lo, hi, fields3 = self._read_words(m, w, Cat(off, b1[:bw_bits]), straddle=straddle,
+                                           w_next=self._next_word(m, self.en & ~self.hold, bit >> log2W, len(w)))
 
         # Stage 5: the index at offset ``off`` units of the word (pair): a right shift by whole units
         # (``off`` with log2(unit) zeros below it), masked to b bits when there are several widths.
