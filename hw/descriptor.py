@@ -24,7 +24,8 @@ from vqtex.golden.register_map import DESCRIPTOR_WORDS, REGIONS
 from .bus_port import DATA_WIDTH, attach_memory, load_decode, or_all
 from .features import READ_BY, Features, Fields
 
-__all__ = ["DescriptorLayout", "DescriptorTable", "descriptor_widths", "texture_bits", "LEVEL_BITS", "as_geometry"]
+__all__ = ["DescriptorLayout", "DescriptorTable", "descriptor_widths", "texture_bits", "LEVEL_BITS", "as_geometry",
+           "BLOCK_RAM_ROWS"]
 
 #: Width of a level number (``MAX_LEVELS`` = 16 rows per texture).
 LEVEL_BITS = log2(MAX_LEVELS)
@@ -75,6 +76,12 @@ class DescriptorLayout(data.StructLayout):
 
 #: The fields a loadable table gives the pipeline (it stores every field, for the host to read back).
 READ_BY_TABLE = frozenset(READ_BY)
+
+#: A loadable, registered table (the texel pipeline's) of more rows than this is block RAM: port A
+#: the pipeline's read (its address register the request stage), port B the bus's; the rows
+#: registered once more behind it (the descriptor stage). Smaller tables stay in LUT RAM, read from
+#: a registered address (docs/area.md, "Block by block").
+BLOCK_RAM_ROWS = 256
 
 
 class DescriptorTable(wiring.Component):
@@ -231,6 +238,7 @@ class DescriptorTable(wiring.Component):
         hit, row_of, lane, command = load_decode(m, self.load, region=REGIONS["descriptors"],
                                                  lanes=len(DESCRIPTOR_WORDS), depth=depth, name="load")
         contents = self._rows(LEVEL_BITS, g.texture_bits)[:depth] if self._ts is not None else None
+        block = self._registered and depth > BLOCK_RAM_ROWS
         for w, word in enumerate(DESCRIPTOR_WORDS):
             present = [(name, lsb) for name, lsb, _ in word if widths[name]]
             if not present:
@@ -240,9 +248,11 @@ class DescriptorTable(wiring.Component):
                                                   for name, _ in present} for r in contents]
             # In LUTs (distributed RAM), as the baked PowerVR2 table: a block RAM's clock-to-output
             # (4.3 ns on the ECP5-8) left too little of the cycle for the shifter behind it (town's
-            # 512-row table: 104-112 MHz, docs/area.md).
-            m.submodules[f"word{w}"] = mem = memory.Memory(shape=layout, depth=depth, init=init,
-                                                           attrs={"ram_style": "distributed"})
+            # 512-row table: 104-112 MHz, docs/area.md). A registered table of more than
+            # BLOCK_RAM_ROWS rows is block RAM (below).
+            m.submodules[f"word{w}"] = mem = memory.Memory(
+                shape=layout, depth=depth, init=init,
+                attrs={"no_rw_check": 1, "ram_style": "block"} if block else {"ram_style": "distributed"})
 
             def pack(bus_word, present=present, layout=layout):     # noqa: E306
                 return Cat(*(bus_word[lsb:lsb + layout.members[name].width] for name, lsb in present))
@@ -253,12 +263,24 @@ class DescriptorTable(wiring.Component):
                     out = out | (Value.cast(getattr(view, name)) << lsb)
                 return out[:DATA_WIDTH]
 
-            port, answer = attach_memory(m, mem, command, hit=hit, row=row_of, lane=lane, only_lane=w,
-                                         pack=pack, unpack=unpack, name=f"word{w}_load", read_addr=addr,
-                                         read_en=self.en, data_en=self.row_en if self._registered else None)
+            if block:
+                # The block RAM's port A is the pipeline's (its address register is the request
+                # stage, loaded on ``en``), port B the bus's (hw.bus_port.attach_memory with
+                # ``own_port``, as the codebook's banks); its data registered on ``row_en``.
+                port, answer = attach_memory(m, mem, command, hit=hit, row=row_of, lane=lane, only_lane=w,
+                                             pack=pack, unpack=unpack, name=f"word{w}_load", read_addr=addr,
+                                             read_en=self.en, own_port=True)
+                data_r = Signal.like(port.data, name=f"word{w}_row")
+                with m.If(self.row_en):
+                    m.d.sync += data_r.eq(port.data)
+            else:
+                port, answer = attach_memory(m, mem, command, hit=hit, row=row_of, lane=lane, only_lane=w,
+                                             pack=pack, unpack=unpack, name=f"word{w}_load", read_addr=addr,
+                                             read_en=self.en, data_en=self.row_en if self._registered else None)
+                data_r = port.data
             answers.append(answer)
             for name, _ in present:
-                row[name] = getattr(port.data, name)
+                row[name] = getattr(data_r, name)
         m.d.comb += self.load_data.eq(or_all(answers))
         # ``row`` assigned in one piece (plain wiring; field by field, CXXRTL would assemble it
         # with read-modify-writes every cycle, and its in-place cycle would not apply)

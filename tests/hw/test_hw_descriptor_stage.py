@@ -1,19 +1,22 @@
 """The descriptor stage (hw.descriptor.DescriptorTable with ``registered``, the pipeline's stages
 ``request`` and ``descriptor``): ECP5 synthesis of the loadable table reads every LUT RAM from a
 register of the unit's own, one copy of the address per memory (none from the ports), and the row
-of the address taken two advancing cycles before, under random stalls (pysim)."""
+of the address taken two advancing cycles before, under random stalls (pysim), with the loadable
+table in LUT RAM and in block RAM (``hw.descriptor.BLOCK_RAM_ROWS``)."""
 
 from __future__ import annotations
 
 import json
 
 import numpy as np
+import pytest
 from amaranth.back import rtlil
 from amaranth.sim import Simulator
 
 from vqtex.golden.geometry import Geometry
 from vqtex.golden.register_map import DESCRIPTOR_WORDS, RegisterMap
 from vqtex.hw.bus_port import load_layout
+from vqtex.hw import descriptor
 from vqtex.hw.descriptor import DescriptorTable
 from vqtex.hw.features import Features
 
@@ -31,7 +34,12 @@ def _table(loadable: bool):
     return ts, DescriptorTable(ts, features=Features.full(ts), registered=True)
 
 
-def test_row_is_the_address_taken_two_advances_before():
+@pytest.mark.parametrize("block_rows", [None, 0])
+def test_row_is_the_address_taken_two_advances_before(block_rows, monkeypatch):
+    """Baked and loadable; with ``block_rows`` 0 the loadable table is block RAM (as the presets'
+    tables of more than ``BLOCK_RAM_ROWS`` rows are), else LUT RAM (this set's 2 textures)."""
+    if block_rows is not None:
+        monkeypatch.setattr(descriptor, "BLOCK_RAM_ROWS", block_rows)
     for loadable in (False, True):
         ts, dut = _table(loadable)
         rng = np.random.default_rng(3)

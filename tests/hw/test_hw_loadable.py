@@ -254,3 +254,14 @@ def test_load_over_bus_counts_cycles_and_refuses_err():
     sim.add_testbench(bench)
     sim.run()
     assert out["cycles"] == load_cycles(len(writes))
+
+
+def test_descriptor_table_in_block_ram(monkeypatch):
+    """The presets' descriptor tables (more than ``hw.descriptor.BLOCK_RAM_ROWS`` rows) are block
+    RAM, the bus on their second port; forced here on small geometries: load, fetch and reload bit
+    for bit and cycle for cycle, read back and errors, and the drain rule, as with LUT RAM."""
+    import vqtex.hw.descriptor as descriptor
+    monkeypatch.setattr(descriptor, "BLOCK_RAM_ROWS", 0)
+    test_load_then_fetch_then_reload(("rgba_2x2_b7_mip_w16", "rgb_2x2_b16_w16"))
+    test_read_back_and_errors(None)
+    test_drain_rule()
