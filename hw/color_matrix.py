@@ -133,7 +133,7 @@ class ColorMatrix(wiring.Component):
         # select per register, and the data): the compare and its fan-out to the registers' enables
         # start from flip-flops (the load command's offset -> compare -> the coefficient registers'
         # clock enables was the topspin geometry's critical path, docs/area.md). A write lands one
-        # cycle later than the command (K follows 3 cycles after it; the drain rule keeps every
+        # cycle later than the command (K follows 4 cycles after it; the drain rule keeps every
         # request further behind), a read's answer keeps ANSWER_LATENCY.
         mine = load.region == REGIONS["control"]
         offsets = list(by_offset)
@@ -171,9 +171,9 @@ class ColorMatrix(wiring.Component):
            coefficients), registered;
         2. per output, the three products plus ``K[c]``, registered.
 
-        ``K`` depends only on the loaded registers: its own two-stage pipeline (the nine
-        ``M * off`` registered, then ``bias - sum`` registered) runs every cycle, so it holds the new
-        value 3 cycles after the host's last write of a matrix register. The bus port's drain rule
+        ``K`` depends only on the loaded registers: its own three-stage pipeline (a copy of the
+        coefficients, the nine ``M * off`` registered, then ``bias - sum`` registered) runs every
+        cycle, so it holds the new value 4 cycles after the host's last write of a matrix register. The bus port's drain rule
         (no request is accepted while a transfer is under way) and the 11 stages in front of the
         colour matrix put every request after the load well behind that.
         """
@@ -189,9 +189,15 @@ class ColorMatrix(wiring.Component):
                         init=mat.bias - sum(mat.coeffs[c][k] * mat.offsets[k] for k in range(3))) for c in range(3)]
         # bias 2^(F-1) when rounding and F > 0
         m.d.sync += bias.eq(Mux(rounding & (frac != 0), C(1, 17) << (frac - 1)[:4], 0))
+        # K's own copy of the coefficients, a cycle behind the loaded ones: the loaded register, an
+        # operand of the pipeline's product as well, no longer drives a second multiplier
+        # (``m_bu`` -> MULT18X18D -> ``q_bu`` was the paper geometry's ``fetch.back`` critical path
+        # out of context, docs/area.md "Block by block"). K settles a cycle later: 4 cycles.
+        kcoeff = [[Signal(signed(COEFF_BITS), name=f"mk_{'rgb'[c]}{'yuv'[k]}", init=mat.coeffs[c][k],
+                          reset_less=True) for k in range(3)] for c in range(3)]
         for c in range(3):
             for k in range(3):
-                m.d.sync += q[c][k].eq(coeff[c][k] * offset[k])
+                m.d.sync += [kcoeff[c][k].eq(coeff[c][k]), q[c][k].eq(kcoeff[c][k] * offset[k])]
             m.d.sync += konst[c].eq(bias - q[c][0] - q[c][1] - q[c][2])
         prod = [[Signal(signed(pbits), name=f"p_{'rgb'[c]}{'yuv'[k]}") for k in range(3)] for c in range(3)]
         acc = [Signal(signed(sbits), name=f"sum_{'rgb'[c]}") for c in range(3)]
