@@ -19,7 +19,7 @@ its slots (``k + lanes g`` of every pixel's group ``g``) through its own index a
 - ``b[n]`` (every lane's lookup, the tag check's first cycle, takes group n; two places, its ready
   registered) ``>= a[n] + ADDRESS_STAGES``, ``>= b[n-1] + 1``, ``>= g[n-2] + 1``;
 - ``g[n]`` (every lane's tag check, the same cycle) ``>= b[n] + LOOKUP_STAGES``, ``>= g[n-1] +
-  max(1, max_k misses_k[n-1])``, and for every lane ``>= p_k[n-Q]`` and ``>= p_k[v_k] + 1`` (its
+  max(1, max_k misses_k[n-1])``, and for every lane ``>= p_k[n-Q] + fifo_slack(Q)`` and ``>= p_k[v_k] + 1`` (its
   victim rule);
 - lane k's j-th burst of group n is offered in ``g[n] + 1 + j`` and issued by the arbiter's rule
   (:class:`golden.memory.arbiter.Arbiter`, offers in (cycle, lane) order) into one memory model;
@@ -47,7 +47,7 @@ from .. import filter as spec
 from ..format import TextureSet
 from .arbiter import Arbiter
 from .system import MemoryConfig
-from .timing import ADDRESS_STAGES, LOOKUP_STAGES, accept_and_lookup, plan
+from .timing import ADDRESS_STAGES, LOOKUP_STAGES, accept_and_lookup, fifo_slack, plan
 
 __all__ = ["FOOTPRINT_LATENCY", "BLEND_LATENCY", "FETCH_LATENCY", "lane_requests", "run", "run_pixels"]
 
@@ -95,6 +95,7 @@ def run(plans: list, config: MemoryConfig, last: np.ndarray, *, start: int = FOO
     lanes = len(plans)
     n = len(last)
     La, Q, L = ADDRESS_STAGES, config.prefetch, int(latency)
+    slack = fifo_slack(Q)
     mem = config.make_memory()
     d = mem.beat_interval
     arb = Arbiter()
@@ -120,7 +121,7 @@ def run(plans: list, config: MemoryConfig, last: np.ndarray, *, start: int = FOO
         if i and g[i - 1] + max(1, maxmiss[i - 1]) > gi:
             gi = g[i - 1] + max(1, maxmiss[i - 1])
         if i >= Q:
-            f = max(pr[k][i - Q] for k in K)
+            f = max(pr[k][i - Q] for k in K) + slack
             if f > gi:
                 fifo_c += f - gi
                 gi = f

@@ -33,7 +33,9 @@ back to back from cycle 0; ``x[n-k]`` for ``n < k`` imposes nothing):
   was still unchecked at the start of the cycle). With ``address_stages = 0``, ``a[n] = b[n]``.
 - ``g[n]`` (tag check, its second cycle, where it is decided and the state written): ``>= b[n] +
   LOOKUP_STAGES``; ``>= g[n-1] + max(1, misses[n-1])`` (one burst
-  issued per cycle); ``>= p[n-Q]`` (a FIFO entry frees when its reference is read); for a miss whose
+  issued per cycle); ``>= p[n-Q] + fifo_slack(Q)`` (a FIFO entry frees when its reference is read:
+  the check sees the room in the FIFO's registered level, so from the cycle after the read, for
+  ``Q > 1``; the blocking cache, ``Q = 1``, takes the read's room in the same cycle); for a miss whose
   victim line has a reference ``v`` not yet read, ``>= p[v] + 1`` (a line is never replaced under a
   waiting reference).
 - The j-th miss of request n issues its burst (AR) in cycle ``g[n] + 1 + j``; the memory model gives
@@ -80,7 +82,7 @@ from ..format import TextureSet
 from .cache import classify
 from .system import Layout, MemoryConfig, references
 
-__all__ = ["ADDRESS_STAGES", "LOOKUP_STAGES", "FRONT_LATENCY", "Plan", "plan", "accept_and_lookup", "run", "run_requests", "TexelPipeline", "StreamSink"]
+__all__ = ["ADDRESS_STAGES", "LOOKUP_STAGES", "FRONT_LATENCY", "Plan", "plan", "fifo_slack", "accept_and_lookup", "run", "run_requests", "TexelPipeline", "StreamSink"]
 
 #: The unit's address stages before the cache block (descriptor, block address).
 ADDRESS_STAGES = 2
@@ -231,6 +233,15 @@ class StreamSink:
 
 
 
+def fifo_slack(q: int) -> int:
+    """Cycles after the read of reference ``n - q`` before the tag check may put reference ``n`` in
+    a FIFO of ``q`` entries (the rule ``g[n] >= p[n-q] + fifo_slack(q)``): 1 for a prefetching FIFO
+    (``q > 1``: the check's ready sees the room in the FIFO's registered level only, so the data
+    read's ``pop`` stays off the check's path), 0 for the blocking cache (``q = 1``: a read and the
+    next check in the same cycle, else every reference would take two cycles)."""
+    return 1 if q > 1 else 0
+
+
 def accept_and_lookup(i: int, a: list, b: list, g: list, La: int, start: int) -> tuple:
     """Request (or group) ``i``'s accept and lookup cycles ``(a[i], b[i])`` from its predecessors'
     (the rules of the module docstring; one definition for :func:`run` and the filter's
@@ -263,6 +274,7 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
     ``read``, ``enter`` (int64 (N,))."""
     n = len(p.misses)
     La, Q, L = int(address_stages), config.prefetch, int(pipeline_latency)
+    slack = fifo_slack(Q)
     mem = config.make_memory()
     d = mem.beat_interval
     pipe = consumer if consumer is not None else TexelPipeline(L, ready_pattern, max(64, 2 * n + L + 64, n_hint))
@@ -284,9 +296,9 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
         gi = bi + LOOKUP_STAGES
         if i and g[i - 1] + max(1, misses[i - 1]) > gi:
             gi = g[i - 1] + max(1, misses[i - 1])
-        if i >= Q and pr[i - Q] > gi:
-            fifo_c += pr[i - Q] - gi
-            gi = pr[i - Q]
+        if i >= Q and pr[i - Q] + slack > gi:
+            fifo_c += pr[i - Q] + slack - gi
+            gi = pr[i - Q] + slack
         v = victim[i]
         if v >= 0 and pr[v] + 1 > gi:
             victim_c += pr[v] + 1 - gi

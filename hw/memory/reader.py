@@ -20,7 +20,8 @@ consumer; with every reference a hit: one request per cycle, 3 cycles from ``i``
   (an index request reads word ``w``, and ``w + 1`` when ``straddle``, a second lookup when it lies
   in the next line; a raw request one raw word). A miss allocates the LRU way at once (an empty way
   first) and queues its burst; the reference enters the FIFO. The check waits while the FIFO is full
-  (and not read this cycle), while the second of two bursts of the previous request waits, or while
+  at the start of the cycle (its registered level; for ``Q = 1``, the blocking cache: full and not
+  read this cycle), while the second of two bursts of the previous request waits, or while
   a miss's victim line still has a reference in the FIFO.
 * **AR**: the j-th burst of a request checked in cycle ``g`` is on AR in cycle ``g + 1 + j`` (when
   ``arready`` is high, as the golden memory assumes; otherwise it waits and holds the tag check).
@@ -555,8 +556,14 @@ class CachedReader(wiring.Component):
         m.d.comb += pop.eq((level != 0) & head_filled & o_free)
         m.d.comb += self.stall_fill.eq((level != 0) & ~head_filled & o_free)
 
+        # Room in the FIFO: from the registered level alone (``pop``, the end of the data read's
+        # path through the fill LUT RAMs, stays off the check's ready and ``take``), so an entry freed
+        # by a read is taken from the next cycle (golden's ``fifo_slack``); the blocking cache
+        # (Q = 1) keeps the read's room in the same cycle (else every reference would take two).
+        room = Signal(name="fifo_room")
+        m.d.comb += room.eq((level != Q) | pop if Q == 1 else level != Q)
         m.d.comb += [
-            check_ready.eq(~slot_v[1] & (~slot_v[0] | self.axi.arready) & ((level != Q) | pop) & ~busy),
+            check_ready.eq(~slot_v[1] & (~slot_v[0] | self.axi.arready) & room & ~busy),
             take.eq(lv & (self.check_go if self._joint else check_ready)),
             self.i.ready.eq(~sv),
         ]
