@@ -13,10 +13,11 @@ consumer; with every reference a hit: one request per cycle, 3 cycles from ``i``
 
 * **Lookup** (the tag check's first cycle; ``i`` transfers in cycle ``b``): the request's lines, sets
   and tags are computed and each bank's tag row (tags, LRU ages, valid bits) is read from LUT RAM and
-  registered, the row the check writes in that cycle forwarded. The lookup has two places, a main
-  register (read by the check) and a skid register (a request arriving while the main one waits),
-  so ``i.ready`` is a register: ``~skid_valid``, i.e. ``b[n] >= g[n-2] + 1``.
-* **Tag check** (cycle ``g >= b + 1``, from the main register): the request's references are compared
+  registered, the row the check writes in that cycle forwarded. The lookup has two places, two
+  entries: the check reads the older (a registered pointer), the free one loads the request on
+  ``i``; so ``i.ready`` is a register, ``~skid_valid`` (both entries full), i.e. ``b[n] >= g[n-2] +
+  1``, and no entry's clock enable depends on the check's decision.
+* **Tag check** (cycle ``g >= b + 1``, from the older entry): the request's references are compared
   (an index request reads word ``w``, and ``w + 1`` when ``straddle``, a second lookup when it lies
   in the next line; a raw request one raw word). A miss allocates the LRU way at once (an empty way
   first) and queues its burst; the reference enters the FIFO. The check waits while the FIFO is full
@@ -229,14 +230,15 @@ class _Cache:
         """The tag check's first cycle: the lookup registers the set and tag of ``line`` (and of
         ``line + 1``: a second port, when the cache has two banks), and each bank's tag row and
         touched bit for them, read from the LUT RAM (a bank holds the port whose set has its parity),
-        in two places (:func:`_skid`): the main register, which the check reads, loaded when
-        ``load``; and the skid register, which holds a request that arrived while the main one
-        waited (``sv``). A row the tag check writes in this same cycle (the request ahead, leaving
-        the check) is forwarded into the main register: it takes the written row and touched bit,
-        not the memory's (or the skid register's) old ones. Only the tag check writes these rows,
-        and only when its request leaves, which is when the main register loads: so no register
-        holds a stale row (the skid register is loaded only in cycles without a write, and moves
-        into the main register, forwarded, in the cycle of the next one)."""
+        in two places (:func:`_pair`): two entries, the free one (``wr``) loading the request on
+        ``i``, the check reading entry ``rp`` (the older; ``sv``: both full). Only the tag check
+        writes these rows, and only when its request leaves (``take``); the request ahead of an
+        entry's is the only one that can leave between the entry's lookup and its check (the
+        rule ``b[n] >= g[n-2] + 1``). So an entry loaded in the cycle of that write takes the
+        written row and touched bit (forwarded), and an entry that waited full while it was
+        written (``sv``) reads, in the next cycle, when it is the checked one, the written row from
+        a register loaded every cycle (``fix_row``), and keeps it (its enable is the registered
+        ``fix``): no entry holds a stale row when the check reads it."""
         nports = self.banks
         sb = max(1, self.set_bits)
         nsets, ntags = [], []
@@ -482,11 +484,11 @@ class CachedReader(wiring.Component):
         m.d.comb += [a0.eq(req.word * wb), a1.eq((req.word + 1) * wb), ra.eq(self._raw_base + req.word * 4)]
         il, rl = _log2(ic.shape.line), _log2(rc.shape.line)
         line0, line1, rline = a0 >> il, a1 >> il, ra >> rl
-        # The lookup holds up to two requests: the main register (``lv``), which the check works
-        # from, and a skid register (``sv``) that takes the request on ``i`` while the main one waits,
-        # so that ``i.ready`` is a register (``~sv``) and the check's decision (``take``) does not
-        # reach the stages in front. The main register loads when empty or when its request leaves
-        # the check (``take``): from the skid register when that holds one, else from ``i``.
+        # The lookup holds up to two requests (``lv``: one or two, ``sv``: two), so that ``i.ready``
+        # is a register (``~sv``) and the check's decision (``take``) does not reach the stages in
+        # front; they are in two entries (:func:`_pair`) whose clock enables are registered
+        # (``wr``: the free entry, whenever ``~sv``): ``take`` moves the read pointer and the counts
+        # only, not the enables of the lookup's some 500 flip-flops.
         lv = Signal(name="lookup_valid")
         sv = Signal(name="skid_valid")
         load = Signal()
