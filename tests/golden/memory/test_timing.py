@@ -8,7 +8,7 @@ import pytest
 from vqtex.golden.fetch import random_requests
 from vqtex.golden.memory.cache import CacheShape
 from vqtex.golden.memory.system import Layout, MemoryConfig, references
-from vqtex.golden.memory.timing import FRONT_LATENCY, plan, run_requests
+from vqtex.golden.memory.timing import FRONT_LATENCY, fifo_slack, plan, run_requests
 from vqtex.golden.encode import encode
 
 from tests.support import image, texture_set
@@ -92,6 +92,24 @@ def test_every_request_a_new_line_blocking():
     assert pre["tag"][0] == 3
     assert pre["read"].tolist() == (25 + np.arange(16)).tolist()
     assert pre["cycles"] == 25 + 15 + 1 + L + 1
+
+
+def test_fifo_room_from_the_registered_level():
+    """A prefetching FIFO of Q entries frees an entry for the check the cycle after its reference is
+    read (``g[n] >= p[n-Q] + 1``: the check sees the registered level, not the read's ``pop``); the
+    blocking cache (Q = 1) in the read's own cycle (``g[n] >= p[n-1]``). Every request misses on a
+    new line, so the FIFO is full and the rule binds for every n >= Q."""
+    ts = encode([image((64, 64), 0)], block=(4, 4), codebook_size=8, color="rgb", index_bits=8)
+    line = 16
+    req = np.array([(0, 0, 0, 4 * r) for r in range(16)], np.int64)   # request r: line r, a miss
+    assert (fifo_slack(1), fifo_slack(2), fifo_slack(128)) == (0, 1, 1)
+    for q in (1, 2, 4):
+        cfg = MemoryConfig(index_cache=CacheShape(4096, line, 4), prefetch=q, latency=20, bandwidth=16,
+                           bus_bytes=16)
+        out = run_requests(ts, req, cfg, L, always)
+        g, p = out["tag"], out["read"]
+        assert (g[q:] == p[:-q] + fifo_slack(q)).all(), q
+        assert out["stall_cycles"]["fifo_full"] > 0
 
 
 @pytest.mark.parametrize("name", ["yuv_4x4_b12_mip", "rgba_2x2_b7_mip_w16", "i8_4x2_b5_w64"])
