@@ -12,7 +12,7 @@ The unit (docs/memory.md)
                                                                                           responses
 
 The address stages (descriptor, block address) compute the words a request reads; the tag check
-takes two cycles: the lookup (``LOOKUP_STAGES``: two places, two entries the check reads in turn, so its
+takes two cycles: the lookup (``LOOKUP_STAGES``: two places, a main and a skid register, so its
 ready is a register) reads the tag rows of the request's sets and registers them (a row the check
 writes in that cycle is forwarded to it), and the check proper compares them for its references
 (:mod:`golden.memory.system`) in the index or raw cache, allocating a line and issuing its burst
@@ -28,7 +28,7 @@ back to back from cycle 0; ``x[n-k]`` for ``n < k`` imposes nothing):
   stages are a chain of stream registers that moves as a whole against the lookup's acceptance: a
   stage takes a new item when its item leaves, in the same cycle).
 - ``b[n]`` (the lookup, the tag check's first cycle, takes request n): ``>= a[n] + ADDRESS_STAGES``;
-  ``>= b[n-1] + 1``; ``>= g[n-2] + 1`` (the lookup has two places, two entries the check reads in turn, and
+  ``>= b[n-1] + 1``; ``>= g[n-2] + 1`` (the lookup has two places, a main and a skid register, and
   its ready is the registered ``~skid_valid``: it takes a request when at most one of those it holds
   was still unchecked at the start of the cycle). With ``address_stages = 0``, ``a[n] = b[n]``.
 - ``g[n]`` (tag check, its second cycle, where it is decided and the state written): ``>= b[n] +

@@ -13,11 +13,10 @@ consumer; with every reference a hit: one request per cycle, 3 cycles from ``i``
 
 * **Lookup** (the tag check's first cycle; ``i`` transfers in cycle ``b``): the request's lines, sets
   and tags are computed and each bank's tag row (tags, LRU ages, valid bits) is read from LUT RAM and
-  registered, the row the check writes in that cycle forwarded. The lookup has two places, two
-  entries: the check reads the older (a registered pointer), the free one loads the request on
-  ``i``; so ``i.ready`` is a register, ``~skid_valid`` (both entries full), i.e. ``b[n] >= g[n-2] +
-  1``, and no entry's clock enable depends on the check's decision.
-* **Tag check** (cycle ``g >= b + 1``, from the older entry): the request's references are compared
+  registered, the row the check writes in that cycle forwarded. The lookup has two places, a main
+  register (read by the check) and a skid register (a request arriving while the main one waits),
+  so ``i.ready`` is a register: ``~skid_valid``, i.e. ``b[n] >= g[n-2] + 1``.
+* **Tag check** (cycle ``g >= b + 1``, from the main register): the request's references are compared
   (an index request reads word ``w``, and ``w + 1`` when ``straddle``, a second lookup when it lies
   in the next line; a raw request one raw word). A miss allocates the LRU way at once (an empty way
   first) and queues its burst; the reference enters the FIFO. The check waits while the FIFO is full
@@ -92,18 +91,17 @@ def _log2(v: int) -> int:
     return v.bit_length() - 1
 
 
-def _pair(m, nx, name, wr, rp):
-    """The lookup's two places for one field: two entries, entry ``k`` loading ``nx`` (the request
-    on ``i``) when ``wr[k]`` (a registered enable: the entry is free); returned, the entry the check
-    reads, ``rp`` (a register: the older request). Neither entry's enable depends on the check's
-    decision (``take`` moves only ``rp`` and the counts)."""
+def _skid(m, nx, name, load, sv):
+    """The lookup's two places for one field: the main register (returned; the check reads it),
+    loaded when ``load`` from the skid register when that holds a request (``sv``), else from
+    ``nx`` (the request on ``i``); and the skid register, loading ``nx`` whenever it is empty."""
     nx = Value.cast(nx)
-    e = [Signal(len(nx), name=f"{name}_e{k}") for k in range(2)]
-    for k in range(2):
-        with m.If(wr[k]):
-            m.d.sync += e[k].eq(nx)
     r = Signal(len(nx), name=name)
-    m.d.comb += r.eq(Mux(rp, e[1], e[0]))
+    sk = Signal(len(nx), name=f"skid_{name}")
+    with m.If(~sv):
+        m.d.sync += sk.eq(nx)
+    with m.If(load):
+        m.d.sync += r.eq(Mux(sv, sk, nx))
     return r
 
 
@@ -226,19 +224,18 @@ class _Cache:
         """The value of the bank holding set ``s`` (small signals: hit, way, ...)."""
         return per_bank[0] if self.banks == 1 else Mux(s[0], per_bank[1], per_bank[0])
 
-    def lookup(self, m, line, wr, rp, take, sv):
+    def lookup(self, m, line, load, sv):
         """The tag check's first cycle: the lookup registers the set and tag of ``line`` (and of
         ``line + 1``: a second port, when the cache has two banks), and each bank's tag row and
         touched bit for them, read from the LUT RAM (a bank holds the port whose set has its parity),
-        in two places (:func:`_pair`): two entries, the free one (``wr``) loading the request on
-        ``i``, the check reading entry ``rp`` (the older; ``sv``: both full). Only the tag check
-        writes these rows, and only when its request leaves (``take``); the request ahead of an
-        entry's is the only one that can leave between the entry's lookup and its check (the
-        rule ``b[n] >= g[n-2] + 1``). So an entry loaded in the cycle of that write takes the
-        written row and touched bit (forwarded), and an entry that waited full while it was
-        written (``sv``) reads, in the next cycle, when it is the checked one, the written row from
-        a register loaded every cycle (``fix_row``), and keeps it (its enable is the registered
-        ``fix``): no entry holds a stale row when the check reads it."""
+        in two places (:func:`_skid`): the main register, which the check reads, loaded when
+        ``load``; and the skid register, which holds a request that arrived while the main one
+        waited (``sv``). A row the tag check writes in this same cycle (the request ahead, leaving
+        the check) is forwarded into the main register: it takes the written row and touched bit,
+        not the memory's (or the skid register's) old ones. Only the tag check writes these rows,
+        and only when its request leaves, which is when the main register loads: so no register
+        holds a stale row (the skid register is loaded only in cycles without a write, and moves
+        into the main register, forwarded, in the cycle of the next one)."""
         nports = self.banks
         sb = max(1, self.set_bits)
         nsets, ntags = [], []
@@ -250,8 +247,8 @@ class _Cache:
             m.d.comb += [s.eq(ln[:self.set_bits] if self.set_bits else 0), t.eq(ln >> self.set_bits)]
             nsets.append(s)
             ntags.append(t)
-            self.rset.append(_pair(m, s, f"{self.name}_set{k}", wr, rp))
-            self.rtag.append(_pair(m, t, f"{self.name}_line_tag{k}", wr, rp))
+            self.rset.append(_skid(m, s, f"{self.name}_set{k}", load, sv))
+            self.rtag.append(_skid(m, t, f"{self.name}_line_tag{k}", load, sv))
         self.rrow = [Signal(self.lines.shape, name=f"{self.name}{b}_row" if self.banks > 1 else f"{self.name}_row")
                      for b in range(self.banks)]
         self.rtouched = [Signal(name=f"{self.name}{b}_row_touched" if self.banks > 1 else f"{self.name}_row_touched")
@@ -268,35 +265,25 @@ class _Cache:
                 t = Signal(self.tag_bits, name=f"{n}_next_tag")
                 m.d.comb += [s.eq(Mux(nsets[0][0] == b, nsets[0], nsets[1])),
                              t.eq(Mux(nsets[0][0] == b, ntags[0], ntags[1]))]
-                self.rbank.append((_pair(m, s, f"{n}_set", wr, rp), _pair(m, t, f"{n}_tag", wr, rp)))
+                self.rbank.append((_skid(m, s, f"{n}_set", load, sv), _skid(m, t, f"{n}_tag", load, sv)))
             rd = self.lines.read(m, b, s, f"{n}_next_row")
             r = self.lines.row(s)
             touched = self.touched[b]
             here = touched.bit_select(r, 1) if len(touched) > 1 else touched
-            # each entry's row, its row address and touched bit; an entry loaded in a cycle in which
-            # the check writes its set takes the written row (``now``)
-            rows = [Signal(self.lines.shape, name=f"{n}_row_e{k}") for k in range(2)]
-            addrs = [Signal(len(r), name=f"{n}_row_addr_e{k}") for k in range(2)]
-            ts = [Signal(name=f"{n}_row_touched_e{k}") for k in range(2)]
-            now = Signal(name=f"{n}_fwd_now")
-            m.d.comb += now.eq(take & self.w_act[b] & (self.w_addr[b] == r) if len(touched) > 1
-                               else take & self.w_act[b])
-            # A request held in the other entry (``sv``: both full) while the check writes its set
-            # (the request ahead leaving): the next cycle, when it is the checked one, it reads the
-            # written row (``fix_row``, registered every cycle) and its entry keeps it.
-            fix = Signal(name=f"{n}_fix")
-            fix_row = Signal(self.lines.shape, name=f"{n}_fix_row")
-            other = Mux(rp, addrs[0], addrs[1])
-            m.d.sync += [fix.eq(take & sv & self.w_act[b] & (self.w_addr[b] == other) if len(touched) > 1
-                                else take & sv & self.w_act[b]),
-                         fix_row.eq(self.w_row[b])]
-            for k in range(2):
-                with m.If(fix & (rp == k)):
-                    m.d.sync += [rows[k].eq(fix_row), ts[k].eq(1)]
-                with m.If(wr[k]):
-                    m.d.sync += [rows[k].eq(Mux(now, self.w_row[b], rd)), addrs[k].eq(r), ts[k].eq(here | now)]
-            m.d.comb += [self.rrow[b].eq(Mux(fix, fix_row, Mux(rp, rows[1], rows[0]))),
-                         self.rtouched[b].eq(Mux(rp, ts[1], ts[0]) | fix)]
+            # the skid register's row, its address and touched bit
+            sk_row = Signal(self.lines.shape, name=f"skid_{n}_row")
+            sk_addr = Signal(len(r), name=f"skid_{n}_row_addr")
+            sk_t = Signal(name=f"skid_{n}_row_touched")
+            with m.If(~sv):
+                m.d.sync += [sk_row.eq(rd), sk_addr.eq(r), sk_t.eq(here)]
+            src_row = Signal(self.lines.shape, name=f"{n}_src_row")
+            src_addr = Signal(len(r), name=f"{n}_src_row_addr")
+            m.d.comb += [src_row.eq(Mux(sv, sk_row, rd)), src_addr.eq(Mux(sv, sk_addr, r))]
+            fwd = Signal(name=f"{n}_fwd")
+            m.d.comb += fwd.eq(self.w_act[b] & (self.w_addr[b] == src_addr) if len(touched) > 1 else self.w_act[b])
+            with m.If(load):
+                m.d.sync += [self.rrow[b].eq(Mux(fwd, self.w_row[b], src_row)),
+                             self.rtouched[b].eq(Mux(sv, sk_t, here) | fwd)]
 
     def check(self, m, actives, take):
         """The tag check's second cycle, on what :meth:`lookup` registered: ``actives`` is whether each
@@ -484,25 +471,15 @@ class CachedReader(wiring.Component):
         m.d.comb += [a0.eq(req.word * wb), a1.eq((req.word + 1) * wb), ra.eq(self._raw_base + req.word * 4)]
         il, rl = _log2(ic.shape.line), _log2(rc.shape.line)
         line0, line1, rline = a0 >> il, a1 >> il, ra >> rl
-        # The lookup holds up to two requests (``lv``: one or two, ``sv``: two), so that ``i.ready``
-        # is a register (``~sv``) and the check's decision (``take``) does not reach the stages in
-        # front; they are in two entries (:func:`_pair`) whose clock enables are registered
-        # (``wr``: the free entry, whenever ``~sv``): ``take`` moves the read pointer and the counts
-        # only, not the enables of the lookup's some 500 flip-flops.
+        # The lookup holds up to two requests: the main register (``lv``), which the check works
+        # from, and a skid register (``sv``) that takes the request on ``i`` while the main one waits,
+        # so that ``i.ready`` is a register (``~sv``) and the check's decision (``take``) does not
+        # reach the stages in front. The main register loads when empty or when its request leaves
+        # the check (``take``): from the skid register when that holds one, else from ``i``.
         lv = Signal(name="lookup_valid")
         sv = Signal(name="skid_valid")
         load = Signal()
         take = Signal()
-        # the two entries (:func:`_pair`): the check reads entry ``rp`` (the older request); the
-        # free entry ``wp`` loads the request on ``i`` whenever the lookup is not full (``~sv``)
-        rp = Signal(name="lookup_rp")
-        wp = Signal(name="lookup_wp")
-        wr = [Signal(name=f"lookup_wr{k}") for k in range(2)]
-        m.d.comb += [wr[0].eq(~sv & ~wp), wr[1].eq(~sv & wp)]
-        with m.If(self.i.valid & ~sv):
-            m.d.sync += wp.eq(~wp)
-        with m.If(take):
-            m.d.sync += rp.eq(~rp)
         m.d.comb += load.eq(~lv | take)
         with m.If(load):
             m.d.sync += lv.eq(sv | self.i.valid)
@@ -510,11 +487,11 @@ class CachedReader(wiring.Component):
             m.d.sync += sv.eq(~take)
         with m.Else():
             m.d.sync += sv.eq(self.i.valid & lv & ~take)
-        ic.lookup(m, line0, wr, rp, take, sv)
-        rc.lookup(m, rline, wr, rp, take, sv)
+        ic.lookup(m, line0, load, sv)
+        rc.lookup(m, rline, load, sv)
 
         def field(nx, name):
-            return _pair(m, nx, name, wr, rp)
+            return _skid(m, nx, name, load, sv)
         l_raw = field(req.raw, "lookup_raw")
         l_two = field(~req.raw & req.straddle & (line1 != line0), "lookup_two")
         l_tag = field(req.tag, "lookup_tag") if self._tag_width else C(0, 1)
