@@ -501,8 +501,13 @@ class CachedReader(wiring.Component):
         l_off0 = field(Mux(req.raw, (ra & (bus - 1)) >> 2, (a0 & (bus - 1)) >> _log2(wb))[:max(1, _log2(bus // min(wb, 4)) or 1)],
                        "lookup_off0")
         l_off1 = field(((a1 & (bus - 1)) >> _log2(wb))[:max(1, _log2(bus // wb) or 1)], "lookup_off1")
-        l_addr = [field((x << sh)[:self._addr_width], f"lookup_line_addr{j}")     # line0, line0 + 1, raw
-                  for j, (x, sh) in enumerate(((line0, il), (line0 + 1, il), (rline, rl)))]
+        # the bursts' line addresses (line0, line0 + 1, raw) from the sets and tags the lookup
+        # registered for the compare (not registered again: fewer flip-flops on ``take``'s enable)
+        def line_addr(cache, k, sh):
+            st, tg = cache.rset[k], cache.rtag[k]
+            return (Cat(st[:cache.set_bits], tg) << sh)[:self._addr_width] if cache.set_bits else \
+                (tg << sh)[:self._addr_width]
+        l_addr = [line_addr(ic, 0, il), line_addr(ic, 1, il), line_addr(rc, 0, rl)]
         two = l_two
         # port 1 looks up the line after line0 (line1 when ``two``; unused otherwise)
         (s0, hit0, way0, busy0), (s1, hit1, way1, busy1) = ic.check(m, [lv & ~l_raw, lv & two], take)
