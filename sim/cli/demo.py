@@ -2,7 +2,10 @@
 
 Encodes the bundled textures of the built-in ``topspin`` scene, renders a few frames with the golden
 model and with the compiled RTL, checks they are identical, writes the frames, the texture set and a
-report, and prints a summary. The files appear together when the demo succeeds, or not at all
+report, and prints a summary. ``--unit``/``--geometry`` choose the RTL unit (the loadable one loads
+the set over its bus before each frame); ``--memory external`` puts the index map and raw levels
+behind caches (the baked cached unit, or with ``--unit loadable`` the loadable cached unit, whose
+load writes the base registers; the report's ``unit`` is ``cached`` or ``loadable cached``). The files appear together when the demo succeeds, or not at all
 (:class:`~vqtex.sim.cli.common.Outputs`): a new output folder appears with one rename.
 """
 
@@ -32,8 +35,8 @@ def cmd_demo(args) -> int:
     from vqtex.golden.render.scene import load_scene
     t_start = time.perf_counter()
     memory = memory_config(args)
-    if memory is not None and args.unit is not None:
-        raise CliError("--memory external is the specialised baked unit behind caches: no --unit")
+    if memory is not None and args.unit not in (None, "loadable"):
+        raise CliError(f"--memory external is the cached unit, baked or loadable: no --unit {args.unit}")
     with Outputs() as outs:
         out_dir = outs.folder(args.out_dir)
         scene = load_scene("topspin")
@@ -42,7 +45,7 @@ def cmd_demo(args) -> int:
                                      for n in ("topspin.vqt", "report.json", COMPARE_NAME))
         frame_paths = {f: outs.add(os.path.join(out_dir, f"topspin_{f:04d}.png")) for f in frames}
         images = [img for img, _ in scene.load_textures()]
-        resolve(args, "unit", "specialised", args.backend != "golden",
+        resolve(args, "unit", "specialised", args.backend != "golden" or (memory is not None and args.unit == "loadable"),
                 "chooses the RTL texel-fetch unit: it needs an RTL --backend (pysim, cxxrtl, verilator)")
         t0 = time.perf_counter()
         ts = encode_scene(scene, images)
@@ -56,7 +59,7 @@ def cmd_demo(args) -> int:
         report = _report(args, ts, per_frame, mismatches, encode_s)
         report["unit"] = args.unit
         if memory is not None:
-            report["unit"] = "cached"
+            report["unit"] = "loadable cached" if geometry is not None else "cached"
             report["memory"] = memory_summary(memory, per_frame)
         if geometry is not None:
             report["geometry"] = geometry.to_dict()
@@ -97,8 +100,8 @@ def _summary(args, scene, frames, report, per_frame, mismatches) -> str:
     else:
         rtl = (f"  RTL ({args.backend}, {report['unit']} unit) frames identical to golden: "
                f"{'yes' if not mismatches else 'NO ' + str(mismatches)}")
-        if report.get("load_cycles_per_frame") is not None:
-            rtl += f"\n  loaded over the bus port before each frame: {report['load_cycles_per_frame']} cycles"
+    if report.get("load_cycles_per_frame") is not None:
+        rtl += f"\n  loaded over the bus port before each frame: {report['load_cycles_per_frame']} cycles"
     return "\n".join([
         f"vqtex demo: topspin, {len(frames)} frames {scene.width}x{scene.height}, trilinear mipmapping",
         "  textures: " + ", ".join(f"{n} {r:.1f}:1" for n, r in report["texture_rates"].items())

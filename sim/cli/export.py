@@ -14,7 +14,9 @@ unit into DIR (:mod:`vqtex.sim.testbench.write`: ``tb_texel_fetch.py``, ``run_tb
 
 With ``--unit loadable --memory external`` it is the loadable cached unit: no texture data, the
 Wishbone port (``bus_*``) and the AXI4 read master (``axi_*``), and the register map with the base
-registers (``INDEX_BASE``, ``RAW_BASE``) and no index or raw regions.
+registers (``INDEX_BASE``, ``RAW_BASE``) and no index or raw regions; its ``--testbench`` loads the
+set over the bus, places its image in cocotbext-axi's RAM where the base registers say, and reloads
+it elsewhere in the same simulation (docs/verification.md).
 
 The loadable unit (``--unit loadable``) holds no texture data: its Verilog is the geometry's (the
 named one, or the smallest that holds FILE), and beside it go its register map, ``OUT.regs.md``,
@@ -135,7 +137,7 @@ def cmd_export(args) -> int:
         if bench is not None:
             from vqtex.sim.testbench.write import write_testbench
             write_testbench({name: outs.path(p) for name, p in bench.items()}, verilog=out, ts=ts,
-                            top=args.name, unit="external" if memory is not None else args.unit,
+                            top=args.name, unit="external" if memory is not None and geometry is None else args.unit,
                             tag_width=args.tag_width, latency=latency, geometry=geometry, folder=folder,
                             memory=memory)
     report = {"output": args.output, "lint_waivers": waiver_path(args.output), "module": args.name, "bytes": len(text.encode()),
@@ -183,9 +185,6 @@ def _memory(args):
     if args.filter_lanes is not None or args.one_port or args.unit == "full" or args.dialect != "sv":
         raise ExportError("--memory external exports the cached unit: specialised or loadable, two index banks, "
                           "SystemVerilog (no --filter-lanes, --one-port, --unit full or --dialect v2005)")
-    if args.unit == "loadable" and args.testbench is not None:
-        raise ExportError("--testbench: the generated cocotb bench drives the baked cached unit, not the loadable one "
-                          "(--unit loadable --memory external)")
     return memory
 
 

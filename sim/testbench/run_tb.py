@@ -2,7 +2,7 @@
 """Runner of the cocotb testbench ``tb_texel_fetch.py`` beside it (written by ``vqtex export --testbench DIR``).
 
     python run_tb.py [--sim icarus|verilator] [--requests N] [--seed S] [--stall P] [--gap P]
-                     [--per-bin N] [--set OTHER.vqt] [--build-dir DIR] [--rebuild] [--waves]
+                     [--per-bin N] [--set OTHER.vqt ...] [--build-dir DIR] [--rebuild] [--waves]
 
 ``--sim`` defaults to ``$SIM``, else ``icarus``. It builds the Verilog named in ``tb_config.json``
 with cocotb's Python runner (``cocotb_tools.runner``) into ``sim_build_<sim>/`` beside this file,
@@ -104,7 +104,9 @@ def main(argv=None) -> int:
     p.add_argument("--gap", type=float, default=cfg["gap"], help=f"P(no request offered) per cycle (default {cfg['gap']})")
     p.add_argument("--per-bin", type=int, default=cfg["per_bin"],
                    help=f"random-phase requests drawn from each reachable bin (default {cfg['per_bin']})")
-    p.add_argument("--set", default=None, help=f"texture set to run (default {cfg['set']}; another one only on the loadable unit)")
+    p.add_argument("--set", action="append", default=None,
+                   help=f"texture set to run (default {cfg['set']}; another one only on the loadable unit, which "
+                        "loads each --set given in turn in one simulation)")
     p.add_argument("--build-dir", default=None, help="build folder (default sim_build_<sim> beside this file)")
     p.add_argument("--rebuild", action="store_true", help="rebuild even if the build is up to date")
     p.add_argument("--waves", action="store_true", help="dump waveforms")
@@ -156,7 +158,7 @@ def main(argv=None) -> int:
     env = {"VQTEX_TB_REQUESTS": str(args.requests), "VQTEX_TB_SEED": str(args.seed), "VQTEX_TB_STALL": repr(args.stall),
            "VQTEX_TB_GAP": repr(args.gap), "VQTEX_TB_PER_BIN": str(args.per_bin), "VQTEX_TB_REPORT": report}
     if args.set:
-        env["VQTEX_TB_SET"] = os.path.abspath(args.set)
+        env["VQTEX_TB_SET"] = os.pathsep.join(os.path.abspath(path) for path in args.set)
     if HERE not in sys.path:
         sys.path.insert(0, HERE)                          # the runner passes sys.path to the simulator's Python
     runner = get_runner(args.sim)
@@ -185,6 +187,12 @@ def main(argv=None) -> int:
     if os.path.exists(report):
         with open(report) as f:
             cov = json.load(f)
+        for n, load in enumerate(cov.get("loads", [])):
+            print(f"run_tb: {args.sim}: load {n + 1}: {load['set']}, {load['writes']} Wishbone writes"
+                  + (f" (index base 0x{load['index_base']:x}, raw base 0x{load['raw_base']:x}), {load['bursts']} AXI "
+                     f"bursts (golden's caches: {load['golden_bursts']})" if "index_base" in load else "")
+                  + f"; port check: {load['port']['reads']} reads, {load['port']['writes']} writes, "
+                    f"{load['port']['errors']} err answers (golden's map: {load['port']['errors_expected']})")
         if "bursts" in cov:
             print(f"run_tb: {args.sim}: {cov['bursts']} AXI bursts (golden's caches: {cov['golden_bursts']}), "
                   f"hit rate index {cov['hit_rate']['index']}, raw {cov['hit_rate']['raw']}; requests that hit "

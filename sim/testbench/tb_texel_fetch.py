@@ -4,13 +4,22 @@ Run it with ``python run_tb.py`` beside it (``SIM=icarus`` or ``SIM=verilator``;
 it does, in one cocotb test, ``texel_fetch_against_golden``:
 
 1. **Reset** (``rst`` high for three clock edges; nothing is driven at time 0, see :func:`_start`).
-2. **Load** (the loadable unit only): every bus write of ``golden.register_map.load_writes(set,
+2. **Load** (the loadable units only): every bus write of ``golden.register_map.load_writes(set,
    geometry)`` (colour matrix, every descriptor row, the index, codebook and raw memories) through the
    ``bus_*`` Wishbone port by cocotbext-wishbone's ``WishboneMaster``; every write must be acked.
+   Then the **port check** (:meth:`Host.check_port`): reads of the control registers and a few
+   words answer ``golden.register_map.expected_reads``, addresses beyond the map answer ``err``.
    The baked units hold the set in their ROMs already (the bench checks the set is the one baked in).
-   **Memory** (the external-memory unit, ``unit`` ``external``): cocotbext-axi's ``AxiRamRead``
-   answers the ``axi_*`` master from the set's memory image (``golden.memory.system.Layout.image``:
-   the index map at 0, the raw levels from the next 4 KB), with its own ``arready`` and R timing.
+   **Memory** (the external-memory units, ``memory`` in the configuration): cocotbext-axi's
+   ``AxiRamRead`` answers the ``axi_*`` master, with its own ``arready`` and R timing, from the set's
+   memory image (``golden.memory.system.Layout.image``): the baked cached unit's at ``Layout.of``
+   (the index map at 0, the raw levels from the next 4 KB); the loadable cached unit's where the
+   bench puts it (:func:`placements`) and tells the unit by the ``INDEX_BASE``/``RAW_BASE`` writes
+   of its load.
+   **Several loads** (the loadable units): steps 2-5 run for each set given (``VQTEX_TB_SET``, a
+   path list) in turn, in one simulation; the loadable cached unit given one set loads it twice, the
+   second time at other, overlapping bases (:func:`loads`), so a line kept from the first load
+   would hold other bytes.
 3. **Random phase**: ``requests`` requests; every bin the set can reach (``vqtex.sim.testbench.bins``)
    gets ``per_bin`` requests drawn from its blocks, the rest are ``golden.fetch.random_requests``,
    shuffled. The **driver** offers them on ``i_*`` with random idle cycles (``gap``), holding valid
@@ -28,7 +37,8 @@ it does, in one cocotb test, ``texel_fetch_against_golden``:
    external-memory unit: every AR is an INCR burst of the bus width that stays inside a 4 KB page
    and inside the memory image (checked at its handshake; AxiRamRead itself asserts the 4 KB rule
    but wraps an address past its size, so the bench checks that), and the bursts are exactly the
-   golden caches' misses of the whole stream, in order (``golden.memory.timing.plan``: the lines,
+   golden caches' misses of the stream since the load, in order (``golden.memory.timing.plan`` with
+   the load's layout: the lines,
    each read once while it stays cached); its latency is a lower bound (``latency``, every
    reference a hit), a miss takes what the memory takes.
 6. **Coverage** (cocotb-coverage): cover points colour, index width, straddle, level group, stall and
@@ -40,8 +50,9 @@ it does, in one cocotb test, ``texel_fetch_against_golden``:
 
 Configuration: ``tb_config.json`` beside this file (written by the export), overridden by the
 environment the runner sets: ``VQTEX_TB_REQUESTS``, ``VQTEX_TB_SEED``, ``VQTEX_TB_STALL``,
-``VQTEX_TB_GAP``, ``VQTEX_TB_PER_BIN``, ``VQTEX_TB_SET`` (another texture set: the loadable unit
-loads it; a baked unit refuses any set but its own), ``VQTEX_TB_REPORT`` (the coverage JSON).
+``VQTEX_TB_GAP``, ``VQTEX_TB_PER_BIN``, ``VQTEX_TB_SET`` (other texture sets, ``os.pathsep``
+between them: the loadable unit loads each in turn; a baked unit refuses any set but its own),
+``VQTEX_TB_REPORT`` (the coverage JSON).
 """
 
 from __future__ import annotations
@@ -81,7 +92,9 @@ def settings() -> dict:
     cfg["stall"] = float(env.get("VQTEX_TB_STALL", cfg["stall"]))
     cfg["gap"] = float(env.get("VQTEX_TB_GAP", cfg["gap"]))
     cfg["per_bin"] = int(env.get("VQTEX_TB_PER_BIN", cfg["per_bin"]))
-    cfg["set_path"] = env.get("VQTEX_TB_SET") or os.path.join(HERE, cfg["set"])
+    given = [p for p in env.get("VQTEX_TB_SET", "").split(os.pathsep) if p]
+    cfg["set_paths"] = given or [os.path.join(HERE, cfg["set"])]
+    cfg["set_path"] = cfg["set_paths"][0]
     cfg["report"] = env.get("VQTEX_TB_REPORT") or os.path.join(os.getcwd(), "coverage.json")
     cfg.setdefault("memory", None)
     return cfg
@@ -172,9 +185,18 @@ class Bench:
         self.presented: list = []           # cycle its response first showed o_valid
         self.stalls: set = set()            # cycles of output backpressure or a one-port bubble
         self.memory = memory_config(cfg)    # the external-memory unit's caches (None on chip)
-        self.history = np.zeros((0, 4), np.int64)   # every request so far (the caches' state is the stream's)
+        self.layout = None                  # where the set lies in external memory (Layout.of by default)
+        self.history = np.zeros((0, 4), np.int64)   # every request since the load (the caches' state is the stream's)
         self.bursts: list = []              # (address, beats) of every AR handshake
+        self.first_burst = 0                # the first of them since the load
         self.memory_hits = {"hit": 0, "miss": 0}
+
+    def begin(self, ts: TextureSet, layout=None):
+        """A set is loaded (or, baked, was there from reset): the scoreboard's set, and empty caches
+        (every accepted bus write empties them; golden's model starts each stream empty)."""
+        self.ts, self.layout = ts, layout
+        self.history = np.zeros((0, 4), np.int64)
+        self.first_burst = len(self.bursts)
 
     async def drive(self, req: np.ndarray):
         """Offer ``req`` on ``i_*``: valid and payload held until ``i_ready``, random idle cycles between."""
@@ -208,7 +230,7 @@ class Bench:
         missed = np.zeros(len(req), bool)
         if self.memory is not None:
             self.history = np.concatenate([self.history, req])
-            missed = memory_plan(self.ts, self.history, self.memory).misses[-len(req):] > 0
+            missed = memory_plan(self.ts, self.history, self.memory, layout=self.layout).misses[-len(req):] > 0
         self.straddling += sum(key[2] for key in keys)
         n, held, last = 0, False, None
         while n < len(req):
@@ -287,17 +309,21 @@ class Bench:
             await RisingEdge(dut.clk)
 
     def check_bursts(self):
-        """The bursts are golden's misses of the whole stream, in order: every line the stream needs is
-        read, none twice while it stays in the cache (nor while its burst is in flight)."""
-        p = memory_plan(self.ts, self.history, self.memory)
+        """The bursts since the load are golden's misses of the stream since the load, in order (with
+        the layout the base registers give): every line the stream needs is read, none twice while it
+        stays in the cache (nor while its burst is in flight), none of the previous set's lines hit."""
+        p = memory_plan(self.ts, self.history, self.memory, layout=self.layout)
         want = list(zip(p.address.tolist(), p.beats.tolist()))
-        if self.bursts != want:
-            first = next((n for n, (a, b) in enumerate(zip(self.bursts, want)) if a != b), min(len(self.bursts), len(want)))
-            self.mismatches.append(f"{len(self.bursts)} bursts, golden's caches miss {len(want)} times; first "
+        got = self.bursts[self.first_burst:]
+        if got != want:
+            first = next((n for n, (a, b) in enumerate(zip(got, want)) if a != b), min(len(got), len(want)))
+            self.mismatches.append(f"{len(got)} bursts, golden's caches miss {len(want)} times; first "
                                    f"difference at burst {first}: "
-                                   f"{self.bursts[first] if first < len(self.bursts) else None} != "
+                                   f"{got[first] if first < len(got) else None} != "
                                    f"{want[first] if first < len(want) else None} (address, beats)")
-        return {"bursts": len(self.bursts), "golden_bursts": len(want),
+        return {"bursts": len(got), "golden_bursts": len(want),
+                "references": {"index": int(p.references[0]), "raw": int(p.references[1])},
+                "hits": {"index": int(p.hits[0]), "raw": int(p.hits[1])},
                 "hit_rate": {"index": round(p.hits[0] / max(1, p.references[0]), 4),
                              "raw": round(p.hits[1] / max(1, p.references[1]), 4)}}
 
@@ -341,10 +367,11 @@ def _int(value):
     return int(value) if value.is_resolvable else str(value)
 
 
-async def _start(dut, image: bytes | None = None):
-    """Clock and reset; with ``image``, cocotbext-axi's AxiRamRead holding it answers the ``axi_*``
-    master. Nothing is driven at time 0: Icarus 11 does not propagate a VPI write made then to the
-    logic that reads the port (iverilog issues #1041/#1111, cocotb #4886)."""
+async def _start(dut, memory_bytes: int = 0):
+    """Clock and reset; with ``memory_bytes``, cocotbext-axi's AxiRamRead of that size answers the
+    ``axi_*`` master (returned: the host writes the sets' images into it). Nothing is driven at time
+    0: Icarus 11 does not propagate a VPI write made then to the logic that reads the port (iverilog
+    issues #1041/#1111, cocotb #4886)."""
     await Timer(1, unit="ns")
     cocotb.start_soon(Clock(dut.clk, PERIOD_NS, unit="ns").start())
     for name in ("i_valid", "i_texture", "i_level", "i_i", "i_j", "i_tag"):
@@ -356,83 +383,194 @@ async def _start(dut, image: bytes | None = None):
         for name in ("bus_cyc", "bus_stb", "bus_we", "bus_adr", "bus_dat_w"):
             getattr(dut, name).value = 0
         dut.bus_sel.value = 1
-    if image is not None:
+    ram = None
+    if memory_bytes:
         from cocotbext.axi import AxiRamRead, AxiReadBus
-        ram = AxiRamRead(AxiReadBus.from_prefix(dut, "axi"), dut.clk, dut.rst, size=len(image))
-        ram.write(0, image)
+        ram = AxiRamRead(AxiReadBus.from_prefix(dut, "axi"), dut.clk, dut.rst, size=memory_bytes)
     for _ in range(3):
         await RisingEdge(dut.clk)
     dut.rst.value = 0
     await RisingEdge(dut.clk)
+    return ram
 
 
-async def _load(dut, ts: TextureSet, geometry_toml: str, log):
-    """The loadable unit: every write of ``load_writes`` through the Wishbone port (cocotbext-wishbone)."""
-    from cocotbext.wishbone.driver import WBOp, WishboneMaster
-    from vqtex.golden.geometry import Geometry
-    from vqtex.golden.register_map import load_writes
-    signals = {"cyc": "cyc", "stb": "stb", "we": "we", "adr": "adr", "datwr": "dat_w", "datrd": "dat_r",
+def placements(sets: list, rng) -> list:
+    """Where the host puts each load's set in external memory (the loadable cached unit; its
+    ``INDEX_BASE`` and ``RAW_BASE``): ``Layout.at`` with the index base an odd number of index words
+    past 4 KB and the raw base an odd number of 4-byte words past the next 64-byte boundary after the
+    index memory (so neither is on a cache line of two words or more), both moving from one load to
+    the next while the regions overlap: the host reuses its buffer, so a line the caches kept from
+    the previous load holds other bytes at the same address, and only emptied caches give golden's
+    texels and golden's bursts."""
+    out = []
+    for k, ts in enumerate(sets):
+        wb = ts.word_bits // 8
+        index_base = 4096 + wb * int(1 + 8 * k + 2 * rng.integers(0, 4))
+        index_end = index_base + len(ts.index_words) * wb
+        raw_base = -(-index_end // 64) * 64 + 4 * int(1 + 8 * k + 2 * rng.integers(0, 4))
+        out.append(Layout.at(ts, index_base, raw_base))
+    return out
+
+
+class Host:
+    """The host side of a loadable unit's Wishbone port ``bus_*``: cocotbext-wishbone's
+    ``WishboneMaster`` (one for the whole run) with the register map (``RegisterMap(geometry,
+    external)``: the loadable cached unit's map when ``external``)."""
+
+    SIGNALS = {"cyc": "cyc", "stb": "stb", "we": "we", "adr": "adr", "datwr": "dat_w", "datrd": "dat_r",
                "ack": "ack", "err": "err", "stall": "stall", "sel": "sel"}
-    wb = WishboneMaster(dut, "bus", dut.clk, width=32, timeout=BUS_TIMEOUT, signals_dict=signals)
-    writes = load_writes(ts, Geometry.loads(geometry_toml, "tb_config.json"))
-    ops = [WBOp(adr=int(a), dat=int(d), sel=1, acktimeout=BUS_TIMEOUT) for a, d in writes.tolist()]
-    results = await wb.send_cycle(ops)
-    refused = [f"0x{int(r.adr):x}" for r in results if int(r.ack) != 1]
-    assert len(results) == len(ops) and not refused, f"bus load: {len(refused)} write(s) not acked: {refused[:8]}"
-    log.info("loaded the set: %d Wishbone writes, all acked", len(ops))
-    await RisingEdge(dut.clk)
+
+    def __init__(self, dut, geometry, external: bool):
+        from cocotbext.wishbone.driver import WishboneMaster
+        from vqtex.golden.register_map import RegisterMap
+        self.wb = WishboneMaster(dut, "bus", dut.clk, width=32, timeout=BUS_TIMEOUT, signals_dict=self.SIGNALS)
+        self.geometry, self.rmap = geometry, RegisterMap(geometry, external=external)
+
+    async def load(self, ts: TextureSet, name: str, layout, log) -> int:
+        """Every write of ``load_writes(ts, geometry, layout)``; each must be acked. Returns their number."""
+        from cocotbext.wishbone.driver import WBOp
+        from vqtex.golden.register_map import load_writes
+        writes = load_writes(ts, self.geometry, layout)
+        ops = [WBOp(adr=int(a), dat=int(d), sel=1, acktimeout=BUS_TIMEOUT) for a, d in writes.tolist()]
+        results = await self.wb.send_cycle(ops)
+        refused = [f"0x{int(r.adr):x}" for r in results if int(r.ack) != 1]
+        assert len(results) == len(ops) and not refused, f"bus load: {len(refused)} write(s) not acked: {refused[:8]}"
+        log.info("loaded %s: %d Wishbone writes, all acked%s", name, len(ops),
+                 f"; index base 0x{layout.index_base:x}, raw base 0x{layout.raw_base:x}" if layout else "")
+        return len(ops)
+
+    def probe_addresses(self, written) -> tuple:
+        """(reads, writes): every control register, the first descriptor row, the first codebook
+        entry's first word, the index and raw regions' first words, a word of regions 5 and 7 (unmapped),
+        each either unmapped or ``written`` by the load (another word holds what an earlier load left);
+        and writes to what answers ``err`` to a write (the read-only ``ID``, region 5, the index and raw
+        regions of the loadable cached unit: its words are in external memory)."""
+        from vqtex.golden.register_map import mapped_words
+        rmap, top = self.rmap, (1 << self.rmap.offset_bits) - 1
+        control = rmap.address("control", [off for off, _, _ in rmap.control.values()])
+        reads = np.concatenate([rmap.address("control", sorted(off for off, _, _ in rmap.control.values())),
+                                rmap.address("descriptors", np.arange(4)), rmap.address("codebook", [0]),
+                                rmap.address("index", [0]), rmap.address("raw", [0]),
+                                np.array([5 << rmap.offset_bits, (7 << rmap.offset_bits) | top], np.uint64)])
+        writes = np.concatenate([rmap.address("control", [rmap.control["ID"][0]]), rmap.address("index", [0]),
+                                 rmap.address("raw", [0]), np.array([5 << rmap.offset_bits], np.uint64)])
+        known = np.isin(reads, control) | np.isin(reads, np.asarray(written, np.uint64)) | ~mapped_words(rmap, reads)
+        return reads[known], writes[~mapped_words(rmap, writes, write=True)]
+
+    async def check_port(self, ts: TextureSet, layout, mismatches: list) -> dict:
+        """After a load: the reads of :meth:`probe_addresses` answer ``golden.register_map.expected_reads``
+        (data, or ``err`` where the map holds no word: an address out of range), and the writes to
+        addresses that take none answer ``err``. The writes go first (they change nothing)."""
+        from cocotbext.wishbone.driver import WBOp
+        from vqtex.golden.register_map import expected_reads, load_writes
+        reads, writes = self.probe_addresses(load_writes(ts, self.geometry, layout)[:, 0])
+        data, err = expected_reads(ts, self.geometry, reads, layout)
+        ops = [WBOp(adr=int(a), dat=0, sel=1, acktimeout=BUS_TIMEOUT) for a in writes.tolist()]
+        ops += [WBOp(adr=int(a), dat=None, sel=1, acktimeout=BUS_TIMEOUT) for a in reads.tolist()]
+        results = await self.wb.send_cycle(ops)
+        want = [(2, None)] * len(writes) + [(2, None) if e else (1, int(d)) for d, e in zip(data.tolist(), err.tolist())]
+        for op, res, (code, value) in zip(ops, results, want):
+            got = (int(res.ack), _int(res.datrd) if code == 1 and op.dat is None else None)
+            if got != (code, value):
+                kind = "write" if op.dat is not None else "read"
+                mismatches.append(f"bus {kind} of 0x{op.adr:x}: answered {'ack' if got[0] == 1 else 'err' if got[0] == 2 else got[0]}"
+                                  f"{'' if got[1] is None else f' 0x{got[1]:x}' if isinstance(got[1], int) else ' ' + got[1]}, "
+                                  f"expected {'ack' if code == 1 else 'err'}{'' if value is None else f' 0x{value:x}'} "
+                                  "(golden.register_map)")
+        return {"reads": len(reads), "writes": len(writes), "errors_expected": int(err.sum()) + len(writes),
+                "errors": sum(int(r.ack) == 2 for r in results)}
 
 
-def _check_set(ts: TextureSet, cfg: dict):
-    """A baked unit answers for the set it was exported with only."""
+def _check_set(ts: TextureSet, cfg: dict, path: str):
+    """A baked unit answers for the set it was exported with only; a loadable one for any set that
+    fits its geometry."""
     if cfg["unit"] == "loadable":
         from vqtex.golden.geometry import Geometry
         misfit = Geometry.loads(cfg["geometry"], "tb_config.json").fits(ts)
-        assert not misfit, f"{cfg['set_path']} does not fit the unit's geometry: {'; '.join(misfit)}"
+        assert not misfit, f"{path} does not fit the unit's geometry: {'; '.join(misfit)}"
         return
     from vqtex.sim.testbench.write import set_digest
     assert set_digest(ts) == cfg["set_digest"], (
-        f"{cfg['set_path']} is not the texture set baked into this {cfg['unit']} unit (its ROMs hold "
+        f"{path} is not the texture set baked into this {cfg['unit']} unit (its ROMs hold "
         f"{cfg['set']}); export the Verilog for it, or export --unit loadable")
+
+
+def loads(cfg: dict, sets: list) -> list:
+    """The sets the run serves, in turn: a baked unit its own (no load); a loadable unit each set
+    given, loaded over the bus one after the other in one simulation; the loadable cached unit given
+    one set loads it twice (the reload at other bases)."""
+    if cfg["unit"] == "loadable" and cfg["memory"] is not None and len(sets) == 1:
+        return [sets[0], sets[0]]
+    return sets
 
 
 @cocotb.test()
 async def texel_fetch_against_golden(dut):
     cfg = settings()
-    ts = TextureSet.load(cfg["set_path"])
-    _check_set(ts, cfg)
+    sets, names = [], {}
+    for path in cfg["set_paths"]:
+        ts = TextureSet.load(path)
+        _check_set(ts, cfg, path)
+        sets.append(ts)
+        names[id(ts)] = os.path.basename(path)
+    run = loads(cfg, sets)
     rng = np.random.default_rng(cfg["seed"])
-    cands = candidates(ts)
-    reachable = {(*key, stall) for key in cands for stall in (False, True)}
+    cands = [candidates(ts) for ts in run]
+    reachable = {(*key, stall) for c in cands for key in c for stall in (False, True)}
     coverage = Coverage(reachable)
-    dut._log.info("set %s: %d textures, %d reachable bins; %d requests, seed %d, stall %.2f, gap %.2f",
-                  cfg["set_path"], ts.n_textures, len(reachable), cfg["requests"], cfg["seed"], cfg["stall"], cfg["gap"])
-    image = Layout.of(ts).image(ts) if cfg["memory"] is not None else None
-    await _start(dut, image)
-    if cfg["unit"] == "loadable":
-        await _load(dut, ts, cfg["geometry"], dut._log)
-    bench = Bench(dut, ts, cfg, coverage, rng)
+    loadable, external = cfg["unit"] == "loadable", cfg["memory"] is not None
+    dut._log.info("%s: %d load(s) of %d set(s), %d reachable bins; %d requests per load, seed %d, stall %.2f, gap %.2f",
+                  ", ".join(cfg["set_paths"]), len(run), len(sets), len(reachable), cfg["requests"], cfg["seed"],
+                  cfg["stall"], cfg["gap"])
+    # where each set lies in external memory: the loadable cached unit's bases, else Layout.of
+    layouts = (placements(run, rng) if loadable else [Layout.of(ts) for ts in run]) if external else [None] * len(run)
+    size = max((-(-lay.end // 4096) * 4096 for lay in layouts if lay is not None), default=0)
+    ram = await _start(dut, size)
+    host = None
+    if loadable:
+        from vqtex.golden.geometry import Geometry
+        host = Host(dut, Geometry.loads(cfg["geometry"], "tb_config.json"), external)
+    bench = Bench(dut, run[0], cfg, coverage, rng)
     strobes = cocotb.start_soon(bench.count_strobes()) if hasattr(dut, "straddle") else None
-    ar = cocotb.start_soon(bench.watch_ar(len(image))) if image is not None else None
+    ar = cocotb.start_soon(bench.watch_ar(size)) if external else None
 
-    req = random_phase(ts, cands, cfg["requests"], cfg["per_bin"], rng)
-    await bench.run(req, [None] * len(req))
-    after_random = coverage.hit() & reachable
-    # Closure: one request per missed bin, its backpressure forced to the bin's stall value.
-    holes = sorted(reachable - coverage.hit(), key=str)
-    closure = [(_inside_blocks(ts, cands[key[:4]][rng.integers(0, len(cands[key[:4]]), 1)], rng)[0], key[4])
-               for key in holes]
-    if bench.memory is not None and bench.memory_hits["hit"] == 0 and bench.sent:
-        # a request's lines stay cached after it is read: its repeat hits (golden says whether it did)
-        closure.append((closure[-1][0] if closure else bench.history[-1], False))
-    if closure:
-        creq = np.array([c[0] for c in closure], np.int64)
-        await bench.run(creq, [c[1] for c in closure])
+    per_load, closure_total, random_total, after_random = [], 0, 0, set()
+    for k, (ts, layout, cand) in enumerate(zip(run, layouts, cands)):
+        entry = {"set": names[id(ts)]}
+        if ram is not None:                 # the host writes the set's bytes where its bases say
+            ram.write(layout.index_base, layout.image(ts)[layout.index_base:layout.end])
+            entry.update(index_base=layout.index_base, raw_base=layout.raw_base)
+        if host is not None:
+            entry["writes"] = await host.load(ts, entry["set"], layout if external else None, dut._log)
+            entry["port"] = await host.check_port(ts, layout if external else None, bench.mismatches)
+        bench.begin(ts, layout)
+        req = random_phase(ts, cand, cfg["requests"], cfg["per_bin"], rng)
+        await bench.run(req, [None] * len(req))
+        after_random |= coverage.hit() & reachable
+        # Closure: one request per bin of this set still missed, its backpressure forced to the bin's stall value.
+        mine = {(*key, stall) for key in cand for stall in (False, True)}
+        holes = sorted(mine - coverage.hit(), key=str)
+        closure = [(_inside_blocks(ts, cand[key[:4]][rng.integers(0, len(cand[key[:4]]), 1)], rng)[0], key[4])
+                   for key in holes]
+        if external and bench.memory_hits["hit"] == 0 and len(bench.history):
+            # a request's lines stay cached after it is read: its repeat hits (golden says whether it did)
+            closure.append((closure[-1][0] if closure else bench.history[-1], False))
+        if closure:
+            creq = np.array([c[0] for c in closure], np.int64)
+            await bench.run(creq, [c[1] for c in closure])
+        random_total, closure_total = random_total + len(req), closure_total + len(closure)
+        if external:
+            entry.update(bench.check_bursts())
+        per_load.append(entry)
     await bench.quiet(cfg["latency"] + 8)
     memory = {}
     if ar is not None:
         ar.cancel()
-        memory = {**bench.check_bursts(), "memory_bins": dict(bench.memory_hits)}
+        refs = {c: sum(e["references"][c] for e in per_load) for c in ("index", "raw")}
+        hits = {c: sum(e["hits"][c] for e in per_load) for c in ("index", "raw")}
+        memory = {"bursts": sum(e["bursts"] for e in per_load), "golden_bursts": sum(e["golden_bursts"] for e in per_load),
+                  "hit_rate": {c: round(hits[c] / max(1, refs[c]), 4) for c in refs},      # (golden's, over every load)
+                  "memory_bins": dict(bench.memory_hits)}
         for outcome, count in bench.memory_hits.items():
             if not count:
                 bench.mismatches.append(f"memory coverage: no request {'missed' if outcome == 'miss' else 'hit'}")
@@ -441,12 +579,13 @@ async def texel_fetch_against_golden(dut):
         bench.check_strobes()
     timing = bench.check_latency(cfg["latency"])
 
-    phases = {"requests": {"random": int(len(req)), "closure": len(closure)},
+    phases = {"requests": {"random": random_total, "closure": closure_total},
               "hit_by_random": len(after_random), "hit_by_closure": len((coverage.hit() & reachable) - after_random),
               "mismatches": len(bench.mismatches), "responses": bench.received,
               "straddling_requests": bench.straddling, "straddle_strobes": bench.strobes["straddle"], **timing,
-              "set": os.path.basename(cfg["set_path"]), "unit": cfg["unit"], "seed": cfg["seed"],
-              "stall": cfg["stall"], "simulator": cocotb.SIM_NAME, **memory}
+              "set": os.path.basename(cfg["set_path"]), "sets": [names[id(ts)] for ts in sets],
+              "unit": cfg["unit"], "seed": cfg["seed"], "stall": cfg["stall"], "simulator": cocotb.SIM_NAME,
+              **memory, **({"loads": per_load} if loadable else {})}
     summary = coverage.report(dut._log, cfg["report"], phases)
     dut._log.info("coverage: %d of %d reachable bins (%.1f %%): %d by the random phase, %d by closure; %d responses, "
                   "%d mismatches", summary["hit"], summary["reachable"], summary["percent"], summary["hit_by_random"],

@@ -8,7 +8,8 @@ Into DIR go, beside or away from the Verilog (the configuration names it by a pa
 - ``run_tb.py``: its runner on cocotb's Python runner, ``SIM=icarus`` or ``SIM=verilator``, a verbatim
   copy of :mod:`vqtex.sim.testbench.run_tb`;
 - ``tb_config.json``: the top module, the unit (``specialised``, ``full``, ``loadable`` with its
-  geometry, ``external``: the cached unit with its caches' shapes), tag width and latency (the
+  geometry, ``external``: the cached unit with its caches' shapes under ``memory``; ``loadable``
+  with ``memory``: the loadable cached unit), tag width and latency (the
   cached unit's when every reference hits), the Verilog and its Verilator waivers, the default run
   (``requests``, ``seed``, ``stall``, ``gap``, ``per_bin``), the texture set and its digest;
 - ``tb_set.vqt``: the texture set, the one baked into the unit's ROMs or the one the bench loads
@@ -60,7 +61,8 @@ def write_testbench(paths: dict, *, verilog: str, ts, top: str, unit: str, tag_w
                     geometry=None, folder: str | None = None, memory=None) -> dict:
     """Write :data:`FILES` to ``paths[name]`` (staging paths; ``folder`` is where they end up, default
     that of ``paths``' config file, so the Verilog and its ``.vlt`` are named relative to it).
-    ``memory``: the cached unit's MemoryConfig (``unit`` ``external``). Returns the configuration written."""
+    ``memory``: the cached unit's MemoryConfig (``unit`` ``external``, or ``loadable`` with ``geometry``:
+    the loadable cached unit). Returns the configuration written."""
     folder = os.path.abspath(folder or os.path.dirname(paths["tb_config.json"]))
     stem = os.path.splitext(os.path.abspath(verilog))[0]
     cfg = {"top": top, "unit": unit, "tag_width": int(tag_width), "latency": int(latency),

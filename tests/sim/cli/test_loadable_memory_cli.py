@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from vqtex.golden.fetch import fetch, random_requests
+from vqtex.golden.format import TextureSet
 from vqtex.golden.geometry import Geometry, preset
 from vqtex.golden.memory.system import Layout
 from vqtex.golden.register_map import load_cycles, load_writes
@@ -116,8 +117,6 @@ def test_export_writes_the_register_map(capsys, trace, tmp_path):
     (["sim", "T", "R", "-o", "X.npy", "--memory", "external", "--unit", "full"], "no --unit full"),
     (["sim", "T", "R", "-o", "X.npy", "--memory", "external", "--unit", "loadable", "--one-port"], "no --one-port"),
     (["sim", "T", "R", "-o", "X.npy", "--memory", "external", "--geometry", "paper"], "--geometry applies"),
-    (["export", "T", "-o", "X.sv", "--memory", "external", "--unit", "loadable", "--testbench", "TB"],
-     "not the loadable one"),
     (["export", "T", "-o", "X.sv", "--memory", "external", "--unit", "full"], "no --filter-lanes, --one-port, --unit full"),
 ])
 def test_bad_combinations(capsys, trace, argv, pattern):
@@ -135,3 +134,31 @@ def test_export_lints_clean(capsys, trace):
                               "--cache-size", "1024", "--raw-cache-size", "256", "-o", d / "lint.sv", "--lint", "--json")
     assert code == 0, err
     assert json.loads(text)["lint"] == "clean"
+
+
+def test_demo_loadable_cached(capsys, tmp_path):
+    """demo --memory external --unit loadable --geometry paper: topspin's frame through the loadable
+    cached unit on CXXRTL (the build of test_render_scene_frame_on_cxxrtl: paper, 1 KB + 512 B caches of
+    2 ways, FIFO 16), the set loaded over the bus before it: the frame identical to golden, the load's
+    cycles golden's count; a geometry topspin does not fit is one line, exit 2."""
+    need("g++")
+    small = ["--cache-size", "1024", "--raw-cache-size", "512", "--cache-ways", "2", "--prefetch", "16"]
+    with shared_cache():
+        code, text, err = run_cli(capsys, "demo", "-o", tmp_path / "d", "--frames", "0", "--memory", "external",
+                                  "--unit", "loadable", "--geometry", "paper", *small)
+    assert code == 0, err
+    assert "RTL (cxxrtl, loadable cached unit) frames identical to golden: yes" in text
+    rep = json.loads((tmp_path / "d" / "report.json").read_text())
+    ts = TextureSet.load(tmp_path / "d" / "topspin.vqt")
+    want = load_cycles(len(load_writes(ts, preset("paper"), Layout.of(ts))))
+    assert rep["unit"] == "loadable cached" and rep["identical_to_golden"] and rep["geometry"] == preset("paper").to_dict()
+    assert rep["load_cycles_per_frame"] == rep["frames"][0]["load_cycles"] == want
+    assert f"loaded over the bus port before each frame: {want} cycles" in text
+    m = rep["memory"]
+    assert m["configuration"].startswith("index cache 1 KB") and 0.9 < m["hit_rate"]["index"] < 1
+    assert rep["frames"][0]["cycles"] > rep["frames"][0]["requests"] and rep["frames"][0]["latency"] == 19
+    small_geometry = tmp_path / "small.toml"
+    small_geometry.write_text(Geometry.of(texture_set("rgb_4x4_b8_mip")).dumps())
+    assert_one_error(capsys, ["demo", "-o", tmp_path / "e", "--memory", "external", "--unit", "loadable",
+                              "--geometry", small_geometry], "does not fit geometry")
+    assert not (tmp_path / "e").exists()

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
 
@@ -75,13 +76,17 @@ def _run(folder: str, sim: str, *args) -> tuple:
 
 
 def _assert_passed(ts, folder, sim, *args):
+    """The run passed; ``ts`` is the set run, or a list of the sets loaded in turn."""
     code, out, cov = _run(folder, sim, *args)
     assert code == 0 and cov is not None, out[-6000:]
     assert f"run_tb: {sim}: PASS" in out
-    want = reachable(ts)
+    want = set().union(*(reachable(t) for t in (ts if isinstance(ts, list) else [ts])))
     assert cov["reachable"] == len(want) and cov["hit"] == len(want) and cov["percent"] == 100.0, cov
     assert cov["mismatches"] == 0 and cov["responses"] == cov["requests"]["random"] + cov["requests"]["closure"]
-    assert cov["requests"]["random"] >= REQUESTS and all(n > 0 for n in cov["bins"].values())
+    assert cov["requests"]["random"] >= REQUESTS * len(cov.get("loads", [None])) and all(n > 0 for n in cov["bins"].values())
+    if "bursts" in cov:             # the cached units: the all-hit latency is a lower bound (no strobe port)
+        assert cov["latency_min"] >= LATENCY + 5 and cov["latency_max"] > LATENCY + 5
+        return cov
     # the unit's straddle strobe pulsed once per straddling request (golden's count)
     assert cov["straddle_strobes"] == cov["straddling_requests"]
     assert (cov["straddling_requests"] > 0) == any(b.split("/")[2] == "straddle" for b in cov["bins"])
@@ -135,11 +140,20 @@ def _loadable(capsys, tmp_path) -> str:
 
 @pytest.mark.parametrize("sim", ["icarus", "verilator"])
 def test_loadable_unit_three_sets_one_build(capsys, tmp_path, sim):
+    """The three sets loaded over the bus one after the other in one simulation (each load's
+    read-back and err answers checked against golden's register map); then one set alone."""
     _need(sim)
     folder = _loadable(capsys, tmp_path)
-    for name in SETS:
-        cov = _assert_passed(SETS[name](), folder, sim, "--set", tmp_path / f"{name}-load.vqt")
-        assert cov["unit"] == "loadable" and cov["set"] == f"{name}-load.vqt"
+    sets = [a for name in SETS for a in ("--set", tmp_path / f"{name}-load.vqt")]
+    cov = _assert_passed([SETS[name]() for name in SETS], folder, sim, *sets)
+    assert cov["unit"] == "loadable" and cov["sets"] == [f"{name}-load.vqt" for name in SETS]
+    assert [load["set"] for load in cov["loads"]] == cov["sets"]
+    for load in cov["loads"]:
+        # err: writes to the read-only ID and to region 5; reads of regions 5 and 7 (beyond the map)
+        assert load["port"]["errors"] == load["port"]["errors_expected"] == 4 and load["port"]["reads"] >= 29
+    if sim == "icarus":
+        cov = _assert_passed(SETS["pvr2"](), folder, sim, "--set", tmp_path / "pvr2-load.vqt")
+        assert cov["set"] == "pvr2-load.vqt" and len(cov["loads"]) == 1
 
 
 def test_verilator_baked_unit(capsys, tmp_path):
@@ -317,3 +331,101 @@ def test_export_external_memory_refusals(capsys, tmp_path):
         assert_one_error(capsys, ["export", vqt, "--memory", "external", "-o", out, *extra], pattern)
     assert_one_error(capsys, ["export", vqt, "--prefetch", "4", "-o", out], "--prefetch needs --memory external")
     assert not out.exists()
+
+
+# -- the loadable cached unit: loaded over Wishbone, its set in AxiRamRead where its base registers say --
+
+def _loadable_external(capsys, tmp_path) -> str:
+    """The loadable cached unit (the small caches above, a 4-entry FIFO) of a geometry holding the
+    straddling set and the 8-bit one; its bench loads the straddling set by default."""
+    _need_axi()
+    geometry = Geometry.of(SETS["yuv12_straddle"]()).union(Geometry.of(SETS["rgb8"]()))
+    toml = tmp_path / "two.toml"
+    toml.write_text(geometry.dumps())
+    for name in ("yuv12_straddle", "rgb8"):
+        SETS[name]().save(tmp_path / f"{name}-load.vqt")
+    return _export(capsys, tmp_path, "yuv12_straddle", "--unit", "loadable", "--geometry", toml, "--memory", "external",
+                   *CACHES, "--prefetch", 4)
+
+
+def _assert_loads(cov, names):
+    """Each load: its bursts golden's caches' misses with its layout, at other bases than the load
+    before it, in a region overlapping it (a line kept from before would hold other bytes); the port's
+    read-back and err answers golden's (8 err: writes to ID, the index and raw regions, region 5; reads
+    of the index and raw regions, regions 5 and 7)."""
+    loads = cov["loads"]
+    assert [load["set"] for load in loads] == names
+    for before, load in zip(loads, loads[1:]):
+        assert load["index_base"] != before["index_base"] and load["raw_base"] != before["raw_base"]
+        assert load["index_base"] < before["raw_base"]                        # the regions overlap
+    for load in loads:
+        assert load["bursts"] == load["golden_bursts"] > 0 and load["writes"] > 0
+        assert load["index_base"] % 8 and load["raw_base"] % 8               # not on a cache line
+        assert load["port"]["errors"] == load["port"]["errors_expected"] == 8
+    assert cov["bursts"] == cov["golden_bursts"] == sum(load["bursts"] for load in loads)
+    assert cov["memory_bins"]["hit"] > 0 and cov["memory_bins"]["miss"] > 0
+    assert cov["latency_min"] >= LATENCY + 5
+
+
+@pytest.mark.parametrize("sim", ["icarus", "verilator"])
+def test_loadable_external_memory_unit(capsys, tmp_path, sim):
+    """The loadable cached unit under cocotb: the host writes each set's image into AxiRamRead at the
+    bases it then writes to INDEX_BASE/RAW_BASE, loads the set over Wishbone (cocotbext-wishbone),
+    and streams requests with random backpressure: responses equal golden.fetch; then another set at
+    other bases in the same simulation. Icarus also runs the default: the exported set loaded, then
+    reloaded elsewhere."""
+    _need(sim)
+    folder = _loadable_external(capsys, tmp_path)
+    with open(os.path.join(folder, "tb_config.json")) as f:
+        cfg = json.load(f)
+    assert cfg["unit"] == "loadable" and cfg["memory"]["prefetch"] == 4 and cfg["latency"] == LATENCY + 5
+    two = [SETS["yuv12_straddle"](), SETS["rgb8"]()]
+    cov = _assert_passed(two, folder, sim, "--set", tmp_path / "yuv12_straddle-load.vqt",
+                         "--set", tmp_path / "rgb8-load.vqt")
+    _assert_loads(cov, ["yuv12_straddle-load.vqt", "rgb8-load.vqt"])
+    if sim == "icarus":
+        cov = _assert_passed(two[0], folder, sim)
+        _assert_loads(cov, ["tb_set.vqt", "tb_set.vqt"])
+
+
+def test_loadable_external_reload_check_can_fail(capsys, tmp_path):
+    """Negative control of the reload: the Verilog's reader no longer emptied by bus writes (its reset
+    is the unit's alone): the reload at overlapping bases hits lines of the first load, whose bytes
+    are not the set's there; the bench fails on texels and on the bursts of the second load."""
+    _need("icarus")
+    folder = _loadable_external(capsys, tmp_path)
+    path = os.path.join(folder, "texel_fetch.sv")
+    with open(path) as f:
+        text = f.read()
+    flush = re.compile(r"assign (\S+) = \| \{ \\load\$\d+ \[0\], rst \};")
+    assert len(flush.findall(text)) > 0
+    with open(path, "w") as f:
+        f.write(flush.sub(lambda m: f"assign {m.group(1)} = | {{ 1'h0, rst }};", text))
+    code, out, cov = _run(folder, "icarus")
+    assert code == 1 and "(golden.fetch)" in out and "golden's caches miss" in out, out[-4000:]
+    first, second = cov["loads"]
+    assert first["bursts"] == first["golden_bursts"] and second["bursts"] < second["golden_bursts"]
+
+
+def test_port_check_catches_ack_for_err(capsys, tmp_path):
+    """Negative control of the port check: the loadable cached unit's Verilog answering ``ack`` where
+    its port says ``err`` (an address beyond the map, the index and raw regions): the load passes (its
+    writes are acked), the port check fails on the 8 ``err`` answers of each load, naming golden's
+    map; nothing else fails."""
+    _need("icarus")
+    folder = _loadable_external(capsys, tmp_path)
+    path = os.path.join(folder, "texel_fetch.sv")
+    with open(path) as f:
+        text = f.read()
+    for old in ("    .bus__ack(bus_ack),\n", "    .bus__err(bus_err),\n", "  wire bus_err;\n"):
+        assert text.count(old) == 1, old
+    text = (text.replace("    .bus__ack(bus_ack),\n", "    .bus__ack(bus_ack_port),\n")
+                .replace("    .bus__err(bus_err),\n", "    .bus__err(bus_err_port),\n")
+                .replace("  wire bus_err;\n", "  wire bus_err;\n  wire bus_ack_port, bus_err_port;\n"
+                         "  assign bus_ack = bus_ack_port | bus_err_port;\n  assign bus_err = 1'h0;\n"))
+    with open(path, "w") as f:
+        f.write(text)
+    code, out, cov = _run(folder, "icarus", "--requests", 20)
+    assert code == 1 and "answered ack" in out and "expected err" in out and "(golden.register_map)" in out, out[-4000:]
+    assert [load["port"]["errors"] for load in cov["loads"]] == [0, 0]
+    assert cov["mismatches"] == 16 and cov["responses"] == cov["requests"]["random"] + cov["requests"]["closure"]
