@@ -342,12 +342,17 @@ class ColorMatrix(wiring.Component):
         if one:
             m.d.comb += out.eq(expand[present[0]])
         else:
-            with m.Switch(color_p):
-                for code in present[:-1]:
-                    with m.Case(code):
-                        m.d.comb += out.eq(expand[code])
-                with m.Default():
-                    m.d.comb += out.eq(expand[present[-1]])
+            # Each format's bytes where its decoded code holds, else 0 (the last format: where no
+            # other code holds), ORed: the AND-OR a multi-way multiplexer is in the fabric; a
+            # simulator selects each by its own condition where it branched on the format (random
+            # per texel: Verilator's model about 3 ns a cycle faster than with a case statement,
+            # docs/simulation.md).
+            hits = [color_p == code for code in present[:-1]]
+            hits.append(~Cat(*hits).any())
+            value = 0
+            for hit, code in zip(hits, present):
+                value = value | Mux(hit, expand[code], 0)
+            m.d.comb += out.eq(value)
         with m.If(self.en):
             m.d.sync += self.rgba.eq(out)
         return m
