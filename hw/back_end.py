@@ -24,7 +24,7 @@ from .codebook_rom import CodebookROM
 from .color_matrix import ColorMatrix
 from .descriptor import as_geometry
 from .features import Features
-from .pipeline import LinkLayout, RGBALayout, addr_bits
+from .pipeline import ADVANCE_COPIES, LinkLayout, RGBALayout, addr_bits
 
 __all__ = ["BackEnd"]
 
@@ -77,7 +77,8 @@ class BackEnd(wiring.Component):
         self._features = features if features is not None else Features.full(texture_set)
         self._summed = bool(summed) and self._features.compressed
         super().__init__({
-            "link": In(LinkLayout(self._geometry, self._features, summed=self._summed)),
+            "link": In(LinkLayout(self._geometry, self._features, summed=self._summed,
+                                  copies=len(ADVANCE_COPIES) if load is not None else 0)),
             "rgba": Out(RGBALayout),
             **({} if load is None else {"load": In(load), "load_data": Out(DATA_WIDTH)}),
             **({"raw_in": In(32)} if self._raw_port else {}),
@@ -113,14 +114,17 @@ class BackEnd(wiring.Component):
         m.d.comb += rom.index.eq(link.index)
         m.d.comb += [getattr(rom, name).eq(getattr(link.side, name)) for name in _ROM_INPUTS
                      if name in carried and not (self._summed and name == "cb_base")]
-        m.d.comb += rom.en.eq(link.advance)
+        # The loadable unit's blocks each move on a copy of ``advance`` (hw.pipeline.advance_copies).
+        en = ({name: link.copies[k] for k, name in enumerate(ADVANCE_COPIES)} if load is not None
+              else dict.fromkeys(ADVANCE_COPIES, link.advance))
+        m.d.comb += rom.en.eq(en["codebook_rom"])
         # Stages 12-14: colour matrix.
         m.d.comb += [
-            cm.samples.eq(rom.samples), cm.color.eq(rom.color_out), cm.en.eq(link.advance),
+            cm.samples.eq(rom.samples), cm.color.eq(rom.color_out), cm.en.eq(en["color_matrix"]),
         ]
         # The output: the skid register (the colour pushed out in a stalled cycle) or the last stage.
         skid = Signal(32, name="skid")
-        with m.If(link.advance):
+        with m.If(en["skid"]):
             m.d.sync += skid.eq(cm.rgba.as_value())
         m.d.comb += self.rgba.as_value().eq(Mux(link.skid_valid, skid, cm.rgba.as_value()))
         return m

@@ -23,7 +23,8 @@ from .descriptor import DescriptorTable, as_geometry
 from .features import Features
 from .index_reader import IndexReader, IndexRequestLayout
 from .registers import enabled_register
-from .pipeline import STAGES, UPSTREAM_STAGES, REGISTERS, LinkLayout, RequestLayout, SideLayout, addr_bits, pack
+from .pipeline import (ADVANCE_COPIES, STAGES, UPSTREAM_STAGES, REGISTERS, LinkLayout, RequestLayout, SideLayout,
+                       addr_bits, advance_copies, pack)
 
 __all__ = ["FrontEnd", "index_port_members"]
 
@@ -141,7 +142,8 @@ class FrontEnd(wiring.Component):
             "stall_output": Out(1),
             "valid": Out(len(REGISTERS)),
             "o_tag": Out(tag_width),
-            "link": Out(LinkLayout(g, self._features, summed=self._summed)),
+            "link": Out(LinkLayout(g, self._features, summed=self._summed,
+                                   copies=len(ADVANCE_COPIES) if load is not None else 0)),
             **(index_port_members(g, self._features) if self._index_port else {}),
             **({} if load is None else {"pause": In(1), "load": In(load), "load_data": Out(DATA_WIDTH)}),
         })
@@ -190,6 +192,18 @@ class FrontEnd(wiring.Component):
             self.stall_one_port.eq(idx.hold & advance),
         ]
         m.d.sync += [advance.eq(~self.stall_output), skid_valid.eq(self.stall_output)]
+        # The loadable unit: the data registers' enables from copies of ``advance`` (one per block,
+        # hw.pipeline.advance_copies), the valid bits, tags, control and stage 1 (the descriptor
+        # table's read and the request's i, j: they take the input, which a copy's first cycle
+        # after a reset would miss) from ``advance`` itself.
+        if load is not None:
+            copies = dict(zip(ADVANCE_COPIES, advance_copies(m, self.stall_output, len(ADVANCE_COPIES))))
+            en_desc = Signal(name="upstream_address")
+            m.d.comb += en_desc.eq(copies["address"] & ~idx.hold)
+            en_idx, en_side = copies["index_reader"], copies["side"]
+        else:
+            copies = {}
+            en_desc, en_idx, en_side = upstream, advance, advance
         m.d.comb += self.valid.eq(Cat(valid, skid_valid))
         # The first UPSTREAM_STAGES bits shift on ``upstream``, the rest on ``advance`` (a held
         # straddling index enters the index reader's word stage as a bubble). One assignment of the
@@ -218,11 +232,11 @@ class FrontEnd(wiring.Component):
             addr.i.eq(i1), addr.j.eq(j1),
             addr.log2w.eq(row.log2w), addr.log2bw.eq(row.log2bw), addr.log2bh.eq(row.log2bh),
             addr.base.eq(row.base),
-            addr.en.eq(upstream),
+            addr.en.eq(en_desc),
         ]
         if addr.twiddle:                    # a level with a PowerVR2 twiddled map
             m.d.comb += [addr.layout.eq(row.layout), addr.log2h.eq(row.log2h)]
-        d2 = desc.fields(carry(desc.row, upstream, "row_address"))
+        d2 = desc.fields(carry(desc.row, en_desc, "row_address"))
 
         # Stages 3-7: index reader (stage 3 moves on upstream: the reader gates it with its hold).
         if feat.compressed and self._index_port:
@@ -243,7 +257,7 @@ class FrontEnd(wiring.Component):
                 idx.k.eq(addr.k),
                 idx.b.eq(d2.index_bits),
                 idx.base.eq(d2.base),
-                idx.en.eq(advance),
+                idx.en.eq(en_idx),
             ]
         if load is not None:                # the read answers of the table and the index memory
             inside = feat.compressed and not self._index_port       # an index memory here
@@ -259,7 +273,7 @@ class FrontEnd(wiring.Component):
         }))
         index_stages = STAGES[2:2 + index_reader.LATENCY]
         for n, name in enumerate(index_stages):
-            en = upstream if n + 2 < UPSTREAM_STAGES else advance
+            en = en_desc if n + 2 < UPSTREAM_STAGES else en_side
             if self._summed and n == len(index_stages) - 1:
                 m.d.comb += idx.add.eq(side.cb_base)     # the item entering the extract stage
             side = carry(side, en, f"side_{name}")
@@ -281,5 +295,6 @@ class FrontEnd(wiring.Component):
             m.d.comb += self.o_tag.eq(Mux(skid_valid, skid_tag, tags[-tw:]))
 
         m.d.comb += self.link.eq(pack(self.link.shape(), {
-            "advance": advance, "skid_valid": skid_valid, "index": idx.index, "side": side}))
+            "advance": advance, "skid_valid": skid_valid, "index": idx.index, "side": side,
+            **({"copies": Cat(*copies.values())} if copies else {})}))
         return m

@@ -29,7 +29,7 @@ from .features import Features
 
 __all__ = ["STAGES", "LATENCY", "UPSTREAM_STAGES", "REGISTERS", "FRONT_STAGES", "RequestLayout",
            "ResponseLayout", "RGBALayout", "SideLayout", "LinkLayout", "summed_index_bits", "pack", "addr_bits", "side_fields",
-           "SIDE_DESCRIPTOR_FIELDS"]
+           "SIDE_DESCRIPTOR_FIELDS", "ADVANCE_COPIES", "advance_copies"]
 
 #: Pipeline registers in order, one per cycle of latency; bit ``k`` of ``TexelFetch.valid`` is the
 #: valid bit of ``STAGES[k]``.
@@ -142,6 +142,9 @@ class LinkLayout(data.StructLayout):
     """What the front end gives the back end in every cycle, all of it flip-flops of the front end:
 
     * ``advance``: the pipeline moves this cycle (the enable of every back-end register);
+    * ``copies`` (the loadable unit only, ``copies`` > 0): copies of ``advance`` in flip-flops of
+      their own (:func:`advance_copies`), each the enable of one block's registers, so that no
+      single net drives the clock enables of the whole unit;
     * ``skid_valid``: the skid register holds the response that ``o`` shows;
     * ``index``: the index reader's output (stage 7);
     * ``side``: the fields beside it (:class:`SideLayout`).
@@ -158,15 +161,55 @@ class LinkLayout(data.StructLayout):
         ``index`` is the codebook address ``cb_base + index`` (:func:`summed_index_bits` wide), added
         by the index reader's extract stage (the loadable unit: no adder between the link and the
         codebook's block RAMs); ``side.cb_base`` is then not read.
+    copies : int
+        Width of the ``copies`` field (0: no field).
     """
 
-    def __init__(self, ts, features: Features | None = None, *, summed: bool = False):
+    def __init__(self, ts, features: Features | None = None, *, summed: bool = False, copies: int = 0):
         index = index_reader.INDEX_BITS if features is None or not features.specialised else features.index_bits
         if summed:
             index = summed_index_bits(ts, features)
         super().__init__({
-            "advance": 1, "skid_valid": 1, "index": index, "side": SideLayout(ts, features),
+            "advance": 1, **({"copies": copies} if copies else {}), "skid_valid": 1, "index": index,
+            "side": SideLayout(ts, features),
         })
+
+
+#: The copies of ``advance`` the loadable unit keeps (:func:`advance_copies`): the front end's
+#: address stage (and the index reader's first, which moves with it), its index reader, its
+#: side-field carries; the back end's codebook ROM, colour matrix and skid register. Stage 1 (the
+#: descriptor) moves on ``advance`` itself: it takes the input. Never more than ``len(_COPY_KINDS)``.
+ADVANCE_COPIES = ("address", "index_reader", "side", "codebook_rom", "color_matrix", "skid")
+
+# (reset value, reset-less, inverted) of each copy: no two alike, and none like ``advance`` itself
+# (reset value 1, reset, not inverted) or ``skid_valid`` (its complement: reset value 0, reset,
+# inverted), or Yosys's opt_merge makes them one flip-flop again (it merges flip-flops with the
+# same input and the same reset, whatever ``keep`` their wires have).
+_COPY_KINDS = ((0, False, False), (1, True, False), (0, True, False),
+               (1, False, True), (1, True, True), (0, True, True))
+
+
+def advance_copies(m: Module, stall: Value, n: int) -> list:
+    """``n`` flip-flops in ``m`` that each equal ``advance`` (``~stall`` of the previous cycle)
+    from the second cycle after a reset on; returns their values (each already the enable, not
+    inverted).
+
+    They differ in their reset value and in whether they store ``advance`` or its complement, so
+    that synthesis keeps them apart (``_COPY_KINDS``); in the first cycle after a reset (or, for
+    the reset-less ones, after a reset that followed a stalled cycle) a copy may read 0 where
+    ``advance`` reads 1. Every stage is empty then (the valid bits reset to 0), so whether stage 2
+    or a later one loads in that cycle changes no response (it would load its empty predecessor);
+    the registers a copy enables hold data, never a valid bit (those move on ``advance``), and
+    never stage 1's (it takes the request accepted in that cycle).
+    """
+    if n > len(_COPY_KINDS):
+        raise ValueError(f"at most {len(_COPY_KINDS)} copies of advance, not {n}")
+    out = []
+    for k, (init, reset_less, inverted) in enumerate(_COPY_KINDS[:n]):
+        q = Signal(init=init, reset_less=reset_less, name=f"advance_copy{k}")
+        m.d.sync += q.eq(stall if inverted else ~stall)
+        out.append(~q if inverted else q)
+    return out
 
 
 def summed_index_bits(ts, features: Features | None = None) -> int:

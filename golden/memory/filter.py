@@ -26,8 +26,8 @@ its slots (``k + lanes g`` of every pixel's group ``g``) through its own index a
   its line is filled the cycle after its last beat;
 - ``p_k[n]`` (lane k's data read) ``>= g[n] + 1``, ``>= p_k[n-1] + 1``, ``>= e[n-1]``, and ``>=``
   the fills of its lines;
-- ``e[n]`` (the texel pipelines take group n): ``max(max_k p_k[n] + 1, e[n-1] + 1)`` (``o.ready``
-  high always: every cycle advances);
+- ``e[n]`` (the texel pipelines take group n): ``max(max_k p_k[n] + 1, e[n-1] + 1)`` (with
+  ``o.ready`` high always every cycle advances; output backpressure: below);
 - the lanes' outputs ``T[n] = e[n] + LATENCY`` (the texel pipeline's), and pixel m's colour
   transfers ``BLEND_LATENCY`` cycles after its last group's: ``cycles = T[last] + BLEND_LATENCY + 1``.
 
@@ -35,7 +35,13 @@ With every reference a hit: ``cycles = groups + FOOTPRINT_LATENCY + ADDRESS_STAG
 + 2 + LATENCY + BLEND_LATENCY`` = ``groups + 28`` (the on-chip filter: ``groups + 23``). With one lane the rules are
 :func:`golden.memory.timing.run`'s exactly (the tests hold them equal).
 
-Not modelled: output backpressure (``o.ready`` low). Why a loop over groups: as in
+Output backpressure (``run(..., ready_pattern=)``): ``o.ready`` low holds the blend (its output
+register, then its stages: :class:`BlendStages`, stepped cycle by cycle), whose ``i.ready`` is the
+texel pipelines' ``o.ready``; the texel pipelines then take group n as
+:class:`golden.memory.timing.TexelPipeline` says (``e[n]``: the first advancing cycle; their
+``advance`` is registered), the data read keeps ``p_k[n] >= e[n-1]``, and each colour transfers
+when the blend's output register holds it and ``o.ready`` is high. With ``o.ready`` high always the
+two give the same cycles (a test holds them equal). Why a loop over groups: as in
 :mod:`golden.memory.timing`, each group's times chain to its predecessors' and to the memory's state.
 """
 
@@ -46,8 +52,8 @@ import numpy as np
 from .. import filter as spec
 from ..format import TextureSet
 from .arbiter import Arbiter
-from .system import MemoryConfig
-from .timing import ADDRESS_STAGES, LOOKUP_STAGES, accept_and_lookup, fifo_slack, plan
+from .system import Layout, MemoryConfig
+from .timing import ADDRESS_STAGES, LOOKUP_STAGES, TexelPipeline, accept_and_lookup, fifo_slack, plan
 
 __all__ = ["FOOTPRINT_LATENCY", "BLEND_LATENCY", "FETCH_LATENCY", "lane_requests", "run", "run_pixels"]
 
@@ -79,10 +85,84 @@ def lane_requests(ts: TextureSet, pixels: dict, lanes: int, frac: int):
     return req, last
 
 
+class BlendStages:
+    """The blend's timing (``hw.filter.blend.Blend``: stages *group*, *weigh*, *sum* loading when
+    empty or when their content moves on, *accumulate* taking the sum's group when ``~o.valid |
+    o.ready``, ``o.valid`` set by a pixel's last group, cleared by a transfer), stepped cycle by cycle
+    under the output's ``ready`` (a :class:`golden.memory.timing._Ready`-like pattern of ``o.ready``).
+
+    ``__call__(t)``: the first cycle ``>= t`` in which the blend takes a group (its ``i.ready``, the
+    texel pipelines' ``o.ready``), given the groups entered so far (the texel pipeline model asks in
+    order); :meth:`enter` records that the pending cycle took a group; :meth:`finish` runs until
+    every pixel's colour has transferred. ``transfer``: each colour's cycle; ``backpressure``:
+    cycles with ``o.valid & ~o.ready``."""
+
+    def __init__(self, ready_pattern, length: int):
+        self._ready = ready_pattern(max(64, length)).tolist()
+        self._pattern = ready_pattern
+        self.t = 0                            # the next cycle to evaluate (registers at its start)
+        self.stages = [None, None, None]      # group, weigh, sum: None or the group's last mark
+        self.o_valid = False
+        self.transfer = []
+        self.backpressure = 0
+        self.pixels = 0
+
+    def _o_ready(self, t: int) -> bool:
+        while t >= len(self._ready):
+            self._ready = self._pattern(2 * len(self._ready)).tolist()
+        return bool(self._ready[t])
+
+    def _loads(self):
+        g, p, w = self.stages
+        r = self._o_ready(self.t)
+        take = w is not None and (not self.o_valid or r)
+        load_w = w is None or take
+        load_p = p is None or load_w
+        return r, take, load_w, load_p, g is None or load_p
+
+    def _step(self, entering):
+        """Cycle ``t``'s edge: ``entering`` is the last mark of the group the blend takes (None: none)."""
+        g, p, w = self.stages
+        r, take, load_w, load_p, load_g = self._loads()
+        if self.o_valid:
+            if r:
+                self.transfer.append(self.t)
+            else:
+                self.backpressure += 1
+        if r:
+            self.o_valid = False
+        if take and w:
+            self.o_valid = True
+        self.stages = [entering if load_g else g, g if load_p else p, p if load_w else w]
+        self.t += 1
+
+    def __call__(self, t: int) -> int:
+        while self.t < t:
+            self._step(None)
+        while not self._loads()[4]:
+            self._step(None)
+        return self.t
+
+    def enter(self, t: int, last: bool) -> None:
+        assert t == self.t and self._loads()[4], "a group entered the blend when it could not take it"
+        self._step(bool(last))
+        self.pixels += bool(last)
+
+    def finish(self) -> None:
+        while len(self.transfer) < self.pixels:
+            self._step(None)
+
+
 def run(plans: list, config: MemoryConfig, last: np.ndarray, *, start: int = FOOTPRINT_LATENCY,
-        latency: int = FETCH_LATENCY, blend: int = BLEND_LATENCY) -> dict:
+        latency: int = FETCH_LATENCY, blend: int = BLEND_LATENCY, ready_pattern=None) -> dict:
     """Walk the rules of the module docstring over the lanes' :class:`golden.memory.timing.Plan`
     (one per lane, over the same G groups). ``last`` (G,) marks each pixel's last group.
+    ``ready_pattern(length)`` (bool array of ``o.ready`` for cycles ``0 .. length-1``, every length a
+    prefix of one sequence; :func:`sim.streams.ready_pattern`): output backpressure. The texel
+    pipelines then take group n as :class:`golden.memory.timing.TexelPipeline` says, their outputs
+    taken by the blend (:class:`BlendStages`, ``blend`` must be its 4 stages), whose colours leave
+    under ``o.ready``; ``stall_cycles["output_backpressure"]`` counts ``o.valid & ~o.ready``. None:
+    ``o.ready`` high always (the rules above, closed form).
 
     Returns a dict: ``cycles``; ``transfer`` (int64 (M,), each colour's cycle); ``group_transfer``
     (int64 (G,), the lanes' outputs); ``stall_cycles``: ``miss`` and ``bandwidth`` (summed over the
@@ -114,6 +194,14 @@ def run(plans: list, config: MemoryConfig, last: np.ndarray, *, start: int = FOO
     ar, ar_lane = [], []
     miss_c = bw_c = fifo_c = victim_c = join_c = 0
     K = range(lanes)
+    pipe = stages = None
+    lastl = np.asarray(last, bool).tolist()
+    if ready_pattern is not None:
+        if blend != BLEND_LATENCY:
+            raise ValueError(f"the blend's backpressure model is of its {BLEND_LATENCY} stages")
+        stages = BlendStages(ready_pattern, 2 * n + L + 64)
+        pipe = TexelPipeline(L, ready_pattern, max(64, 2 * n + L + 64))
+        pipe.ready = stages
     for i in range(n):
         ai, bi = accept_and_lookup(i, a, lk, g, La, start)
         lk[i] = bi
@@ -166,9 +254,20 @@ def run(plans: list, config: MemoryConfig, last: np.ndarray, *, start: int = FOO
             lo = pi if lo is None or pi < lo else lo
             hi = pi if pi > hi else hi
         join_c += hi - lo
-        e[i] = max(hi + 1, e[i - 1] + 1) if i else hi + 1
-    T = np.array(e, np.int64) + L
-    colour = T[np.asarray(last, bool)] + blend
+        if pipe is None:
+            e[i] = max(hi + 1, e[i - 1] + 1) if i else hi + 1
+        else:
+            e[i] = pipe.take(max(hi + 1, e[i - 1] + 1) if i else hi + 1)
+            stages.enter(pipe.transfer[-1], lastl[i])
+    if pipe is None:
+        T = np.array(e, np.int64) + L
+        colour = T[np.asarray(last, bool)] + blend
+        backpressure = 0
+    else:
+        stages.finish()
+        T = np.array(pipe.transfer, np.int64)
+        colour = np.array(stages.transfer, np.int64)
+        backpressure = stages.backpressure
     line = (config.index_cache.line, config.raw_cache.line)
     per_cache = np.zeros(2, np.int64)
     for p in plans:
@@ -177,7 +276,7 @@ def run(plans: list, config: MemoryConfig, last: np.ndarray, *, start: int = FOO
         "cycles": int(colour[-1]) + 1 if n else 0,
         "transfer": colour, "group_transfer": T,
         "stall_cycles": {"miss": miss_c, "bandwidth": bw_c, "join": join_c, "fifo_full": fifo_c,
-                         "victim": victim_c, "arbiter": arb.waited},
+                         "victim": victim_c, "arbiter": arb.waited, "output_backpressure": backpressure},
         "bursts": int(per_cache.sum()),
         "memory_bytes": {"index": int(per_cache[0]) * line[0], "raw": int(per_cache[1]) * line[1]},
         "accept": np.array(a, np.int64), "lookup": np.array(lk, np.int64), "tag": np.array(g, np.int64), "enter": np.array(e, np.int64),
@@ -186,14 +285,16 @@ def run(plans: list, config: MemoryConfig, last: np.ndarray, *, start: int = FOO
 
 
 def run_pixels(ts: TextureSet, pixels: dict, config: MemoryConfig, lanes: int, frac: int,
-               ideal: bool = False) -> dict:
-    """:func:`lane_requests`, a :func:`golden.memory.timing.plan` per lane, then :func:`run`; adds
+               ideal: bool = False, layout: Layout | None = None, ready_pattern=None) -> dict:
+    """:func:`lane_requests`, a :func:`golden.memory.timing.plan` per lane (``layout``: where the set
+    lies in external memory, default ``Layout.of(ts)``; the loadable filter's base registers), then
+    :func:`run` (``ready_pattern``: output backpressure, as there); adds
     ``pixels``, ``groups``, ``pixels_per_clock``, ``on_chip_cycles`` (the on-chip filter's ``groups +
     23``), ``references``/``hit_rate`` per cache (over all lanes), ``bytes_per_pixel`` and
     ``bytes_per_texel`` (per texel slot fetched). ``ideal``: every reference hits."""
     req, last = lane_requests(ts, pixels, lanes, frac)
-    plans = [plan(ts, req[k], config, ideal=ideal) for k in range(lanes)]
-    out = run(plans, config, last)
+    plans = [plan(ts, req[k], config, ideal=ideal, layout=layout) for k in range(lanes)]
+    out = run(plans, config, last, ready_pattern=ready_pattern)
     m, groups = int(last.sum()), len(last)
     refs = [sum(p.references[c] for p in plans) for c in (0, 1)]
     hits = [sum(p.hits[c] for p in plans) for c in (0, 1)]

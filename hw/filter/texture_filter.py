@@ -254,17 +254,7 @@ class TextureFilter(wiring.Component):
                 conflicts.append(ib.conflict)
         m.d.comb += self.bank_conflict.eq(Cat(*conflicts).any() if conflicts else 0)
         if loadable:
-            # The drain rule in pixels: none accepted while the host holds the bus, and a transfer
-            # only when every accepted pixel's colour has left (a count of the pixels in flight).
-            taken, given = Signal(), Signal()
-            in_flight = Signal(range(1 << 10), name="pixels_in_flight")
-            m.d.comb += [
-                fp.i.valid.eq(self.i.valid & ~port.pause), self.i.ready.eq(fp.i.ready & ~port.pause),
-                fp.i.p.eq(self.i.p),
-                taken.eq(self.i.valid & self.i.ready), given.eq(self.o.valid & self.o.ready),
-                port.idle.eq(in_flight == 0),
-            ]
-            m.d.sync += in_flight.eq(in_flight + taken - given)
+            pixel_drain(m, self.i, fp.i, self.o, port, 1 << 10)
         else:
             wiring.connect(m, wiring.flipped(self.i), fp.i)
         wiring.connect(m, bl.o, wiring.flipped(self.o))
@@ -308,6 +298,21 @@ def sequencer(m, fp, lanes: int, ready, targets, tag_width: int):
             p.j.eq(texel.j),
             p.tag.eq(Cat(weight, group == 0, last, fpp.tag) if k == 0 else weight),
         ]
+
+
+def pixel_drain(m, i, inner, o, port, most: int) -> None:
+    """The loadable filters' drain rule, in pixels: the input stream ``i`` reaches ``inner`` except
+    while the host holds the bus (``port.pause``), and a bus transfer happens only when every pixel
+    accepted has left through ``o`` (``port.idle``: a count of the pixels in flight, below ``most``).
+    Zero latency; the count is one register."""
+    taken, given = Signal(), Signal()
+    in_flight = Signal(range(most), name="pixels_in_flight")
+    m.d.comb += [
+        inner.valid.eq(i.valid & ~port.pause), i.ready.eq(inner.ready & ~port.pause), inner.p.eq(i.p),
+        taken.eq(i.valid & i.ready), given.eq(o.valid & o.ready),
+        port.idle.eq(in_flight == 0),
+    ]
+    m.d.sync += in_flight.eq(in_flight + taken - given)
 
 
 def gather(m, bl, outs):

@@ -79,7 +79,7 @@ from ..texel_fetch import LATENCY, TexelFetch
 from .axi import axi4_read_signature
 from .reader import CachedReader
 
-__all__ = ["CachedTexelFetch", "ADDRESS_STAGES", "cached_lane"]
+__all__ = ["CachedTexelFetch", "ADDRESS_STAGES", "cached_lane", "base_registers"]
 
 #: The unit's own address stages in front of the caches (descriptor, block address).
 ADDRESS_STAGES = 2
@@ -150,7 +150,7 @@ class CachedTexelFetch(wiring.Component):
             m.d.comb += [tf.load.write.eq(port.load.write), tf.load.read.eq(port.load.read),
                          tf.load.region.eq(port.load.region), tf.load.offset.eq(port.load.offset),
                          tf.load.data.eq(port.load.data)]
-            bases, answer = _base_registers(m, port.load, self._map, self._layout)
+            bases, answer = base_registers(m, port.load, self._map, self._layout)
             m.d.comb += port.load_data.eq(or_all([tf.load_data, answer]))
             # any accepted write empties the caches (the drain rule has emptied the unit)
             lane = {"load": tf.load, "bases": bases, "flush": port.load.write}
@@ -185,7 +185,7 @@ class CachedTexelFetch(wiring.Component):
         return m
 
 
-def _base_registers(m, load, rmap: RegisterMap, layout: Layout | None):
+def base_registers(m, load, rmap: RegisterMap, layout: Layout | None):
     """The base registers of the loadable cached unit (reset-less, as the other loaded contents):
     written and read by the load command ``load`` (registered, as :class:`hw.color_matrix.ColorMatrix`'s
     registers), read back ``ANSWER_LATENCY`` cycles after acceptance. Returns ``({"index": word

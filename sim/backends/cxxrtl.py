@@ -51,7 +51,7 @@ from .toolchain import (CLANG_INLINE, ToolchainError, cached_build, digest, find
 __all__ = ["cxxrtl_sources", "cxxrtl_program", "write_cxxrtl", "blank_memories", "memory_initialisers",
            "rewrite", "PASSES", "guarded_writes", "INLINED_UNITS", "build_cxxrtl", "build_design", "open_design", "driver_sources", "source_stamp",
            "texture_set_digest", "BatchLibrary", "batch_layout", "strobe_sums", "run_batch", "run_checked", "run",
-           "run_unit", "open_cxxrtl", "load_set", "CXXFLAGS", "ready_pattern", "DRIVER_DIR"]
+           "run_unit", "open_cxxrtl", "load_set", "load_writes_over_bus", "CXXFLAGS", "ready_pattern", "DRIVER_DIR"]
 
 DRIVER_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "drivers")
 #: Compiler flags of the CXXRTL library (see docs/simulation.md for the build time / speed trade);
@@ -784,7 +784,14 @@ def load_set(lib: BatchLibrary, ts, geometry) -> int:
     """Load ``ts`` into the loadable unit of ``lib`` by the bus writes a host makes
     (:func:`golden.register_map.load_writes`); returns the cycles they took."""
     from vqtex.golden.register_map import load_writes
-    writes = load_writes(ts, geometry).astype(np.int64)
+    return load_writes_over_bus(lib, load_writes(ts, geometry))
+
+
+def load_writes_over_bus(lib: BatchLibrary, writes) -> int:
+    """The host's load on a compiled library: ``writes`` ((N, 2) word address, data, as
+    :func:`golden.register_map.load_writes` gives them) by ``lib.bus``; returns the cycles they
+    took. A write answered with ``err`` raises ToolchainError."""
+    writes = np.asarray(writes).astype(np.int64).reshape(-1, 2)
     ops = np.concatenate([writes, np.ones((len(writes), 1), np.int64)], axis=1)
     _, err, cycles = lib.bus(ops)
     if err.any():

@@ -450,33 +450,37 @@ def _cached_design_info(ts, config, tag_width: int, geometry=None, contents=None
 
 
 def cached_filter_design_info(ts, config, *, lanes: int = 4, frac: int | None = None,
-                              tag_width: int = 16) -> DesignInfo:
+                              tag_width: int = 16, geometry=None) -> DesignInfo:
     """Elaborate :class:`hw.memory.filter.CachedTextureFilter` and describe it as
     :func:`filter_design_info` does the filter (a request row is the pixel's :data:`FIELDS`) with the
     AXI4 read master as ``axi__*`` (``axi_bytes``, as :func:`cached_design_info`) and the strobes in
     the unit's signature order (``stall_output``, ``stall_memory0`` .. , ``overflow``). What names
-    the build: lanes, frac, tag width, cache shapes, FIFO depth, bus width and the set's contents."""
+    the build: lanes, frac, tag width, cache shapes, FIFO depth, bus width and the set's contents.
+    With ``geometry``: the loadable filter of that geometry (no contents; ``ts`` is loaded over its
+    bus, the ``bus__*`` ports), one build per geometry and cache configuration for every set."""
     key = ("cached_filter", lanes, frac, tag_width, config.index_cache, config.raw_cache, config.prefetch,
-           config.bus_bytes, texture_set_digest(ts))
-    return _memoised(key, lambda: _cached_filter_design_info(ts, config, lanes, frac, tag_width, key))
+           config.bus_bytes, _contents(ts, geometry))
+    return _memoised(key, lambda: _cached_filter_design_info(ts, config, lanes, frac, tag_width, key, geometry))
 
 
-def _cached_filter_design_info(ts, config, lanes, frac, tag_width, key) -> DesignInfo:
+def _cached_filter_design_info(ts, config, lanes, frac, tag_width, key, geometry=None) -> DesignInfo:
     from vqtex.hw.memories import elaborate, memories
     from vqtex.hw.memory.filter import CachedTextureFilter
-    top = CachedTextureFilter(ts, config, lanes=lanes, tag_width=tag_width, frac=frac)
+    unit = {} if geometry is None else {"geometry": geometry, "loadable": True}
+    top = CachedTextureFilter(None if geometry is not None else ts, config, lanes=lanes, tag_width=tag_width,
+                              frac=frac, **unit)
     frag = elaborate(top)
     req, resp = top.i.p.shape(), top.o.p.shape()
     info = DesignInfo(
         top=top, fragment=frag, ports=port_map(top),
         request_fields=_fields(req), response_fields=_fields(resp),
         request_width=req.size, response_width=resp.size, tag_width=tag_width,
-        stages=["output"], strobes=[n for n in top.signature.members if n not in ("i", "o", "axi")],
+        stages=["output"], strobes=[n for n in top.signature.members if n not in ("i", "o", "axi", "bus")],
         memories=[MemoryImage(" ".join(m.path), m.width, m.depth, m.words) for m in memories(frag)],
         latency=int(top.latency), unit="cached_filter", columns=FIELDS, valid="o__valid",
         verilog_name="cached_texture_filter",
         verilog_request=[("i_payload", 0, req.size)], verilog_response=[("o_payload", 0, resp.size)],
-        options=key[1:], axi_bytes=config.bus_bytes)
+        options=key[1:], axi_bytes=config.bus_bytes, geometry=geometry)
     return _checked(info)
 
 
@@ -567,22 +571,29 @@ class CachedFilterTop(wiring.Component):
     """:class:`hw.memory.filter.CachedTextureFilter` with one port per stream member as
     :class:`FilterTop` (``i_valid``, ``i_ready``, ``i_payload``, ``o_valid``, ``o_ready``,
     ``o_payload``), its strobes, and the AXI4 read master as ``axi_*`` as :class:`CachedTexelFetchTop`
-    (``axi_arid`` tied to 0, ``axi_rid`` ignored).
+    (``axi_arid`` tied to 0, ``axi_rid`` ignored). The loadable filter (``geometry``) has its
+    Wishbone port as ``bus_adr``, ..., ``bus_stall``, as :class:`TexelFetchTop`.
 
     Arguments
     ---------
     texture_set, config, lanes, tag_width, frac
         As for :class:`hw.memory.filter.CachedTextureFilter`.
+    geometry : Geometry, optional
+        The loadable filter of this geometry (``texture_set``, if given, its initial contents).
     """
 
-    def __init__(self, texture_set, config, *, lanes: int = 4, tag_width: int = 16, frac: int | None = None):
+    def __init__(self, texture_set, config, *, lanes: int = 4, tag_width: int = 16, frac: int | None = None,
+                 geometry=None):
         from vqtex.hw.memory.filter import CachedTextureFilter
-        self._unit = u = CachedTextureFilter(texture_set, config, lanes=lanes, tag_width=tag_width, frac=frac)
-        self._strobes = [n for n in u.signature.members if n not in ("i", "o", "axi")]
+        unit = {} if geometry is None else {"geometry": geometry, "loadable": True}
+        self._unit = u = CachedTextureFilter(texture_set, config, lanes=lanes, tag_width=tag_width, frac=frac,
+                                             **unit)
+        self._strobes = [n for n in u.signature.members if n not in ("i", "o", "axi", "bus")]
         members = {"i_valid": In(1), "i_ready": Out(1), "i_payload": In(len(u.i.p.as_value())),
                    "o_valid": Out(1), "o_ready": In(1), "o_payload": Out(len(u.o.p.as_value())),
                    **{n: Out(1) for n in self._strobes}}
         members.update(axi_members(u))
+        members.update(bus_members(u))
         super().__init__(members)
 
     @property
@@ -600,4 +611,5 @@ class CachedFilterTop(wiring.Component):
                      self.o_valid.eq(u.o.valid), u.o.ready.eq(self.o_ready), self.o_payload.eq(u.o.p)]
         m.d.comb += [getattr(self, n).eq(getattr(u, n)) for n in self._strobes]
         connect_axi(m, self, u)
+        connect_bus(m, self, u)
         return m

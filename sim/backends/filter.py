@@ -81,6 +81,8 @@ class FilterResult:
     bank_conflicts: int = 0
     #: Through the memory system (:mod:`sim.backends.filter_memory`): bursts, bytes, hit rates.
     memory: dict | None = None
+    #: A loadable filter's load: the cycles of the bus writes before the pixels (None: baked).
+    load_cycles: int | None = None
 
     @property
     def pixels_per_clock(self) -> float:
@@ -163,16 +165,18 @@ def simulate_filter(ts: TextureSet, pixels: dict, *, backend: str = "golden", la
     if frac is None:
         frac = default_frac(ts)
     p = check_pixels(ts, pixels, frac)
+    load = None
     if geometry is not None:
-        from vqtex.golden.register_map import load_writes
+        from vqtex.golden.register_map import load_cycles, load_writes
         if index_banks != "lane":
             raise ValueError("the loadable texture filter keeps a copy of the memories per lane: index_banks 'lane'")
-        load_writes(ts, geometry)          # (a set that does not fit is refused here, before any backend)
+        # (a set that does not fit is refused here, before any backend)
+        load = load_cycles(len(load_writes(ts, geometry)))
     if backend == "golden":
         colors = golden_colors(ts, p, frac)
         return FilterResult(colors, 0, len(colors), int(texel_slots(p["mode"], lanes)), lanes, LATENCY,
                             {"output_backpressure": 0, "input_wait": 0},
-                            golden_conflicts(ts, p, frac, lanes) if index_banks == "parity" else 0)
+                            golden_conflicts(ts, p, frac, lanes) if index_banks == "parity" else 0, load_cycles=load)
     if backend not in FILTER_BACKENDS:
         raise ValueError(f"unknown filter backend {backend!r} (known: {', '.join(FILTER_BACKENDS)})")
     if geometry is not None:                # the loadable filter's coordinates: widened, exactly
@@ -252,7 +256,9 @@ def run_pysim(ts, pixels: dict, *, lanes: int = 1, frac: int | None = None, stal
     ph, = run_stream(dut, [(writes, rows)], columns=FIELDS, tag_width=TAG_WIDTH,
                      strobes=[n for n in dut.signature.members if n not in ("i", "o", "bus")], valid=dut.o.valid,
                      stall=stall, seed=seed, vcd=vcd, name="filter")
-    return _result(dut, pixels, lanes, ph["responses"], ph["cycles"], ph["strobes"])
+    res = _result(dut, pixels, lanes, ph["responses"], ph["cycles"], ph["strobes"])
+    res.load_cycles = ph["load_cycles"]
+    return res
 
 
 def compiled_build(backend: str, ts, *, lanes: int = 1, frac: int | None = None, index_banks: str = "parity",
@@ -299,9 +305,10 @@ def run_compiled(backend: str, ts, pixels: dict, *, lanes: int = 1, frac: int | 
         return _result(info, pixels, lanes, np.zeros((0, 4), np.uint8), 0, dict.fromkeys(info.strobes, 0))
     lib, info, _ = cxxrtl.open_design(compiled_build(backend, ts, lanes=lanes, frac=frac, index_banks=index_banks,
                                                      geometry=geometry))
+    load = None
     try:
         if geometry is not None:
-            cxxrtl.load_set(lib, ts, geometry)
+            load = cxxrtl.load_set(lib, ts, geometry)
         rows = np.stack([np.asarray(pixels[f], np.int64) for f in FIELDS], 1)
         groups = int(texel_slots(pixels["mode"], lanes) // lanes)
         rgba, counters = cxxrtl.run_checked(lib, rows, cxxrtl.batch_layout(info), n=n, transfers=groups,
@@ -309,4 +316,6 @@ def run_compiled(backend: str, ts, pixels: dict, *, lanes: int = 1, frac: int | 
                                             seed=seed, tag_width=TAG_WIDTH, what="colour")
     finally:
         lib.close()
-    return _result(info, pixels, lanes, rgba, int(counters[cxxrtl.C_CYCLES]), cxxrtl.strobe_sums(info, counters))
+    res = _result(info, pixels, lanes, rgba, int(counters[cxxrtl.C_CYCLES]), cxxrtl.strobe_sums(info, counters))
+    res.load_cycles = load
+    return res

@@ -212,15 +212,12 @@ def run_phases(geometry, config, phases, *, backend: str, stall: float = 0.0, se
         return _pysim(dut, program, config, stall, seed)
     if backend not in ("cxxrtl", "verilator"):
         raise ValueError(f"the loadable cached unit runs on pysim, cxxrtl and verilator, not on {backend}")
-    from .cxxrtl import ToolchainError, open_design
+    from .cxxrtl import load_writes_over_bus, open_design
     lib, info, _ = open_design(build_cached(None, config, backend, geometry=geometry))
     try:
         out = []
         for writes, ts, req, layout in program:
-            ops = np.concatenate([writes, np.ones((len(writes), 1), np.int64)], axis=1)
-            _, err, load = lib.bus(ops)
-            if err.any():
-                raise ToolchainError(f"bus write {int(np.argmax(err))} of the load answered with err")
+            load = load_writes_over_bus(lib, writes)
             got = _run_loaded(lib, info, ts, req, config, layout, stall, seed, trace=trace)
             got["load_cycles"] = load
             out.append(got)

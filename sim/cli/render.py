@@ -109,8 +109,9 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
     request streams through the texel-fetch unit); the fovea's region figures then come from the
     texel-fetch unit's exact cycle model.
     ``unit`` is the RTL texel-fetch unit (``specialised`` or ``full``); with ``geometry`` it is the
-    loadable unit of that geometry (or, with ``filter_in_rtl``, the loadable texture filter),
-    ``ts`` loaded over its bus port before each frame (``"sim"`` holds the load's cycles too).
+    loadable unit of that geometry (or, with ``filter_in_rtl``, the loadable texture filter, with
+    ``memory`` the loadable filter through the memory system), ``ts`` loaded over its bus port
+    before each frame (``"sim"``, or the filter's result, holds the load's cycles too).
     With ``memory`` (:class:`golden.memory.system.MemoryConfig`) the unit is the cached one, its
     textures in external memory (golden: its cycle model, always run; pysim, cxxrtl, verilator: its RTL); ``"sim"``
     holds its cycles and ``memory`` figures.
@@ -159,7 +160,7 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
                     compiled = backend in ("cxxrtl", "verilator")
                     if compiled:
                         from vqtex.sim.backends.filter_memory import compiled_build
-                        compiled_build(ts, memory, lanes=lanes, frac=sampler.frac, backend=backend)
+                        compiled_build(ts, memory, lanes=lanes, frac=sampler.frac, backend=backend, geometry=geometry)
                     out["rtl_setup_seconds"] = time.perf_counter() - t0 if compiled else 0.0
                 else:
                     from vqtex.sim.backends.filter import prepare_filter
@@ -170,7 +171,7 @@ def render_scene(scene, ts, frames, *, mode="trilinear", backend="golden", stall
             if memory is not None:          # the filter's lanes through the memory system
                 from vqtex.sim.backends.filter_memory import simulate_cached_filter
                 res = simulate_cached_filter(ts, pixels, memory, backend=backend, lanes=lanes, frac=sampler.frac,
-                                             stall=stall, seed=seed)
+                                             stall=stall, seed=seed, geometry=geometry)
             else:
                 res = simulate_filter(ts, pixels, backend=backend, lanes=lanes, frac=sampler.frac, stall=stall,
                                       seed=seed, index_banks=index_banks, geometry=geometry)
@@ -330,6 +331,8 @@ def _frame_report(r: dict) -> dict:
                  bank_conflicts=int(s.bank_conflicts), identical_to_golden=r["identical_to_golden"])
         if s.memory is not None:            # (JSON: the AR cycles are for the tests)
             d["memory"] = {k: v for k, v in s.memory.items() if k != "ar"}
+        if s.load_cycles is not None:
+            d["load_cycles"] = int(s.load_cycles)
     if "sim" in r and r["sim"] is not None:
         s = r["sim"]
         d.update(rtl_seconds=round(r["rtl_seconds"], 4), cycles=int(s.cycles), latency=int(s.latency),
@@ -365,13 +368,10 @@ def cmd_render(args) -> int:
         memory = memory_config(args)
         if memory is not None and args.filter_in_rtl:
             bad = [opt for opt, on in (("--fovea", fovea is not None), ("--index-banks", args.index_banks is not None),
-                                       ("--unit", args.unit is not None)) if on]
+                                       (f"--unit {args.unit}", args.unit not in (None, "loadable"))) if on]
             if bad:
                 raise CliError(f"--filter-in-rtl --memory external: the filter's lanes read through their own caches, "
                                f"not with {bad[0]}")
-            if args.backend == "golden" and args.stall:
-                raise CliError("--filter-in-rtl --memory external: the golden cycle model has no output backpressure "
-                               "(--stall needs --backend pysim or cxxrtl)")
         elif memory is not None:
             bad = [opt for opt, on in (("--filter-in-rtl", args.filter_in_rtl), ("--compare-fixed", args.compare_fixed),
                                        ("--fovea", fovea is not None), ("--one-port", args.one_port),

@@ -40,32 +40,37 @@ import numpy as np
 __all__ = ["codebook_references", "texel_lines", "codebook_cache", "main"]
 
 
-def codebook_references(ts, requests: np.ndarray) -> np.ndarray:
-    """The codebook entry each compressed request of ``requests`` ((N, 4) texture, level, i, j)
-    reads, in request order (int64 (M,), M the compressed requests): ``cb_base + index``."""
+def _compressed_reads(ts, requests: np.ndarray):
+    """The compressed requests of ``requests`` ((N, 4) texture, level, i, j), in request order: their
+    descriptor rows, the codebook entry each reads (``cb_base + index``) and the texel's (x, y) in
+    the block."""
     from vqtex.golden.fetch import block_address, lookup_descriptor, read_index
 
     req = np.asarray(requests, np.int64).reshape(-1, 4)
     d = lookup_descriptor(ts, req[:, 0], req[:, 1])
     comp = d["compressed"].astype(bool)
     dc = d[comp]
-    k, _, _ = block_address(dc, req[comp, 2], req[comp, 3])
-    return dc["cb_base"].astype(np.int64) + read_index(ts, dc, k)
+    k, x, y = block_address(dc, req[comp, 2], req[comp, 3])
+    return dc, dc["cb_base"].astype(np.int64) + read_index(ts, dc, k), x, y
+
+
+def codebook_references(ts, requests: np.ndarray) -> np.ndarray:
+    """The codebook entry each compressed request of ``requests`` ((N, 4) texture, level, i, j)
+    reads, in request order (int64 (M,), M the compressed requests): ``cb_base + index``."""
+    return _compressed_reads(ts, requests)[1]
 
 
 def texel_lines(ts, requests: np.ndarray, line: int) -> np.ndarray:
     """The ``line``-byte lines of the codebook memory (one byte array, entries ``entry_bytes``
     apart) each compressed request's texel bytes lie in, in request order, a straddling texel's two
     lines one after the other (int64)."""
-    from vqtex.golden.fetch import block_address, lookup_descriptor, read_index
+    return _lines_of(ts, *_compressed_reads(ts, requests), line)
+
+
+def _lines_of(ts, dc, entry, x, y, line: int) -> np.ndarray:
+    """:func:`texel_lines` of the reads :func:`_compressed_reads` gives."""
     from vqtex.golden.format import COLORS, texel_bytes
 
-    req = np.asarray(requests, np.int64).reshape(-1, 4)
-    d = lookup_descriptor(ts, req[:, 0], req[:, 1])
-    dc = d[d["compressed"].astype(bool)]
-    rc = req[d["compressed"].astype(bool)]
-    k, x, y = block_address(dc, rc[:, 2], rc[:, 3])
-    entry = dc["cb_base"].astype(np.int64) + read_index(ts, dc, k)
     tb = np.array([texel_bytes(c) for c in COLORS], np.int64)[dc["color"].astype(np.int64)]
     t = (np.asarray(y, np.int64) << dc["log2bw"].astype(np.int64)) | np.asarray(x, np.int64)
     first = entry * ts.entry_bytes + dc["texel_off"].astype(np.int64) + tb * t
@@ -97,9 +102,10 @@ def codebook_cache(scene_name="topspin", frame: int = 0, sizes=(1, 2, 4, 8, 16, 
     ts = build_texture_set(scene, [img for img, _ in scene.load_textures()])
     req, sampler = frame_requests(scene, frame, ts, "trilinear")
     pixels = len(sampler.fragments)
-    entries = codebook_references(ts, req)
+    reads = _compressed_reads(ts, req)          # once: the entries and the texel lines both come from it
+    entries = reads[1]
     cb_line = _line_bytes(ts.entry_bytes)
-    fine = texel_lines(ts, req, texel_line)
+    fine = _lines_of(ts, *reads, texel_line)
     rows = []
     for kb in sizes:
         size = kb * 1024

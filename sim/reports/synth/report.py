@@ -105,6 +105,7 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
             "port_bits": harness.port_bits,
             "memories": _memory_shapes(shapes, syn["memories"]),
             "seconds": {"rtlil": round(t_rtlil, 2), "synthesis": round(syn["seconds"], 2)},
+            "mapper": syn["mapper"],
         }
         if geometry is not None:
             rep["geometry"] = geometry.to_dict()

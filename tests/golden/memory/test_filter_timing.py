@@ -98,3 +98,28 @@ def test_slower_memory_never_faster(lanes):
         c = gf.run_pixels(ts, px, config(latency), lanes, frac)["cycles"]
         assert c >= max(prev, ideal)
         prev = c
+
+
+@pytest.mark.parametrize("lanes", [1, 4])
+def test_backpressure_model(lanes):
+    """With output backpressure (``ready_pattern``): o.ready high always gives the closed form's
+    every cycle; backpressure never makes a frame faster (heavy backpressure slower), and the
+    colours leave in order, one per cycle at most, only in cycles with o.ready high."""
+    from vqtex.sim.streams import ready_pattern
+    ts, px, frac = setup(80, lanes)
+    req, last = gf.lane_requests(ts, px, lanes, frac)
+    plans = [timing.plan(ts, req[k], config()) for k in range(lanes)]
+    free = gf.run(plans, config(), last)
+    high = gf.run(plans, config(), last, ready_pattern=lambda m: np.ones(m, bool))
+    for key in ("transfer", "group_transfer", "tag", "enter", "ar"):
+        assert high[key].tolist() == free[key].tolist()
+    assert high["cycles"] == free["cycles"] and high["stall_cycles"]["output_backpressure"] == 0
+    for stall in (0.3, 0.8):
+        r = gf.run(plans, config(), last, ready_pattern=lambda m: ready_pattern(2, stall, m))
+        bp = r["stall_cycles"]["output_backpressure"]
+        assert bp > 0 and r["cycles"] >= free["cycles"] + (stall > 0.5)
+        assert len(r["transfer"]) == last.sum() and (np.diff(r["transfer"]) >= 1).all()
+        ready = ready_pattern(2, stall, r["cycles"])
+        assert ready[r["transfer"]].all()                      # a colour leaves only when o.ready is high
+    with pytest.raises(ValueError, match="4 stages"):
+        gf.run(plans, config(), last, blend=3, ready_pattern=lambda m: np.ones(m, bool))

@@ -1,9 +1,9 @@
 """hw.memory.filter.CachedTextureFilter on pysim (sim.backends.filter_memory), its AXI master
 answered by the golden memory models: colours equal golden's bit for bit, in order; the cycles,
 every AR's cycle (the arbiter's order), the bursts and the lanes' fill waits equal the cycle model
-golden.memory.filter exactly (o.ready high); 1, 2, 4 and 8 lanes, blocking and prefetching caches
-smaller than the set, memory latencies 1 to 300, DDR3; with random output backpressure, colours and
-order only (the cycle model has none)."""
+golden.memory.filter exactly; 1, 2, 4 and 8 lanes, blocking and prefetching caches
+smaller than the set, memory latencies 1 to 300, DDR3; with random output backpressure (0.4 to 0.9)
+too."""
 
 import numpy as np
 import pytest
@@ -54,19 +54,32 @@ def test_cached_filter_equals_the_cycle_model(lanes, n, latency, prefetch, kind)
         assert model.memory["stall_detail"]["join"] > 0
 
 
-def test_cached_filter_with_backpressure_keeps_colours_and_order():
-    ts, px, frac = pixels(30, 11)
-    rtl = simulate_cached_filter(ts, px, config(9, 4), backend="pysim", lanes=4, stall=0.4, seed=3)
+@pytest.mark.parametrize("lanes,n,latency,prefetch,stall,kind", [
+    (4, 30, 9, 4, 0.4, "fixed"),
+    (4, 24, 1, 4, 0.8, "dram"),
+    (1, 16, 7, 1, 0.9, "fixed"),
+    (8, 8, 60, 8, 0.5, "fixed"),
+])
+def test_cached_filter_with_backpressure_equals_the_cycle_model(lanes, n, latency, prefetch, stall, kind):
+    """Random output backpressure: colours and order, and the cycles, every AR, the fill waits and
+    the output backpressure cycles equal the model's (golden.memory.filter with ``ready_pattern``)."""
+    ts, px, frac = pixels(n, 11 + lanes)
+    cfg = config(latency, prefetch, kind)
+    rtl = simulate_cached_filter(ts, px, cfg, backend="pysim", lanes=lanes, stall=stall, seed=3)
+    model = simulate_cached_filter(ts, px, cfg, backend="golden", lanes=lanes, stall=stall, seed=3)
     assert (rtl.colors == golden_colors(ts, px, frac)).all()          # (run_stream checks every tag's order)
     assert rtl.stall_cycles["output_backpressure"] > 0
+    assert rtl.cycles == model.cycles
+    assert rtl.stall_cycles == model.stall_cycles
+    assert rtl.memory["ar"].tolist() == model.memory["ar"].tolist()
 
 
 def test_cached_filter_refuses_bad_configuration():
     ts, px, frac = pixels(4, 1)
     with pytest.raises(ValueError, match="lanes"):
         CachedTextureFilter(ts, config(5, 4), lanes=3)
-    with pytest.raises(ValueError, match="backpressure"):
-        simulate_cached_filter(ts, px, config(5, 4), backend="golden", stall=0.2)
+    with pytest.raises(ValueError, match="stall probability"):
+        simulate_cached_filter(ts, px, config(5, 4), backend="golden", stall=1.2)
     with pytest.raises(ValueError, match="runs on"):
         simulate_cached_filter(ts, px, config(5, 4), backend="icarus")
     assert LATENCY == 28

@@ -4,7 +4,7 @@ golden memory models, on a scene frame (and on Verilator, from the exported Veri
 edge-case pixels of a small set with two lanes): colours equal golden's frame bit for bit, and the cycles,
 every AR's cycle, the bytes read and the lanes' fill waits equal the cycle model
 (golden.memory.filter) exactly; fixed latency and DDR3 from one build (the memory model is the
-driver's, chosen per run); with random output backpressure, colours and order only."""
+driver's, chosen per run); with random output backpressure too (golden.memory.filter's ready pattern)."""
 
 from __future__ import annotations
 
@@ -53,9 +53,12 @@ def test_scene_frame_equals_the_cycle_model():
         assert rtl.memory["memory_bytes"] == model.memory["memory_bytes"]
         assert rtl.memory["fill_waits"] == model.memory["fill_waits"] > 0
         assert model.memory["bursts"] > 0 and rtl.cycles > model.memory["on_chip_cycles"] + 4
-    rtl = simulate_cached_filter(ts, px, MemoryConfig(**SCENE, latency=13), backend="cxxrtl", lanes=4, stall=0.25,
-                                 seed=2)
+    cfg = MemoryConfig(**SCENE, latency=13)
+    rtl = simulate_cached_filter(ts, px, cfg, backend="cxxrtl", lanes=4, stall=0.25, seed=2)
+    model = simulate_cached_filter(ts, px, cfg, backend="golden", lanes=4, stall=0.25, seed=2)
     assert (rtl.colors == want).all() and rtl.stall_cycles["output_backpressure"] > 0
+    assert rtl.cycles == model.cycles and rtl.stall_cycles == model.stall_cycles
+    assert rtl.memory["ar"].tolist() == model.memory["ar"].tolist()
 
 
 def test_verilator_equals_the_cycle_model():

