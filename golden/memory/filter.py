@@ -53,7 +53,7 @@ from .. import filter as spec
 from ..format import TextureSet
 from .arbiter import Arbiter
 from .system import Layout, MemoryConfig
-from .timing import ADDRESS_STAGES, LOOKUP_STAGES, TexelPipeline, accept_and_lookup, fifo_slack, plan
+from .timing import ADDRESS_STAGES, LOOKUP_STAGES, TexelPipeline, accept_and_lookup, attempt, fifo_slack, first_check, plan
 
 __all__ = ["FOOTPRINT_LATENCY", "BLEND_LATENCY", "FETCH_LATENCY", "lane_requests", "run", "run_pixels"]
 
@@ -205,22 +205,21 @@ def run(plans: list, config: MemoryConfig, last: np.ndarray, *, start: int = FOO
     for i in range(n):
         ai, bi = accept_and_lookup(i, a, lk, g, La, start)
         lk[i] = bi
-        gi = bi + LOOKUP_STAGES
-        if i and g[i - 1] + max(1, maxmiss[i - 1]) > gi:
-            gi = g[i - 1] + max(1, maxmiss[i - 1])
+        gi = first_check(i, bi, g)
+        if i:
+            gi = attempt(gi, g[i - 1] + maxmiss[i - 1])
         if i >= Q:
-            f = max(pr[k][i - Q] for k in K) + slack
-            if f > gi:
-                fifo_c += f - gi
-                gi = f
+            t = attempt(gi, max(pr[k][i - Q] for k in K) + slack)
+            fifo_c += t - gi
+            gi = t
         vt = -1
         for k in K:
             v = victim[k][i]
             if v >= 0 and pr[k][v] + 1 > vt:
                 vt = pr[k][v] + 1
-        if vt > gi:
-            victim_c += vt - gi
-            gi = vt
+        t = attempt(gi, vt)
+        victim_c += t - gi
+        gi = t
         g[i] = gi
         a[i] = ai
         for j in range(maxmiss[i]):

@@ -82,13 +82,16 @@ from ..format import TextureSet
 from .cache import classify
 from .system import Layout, MemoryConfig, references
 
-__all__ = ["ADDRESS_STAGES", "LOOKUP_STAGES", "FRONT_LATENCY", "Plan", "plan", "fifo_slack", "accept_and_lookup", "run", "run_requests", "TexelPipeline", "StreamSink"]
+__all__ = ["ADDRESS_STAGES", "LOOKUP_STAGES", "REPLAY", "FRONT_LATENCY", "first_check", "attempt", "Plan", "plan", "fifo_slack", "accept_and_lookup", "run", "run_requests", "TexelPipeline", "StreamSink"]
 
 #: The unit's address stages before the cache block (descriptor, block address).
 ADDRESS_STAGES = 2
 #: The tag check's first cycle (the lookup: the set's tag row read and registered), a stream
 #: register of the cache block in the chain in front of the tag check.
 LOOKUP_STAGES = 1
+#: Cycles between two tries of a tag check that does not take its request (the lookup took the
+#: next request meanwhile: killed, and the request looked up again).
+REPLAY = 2
 #: Cycles from accepting a request to offering it to the texel pipeline when every reference hits:
 #: the address stages, the lookup, the tag check and the data read.
 FRONT_LATENCY = ADDRESS_STAGES + LOOKUP_STAGES + 2
@@ -242,6 +245,21 @@ def fifo_slack(q: int) -> int:
     return 1 if q > 1 else 0
 
 
+def first_check(i: int, b_i: int, g: list) -> int:
+    """The cycle request (or group) ``i`` is first in the tag check: ``>= b[i] + LOOKUP_STAGES``
+    (looked up), ``>= g[i-1] + 1`` (the lookup takes it while its predecessor is checked, as if that
+    one were taken)."""
+    c = b_i + LOOKUP_STAGES
+    return g[i - 1] + 1 if i and g[i - 1] + 1 > c else c
+
+
+def attempt(c: int, r: int) -> int:
+    """The first cycle ``>= r`` at which a check first tried in cycle ``c`` is tried again: a check
+    not taken is killed and looked up again, so its tries are ``c, c + REPLAY, c + 2 REPLAY, ...``
+    (``attempt(attempt(c, r1), r2) == attempt(c, max(r1, r2))``)."""
+    return c if r <= c else c + -(-(r - c) // REPLAY) * REPLAY
+
+
 def accept_and_lookup(i: int, a: list, b: list, g: list, La: int, start: int) -> tuple:
     """Request (or group) ``i``'s accept and lookup cycles ``(a[i], b[i])`` from its predecessors'
     (the rules of the module docstring; one definition for :func:`run` and the filter's
@@ -293,16 +311,18 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
         # accept, lookup and tag check
         ai, bi = accept_and_lookup(i, a, b, g, La, 0)
         b[i] = bi
-        gi = bi + LOOKUP_STAGES
-        if i and g[i - 1] + max(1, misses[i - 1]) > gi:
-            gi = g[i - 1] + max(1, misses[i - 1])
-        if i >= Q and pr[i - Q] + slack > gi:
-            fifo_c += pr[i - Q] + slack - gi
-            gi = pr[i - Q] + slack
+        gi = first_check(i, bi, g)
+        if i:
+            gi = attempt(gi, g[i - 1] + misses[i - 1])
+        if i >= Q:
+            t = attempt(gi, pr[i - Q] + slack)
+            fifo_c += t - gi
+            gi = t
         v = victim[i]
-        if v >= 0 and pr[v] + 1 > gi:
-            victim_c += pr[v] + 1 - gi
-            gi = pr[v] + 1
+        if v >= 0:
+            t = attempt(gi, pr[v] + 1)
+            victim_c += t - gi
+            gi = t
         g[i] = gi
         a[i] = bi if La == 0 else ai
         for j in range(misses[i]):

@@ -91,17 +91,12 @@ def _log2(v: int) -> int:
     return v.bit_length() - 1
 
 
-def _skid(m, nx, name, load, sv):
-    """The lookup's two places for one field: the main register (returned; the check reads it),
-    loaded when ``load`` from the skid register when that holds a request (``sv``), else from
-    ``nx`` (the request on ``i``); and the skid register, loading ``nx`` whenever it is empty."""
+def _reg(m, nx, name):
+    """A lookup register of ``nx`` (returned; the check reads it): loaded every cycle, no clock
+    enable (a request the check does not take is killed and sent again: :class:`CachedReader`)."""
     nx = Value.cast(nx)
     r = Signal(len(nx), name=name)
-    sk = Signal(len(nx), name=f"skid_{name}")
-    with m.If(~sv):
-        m.d.sync += sk.eq(nx)
-    with m.If(load):
-        m.d.sync += r.eq(Mux(sv, sk, nx))
+    m.d.sync += r.eq(nx)
     return r
 
 
@@ -224,18 +219,16 @@ class _Cache:
         """The value of the bank holding set ``s`` (small signals: hit, way, ...)."""
         return per_bank[0] if self.banks == 1 else Mux(s[0], per_bank[1], per_bank[0])
 
-    def lookup(self, m, line, load, sv):
+    def lookup(self, m, line):
         """The tag check's first cycle: the lookup registers the set and tag of ``line`` (and of
         ``line + 1``: a second port, when the cache has two banks), and each bank's tag row and
-        touched bit for them, read from the LUT RAM (a bank holds the port whose set has its parity),
-        in two places (:func:`_skid`): the main register, which the check reads, loaded when
-        ``load``; and the skid register, which holds a request that arrived while the main one
-        waited (``sv``). A row the tag check writes in this same cycle (the request ahead, leaving
-        the check) is forwarded into the main register: it takes the written row and touched bit,
-        not the memory's (or the skid register's) old ones. Only the tag check writes these rows,
-        and only when its request leaves, which is when the main register loads: so no register
-        holds a stale row (the skid register is loaded only in cycles without a write, and moves
-        into the main register, forwarded, in the cycle of the next one)."""
+        touched bit for them, read from the LUT RAM (a bank holds the port whose set has its
+        parity). The registers load every cycle (:func:`_reg`, no clock enable): what they hold is
+        checked the next cycle, or killed there. A row the tag check writes in this same cycle
+        (the request ahead, leaving the check) is forwarded: the register takes the written row and
+        touched bit, not the memory's old ones (when the check does not take its request, the
+        looked-up request is killed anyway). Only the tag check writes these rows, so no register
+        holds a stale row."""
         nports = self.banks
         sb = max(1, self.set_bits)
         nsets, ntags = [], []
@@ -247,8 +240,8 @@ class _Cache:
             m.d.comb += [s.eq(ln[:self.set_bits] if self.set_bits else 0), t.eq(ln >> self.set_bits)]
             nsets.append(s)
             ntags.append(t)
-            self.rset.append(_skid(m, s, f"{self.name}_set{k}", load, sv))
-            self.rtag.append(_skid(m, t, f"{self.name}_line_tag{k}", load, sv))
+            self.rset.append(_reg(m, s, f"{self.name}_set{k}"))
+            self.rtag.append(_reg(m, t, f"{self.name}_line_tag{k}"))
         self.rrow = [Signal(self.lines.shape, name=f"{self.name}{b}_row" if self.banks > 1 else f"{self.name}_row")
                      for b in range(self.banks)]
         self.rtouched = [Signal(name=f"{self.name}{b}_row_touched" if self.banks > 1 else f"{self.name}_row_touched")
@@ -265,25 +258,14 @@ class _Cache:
                 t = Signal(self.tag_bits, name=f"{n}_next_tag")
                 m.d.comb += [s.eq(Mux(nsets[0][0] == b, nsets[0], nsets[1])),
                              t.eq(Mux(nsets[0][0] == b, ntags[0], ntags[1]))]
-                self.rbank.append((_skid(m, s, f"{n}_set", load, sv), _skid(m, t, f"{n}_tag", load, sv)))
+                self.rbank.append((_reg(m, s, f"{n}_set"), _reg(m, t, f"{n}_tag")))
             rd = self.lines.read(m, b, s, f"{n}_next_row")
             r = self.lines.row(s)
             touched = self.touched[b]
             here = touched.bit_select(r, 1) if len(touched) > 1 else touched
-            # the skid register's row, its address and touched bit
-            sk_row = Signal(self.lines.shape, name=f"skid_{n}_row")
-            sk_addr = Signal(len(r), name=f"skid_{n}_row_addr")
-            sk_t = Signal(name=f"skid_{n}_row_touched")
-            with m.If(~sv):
-                m.d.sync += [sk_row.eq(rd), sk_addr.eq(r), sk_t.eq(here)]
-            src_row = Signal(self.lines.shape, name=f"{n}_src_row")
-            src_addr = Signal(len(r), name=f"{n}_src_row_addr")
-            m.d.comb += [src_row.eq(Mux(sv, sk_row, rd)), src_addr.eq(Mux(sv, sk_addr, r))]
             fwd = Signal(name=f"{n}_fwd")
-            m.d.comb += fwd.eq(self.w_act[b] & (self.w_addr[b] == src_addr) if len(touched) > 1 else self.w_act[b])
-            with m.If(load):
-                m.d.sync += [self.rrow[b].eq(Mux(fwd, self.w_row[b], src_row)),
-                             self.rtouched[b].eq(Mux(sv, sk_t, here) | fwd)]
+            m.d.comb += fwd.eq(self.w_act[b] & (self.w_addr[b] == r) if len(touched) > 1 else self.w_act[b])
+            m.d.sync += [self.rrow[b].eq(Mux(fwd, self.w_row[b], rd)), self.rtouched[b].eq(here | fwd)]
 
     def check(self, m, actives, take):
         """The tag check's second cycle, on what :meth:`lookup` registered: ``actives`` is whether each
@@ -462,36 +444,50 @@ class CachedReader(wiring.Component):
         rc = _Cache(m, "raw", cfg.raw_cache, 1, count_bits,
                     max(1, aw - _log2(cfg.raw_cache.line) - _log2(cfg.raw_cache.sets)))
         beats = [ic.shape.line // bus, rc.shape.line // bus]
-        req = self.i.p
+        # -- the lookup's input: the requests accepted on i and not yet taken by the check (at most two) --
+        # The lookup's registers load every cycle (no clock enable, so the check's decision ``take``
+        # reaches a handful of flip-flops, not the ~500 of the lookup): while the check works on
+        # request n (``lv``), the lookup takes n + 1 as if n were taken. When it is not, the check
+        # kills what the lookup took (``lv`` low the next cycle) and the lookup takes n again from
+        # the buffer: a check not taken is tried again two cycles later (golden's ``REPLAY``). The
+        # buffer holds the requests accepted and not yet taken (n and n + 1), so ``i.ready`` is the
+        # registered ``count != 2`` (``b[n] >= g[n-2] + 1``); the request the lookup needs comes
+        # from it, or straight from ``i`` when the buffer does not hold it yet.
+        rq = self.request_layout
+        buf = [Signal(rq, name=f"lookup_buffer{j}") for j in range(2)]
+        wp = Signal(name="lookup_buffer_write")
+        rp = Signal(name="lookup_buffer_read")
+        count = Signal(range(3), name="lookup_buffer_count")
+        lv = Signal(name="lookup_valid")
+        take = Signal()
+        accept = Signal()
+        m.d.comb += accept.eq(self.i.valid & (count != 2))
+        for j in range(2):
+            with m.If(accept & (wp == j)):
+                m.d.sync += buf[j].eq(self.i.p)
+        with m.If(accept):
+            m.d.sync += wp.eq(~wp)
+        with m.If(take):
+            m.d.sync += rp.eq(~rp)
+        m.d.sync += count.eq(count + accept - take)
+        have = Signal(name="lookup_from_buffer")
+        m.d.comb += have.eq(Mux(lv, count == 2, count != 0))
+        req = Signal(rq, name="lookup_request")
+        m.d.comb += req.eq(Mux(have, Mux(rp ^ lv, buf[1], buf[0]), self.i.p))
+        m.d.sync += lv.eq((have | self.i.valid) & ~(lv & ~take))
 
-        # -- the references of the request on i, registered by the lookup (the tag check's first cycle) --
+        # -- the references of the request looked up, registered by the lookup (the tag check's first cycle) --
         a0 = Signal(self._addr_width + 8)
         a1 = Signal(self._addr_width + 8)
         ra = Signal(self._addr_width + 8)
         m.d.comb += [a0.eq(req.word * wb), a1.eq((req.word + 1) * wb), ra.eq(self._raw_base + req.word * 4)]
         il, rl = _log2(ic.shape.line), _log2(rc.shape.line)
         line0, line1, rline = a0 >> il, a1 >> il, ra >> rl
-        # The lookup holds up to two requests: the main register (``lv``), which the check works
-        # from, and a skid register (``sv``) that takes the request on ``i`` while the main one waits,
-        # so that ``i.ready`` is a register (``~sv``) and the check's decision (``take``) does not
-        # reach the stages in front. The main register loads when empty or when its request leaves
-        # the check (``take``): from the skid register when that holds one, else from ``i``.
-        lv = Signal(name="lookup_valid")
-        sv = Signal(name="skid_valid")
-        load = Signal()
-        take = Signal()
-        m.d.comb += load.eq(~lv | take)
-        with m.If(load):
-            m.d.sync += lv.eq(sv | self.i.valid)
-        with m.If(sv):
-            m.d.sync += sv.eq(~take)
-        with m.Else():
-            m.d.sync += sv.eq(self.i.valid & lv & ~take)
-        ic.lookup(m, line0, load, sv)
-        rc.lookup(m, rline, load, sv)
+        ic.lookup(m, line0)
+        rc.lookup(m, rline)
 
         def field(nx, name):
-            return _skid(m, nx, name, load, sv)
+            return _reg(m, nx, name)
         l_raw = field(req.raw, "lookup_raw")
         l_two = field(~req.raw & req.straddle & (line1 != line0), "lookup_two")
         l_tag = field(req.tag, "lookup_tag") if self._tag_width else C(0, 1)
@@ -570,7 +566,7 @@ class CachedReader(wiring.Component):
         m.d.comb += [
             check_ready.eq(~slot_v[1] & (~slot_v[0] | self.axi.arready) & room & ~busy),
             take.eq(lv & (self.check_go if self._joint else check_ready)),
-            self.i.ready.eq(~sv),
+            self.i.ready.eq(count != 2),
         ]
         # the entry of the request being checked
         # The entry's fields as separate signals, joined only where the FIFO stores them, and there

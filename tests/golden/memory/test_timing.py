@@ -8,7 +8,7 @@ import pytest
 from vqtex.golden.fetch import random_requests
 from vqtex.golden.memory.cache import CacheShape
 from vqtex.golden.memory.system import Layout, MemoryConfig, references
-from vqtex.golden.memory.timing import FRONT_LATENCY, fifo_slack, plan, run_requests
+from vqtex.golden.memory.timing import FRONT_LATENCY, REPLAY, attempt, fifo_slack, plan, run_requests
 from vqtex.golden.encode import encode
 
 from tests.support import image, texture_set
@@ -68,18 +68,24 @@ def test_lookup_two_places(ts, prefetch):
     assert (a[2:] >= b[:-2]).all() and (a[2:] == b[:-2]).any() and (a[2:] > a[:-2] + 2).any()
 
 
-def test_every_request_a_new_line_blocking():
+@pytest.mark.parametrize("latency", [20, 21])
+def test_every_request_a_new_line_blocking(latency):
     """A blocking cache (prefetch 1) and a stream whose every request misses: each request waits for
-    its line, issued the cycle after its tag check; worked out from the rules: the data read of n is
-    ``latency + beats + 1`` cycles after the previous one's."""
+    its line, issued the cycle after its tag check; worked out from the rules: the data read of n-1
+    is ``latency + beats + 1`` cycles after its check, and the check of n, first tried the cycle
+    after n-1's and then every ``REPLAY`` cycles, is taken at the first try at or after that read
+    (the blocking cache sees the read's room in the read's cycle)."""
     ts = encode([image((64, 64), 0)], block=(4, 4), codebook_size=8, color="rgb", index_bits=8)  # no mipmaps: all compressed
     line = 16                                       # 4 words of 8-bit indices = 16 blocks per line
-    cfg = MemoryConfig(index_cache=CacheShape(4096, line, 4), prefetch=1, latency=20, bandwidth=16, bus_bytes=16)
+    cfg = MemoryConfig(index_cache=CacheShape(4096, line, 4), prefetch=1, latency=latency, bandwidth=16, bus_bytes=16)
     req = np.array([(0, 0, 0, 4 * r) for r in range(16)], np.int64)   # block k = 16 r: line r
     p = plan(ts, req, cfg)
     assert p.misses.tolist() == [1] * 16
     out = run_requests(ts, req, cfg, L, always)
-    per = cfg.latency + 1 + 1                       # AR after the tag check, the latency, 1 beat, readable next
+    wait = cfg.latency + 1 + 1                      # AR after the tag check, the latency, 1 beat, readable next
+    per = 1 + -(-(wait - 1) // REPLAY) * REPLAY     # tries at g + 1, g + 1 + REPLAY, ...: the first >= g + wait
+    assert per == wait + (wait % 2 == 0)
+    assert np.diff(out["tag"]).tolist() == [per] * 15
     assert np.diff(out["read"]).tolist() == [per] * 15
     # first: accepted 0, lookup 2, tag 3, AR 4, beat 24, filled 25 = read
     assert out["read"][0] == 3 + 1 + cfg.latency + 1
@@ -108,8 +114,25 @@ def test_fifo_room_from_the_registered_level():
                            bus_bytes=16)
         out = run_requests(ts, req, cfg, L, always)
         g, p = out["tag"], out["read"]
-        assert (g[q:] == p[:-q] + fifo_slack(q)).all(), q
+        # the check of n is first tried the cycle after n-1's, again every REPLAY cycles until the
+        # FIFO has room (no other rule binds here: one miss each, no victim waits)
+        room = p[:-q] + fifo_slack(q)
+        first = g[q - 1:-1] + 1
+        assert g[q:].tolist() == [attempt(int(c), int(r)) for c, r in zip(first, room)], q
+        late = room > first                         # the FIFO's room binds: at most REPLAY - 1 beyond it
+        assert late.any() and (g[q:][late] - room[late] < REPLAY).all(), q
+        assert ((g[q:] - first) % REPLAY == 0).all() and (g[q:][~late] == first[~late]).all(), q
         assert out["stall_cycles"]["fifo_full"] > 0
+
+
+def test_attempt_tries_every_replay_cycles():
+    """A check not taken is tried again REPLAY cycles later: the first try at or after the rule's
+    cycle, in the first try's class mod REPLAY; two rules in turn are their maximum."""
+    assert REPLAY == 2
+    assert [attempt(10, r) for r in (5, 10, 11, 12, 13)] == [10, 10, 12, 12, 14]
+    rng = np.random.default_rng(3)
+    for c, r1, r2 in rng.integers(0, 50, (200, 3)).tolist():
+        assert attempt(attempt(c, r1), r2) == attempt(c, max(r1, r2))
 
 
 @pytest.mark.parametrize("name", ["yuv_4x4_b12_mip", "rgba_2x2_b7_mip_w16", "i8_4x2_b5_w64"])
