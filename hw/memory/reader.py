@@ -118,32 +118,60 @@ class _Rows:
     parity, for the index cache, whose straddling index checks two consecutive sets in one cycle).
     Each memory has one write port (what a LUT RAM has) and one asynchronous (combinational) read
     port per party that reads it; a party works on each bank apart (its logic per bank), so no
-    row-wide multiplexer sits between the banks."""
+    row-wide multiplexer sits between the banks.
 
-    def __init__(self, m, name, shape, sets, banks):
+    ``behind``: the writes land one cycle late, from a write register per bank (address, row and
+    enable, loaded every cycle: the writer's decision reaches flip-flops' data inputs, not the LUT
+    RAM's write enables); a read sees the pending write (``read`` forwards it), so to its readers
+    the memory is written at the clock edge as without the register."""
+
+    def __init__(self, m, name, shape, sets, banks, behind=False):
         self.shape = shape
         self.banks = banks
         self.mems = []
+        self.pending = []
         for b in range(banks):
-            m.submodules[f"{name}{b}" if banks > 1 else name] = mem = memory.Memory(
+            n = f"{name}{b}" if banks > 1 else name
+            m.submodules[n] = mem = memory.Memory(
                 shape=shape, depth=sets // banks, init=[], attrs={"ram_style": "distributed"})
             self.mems.append(mem)
+            if behind:
+                self.pending.append((Signal(max(1, _log2(sets // banks)), name=f"{n}_w_addr"),
+                                     Signal(shape, name=f"{n}_w_data"), Signal(name=f"{n}_w_en")))
 
     def row(self, s):
         """The row of set ``s`` in its bank."""
         return s >> _log2(self.banks)
 
+    def forwarded(self, b, r):
+        """Whether bank ``b``'s pending write (``behind``) is to row ``r``, and the row it writes."""
+        a, d, e = self.pending[b]
+        return e & (a == r), d
+
     def read(self, m, b, s, name):
-        """Bank ``b``'s row of set ``s`` (a set of that bank), combinational."""
+        """Bank ``b``'s row of set ``s`` (a set of that bank), combinational (with the pending write
+        forwarded, ``behind``)."""
         port = self.mems[b].read_port(domain="comb")
         out = Signal(self.shape, name=name)
-        m.d.comb += [port.addr.eq(self.row(s)), out.eq(port.data)]
+        m.d.comb += port.addr.eq(self.row(s))
+        if self.pending:
+            hit, d = self.forwarded(b, self.row(s))
+            m.d.comb += out.eq(Mux(hit, d, port.data))
+        else:
+            m.d.comb += out.eq(port.data)
         return out
 
     def write(self, m, b, s, en, data):
-        """Write bank ``b``'s row of set ``s`` at the clock edge when ``en`` (one call per bank)."""
+        """Write bank ``b``'s row of set ``s`` at the clock edge when ``en`` (one call per bank); with
+        ``behind``, into the write register, and from it into the memory at the next edge. Returns
+        the address and enable of the memory's write."""
         port = self.mems[b].write_port()
-        m.d.comb += [port.addr.eq(self.row(s)), port.en.eq(en), port.data.eq(data)]
+        if self.pending:
+            a, d, e = self.pending[b]
+            m.d.sync += [a.eq(self.row(s)), d.eq(data), e.eq(en)]
+            m.d.comb += [port.addr.eq(a), port.en.eq(e), port.data.eq(d)]
+        else:
+            m.d.comb += [port.addr.eq(self.row(s)), port.en.eq(en), port.data.eq(data)]
         return port.addr, port.en
 
 
@@ -178,10 +206,10 @@ class _Cache:
                         for b in range(banks)]
         way = data.StructLayout({"tag": tag_bits, "age": self.age_bits})
         self.lines = _Rows(m, f"{name}_tags", data.StructLayout({"way": data.ArrayLayout(way, W), "valid": W}),
-                           S, banks)
-        self.issued = _Rows(m, f"{name}_issued", data.ArrayLayout(count_bits, W), S, banks)
+                           S, banks, behind=True)
+        self.issued = _Rows(m, f"{name}_issued", data.ArrayLayout(count_bits, W), S, banks, behind=True)
         self.retired = _Rows(m, f"{name}_retired", data.ArrayLayout(count_bits, W), S, banks)
-        self.alloc = _Rows(m, f"{name}_alloc", W, S, banks)
+        self.alloc = _Rows(m, f"{name}_alloc", W, S, banks, behind=True)
         self.fill = _Rows(m, f"{name}_fill", W, S, banks)
         # what the tag check writes into each bank's tag row this cycle (for the lookup's forwarding):
         # the row, its address, and whether the bank's port is active (a request is being checked)
@@ -265,7 +293,8 @@ class _Cache:
             here = touched.bit_select(r, 1) if len(touched) > 1 else touched
             fwd = Signal(name=f"{n}_fwd")
             m.d.comb += fwd.eq(self.w_act[b] & (self.w_addr[b] == r) if len(touched) > 1 else self.w_act[b])
-            m.d.sync += [self.rrow[b].eq(Mux(fwd, self.w_row[b], rd)), self.rtouched[b].eq(here | fwd)]
+            pend, _ = self.lines.forwarded(b, r)     # the check's write of the cycle before (rd has it)
+            m.d.sync += [self.rrow[b].eq(Mux(fwd, self.w_row[b], rd)), self.rtouched[b].eq(here | fwd | pend)]
 
     def check(self, m, actives, take):
         """The tag check's second cycle, on what :meth:`lookup` registered: ``actives`` is whether each
@@ -590,16 +619,26 @@ class CachedReader(wiring.Component):
             new.beat0.eq(l_beat0), new.beat1.eq(l_beat1), new.off0.eq(l_off0), new.off1.eq(l_off1),
             new.tag.eq(l_tag),
         ]
-        m.d.comb += [fifo_w.addr.eq(tail), fifo_w.en.eq(take)]
-        with m.If(take):        # (a gate, not a plain wire: see ``new`` above)
-            m.d.comb += fifo_w.data.eq(new.value(entry))
+        # The FIFO is written one cycle behind the check, from a write register loaded every cycle
+        # (``take`` reaches its enable's data input, not the LUT RAM's write enables); the data read
+        # takes a reference the cycle after its check from ``new`` (the FIFO empty) or from the
+        # write register (below), so it sees no difference.
+        fw_addr = Signal.like(tail, name="fifo_w_addr")
+        fw_data = Signal(entry, name="fifo_w_data")
+        fw_en = Signal(name="fifo_w_en")
+        m.d.sync += [fw_addr.eq(tail), fw_en.eq(take)]
+        with m.If(lv):          # (a gate, not a plain wire: see ``new`` above)
+            m.d.sync += fw_data.eq(new.value(entry))
+        m.d.comb += [fifo_w.addr.eq(fw_addr), fifo_w.en.eq(fw_en), fifo_w.data.eq(fw_data)]
         with m.If(take):
             m.d.sync += tail.eq(Mux(tail == Q - 1, 0, tail + 1))
         with m.If(pop):
             m.d.sync += head.eq(Mux(head == Q - 1, 0, head + 1))
         m.d.sync += level.eq(level + take - pop)
         with m.If(pop):
-            m.d.sync += headv.eq(Mux(level == 1, new.value(entry), fifo_r.data))
+            # the entry after the head: being checked (level 1), in the write register (level 2 and
+            # a write pending: the newest entry is the one after the head), or in the LUT RAM
+            m.d.sync += headv.eq(Mux(level == 1, new.value(entry), Mux(fw_en & (level == 2), fw_data, fifo_r.data)))
         with m.Elif(level == 0):
             m.d.sync += headv.eq(new.value(entry))
 
@@ -640,11 +679,18 @@ class CachedReader(wiring.Component):
         queue = take & (nmiss != 0)
         m.d.comb += [first.eq(Mux(l_raw, fl(slotr, 1), Mux(miss0, fl(slot0, 0), fl(slot1, 0)))),
                      second.eq(fl(slot1, 0))]
+        # written one cycle behind the check, from a write register per bank (``take`` reaches no
+        # write enable of the LUT RAM): a burst's AR leaves at least a cycle after its check and its
+        # first beat at least a cycle after that, when the entry is in the LUT RAM
         t1 = (f_tail + 1)[:len(f_tail)]
         for b, (wp, rp) in enumerate(flight):
             mine = f_tail[0] == b
-            m.d.comb += [wp.addr.eq(Mux(mine, f_tail >> 1, t1 >> 1)), wp.data.eq(Mux(mine, first, second)),
-                         wp.en.eq(queue & (mine | (nmiss == 2))), rp.addr.eq(f_head >> 1)]
+            w_addr = Signal(len(f_tail) - 1, name=f"flight{b}_w_addr")
+            w_data = Signal(1 + sw, name=f"flight{b}_w_data")
+            w_en = Signal(name=f"flight{b}_w_en")
+            m.d.sync += [w_addr.eq(Mux(mine, f_tail >> 1, t1 >> 1)), w_data.eq(Mux(mine, first, second)),
+                         w_en.eq(queue & (mine | (nmiss == 2)))]
+            m.d.comb += [wp.addr.eq(w_addr), wp.data.eq(w_data), wp.en.eq(w_en), rp.addr.eq(f_head >> 1)]
         with m.If(queue):
             m.d.sync += f_tail.eq(Mux(nmiss == 2, f_tail + 2, f_tail + 1))
         cur = Signal(1 + sw)
