@@ -53,7 +53,7 @@ from .. import filter as spec
 from ..format import TextureSet
 from .arbiter import Arbiter
 from .system import Layout, MemoryConfig
-from .timing import ADDRESS_STAGES, LOOKUP_STAGES, TexelPipeline, accept_and_lookup, attempt, fifo_slack, first_check, plan
+from .timing import ADDRESS_STAGES, LOOKUP_STAGES, VICTIM_READ, TexelPipeline, accept_and_lookup, attempt, fifo_slack, first_check, plan
 
 __all__ = ["FOOTPRINT_LATENCY", "BLEND_LATENCY", "FETCH_LATENCY", "lane_requests", "run", "run_pixels"]
 
@@ -215,8 +215,8 @@ def run(plans: list, config: MemoryConfig, last: np.ndarray, *, start: int = FOO
         vt = -1
         for k in K:
             v = victim[k][i]
-            if v >= 0 and pr[k][v] + 1 > vt:
-                vt = pr[k][v] + 1
+            if v >= 0 and pr[k][v] + VICTIM_READ > vt:
+                vt = pr[k][v] + VICTIM_READ
         t = attempt(gi, vt)
         victim_c += t - gi
         gi = t

@@ -82,7 +82,7 @@ from ..format import TextureSet
 from .cache import classify
 from .system import Layout, MemoryConfig, references
 
-__all__ = ["ADDRESS_STAGES", "LOOKUP_STAGES", "REPLAY", "FRONT_LATENCY", "first_check", "attempt", "Plan", "plan", "fifo_slack", "accept_and_lookup", "run", "run_requests", "TexelPipeline", "StreamSink"]
+__all__ = ["ADDRESS_STAGES", "LOOKUP_STAGES", "REPLAY", "VICTIM_READ", "FRONT_LATENCY", "first_check", "attempt", "Plan", "plan", "fifo_slack", "accept_and_lookup", "run", "run_requests", "TexelPipeline", "StreamSink"]
 
 #: The unit's address stages before the cache block (descriptor, block address).
 ADDRESS_STAGES = 2
@@ -92,6 +92,10 @@ LOOKUP_STAGES = 1
 #: Cycles between two tries of a tag check that does not take its request (the lookup took the
 #: next request meanwhile: killed, and the request looked up again).
 REPLAY = 2
+#: Cycles after the read of a line's last waiting reference before a tag check may replace the
+#: line: the lookup (the cycle before the check) reads the counts of references read out, as
+#: written by the reads before its own cycle.
+VICTIM_READ = 2
 #: Cycles from accepting a request to offering it to the texel pipeline when every reference hits:
 #: the address stages, the lookup, the tag check and the data read.
 FRONT_LATENCY = ADDRESS_STAGES + LOOKUP_STAGES + 2
@@ -320,7 +324,7 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
             gi = t
         v = victim[i]
         if v >= 0:
-            t = attempt(gi, pr[v] + 1)
+            t = attempt(gi, pr[v] + VICTIM_READ)
             victim_c += t - gi
             gi = t
         g[i] = gi

@@ -217,6 +217,9 @@ class _Cache:
         self.w_addr = [Signal(rb, name=f"{name}_fwd_addr{b}") for b in range(banks)]
         self.w_act = [Signal(name=f"{name}_fwd_act{b}") for b in range(banks)]
         self.w_row = [Signal(self.lines.shape, name=f"{name}_fwd_row{b}") for b in range(banks)]
+        # and the way it accesses (hit or allocated) and the issued row it writes
+        self.w_way = [Signal(max(1, self.way_bits), name=f"{name}_fwd_way{b}") for b in range(banks)]
+        self.w_issued = [Signal(self.issued.shape, name=f"{name}_fwd_issued{b}") for b in range(banks)]
 
     def slot_bits(self):
         return max(1, _log2(self.sets * self.ways))
@@ -274,6 +277,11 @@ class _Cache:
                      for b in range(self.banks)]
         self.rtouched = [Signal(name=f"{self.name}{b}_row_touched" if self.banks > 1 else f"{self.name}_row_touched")
                          for b in range(self.banks)]
+        nm = [f"{self.name}{b}" if self.banks > 1 else self.name for b in range(self.banks)]
+        self.rmatch = [Signal(self.ways, name=f"{n}_match") for n in nm]
+        self.rwaiting = [Signal(self.ways, name=f"{n}_waiting") for n in nm]
+        self.rissued = [Signal(self.issued.shape, name=f"{n}_issued") for n in nm]
+        self.rretired = [Signal(self.retired.shape, name=f"{n}_retired") for n in nm]
         self.rbank = []
         for b in range(self.banks):
             n = f"{self.name}{b}" if self.banks > 1 else self.name
@@ -287,6 +295,7 @@ class _Cache:
                 m.d.comb += [s.eq(Mux(nsets[0][0] == b, nsets[0], nsets[1])),
                              t.eq(Mux(nsets[0][0] == b, ntags[0], ntags[1]))]
                 self.rbank.append((_reg(m, s, f"{n}_set"), _reg(m, t, f"{n}_tag")))
+            t = ntags[0] if self.banks == 1 else t
             rd = self.lines.read(m, b, s, f"{n}_next_row")
             r = self.lines.row(s)
             touched = self.touched[b]
@@ -295,6 +304,23 @@ class _Cache:
             m.d.comb += fwd.eq(self.w_act[b] & (self.w_addr[b] == r) if len(touched) > 1 else self.w_act[b])
             pend, _ = self.lines.forwarded(b, r)     # the check's write of the cycle before (rd has it)
             m.d.sync += [self.rrow[b].eq(Mux(fwd, self.w_row[b], rd)), self.rtouched[b].eq(here | fwd | pend)]
+            # The tag compare, done here: each way's tag against the request's. When the check writes
+            # this row (``fwd``) it changes one way's tag, the way it accesses, to its own tag (a
+            # hit's is that tag already): that way compares the two requests' tags.
+            cw = self.w_way[b]
+            eq = Signal(self.ways, name=f"{n}_next_match")
+            m.d.comb += eq.eq(Cat(*(Mux(fwd & (cw == w), t == self.rbank[b][1], rd.way[w].tag == t)
+                                    for w in range(self.ways))))
+            m.d.sync += self.rmatch[b].eq(eq)
+            # The counts: issued (only the check writes it: forwarded as the row), retired (the data
+            # read writes it: what was read out before this cycle), and whether each way has
+            # references waiting (the way the check accesses has at least its own).
+            iss = self.issued.read(m, b, s, f"{n}_issued_row")
+            ret = self.retired.read(m, b, s, f"{n}_retired_row")
+            wt = Signal(self.ways, name=f"{n}_next_waiting")
+            m.d.comb += wt.eq(Cat(*((fwd & (cw == w)) | (iss[w] != ret[w]) for w in range(self.ways))))
+            m.d.sync += [self.rissued[b].eq(Mux(fwd, self.w_issued[b], iss)), self.rretired[b].eq(ret),
+                         self.rwaiting[b].eq(wt)]
 
     def check(self, m, actives, take):
         """The tag check's second cycle, on what :meth:`lookup` registered: ``actives`` is whether each
@@ -311,8 +337,7 @@ class _Cache:
         for b, (s, t, act) in enumerate(banked):
             n = f"{self.name}{b}" if self.banks > 1 else self.name
             lines = self.rrow[b]
-            issued = self.issued.read(m, b, s, f"{n}_issued_row")
-            retired = self.retired.read(m, b, s, f"{n}_retired_check")
+            issued, retired = self.rissued[b], self.rretired[b]
             alloc = self.alloc.read(m, b, s, f"{n}_alloc_check")
             fill = self.fill.read(m, b, s, f"{n}_fill_check")
             touched = self.touched[b]
@@ -320,7 +345,7 @@ class _Cache:
             valid = Signal(W, name=f"{n}_valid")
             m.d.comb += valid.eq(Mux(self.rtouched[b], lines.valid, 0))
             row = lines.way
-            hits = [valid[w] & (row[w].tag == t) for w in range(W)]
+            hits = [valid[w] & self.rmatch[b][w] for w in range(W)]
             hit = Signal(name=f"{n}_hit")
             way = Signal(max(1, self.way_bits), name=f"{n}_way")
             busy = Signal(name=f"{n}_busy")
@@ -340,10 +365,8 @@ class _Cache:
                     m.d.comb += vway.eq(w)
             m.d.comb += way.eq(Mux(hit, hway, vway))
             # a way's references wait when its counts differ (mod 2^n: equal is none waiting), found
-            # for every way beside the tag compare, then chosen by the victim (no subtract after it)
-            waiting = Signal(W, name=f"{n}_waiting")
-            m.d.comb += waiting.eq(Cat(*(issued[w] != retired[w] for w in range(W))))
-            m.d.comb += busy.eq(~hit & (valid & waiting).bit_select(vway, 1))
+            # for every way by the lookup (what was read out before its cycle), chosen by the victim
+            m.d.comb += busy.eq(~hit & (valid & self.rwaiting[b]).bit_select(vway, 1))
             # LRU: the accessed way becomes the youngest; younger valid ways age by one. A miss puts
             # the line's tag in the way, rebases its count on what was read out, and clears its fill.
             acc_age = Signal(self.age_bits + 1, name=f"{n}_acc_age")
@@ -365,7 +388,8 @@ class _Cache:
             addr, en = self.lines.write(m, b, s, act & take, new_row)
             self.issued.write(m, b, s, act & take, new_issued)
             self.alloc.write(m, b, s, act & take, new_alloc)
-            m.d.comb += [self.w_addr[b].eq(self.lines.row(s)), self.w_act[b].eq(act), self.w_row[b].eq(new_row)]
+            m.d.comb += [self.w_addr[b].eq(self.lines.row(s)), self.w_act[b].eq(act), self.w_row[b].eq(new_row),
+                         self.w_way[b].eq(way), self.w_issued[b].eq(new_issued)]
             # a set is touched when its row is written (a decoder of the bank's write address)
             with m.If(en):
                 m.d.sync += (touched.bit_select(addr, 1) if len(touched) > 1 else touched).eq(1)
