@@ -16,11 +16,12 @@ its slots (``k + lanes g`` of every pixel's group ``g``) through its own index a
 
 - ``a[n]`` (group n enters the address stages) ``>= a[n-1] + 1``, ``>= b[n - ADDRESS_STAGES]``;
   ``a[0] = FOOTPRINT_LATENCY``;
-- ``b[n]`` (every lane's lookup, the tag check's first cycle, takes group n; two places, its ready
-  registered) ``>= a[n] + ADDRESS_STAGES``, ``>= b[n-1] + 1``, ``>= g[n-2] + 1``;
-- ``g[n]`` (every lane's tag check, the same cycle) ``>= b[n] + LOOKUP_STAGES``, ``>= g[n-1] +
-  max(1, max_k misses_k[n-1])``, and for every lane ``>= p_k[n-Q] + fifo_slack(Q)`` and ``>= p_k[v_k] + 1`` (its
-  victim rule);
+- ``b[n]`` (every lane's lookup, the tag check's first cycle, takes group n; its input holds two
+  groups, its ready registered) ``>= a[n] + ADDRESS_STAGES``, ``>= b[n-1] + 1``, ``>= g[n-2] + 1``;
+- ``g[n]`` (every lane's tag check, the same cycle): first tried in ``max(b[n] + LOOKUP_STAGES,
+  g[n-1] + 1)``, then every ``REPLAY`` cycles (:func:`golden.memory.timing.attempt`), the first try
+  ``>= g[n-1] + max_k misses_k[n-1]`` and, for every lane, ``>= p_k[n-Q] + fifo_slack(Q)`` and
+  ``>= p_k[v_k] + VICTIM_READ`` (its victim rule);
 - lane k's j-th burst of group n is offered in ``g[n] + 1 + j`` and issued by the arbiter's rule
   (:class:`golden.memory.arbiter.Arbiter`, offers in (cycle, lane) order) into one memory model;
   its line is filled the cycle after its last beat;

@@ -12,9 +12,10 @@ The unit (docs/memory.md)
                                                                                           responses
 
 The address stages (descriptor, block address) compute the words a request reads; the tag check
-takes two cycles: the lookup (``LOOKUP_STAGES``: two places, a main and a skid register, so its
-ready is a register) reads the tag rows of the request's sets and registers them (a row the check
-writes in that cycle is forwarded to it), and the check proper compares them for its references
+takes two cycles: the lookup (``LOOKUP_STAGES``; its input holds the requests accepted and not
+yet taken, so its ready is a register) reads the tag rows and the counts of the request's sets,
+compares the tags and registers the results (what the check writes in that cycle is forwarded to
+it), and the check proper decides from them for its references
 (:mod:`golden.memory.system`) in the index or raw cache, allocating a line and issuing its burst
 on a miss; the reference waits in a FIFO of ``Q = config.prefetch`` entries until
 its lines are filled; the data read takes the words from the cache into an output register, which
@@ -28,16 +29,20 @@ back to back from cycle 0; ``x[n-k]`` for ``n < k`` imposes nothing):
   stages are a chain of stream registers that moves as a whole against the lookup's acceptance: a
   stage takes a new item when its item leaves, in the same cycle).
 - ``b[n]`` (the lookup, the tag check's first cycle, takes request n): ``>= a[n] + ADDRESS_STAGES``;
-  ``>= b[n-1] + 1``; ``>= g[n-2] + 1`` (the lookup has two places, a main and a skid register, and
-  its ready is the registered ``~skid_valid``: it takes a request when at most one of those it holds
-  was still unchecked at the start of the cycle). With ``address_stages = 0``, ``a[n] = b[n]``.
-- ``g[n]`` (tag check, its second cycle, where it is decided and the state written): ``>= b[n] +
-  LOOKUP_STAGES``; ``>= g[n-1] + max(1, misses[n-1])`` (one burst
-  issued per cycle); ``>= p[n-Q] + fifo_slack(Q)`` (a FIFO entry frees when its reference is read:
-  the check sees the room in the FIFO's registered level, so from the cycle after the read, for
-  ``Q > 1``; the blocking cache, ``Q = 1``, takes the read's room in the same cycle); for a miss whose
-  victim line has a reference ``v`` not yet read, ``>= p[v] + 1`` (a line is never replaced under a
-  waiting reference).
+  ``>= b[n-1] + 1``; ``>= g[n-2] + 1`` (the lookup's input holds the requests accepted and not yet
+  taken by the check, at most two, and its ready is the registered ``count != 2``). With
+  ``address_stages = 0``, ``a[n] = b[n]``.
+- ``g[n]`` (tag check, its second cycle, where it is decided and the state written): the check is
+  first tried in cycle ``c = max(b[n] + LOOKUP_STAGES, g[n-1] + 1)`` (:func:`first_check`: the lookup
+  takes request n while n-1 is checked, as if n-1 were taken); a try whose rules do not hold is
+  killed and request n looked up again, so it is tried again ``REPLAY`` cycles later: ``g[n]`` is
+  the first of ``c, c + REPLAY, c + 2 REPLAY, ...`` (:func:`attempt`) that is ``>= g[n-1] +
+  misses[n-1]`` (one burst issued per cycle); ``>= p[n-Q] + fifo_slack(Q)`` (a FIFO entry frees
+  when its reference is read: the check sees the room in the FIFO's registered level, so from the
+  cycle after the read, for ``Q > 1``; the blocking cache, ``Q = 1``, takes the read's room in the
+  same cycle); for a miss whose victim line has a reference ``v`` not yet read, ``>= p[v] +
+  VICTIM_READ`` (a line is never replaced under a waiting reference; the lookup, a cycle before the
+  check, reads the counts of references read out as the reads before its own cycle left them).
 - The j-th miss of request n issues its burst (AR) in cycle ``g[n] + 1 + j``; the memory model gives
   the first beat ``f``; the line is filled, readable, from ``f + (beats - 1) * beat_interval + 1``.
 - ``p[n]`` (data read): ``>= g[n] + 1``; ``>= p[n-1] + 1``; ``>= e[n-1]`` (the output register is
@@ -62,7 +67,8 @@ unit counts them); ``miss`` and ``bandwidth``: the cycles by which a line fill h
 beyond its other rules, split into the wait of the binding burst behind earlier bursts in the memory
 (``bandwidth``: the memory's ``queued``) and the rest (``miss``: the memory's latency);
 ``fifo_full`` and ``victim``: cycles by which the FIFO's capacity or a waiting reference to the victim
-line held a tag check back.
+line held a tag check back (counted in that order, each from the try the previous rules left,
+``REPLAY`` rounding included).
 
 Why a loop over requests: the rules chain each request's times to its predecessors' through maxima
 with the backpressure pattern and the memory's state (a DRAM's open rows and refresh), so the model
