@@ -3,26 +3,34 @@
 The cache block of the cached unit (docs/memory.md), without the address stages in front of it and
 the texel pipeline behind it::
 
-    i (raw, word, straddle, tag) -> lookup (2 places) -> tag check -> reference FIFO (Q) -> data read -> o
-                                                              | AR (one burst per miss)      ^
-                                                              v                              | R (line fills)
-                                                            AXI4 read master  <-----------  memory
+    i (raw, word, straddle, tag) -> buffer (2) -> lookup -> tag check -> reference FIFO (Q) -> data read -> o
+                                                                 | AR (one burst per miss)      ^
+                                                                 v                              | R (line fills)
+                                                               AXI4 read master  <-----------  memory
 
 Timing (cycle for cycle :mod:`golden.memory.timing` with ``address_stages=0`` and a stream sink as
 consumer; with every reference a hit: one request per cycle, 3 cycles from ``i`` to ``o``):
 
 * **Lookup** (the tag check's first cycle; ``i`` transfers in cycle ``b``): the request's lines, sets
-  and tags are computed and each bank's tag row (tags, LRU ages, valid bits) is read from LUT RAM and
-  registered, the row the check writes in that cycle forwarded. The lookup has two places, a main
-  register (read by the check) and a skid register (a request arriving while the main one waits),
-  so ``i.ready`` is a register: ``~skid_valid``, i.e. ``b[n] >= g[n-2] + 1``.
-* **Tag check** (cycle ``g >= b + 1``, from the main register): the request's references are compared
-  (an index request reads word ``w``, and ``w + 1`` when ``straddle``, a second lookup when it lies
-  in the next line; a raw request one raw word). A miss allocates the LRU way at once (an empty way
-  first) and queues its burst; the reference enters the FIFO. The check waits while the FIFO is full
-  at the start of the cycle (its registered level; for ``Q = 1``, the blocking cache: full and not
-  read this cycle), while the second of two bursts of the previous request waits, or while
-  a miss's victim line still has a reference in the FIFO.
+  and tags are computed, each bank's tag row (tags, LRU ages, valid bits) and counts (issued,
+  retired) read from LUT RAM, the tags compared and whether each way has references waiting found,
+  and all of it registered, what the check writes in that cycle forwarded. The lookup's registers
+  load every cycle (no clock enable): while the check works on request n the lookup takes n + 1 as
+  if n were taken; when n is not taken, what the lookup took is killed and n is looked up again, so
+  a check is tried every ``REPLAY`` = 2 cycles until it is taken. The requests accepted and not yet
+  taken (at most two) wait in a two-entry buffer in front of the lookup, so ``i.ready`` is the
+  registered ``count != 2``, i.e. ``b[n] >= g[n-2] + 1``.
+* **Tag check** (first tried in cycle ``max(b + 1, g[n-1] + 1)``, from the lookup's registers): the
+  request's references (an index request reads word ``w``, and ``w + 1`` when ``straddle``, a second
+  lookup when it lies in the next line; a raw request one raw word) hit or miss. A miss allocates
+  the LRU way at once (an empty way first) and queues its burst; the reference enters the FIFO. The
+  check is not taken while the FIFO is full at the start of the cycle (its registered level; for
+  ``Q = 1``, the blocking cache: full and not read this cycle), while the second of two bursts of
+  the previous request waits, or while a miss's victim line still has a reference in the FIFO that
+  was not read before the lookup's cycle (golden's ``VICTIM_READ``). The check's writes (tag rows,
+  counts, the FIFO, the bursts in flight) land one cycle later from write registers, every read
+  of them forwarding the pending write, so the decision ``take`` reaches flip-flops' data inputs
+  and a few enables, no LUT RAM write enable.
 * **AR**: the j-th burst of a request checked in cycle ``g`` is on AR in cycle ``g + 1 + j`` (when
   ``arready`` is high, as the golden memory assumes; otherwise it waits and holds the tag check).
   INCR, ``line / bus`` beats, ``araddr`` the line's byte address, never crossing 4 KB.
