@@ -24,7 +24,7 @@ its slots (``k + lanes g`` of every pixel's group ``g``) through its own index a
   ``>= p_k[v_k] + VICTIM_READ`` (its victim rule);
 - lane k's j-th burst of group n is offered in ``g[n] + 1 + j`` and issued by the arbiter's rule
   (:class:`golden.memory.arbiter.Arbiter`, offers in (cycle, lane) order) into one memory model;
-  its line is filled the cycle after its last beat;
+  its line is readable ``FILL_READ`` cycles after its last beat;
 - ``p_k[n]`` (lane k's data read) ``>= g[n] + 1``, ``>= p_k[n-1] + 1``, ``>= e[n-1]``, and ``>=``
   the fills of its lines;
 - ``e[n]`` (the texel pipelines take group n): ``max(max_k p_k[n] + 1, e[n-1] + 1)`` (with
@@ -54,7 +54,7 @@ from .. import filter as spec
 from ..format import TextureSet
 from .arbiter import Arbiter
 from .system import Layout, MemoryConfig
-from .timing import ADDRESS_STAGES, LOOKUP_STAGES, VICTIM_READ, TexelPipeline, accept_and_lookup, attempt, fifo_slack, first_check, plan
+from .timing import ADDRESS_STAGES, FILL_READ, LOOKUP_STAGES, VICTIM_READ, TexelPipeline, accept_and_lookup, attempt, fifo_slack, first_check, plan
 
 __all__ = ["FOOTPRINT_LATENCY", "BLEND_LATENCY", "FETCH_LATENCY", "lane_requests", "run", "run_pixels"]
 
@@ -230,7 +230,7 @@ def run(plans: list, config: MemoryConfig, last: np.ndarray, *, start: int = FOO
                     t = arb.issue(gi + 1 + j)
                     f = mem.read(t, address[k][b], beats[k][b])
                     queued[k][b] = mem.queued
-                    filled[k][b] = f + (beats[k][b] - 1) * d + 1
+                    filled[k][b] = f + (beats[k][b] - 1) * d + FILL_READ
                     ar.append(t)
                     ar_lane.append(k)
                     burst[k] = b + 1

@@ -44,7 +44,8 @@ back to back from cycle 0; ``x[n-k]`` for ``n < k`` imposes nothing):
   VICTIM_READ`` (a line is never replaced under a waiting reference; the lookup, a cycle before the
   check, reads the counts of references read out as the reads before its own cycle left them).
 - The j-th miss of request n issues its burst (AR) in cycle ``g[n] + 1 + j``; the memory model gives
-  the first beat ``f``; the line is filled, readable, from ``f + (beats - 1) * beat_interval + 1``.
+  the first beat ``f``; the line is filled, readable by the data read, from ``f + (beats - 1) *
+  beat_interval + FILL_READ``.
 - ``p[n]`` (data read): ``>= g[n] + 1``; ``>= p[n-1] + 1``; ``>= e[n-1]`` (the output register is
   free: the pipeline takes n-1 from it that cycle); ``>=`` the fill of every line n references that
   was brought in by a miss (its own or an earlier request's: a line refilled while references wait on
@@ -88,7 +89,7 @@ from ..format import TextureSet
 from .cache import classify
 from .system import Layout, MemoryConfig, references
 
-__all__ = ["ADDRESS_STAGES", "LOOKUP_STAGES", "REPLAY", "VICTIM_READ", "FRONT_LATENCY", "first_check", "attempt", "Plan", "plan", "fifo_slack", "accept_and_lookup", "run", "run_requests", "TexelPipeline", "StreamSink"]
+__all__ = ["ADDRESS_STAGES", "LOOKUP_STAGES", "REPLAY", "VICTIM_READ", "FILL_READ", "FRONT_LATENCY", "first_check", "attempt", "Plan", "plan", "fifo_slack", "accept_and_lookup", "run", "run_requests", "TexelPipeline", "StreamSink"]
 
 #: The unit's address stages before the cache block (descriptor, block address).
 ADDRESS_STAGES = 2
@@ -102,6 +103,9 @@ REPLAY = 2
 #: line: the lookup (the cycle before the check) reads the counts of references read out, as
 #: written by the reads before its own cycle.
 VICTIM_READ = 2
+#: Cycles from a line's last beat to the first data read of it: the fill is written at the end of
+#: the beat's cycle and the data read's ``filled`` register takes it the cycle after.
+FILL_READ = 2
 #: Cycles from accepting a request to offering it to the texel pipeline when every reference hits:
 #: the address stages, the lookup, the tag check and the data read.
 FRONT_LATENCY = ADDRESS_STAGES + LOOKUP_STAGES + 2
@@ -339,7 +343,7 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
             f = mem.read(gi + 1 + j, address[burst], beats[burst])
             first_beat[burst] = f
             queued[burst] = mem.queued
-            filled[burst] = f + (beats[burst] - 1) * d + 1
+            filled[burst] = f + (beats[burst] - 1) * d + FILL_READ
             burst += 1
         # data read
         pi = gi + 1

@@ -216,7 +216,7 @@ class _Cache:
         self.lines = _Rows(m, f"{name}_tags", data.StructLayout({"way": data.ArrayLayout(way, W), "valid": W}),
                            S, banks, behind=True)
         self.issued = _Rows(m, f"{name}_issued", data.ArrayLayout(count_bits, W), S, banks, behind=True)
-        self.retired = _Rows(m, f"{name}_retired", data.ArrayLayout(count_bits, W), S, banks)
+        self.retired = _Rows(m, f"{name}_retired", data.ArrayLayout(count_bits, W), S, banks, behind=True)
         self.alloc = _Rows(m, f"{name}_alloc", W, S, banks, behind=True)
         self.fill = _Rows(m, f"{name}_fill", W, S, banks)
         # what the tag check writes into each bank's tag row this cycle (for the lookup's forwarding):
@@ -401,41 +401,55 @@ class _Cache:
             # a set is touched when its row is written (a decoder of the bank's write address)
             with m.If(en):
                 m.d.sync += (touched.bit_select(addr, 1) if len(touched) > 1 else touched).eq(1)
-            results.append((hit, way, busy))
+            # a hit on a filled line (what the data read's register takes when this reference is
+            # the next head: the fills of the cycles before this one)
+            filled = Signal(name=f"{n}_hit_filled")
+            m.d.comb += filled.eq(hit & (alloc.bit_select(way, 1) == fill.bit_select(way, 1)))
+            results.append((hit, way, busy, filled))
         out = []
         for k, s in enumerate(sets):
             hit = Signal(name=f"{self.name}_hit{k}")
             way = Signal(max(1, self.way_bits), name=f"{self.name}_way{k}")
             busy = Signal(name=f"{self.name}_busy{k}")
+            filled = Signal(name=f"{self.name}_hit_filled{k}")
             m.d.comb += [hit.eq(self._unbank(m, s, [r[0] for r in results])),
                          way.eq(self._unbank(m, s, [r[1] for r in results])),
-                         busy.eq(self._unbank(m, s, [r[2] for r in results]))]
-            out.append((s, hit, way, busy))
+                         busy.eq(self._unbank(m, s, [r[2] for r in results])),
+                         filled.eq(self._unbank(m, s, [r[3] for r in results]))]
+            out.append((s, hit, way, busy, filled))
         return out
 
-    def read_out(self, m, slots, retire):
-        """The data read: whether every line of ``slots`` (one, or two in consecutive sets, or the
-        same twice) is filled, combinational; ``retire`` (one enable per slot; the second only when
-        the slots differ) counts a reference read out of each at the clock edge."""
+    def filled(self, m, slots, name):
+        """Whether each line of ``slots`` (one, or two in consecutive sets, or the same twice) is
+        filled, combinational (the fills before this cycle)."""
+        sets = [Signal(max(1, self.set_bits), name=f"{self.name}_{name}_set{k}") for k in range(len(slots))]
+        m.d.comb += [s.eq(self.set_of(slot)) for s, slot in zip(sets, slots)]
+        banked = self._banked(m, [(s, self.way_of(slot)) for s, slot in zip(sets, slots)], name)
+        filled_b = []
+        for b, (s, w) in enumerate(banked):
+            n = f"{self.name}{b}" if self.banks > 1 else self.name
+            alloc = self.alloc.read(m, b, s, f"{n}_alloc_{name}")
+            fill = self.fill.read(m, b, s, f"{n}_fill_{name}")
+            f = Signal(name=f"{n}_{name}_filled")
+            m.d.comb += f.eq(alloc.bit_select(w, 1) == fill.bit_select(w, 1))
+            filled_b.append(f)
+        filled = Signal(len(slots), name=f"{self.name}_{name}_filled")
+        m.d.comb += [filled[k].eq(self._unbank(m, s, filled_b)) for k, s in enumerate(sets)]
+        return filled
+
+    def retire(self, m, slots, retire):
+        """The data read counts a reference read out of each line of ``slots`` at the clock edge
+        (``retire``: one enable per slot; the second only when the slots differ)."""
         sets = [Signal(max(1, self.set_bits), name=f"{self.name}_head_set{k}") for k in range(len(slots))]
         m.d.comb += [s.eq(self.set_of(slot)) for s, slot in zip(sets, slots)]
         banked = self._banked(m, [(s, self.way_of(slot), en) for s, slot, en in zip(sets, slots, retire)], "head")
-        filled_b = []
         for b, (s, w, en) in enumerate(banked):
             n = f"{self.name}{b}" if self.banks > 1 else self.name
-            alloc = self.alloc.read(m, b, s, f"{n}_alloc_head")
-            fill = self.fill.read(m, b, s, f"{n}_fill_head")
             retired = self.retired.read(m, b, s, f"{n}_retired_head")
-            f = Signal(name=f"{n}_head_filled")
-            m.d.comb += f.eq(alloc.bit_select(w, 1) == fill.bit_select(w, 1))
-            filled_b.append(f)
             new = Signal(self.retired.shape, name=f"{n}_new_retired")
             m.d.comb += new.eq(Cat(*(Mux(w == x, retired[x] + 1, retired[x])[:self.count_bits]
                                      for x in range(self.ways))))
             self.retired.write(m, b, s, en, new)
-        filled = Signal(len(slots), name=f"{self.name}_head_filled")
-        m.d.comb += [filled[k].eq(self._unbank(m, s, filled_b)) for k, s in enumerate(sets)]
-        return filled
 
     def fill_line(self, m, slot, en):
         """A burst's last beat fills the line of ``slot`` at the clock edge (``en``)."""
@@ -567,8 +581,10 @@ class CachedReader(wiring.Component):
         l_addr = [line_addr(ic, 0, il), line_addr(ic, 1, il), line_addr(rc, 0, rl)]
         two = l_two
         # port 1 looks up the line after line0 (line1 when ``two``; unused otherwise)
-        (s0, hit0, way0, busy0), (s1, hit1, way1, busy1) = ic.check(m, [lv & ~l_raw, lv & two], take)
-        (sr, hitr, wayr, busyr), = rc.check(m, [lv & l_raw], take)
+        (s0, hit0, way0, busy0, fill0), (s1, hit1, way1, busy1, fill1) = ic.check(m, [lv & ~l_raw, lv & two], take)
+        (sr, hitr, wayr, busyr, fillr), = rc.check(m, [lv & l_raw], take)
+        new_filled = Signal(name="new_filled")       # the request's lines hit and are filled
+        m.d.comb += new_filled.eq(Mux(l_raw, fillr, fill0 & (~two | fill1)))
         miss0 = ~l_raw & ~hit0
         miss1 = two & ~hit1
         missr = l_raw & ~hitr
@@ -610,13 +626,32 @@ class CachedReader(wiring.Component):
         # the entry being written when that one becomes the head (the FIFO empty, or about to be).
         headv = Signal(entry, name="head_entry")
         m.d.comb += fifo_r.addr.eq(Mux(head == Q - 1, 0, head + 1))
-        # the head's lines filled? (a read out of the index cache retires one reference per line)
-        i_filled = ic.read_out(m, [headv.slot0[:islot], headv.slot1],
-                               [pop & ~headv.raw, pop & ~headv.raw & (headv.slot1 != headv.slot0[:islot])])
-        r_filled = rc.read_out(m, [headv.slot0[:rslot]], [pop & headv.raw])
-        head_filled = Mux(headv.raw, r_filled, i_filled.all())
+        # Whether the head's lines are filled, in a register (``head_filled``: the data read's
+        # ``pop`` is then a gate of flip-flops): loaded each cycle for the entry that is the head in
+        # the next one, from the fills before this cycle: the head's own lines when it stays, the
+        # entry after it when it is read, or the entry being checked when that one becomes the head
+        # (the check's hit on a filled line). So a line's fill is seen by the data read the second
+        # cycle after its last beat (golden's ``FILL_READ``).
+        # the FIFO's write register (below)
+        fw_addr = Signal.like(tail, name="fifo_w_addr")
+        fw_data = Signal(entry, name="fifo_w_data")
+        fw_en = Signal(name="fifo_w_en")
+        nextv = Signal(entry, name="head_next")
+        m.d.comb += nextv.eq(Mux(fw_en & (level == 2), fw_data, fifo_r.data))
+
+        def lines_filled(v, name):
+            i_f = ic.filled(m, [v.slot0[:islot], v.slot1], name)
+            r_f = rc.filled(m, [v.slot0[:rslot]], name)
+            return Mux(v.raw, r_f, i_f.all())
+        head_now = lines_filled(headv, "head")
+        next_now = lines_filled(nextv, "next")
+        head_filled = Signal(name="head_filled")
         m.d.comb += pop.eq((level != 0) & head_filled & o_free)
         m.d.comb += self.stall_fill.eq((level != 0) & ~head_filled & o_free)
+        # a read out of the index cache retires one reference per line
+        ic.retire(m, [headv.slot0[:islot], headv.slot1],
+                  [pop & ~headv.raw, pop & ~headv.raw & (headv.slot1 != headv.slot0[:islot])])
+        rc.retire(m, [headv.slot0[:rslot]], [pop & headv.raw])
 
         # Room in the FIFO: from the registered level alone (``pop``, the end of the data read's
         # path through the fill LUT RAMs, stays off the check's ready and ``take``), so an entry freed
@@ -655,9 +690,6 @@ class CachedReader(wiring.Component):
         # (``take`` reaches its enable's data input, not the LUT RAM's write enables); the data read
         # takes a reference the cycle after its check from ``new`` (the FIFO empty) or from the
         # write register (below), so it sees no difference.
-        fw_addr = Signal.like(tail, name="fifo_w_addr")
-        fw_data = Signal(entry, name="fifo_w_data")
-        fw_en = Signal(name="fifo_w_en")
         m.d.sync += [fw_addr.eq(tail), fw_en.eq(take)]
         with m.If(lv):          # (a gate, not a plain wire: see ``new`` above)
             m.d.sync += fw_data.eq(new.value(entry))
@@ -670,9 +702,12 @@ class CachedReader(wiring.Component):
         with m.If(pop):
             # the entry after the head: being checked (level 1), in the write register (level 2 and
             # a write pending: the newest entry is the one after the head), or in the LUT RAM
-            m.d.sync += headv.eq(Mux(level == 1, new.value(entry), Mux(fw_en & (level == 2), fw_data, fifo_r.data)))
+            m.d.sync += [headv.eq(Mux(level == 1, new.value(entry), nextv)),
+                         head_filled.eq(Mux(level == 1, new_filled, next_now))]
         with m.Elif(level == 0):
-            m.d.sync += headv.eq(new.value(entry))
+            m.d.sync += [headv.eq(new.value(entry)), head_filled.eq(new_filled)]
+        with m.Else():
+            m.d.sync += head_filled.eq(head_now)
 
         # AR slots: shift on issue; a tag check with misses loads them (its first burst in slot 0).
         burst_addr = [Signal(self._addr_width, name=f"miss_addr{j}") for j in range(2)]

@@ -8,7 +8,7 @@ import pytest
 from vqtex.golden.fetch import random_requests
 from vqtex.golden.memory.cache import CacheShape
 from vqtex.golden.memory.system import Layout, MemoryConfig, references
-from vqtex.golden.memory.timing import FRONT_LATENCY, REPLAY, attempt, fifo_slack, plan, run_requests
+from vqtex.golden.memory.timing import FILL_READ, FRONT_LATENCY, REPLAY, attempt, fifo_slack, plan, run_requests
 from vqtex.golden.encode import encode
 
 from tests.support import image, texture_set
@@ -72,7 +72,7 @@ def test_lookup_two_places(ts, prefetch):
 def test_every_request_a_new_line_blocking(latency):
     """A blocking cache (prefetch 1) and a stream whose every request misses: each request waits for
     its line, issued the cycle after its tag check; worked out from the rules: the data read of n-1
-    is ``latency + beats + 1`` cycles after its check, and the check of n, first tried the cycle
+    is ``1 + latency + FILL_READ`` cycles after its check (one beat), and the check of n, first tried the cycle
     after n-1's and then every ``REPLAY`` cycles, is taken at the first try at or after that read
     (the blocking cache sees the read's room in the read's cycle)."""
     ts = encode([image((64, 64), 0)], block=(4, 4), codebook_size=8, color="rgb", index_bits=8)  # no mipmaps: all compressed
@@ -82,22 +82,22 @@ def test_every_request_a_new_line_blocking(latency):
     p = plan(ts, req, cfg)
     assert p.misses.tolist() == [1] * 16
     out = run_requests(ts, req, cfg, L, always)
-    wait = cfg.latency + 1 + 1                      # AR after the tag check, the latency, 1 beat, readable next
+    wait = 1 + cfg.latency + FILL_READ              # AR after the tag check, the latency, 1 beat, readable
     per = 1 + -(-(wait - 1) // REPLAY) * REPLAY     # tries at g + 1, g + 1 + REPLAY, ...: the first >= g + wait
     assert per == wait + (wait % 2 == 0)
     assert np.diff(out["tag"]).tolist() == [per] * 15
     assert np.diff(out["read"]).tolist() == [per] * 15
-    # first: accepted 0, lookup 2, tag 3, AR 4, beat 24, filled 25 = read
-    assert out["read"][0] == 3 + 1 + cfg.latency + 1
+    # first: accepted 0, lookup 2, tag 3, AR 4, beat 4 + latency, read FILL_READ = 2 later
+    assert FILL_READ == 2 and out["read"][0] == 3 + 1 + cfg.latency + 2
     assert out["cycles"] == out["read"][-1] + 1 + L + 1
-    assert out["stall_cycles"]["miss"] + out["stall_cycles"]["bandwidth"] == 16 * (cfg.latency + 1)
+    assert out["stall_cycles"]["miss"] + out["stall_cycles"]["bandwidth"] == 16 * (cfg.latency + FILL_READ)
     # prefetching overlaps them: the bursts go out back to back, limited by nothing but the memory
     pre = run_requests(ts, req, MemoryConfig(index_cache=cfg.index_cache, prefetch=16, latency=20), L, always)
-    # tag n at n + 3, AR at n + 4, its beat at n + 24, readable at n + 25
+    # tag n at n + 3, AR at n + 4, its beat at n + 24, readable at n + 26
     assert np.diff(pre["tag"]).tolist() == [1] * 15
     assert pre["tag"][0] == 3
-    assert pre["read"].tolist() == (25 + np.arange(16)).tolist()
-    assert pre["cycles"] == 25 + 15 + 1 + L + 1
+    assert pre["read"].tolist() == (26 + np.arange(16)).tolist()
+    assert pre["cycles"] == 26 + 15 + 1 + L + 1
 
 
 def test_fifo_room_from_the_registered_level():
