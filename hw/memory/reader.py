@@ -288,8 +288,8 @@ class _Cache:
         nm = [f"{self.name}{b}" if self.banks > 1 else self.name for b in range(self.banks)]
         self.rmatch = [Signal(self.ways, name=f"{n}_match") for n in nm]
         self.rwaiting = [Signal(self.ways, name=f"{n}_waiting") for n in nm]
-        self.rissued = [Signal(self.issued.shape, name=f"{n}_issued") for n in nm]
-        self.rretired = [Signal(self.retired.shape, name=f"{n}_retired") for n in nm]
+        self.rissued = [Signal(self.issued.shape, name=f"{n}_row_issued") for n in nm]
+        self.rretired = [Signal(self.retired.shape, name=f"{n}_row_retired") for n in nm]
         self.rbank = []
         for b in range(self.banks):
             n = f"{self.name}{b}" if self.banks > 1 else self.name
