@@ -16,8 +16,8 @@ its slots (``k + lanes g`` of every pixel's group ``g``) through its own index a
 
 - ``a[n]`` (group n enters the address stages) ``>= a[n-1] + 1``, ``>= b[n - ADDRESS_STAGES]``;
   ``a[0] = FOOTPRINT_LATENCY``;
-- ``b[n]`` (every lane's lookup, the tag check's first cycle, takes group n; its input holds two
-  groups, its ready registered) ``>= a[n] + ADDRESS_STAGES``, ``>= b[n-1] + 1``, ``>= g[n-2] + 1``;
+- ``b[n]`` (every lane's cache block takes group n into its lookup's buffer, which holds three
+  groups, its ready registered) ``>= a[n] + ADDRESS_STAGES``, ``>= b[n-1] + 1``, ``>= g[n-3] + 1``;
 - ``g[n]`` (every lane's tag check, the same cycle): first tried in ``max(b[n] + LOOKUP_STAGES,
   g[n-1] + 1)``, then every ``REPLAY`` cycles (:func:`golden.memory.timing.attempt`), the first try
   ``>= g[n-1] + max_k misses_k[n-1]`` and, for every lane, ``>= p_k[n-Q] + fifo_slack(Q)`` and
@@ -33,7 +33,7 @@ its slots (``k + lanes g`` of every pixel's group ``g``) through its own index a
   transfers ``BLEND_LATENCY`` cycles after its last group's: ``cycles = T[last] + BLEND_LATENCY + 1``.
 
 With every reference a hit: ``cycles = groups + FOOTPRINT_LATENCY + ADDRESS_STAGES + LOOKUP_STAGES
-+ 2 + LATENCY + BLEND_LATENCY`` = ``groups + 28`` (the on-chip filter: ``groups + 23``). With one lane the rules are
++ 2 + LATENCY + BLEND_LATENCY`` = ``groups + 29`` (the on-chip filter: ``groups + 23``). With one lane the rules are
 :func:`golden.memory.timing.run`'s exactly (the tests hold them equal).
 
 Output backpressure (``run(..., ready_pattern=)``): ``o.ready`` low holds the blend (its output

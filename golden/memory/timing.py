@@ -29,9 +29,9 @@ back to back from cycle 0; ``x[n-k]`` for ``n < k`` imposes nothing):
   stages are a chain of stream registers that moves as a whole against the lookup's acceptance: a
   stage takes a new item when its item leaves, in the same cycle).
 - ``b[n]`` (the lookup, the tag check's first cycle, takes request n): ``>= a[n] + ADDRESS_STAGES``;
-  ``>= b[n-1] + 1``; ``>= g[n-2] + 1`` (the lookup's input holds the requests accepted and not yet
-  taken by the check, at most two, and its ready is the registered ``count != 2``). With
-  ``address_stages = 0``, ``a[n] = b[n]``.
+  ``>= b[n-1] + 1``; ``>= g[n - LOOKUP_PLACES] + 1`` (the lookup's buffer holds the requests
+  accepted and not yet taken by the check, at most three, and its ready is the registered ``count
+  != 3``). With ``address_stages = 0``, ``a[n] = b[n]``.
 - ``g[n]`` (tag check, its second cycle, where it is decided and the state written): the check is
   first tried in cycle ``c = max(b[n] + LOOKUP_STAGES, g[n-1] + 1)`` (:func:`first_check`: the lookup
   takes request n while n-1 is checked, as if n-1 were taken); a try whose rules do not hold is
@@ -89,13 +89,17 @@ from ..format import TextureSet
 from .cache import classify
 from .system import Layout, MemoryConfig, references
 
-__all__ = ["ADDRESS_STAGES", "LOOKUP_STAGES", "REPLAY", "VICTIM_READ", "FILL_READ", "FRONT_LATENCY", "first_check", "attempt", "Plan", "plan", "fifo_slack", "accept_and_lookup", "run", "run_requests", "TexelPipeline", "StreamSink"]
+__all__ = ["ADDRESS_STAGES", "LOOKUP_STAGES", "LOOKUP_PLACES", "REPLAY", "VICTIM_READ", "FILL_READ", "FRONT_LATENCY", "first_check", "attempt", "Plan", "plan", "fifo_slack", "accept_and_lookup", "run", "run_requests", "TexelPipeline", "StreamSink"]
 
 #: The unit's address stages before the cache block (descriptor, block address).
 ADDRESS_STAGES = 2
-#: The tag check's first cycle (the lookup: the set's tag row read and registered), a stream
-#: register of the cache block in the chain in front of the tag check.
-LOOKUP_STAGES = 1
+#: Cycles from the cache block's acceptance of a request to its first tag check: the lookup's
+#: buffer (the request's sets and tags computed and registered) and the lookup (the sets' tag rows
+#: and counts read, the tags compared, registered).
+LOOKUP_STAGES = 2
+#: Requests the cache block holds accepted and not yet taken by the tag check (the lookup's buffer:
+#: the one checked, the one looked up, the one arriving): ``b[n] >= g[n - LOOKUP_PLACES] + 1``.
+LOOKUP_PLACES = 3
 #: Cycles between two tries of a tag check that does not take its request (the lookup took the
 #: next request meanwhile: killed, and the request looked up again).
 REPLAY = 2
@@ -279,7 +283,7 @@ def accept_and_lookup(i: int, a: list, b: list, g: list, La: int, start: int) ->
     (the rules of the module docstring; one definition for :func:`run` and the filter's
     :func:`golden.memory.filter.run`): ``a[i] >= a[i-1] + 1`` (``start`` for the first),
     ``>= b[i - La]`` (the address stages move against the lookup); ``b[i] >= a[i] + La``, ``>= b[i-1]
-    + 1``, ``>= g[i-2] + 1`` (the lookup's two places). ``La``: the address stages (0: the cache
+    + 1``, ``>= g[i-3] + 1`` (the lookup's buffer). ``La``: the address stages (0: the cache
     block alone). Lists of ints, filled up to ``i - 1``."""
     ai = a[i - 1] + 1 if i else start
     if La and i >= La and b[i - La] > ai:
@@ -287,8 +291,8 @@ def accept_and_lookup(i: int, a: list, b: list, g: list, La: int, start: int) ->
     bi = ai + La
     if i and b[i - 1] + 1 > bi:
         bi = b[i - 1] + 1
-    if i >= 2 and g[i - 2] + 1 > bi:
-        bi = g[i - 2] + 1
+    if i >= LOOKUP_PLACES and g[i - LOOKUP_PLACES] + 1 > bi:
+        bi = g[i - LOOKUP_PLACES] + 1
     return ai, bi
 
 def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_hint: int = 0,

@@ -3,24 +3,25 @@
 The cache block of the cached unit (docs/memory.md), without the address stages in front of it and
 the texel pipeline behind it::
 
-    i (raw, word, straddle, tag) -> buffer (2) -> lookup -> tag check -> reference FIFO (Q) -> data read -> o
+    i (raw, word, straddle, tag) -> buffer (3) -> lookup -> tag check -> reference FIFO (Q) -> data read -> o
                                                                  | AR (one burst per miss)      ^
                                                                  v                              | R (line fills)
                                                                AXI4 read master  <-----------  memory
 
 Timing (cycle for cycle :mod:`golden.memory.timing` with ``address_stages=0`` and a stream sink as
-consumer; with every reference a hit: one request per cycle, 3 cycles from ``i`` to ``o``):
+consumer; with every reference a hit: one request per cycle, 4 cycles from ``i`` to ``o``):
 
-* **Lookup** (the tag check's first cycle; ``i`` transfers in cycle ``b``): the request's lines, sets
+* **Lookup** (the tag check's first cycle; ``i`` transfers in cycle ``b``, into the buffer): the request's sets
   and tags are computed, each bank's tag row (tags, LRU ages, valid bits) and counts (issued,
   retired) read from LUT RAM, the tags compared and whether each way has references waiting found,
   and all of it registered, what the check writes in that cycle forwarded. The lookup's registers
   load every cycle (no clock enable): while the check works on request n the lookup takes n + 1 as
   if n were taken; when n is not taken, what the lookup took is killed and n is looked up again, so
   a check is tried every ``REPLAY`` = 2 cycles until it is taken. The requests accepted and not yet
-  taken (at most two) wait in a two-entry buffer in front of the lookup, so ``i.ready`` is the
-  registered ``count != 2``, i.e. ``b[n] >= g[n-2] + 1``.
-* **Tag check** (first tried in cycle ``max(b + 1, g[n-1] + 1)``, from the lookup's registers): the
+  taken (at most three) wait in a three-entry buffer in front of the lookup, so ``i.ready`` is the
+  registered ``count != 3``, i.e. ``b[n] >= g[n-3] + 1``; a request is looked up from the cycle after
+  its acceptance (its sets and tags computed into the buffer when it is accepted).
+* **Tag check** (first tried in cycle ``max(b + 2, g[n-1] + 1)``, from the lookup's registers): the
   request's references (an index request reads word ``w``, and ``w + 1`` when ``straddle``, a second
   lookup when it lies in the next line; a raw request one raw word) hit or miss. A miss allocates
   the LRU way at once (an empty way first) and queues its burst; the reference enters the FIFO. The
@@ -258,29 +259,38 @@ class _Cache:
         """The value of the bank holding set ``s`` (small signals: hit, way, ...)."""
         return per_bank[0] if self.banks == 1 else Mux(s[0], per_bank[1], per_bank[0])
 
-    def lookup(self, m, line):
-        """The tag check's first cycle: the lookup registers the set and tag of ``line`` (and of
-        ``line + 1``: a second port, when the cache has two banks), and each bank's tag row and
-        touched bit for them, read from the LUT RAM (a bank holds the port whose set has its
-        parity). The registers load every cycle (:func:`_reg`, no clock enable): what they hold is
-        checked the next cycle, or killed there. A row the tag check writes in this same cycle
-        (the request ahead, leaving the check) is forwarded: the register takes the written row and
-        touched bit, not the memory's old ones (when the check does not take its request, the
-        looked-up request is killed anyway). Only the tag check writes these rows, so no register
-        holds a stale row."""
-        nports = self.banks
-        sb = max(1, self.set_bits)
-        nsets, ntags = [], []
-        self.rset, self.rtag = [], []
-        for k in range(nports):
+    def derive(self, line):
+        """The sets and tags a lookup of ``line`` needs (and of ``line + 1``: a second port, when the
+        cache has two banks), combinational: ``set{k}``, ``tag{k}`` per port, and with two banks
+        ``bset{b}``, ``btag{b}``: the set and tag each bank holds (the port whose set has the bank's
+        parity). Computed when a request enters the lookup's buffer, so that the lookup starts
+        from flip-flops."""
+        d = {}
+        for k in range(self.banks):
             ln = line if k == 0 else line + 1
-            s = Signal(sb, name=f"{self.name}_next_set{k}")
-            t = Signal(self.tag_bits, name=f"{self.name}_next_tag{k}")
-            m.d.comb += [s.eq(ln[:self.set_bits] if self.set_bits else 0), t.eq(ln >> self.set_bits)]
-            nsets.append(s)
-            ntags.append(t)
-            self.rset.append(_reg(m, s, f"{self.name}_set{k}"))
-            self.rtag.append(_reg(m, t, f"{self.name}_line_tag{k}"))
+            d[f"set{k}"] = (ln[:self.set_bits] if self.set_bits else C(0, 1), max(1, self.set_bits))
+            d[f"tag{k}"] = ((ln >> self.set_bits)[:self.tag_bits], self.tag_bits)
+        if self.banks == 2:
+            for b in range(2):
+                mine = d["set0"][0][0] == b
+                d[f"bset{b}"] = (Mux(mine, d["set0"][0], d["set1"][0]), max(1, self.set_bits))
+                d[f"btag{b}"] = (Mux(mine, d["tag0"][0], d["tag1"][0]), self.tag_bits)
+        return d
+
+    def lookup(self, m, d):
+        """The tag check's first cycle: the lookup registers the sets and tags of :meth:`derive`
+        (``d``: their values, from the lookup's buffer), and each bank's tag row and touched bit
+        for them, read from the LUT RAM. The registers load every cycle (:func:`_reg`, no clock
+        enable): what they hold is checked the next cycle, or killed there. A row the tag check
+        writes in this same cycle (the request ahead, leaving the check) is forwarded: the register
+        takes the written row and touched bit, not the memory's old ones (when the check does not
+        take its request, the looked-up request is killed anyway). Only the tag check writes these
+        rows, so no register holds a stale row."""
+        nports = self.banks
+        nsets = [d[f"set{k}"] for k in range(nports)]
+        ntags = [d[f"tag{k}"] for k in range(nports)]
+        self.rset = [_reg(m, nsets[k], f"{self.name}_set{k}") for k in range(nports)]
+        self.rtag = [_reg(m, ntags[k], f"{self.name}_line_tag{k}") for k in range(nports)]
         self.rrow = [Signal(self.lines.shape, name=f"{self.name}{b}_row" if self.banks > 1 else f"{self.name}_row")
                      for b in range(self.banks)]
         self.rtouched = [Signal(name=f"{self.name}{b}_row_touched" if self.banks > 1 else f"{self.name}_row_touched")
@@ -294,16 +304,12 @@ class _Cache:
         for b in range(self.banks):
             n = f"{self.name}{b}" if self.banks > 1 else self.name
             if self.banks == 1:
-                s = nsets[0]
+                s, t = nsets[0], ntags[0]
                 self.rbank.append((self.rset[0], self.rtag[0]))
             else:
                 # the bank's set and tag (of the port whose set has the bank's parity), registered
-                s = Signal(sb, name=f"{n}_next_set")
-                t = Signal(self.tag_bits, name=f"{n}_next_tag")
-                m.d.comb += [s.eq(Mux(nsets[0][0] == b, nsets[0], nsets[1])),
-                             t.eq(Mux(nsets[0][0] == b, ntags[0], ntags[1]))]
+                s, t = d[f"bset{b}"], d[f"btag{b}"]
                 self.rbank.append((_reg(m, s, f"{n}_set"), _reg(m, t, f"{n}_tag")))
-            t = ntags[0] if self.banks == 1 else t
             rd = self.lines.read(m, b, s, f"{n}_next_row")
             r = self.lines.row(s)
             touched = self.touched[b]
@@ -494,13 +500,13 @@ class CachedReader(wiring.Component):
             **({"check_ready": Out(1), "check_go": In(1)} if joint else {}),
         })
 
-    #: Cycles from ``i`` to ``o`` when every reference hits: lookup, tag check, data read
+    #: Cycles from ``i`` to ``o`` when every reference hits: buffer, lookup, tag check, data read
     #: (golden's ``FRONT_LATENCY`` is the unit's address stages plus this).
-    LATENCY = 3
+    LATENCY = 4
 
     @property
     def latency(self) -> int:
-        """Cycles from ``i`` to ``o`` when every reference hits (lookup, tag check, data read): 3."""
+        """Cycles from ``i`` to ``o`` when every reference hits (buffer, lookup, tag check, data read): 4."""
         return self.LATENCY
 
     def elaborate(self, platform):
@@ -519,59 +525,81 @@ class CachedReader(wiring.Component):
         rc = _Cache(m, "raw", cfg.raw_cache, 1, count_bits,
                     max(1, aw - _log2(cfg.raw_cache.line) - _log2(cfg.raw_cache.sets)))
         beats = [ic.shape.line // bus, rc.shape.line // bus]
-        # -- the lookup's input: the requests accepted on i and not yet taken by the check (at most two) --
-        # The lookup's registers load every cycle (no clock enable, so the check's decision ``take``
-        # reaches a handful of flip-flops, not the ~500 of the lookup): while the check works on
-        # request n (``lv``), the lookup takes n + 1 as if n were taken. When it is not, the check
-        # kills what the lookup took (``lv`` low the next cycle) and the lookup takes n again from
-        # the buffer: a check not taken is tried again two cycles later (golden's ``REPLAY``). The
-        # buffer holds the requests accepted and not yet taken (n and n + 1), so ``i.ready`` is the
-        # registered ``count != 2`` (``b[n] >= g[n-2] + 1``); the request the lookup needs comes
-        # from it, or straight from ``i`` when the buffer does not hold it yet.
-        rq = self.request_layout
-        buf = [Signal(rq, name=f"lookup_buffer{j}") for j in range(2)]
-        wp = Signal(name="lookup_buffer_write")
-        rp = Signal(name="lookup_buffer_read")
-        count = Signal(range(3), name="lookup_buffer_count")
-        lv = Signal(name="lookup_valid")
-        take = Signal()
-        accept = Signal()
-        m.d.comb += accept.eq(self.i.valid & (count != 2))
-        for j in range(2):
-            with m.If(accept & (wp == j)):
-                m.d.sync += buf[j].eq(self.i.p)
-        with m.If(accept):
-            m.d.sync += wp.eq(~wp)
-        with m.If(take):
-            m.d.sync += rp.eq(~rp)
-        m.d.sync += count.eq(count + accept - take)
-        have = Signal(name="lookup_from_buffer")
-        m.d.comb += have.eq(Mux(lv, count == 2, count != 0))
-        req = Signal(rq, name="lookup_request")
-        m.d.comb += req.eq(Mux(have, Mux(rp ^ lv, buf[1], buf[0]), self.i.p))
-        m.d.sync += lv.eq((have | self.i.valid) & ~(lv & ~take))
-
-        # -- the references of the request looked up, registered by the lookup (the tag check's first cycle) --
+        # -- the lookup's input: the requests accepted on i and not yet taken by the check (at most three) --
+        # What the lookup needs of a request (its sets and tags in each cache, the FIFO entry's
+        # fields) is computed from ``i`` when the request is accepted, into a three-entry buffer,
+        # so the lookup starts from flip-flops. The lookup's registers load every cycle (no clock
+        # enable, so the check's decision ``take`` reaches a handful of flip-flops, not the ~500 of
+        # the lookup): while the check works on request n (``lv``), the lookup takes n + 1 from the
+        # buffer as if n were taken. When it is not, the check kills what the lookup took (``lv``
+        # low the next cycle) and the lookup takes n again: a check not taken is tried again two
+        # cycles later (golden's ``REPLAY``). The buffer holds the requests accepted and not yet
+        # taken (n in the check, n + 1 in the lookup, n + 2 arriving), so ``i.ready`` is the
+        # registered ``count != 3`` (``b[n] >= g[n-3] + 1``), and a request accepted in cycle
+        # ``b`` is looked up from ``b + 1`` and checked from ``b + 2`` (golden's ``LOOKUP_STAGES``).
+        req = self.i.p
         a0 = Signal(self._addr_width + 8)
         a1 = Signal(self._addr_width + 8)
         ra = Signal(self._addr_width + 8)
         m.d.comb += [a0.eq(req.word * wb), a1.eq((req.word + 1) * wb), ra.eq(self._raw_base + req.word * 4)]
         il, rl = _log2(ic.shape.line), _log2(rc.shape.line)
         line0, line1, rline = a0 >> il, a1 >> il, ra >> rl
-        ic.lookup(m, line0)
-        rc.lookup(m, rline)
+        nb = max(1, _log2(max(beats)))
+        derived = [
+            ("raw", req.raw, 1),
+            ("two", ~req.raw & req.straddle & (line1 != line0), 1),
+            ("tag", req.tag, max(1, self._tag_width)),
+            ("beat0", Mux(req.raw, (ra & (rc.shape.line - 1)) >> _log2(bus), (a0 & (ic.shape.line - 1)) >> _log2(bus))[:nb], nb),
+            ("beat1", ((a1 & (ic.shape.line - 1)) >> _log2(bus))[:nb], nb),
+            ("off0", Mux(req.raw, (ra & (bus - 1)) >> 2, (a0 & (bus - 1)) >> _log2(wb))[:max(1, _log2(bus // min(wb, 4)) or 1)],
+             max(1, _log2(bus // min(wb, 4)) or 1)),
+            ("off1", ((a1 & (bus - 1)) >> _log2(wb))[:max(1, _log2(bus // wb) or 1)], max(1, _log2(bus // wb) or 1)),
+        ]
+        for cache, line in ((ic, line0), (rc, rline)):
+            derived += [(f"{cache.name}_{k}", v, w) for k, (v, w) in cache.derive(line).items()]
+        width = sum(w for _, _, w in derived)
+        bundle = Signal(width, name="lookup_bundle_in")
+        m.d.comb += bundle.eq(Cat(*(Value.cast(v)[:w] if len(Value.cast(v)) >= w else v for _, v, w in derived)))
+        buf = [Signal(width, name=f"lookup_buffer{j}") for j in range(3)]
+        wp = Signal(3, name="lookup_buffer_write", init=1)      # one-hot
+        rp = Signal(3, name="lookup_buffer_read", init=1)       # one-hot: the oldest request not taken
+        count = Signal(range(4), name="lookup_buffer_count")
+        lv = Signal(name="lookup_valid")
+        take = Signal()
+        accept = Signal()
+        m.d.comb += accept.eq(self.i.valid & (count != 3))
+        for j in range(3):
+            with m.If(accept & wp[j]):
+                m.d.sync += buf[j].eq(bundle)
+        with m.If(accept):
+            m.d.sync += wp.eq(wp.rotate_left(1))
+        with m.If(take):
+            m.d.sync += rp.eq(rp.rotate_left(1))
+        m.d.sync += count.eq(count + accept - take)
+        # the entry the lookup reads: the oldest not taken, or the one after it while that is checked
+        sel = Signal(3, name="lookup_buffer_select")
+        m.d.comb += sel.eq(Mux(lv, rp.rotate_left(1), rp))
+        src = Signal(width, name="lookup_bundle")
+        m.d.comb += src.eq(Mux(sel[0], buf[0], 0) | Mux(sel[1], buf[1], 0) | Mux(sel[2], buf[2], 0))
+        have = Signal(name="lookup_has_request")
+        m.d.comb += have.eq(Mux(lv, count >= 2, count != 0))
+        m.d.sync += lv.eq(have & ~(lv & ~take))
+        look = {}
+        pos = 0
+        for name, _, w in derived:
+            sig = Signal(w, name=f"lookup_next_{name}")
+            m.d.comb += sig.eq(src[pos:pos + w])
+            look[name] = sig
+            pos += w
+        ic.lookup(m, {k[len("index_"):]: v for k, v in look.items() if k.startswith("index_")})
+        rc.lookup(m, {k[len("raw_"):]: v for k, v in look.items() if k.startswith("raw_") and k != "raw"})
 
-        def field(nx, name):
-            return _reg(m, nx, name)
-        l_raw = field(req.raw, "lookup_raw")
-        l_two = field(~req.raw & req.straddle & (line1 != line0), "lookup_two")
-        l_tag = field(req.tag, "lookup_tag") if self._tag_width else C(0, 1)
-        l_beat0 = field(Mux(req.raw, (ra & (rc.shape.line - 1)) >> _log2(bus), (a0 & (ic.shape.line - 1)) >> _log2(bus))
-                        [:max(1, _log2(max(beats)))], "lookup_beat0")
-        l_beat1 = field(((a1 & (ic.shape.line - 1)) >> _log2(bus))[:max(1, _log2(max(beats)))], "lookup_beat1")
-        l_off0 = field(Mux(req.raw, (ra & (bus - 1)) >> 2, (a0 & (bus - 1)) >> _log2(wb))[:max(1, _log2(bus // min(wb, 4)) or 1)],
-                       "lookup_off0")
-        l_off1 = field(((a1 & (bus - 1)) >> _log2(wb))[:max(1, _log2(bus // wb) or 1)], "lookup_off1")
+        def field(name):
+            return _reg(m, look[name], f"lookup_{name}")
+        l_raw = field("raw")
+        l_two = field("two")
+        l_tag = field("tag") if self._tag_width else C(0, 1)
+        l_beat0, l_beat1, l_off0, l_off1 = field("beat0"), field("beat1"), field("off0"), field("off1")
         # the bursts' line addresses (line0, line0 + 1, raw) from the sets and tags the lookup
         # registered for the compare (not registered again: fewer flip-flops on ``take``'s enable)
         def line_addr(cache, k, sh):
@@ -662,7 +690,7 @@ class CachedReader(wiring.Component):
         m.d.comb += [
             check_ready.eq(~slot_v[1] & (~slot_v[0] | self.axi.arready) & room & ~busy),
             take.eq(lv & (self.check_go if self._joint else check_ready)),
-            self.i.ready.eq(count != 2),
+            self.i.ready.eq(count != 3),
         ]
         # the entry of the request being checked
         # The entry's fields as separate signals, joined only where the FIFO stores them, and there

@@ -8,7 +8,7 @@ import pytest
 from vqtex.golden.fetch import random_requests
 from vqtex.golden.memory.cache import CacheShape
 from vqtex.golden.memory.system import Layout, MemoryConfig, references
-from vqtex.golden.memory.timing import FILL_READ, FRONT_LATENCY, REPLAY, attempt, fifo_slack, plan, run_requests
+from vqtex.golden.memory.timing import FILL_READ, FRONT_LATENCY, LOOKUP_PLACES, LOOKUP_STAGES, REPLAY, attempt, fifo_slack, plan, run_requests
 from vqtex.golden.encode import encode
 
 from tests.support import image, texture_set
@@ -53,18 +53,20 @@ def test_perfect_cache_no_backpressure(ts):
 
 
 @pytest.mark.parametrize("prefetch", [1, 4])
-def test_lookup_two_places(ts, prefetch):
-    """The lookup (the tag check's first cycle) takes request n when at most one of the requests it
-    holds is unchecked (``b[n] >= g[n-2] + 1``: two places, its ready registered) and the check follows
-    it (``g[n] >= b[n] + 1``); the address stages move against it (``a[n] >= b[n-2]``). On a stream
-    that stalls (small caches, 60 cycles of memory), each rule binds somewhere."""
+def test_lookup_buffer(ts, prefetch):
+    """The cache block takes request n into the lookup's buffer when it holds fewer than three
+    requests not yet taken by the check (``b[n] >= g[n-3] + 1``: its ready registered), and the
+    check first tries it LOOKUP_STAGES = 2 cycles later (buffer, lookup); the address stages move
+    against it (``a[n] >= b[n-2]``). On a stream that stalls (small caches, 60 cycles of memory),
+    each rule binds somewhere."""
     req = random_requests(ts, 400, seed=5)
     cfg = MemoryConfig(index_cache=CacheShape(128, 16, 2), raw_cache=CacheShape(64, 16, 2), prefetch=prefetch,
                        latency=60, bandwidth=16, bus_bytes=16)
     out = run_requests(ts, req, cfg, L, always)
     a, b, g = out["accept"], out["lookup"], out["tag"]
-    assert (g >= b + 1).all() and (b >= a + 2).all()
-    assert (b[2:] >= g[:-2] + 1).all() and (b[2:] == g[:-2] + 1).any()
+    assert LOOKUP_STAGES == 2 and LOOKUP_PLACES == 3
+    assert (g >= b + 2).all() and (g == b + 2).any() and (b >= a + 2).all()
+    assert (b[3:] >= g[:-3] + 1).all() and (b[3:] == g[:-3] + 1).any()
     assert (a[2:] >= b[:-2]).all() and (a[2:] == b[:-2]).any() and (a[2:] > a[:-2] + 2).any()
 
 
@@ -87,17 +89,18 @@ def test_every_request_a_new_line_blocking(latency):
     assert per == wait + (wait % 2 == 0)
     assert np.diff(out["tag"]).tolist() == [per] * 15
     assert np.diff(out["read"]).tolist() == [per] * 15
-    # first: accepted 0, lookup 2, tag 3, AR 4, beat 4 + latency, read FILL_READ = 2 later
-    assert FILL_READ == 2 and out["read"][0] == 3 + 1 + cfg.latency + 2
+    # first: accepted 0, into the cache block 2, looked up 3, tag 4, AR 5, beat 5 + latency, read
+    # FILL_READ = 2 later
+    assert FILL_READ == 2 and out["read"][0] == 4 + 1 + cfg.latency + 2
     assert out["cycles"] == out["read"][-1] + 1 + L + 1
     assert out["stall_cycles"]["miss"] + out["stall_cycles"]["bandwidth"] == 16 * (cfg.latency + FILL_READ)
     # prefetching overlaps them: the bursts go out back to back, limited by nothing but the memory
     pre = run_requests(ts, req, MemoryConfig(index_cache=cfg.index_cache, prefetch=16, latency=20), L, always)
-    # tag n at n + 3, AR at n + 4, its beat at n + 24, readable at n + 26
+    # tag n at n + 4, AR at n + 5, its beat at n + 25, readable at n + 27
     assert np.diff(pre["tag"]).tolist() == [1] * 15
-    assert pre["tag"][0] == 3
-    assert pre["read"].tolist() == (26 + np.arange(16)).tolist()
-    assert pre["cycles"] == 26 + 15 + 1 + L + 1
+    assert pre["tag"][0] == 4
+    assert pre["read"].tolist() == (27 + np.arange(16)).tolist()
+    assert pre["cycles"] == 27 + 15 + 1 + L + 1
 
 
 def test_fifo_room_from_the_registered_level():
