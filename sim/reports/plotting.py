@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["PlotError", "require", "cycle_figure", "save_cycle_plot", "save_difference_plot", "INSTALL_HINT",
+__all__ = ["PlotError", "require", "cycle_figure", "memory_axes", "save_cycle_plot", "save_difference_plot", "INSTALL_HINT",
            "CYCLE_PARTS"]
 
 INSTALL_HINT = "pip install '.[plot]' (matplotlib)"
@@ -42,19 +42,31 @@ def require():
 def cycle_figure(rep: dict):
     """A figure of where the cycles of a cycle report (:func:`~vqtex.sim.reports.cycles.cycle_report`)
     went: one horizontal bar, the cycles split by cause, every part in the legend with its count and
-    share; the title names the backend, the index reader and the texels per clock."""
+    share; the title names the backend, the index reader and the texels per clock. A report of the
+    unit through external memory (``rep["memory"]``, ``--memory external``) gets a second row,
+    :func:`memory_axes`: each cache's hit rate, the bytes read from memory per texel, and the texels
+    per clock against the zero-latency unit's; its memory stall's legend entry splits the wait into
+    miss and bandwidth where the report has the split (``stall_detail``)."""
     plt = require()
     values = {"requests": rep["requests"], "latency": rep["latency"], **rep["stall_cycles"]}
     known = {k for k, _, _ in CYCLE_PARTS}
     parts = [(k, label, col) for k, label, col in CYCLE_PARTS if k in values]
     parts += [(k, f"stall: {k.replace('_', ' ')}", "#9650b4") for k in values if k not in known]
     total = max(1, rep["cycles"])
-    fig, ax = plt.subplots(figsize=(9, 3.2), dpi=100)
+    mem = rep.get("memory")
+    if mem:
+        fig = plt.figure(figsize=(9, 5.6), dpi=100)
+        grid = fig.add_gridspec(2, 3, height_ratios=(1, 1.1), hspace=1.1, wspace=0.45)
+        ax = fig.add_subplot(grid[0, :])
+    else:
+        fig, ax = plt.subplots(figsize=(9, 3.2), dpi=100)
+    detail = (mem or {}).get("stall_detail")
     left = 0
     for key, label, colour in parts:
         v = values[key]
+        split = f"; miss {detail['miss']}, bandwidth {detail['bandwidth']}" if key == "memory" and detail else ""
         ax.barh([0], [v], left=left, color=colour, height=0.6,
-                label=f"{label}: {v} cycles ({100 * v / total:.1f}%)")
+                label=f"{label}: {v} cycles ({100 * v / total:.1f}%{split})")
         left += v
     other = rep["cycles"] - left
     if other > 0:
@@ -65,8 +77,44 @@ def cycle_figure(rep: dict):
     ax.set_title(f"Where the {rep['cycles']} cycles went: {rep['requests']} requests, {rep['backend']} backend, "
                  f"{rep['index_reader']} index reader, {rep['texels_per_clock']:.3f} texels/clock", fontsize=9)
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.35), fontsize=8, frameon=False)
-    fig.tight_layout()
+    if mem:
+        memory_axes(fig, [fig.add_subplot(grid[1, k]) for k in range(3)], rep)
+    else:
+        fig.tight_layout()
     return fig
+
+
+def memory_axes(fig, axes, rep: dict) -> None:
+    """The memory row of :func:`cycle_figure` on three axes: the index and raw caches' hit rates
+    (percent; a cache no request used is drawn empty and labelled "unused"), the bytes read from
+    memory per texel split by cache, and the texels per clock of this run beside the zero-latency
+    unit's on the same stream (when the report has it: the golden model's ``zero_latency_cycles``)."""
+    mem = rep["memory"]
+    hit, rates, bytes_ = axes
+    names = ("index", "raw")
+    rate = [mem["hit_rate"][n] for n in names]
+    hit.bar(names, [100 * r if r is not None else 0 for r in rate], color=("#3c8cc8", "#e6b428"))
+    for x, r in enumerate(rate):
+        hit.text(x, 2, f"{100 * r:.1f}%" if r is not None else "unused", ha="center", fontsize=8)
+    hit.set_ylim(0, 100)
+    hit.set_ylabel("hit rate (%)", fontsize=8)
+    hit.set_title("cache hit rate", fontsize=9)
+    requests = max(1, rep["requests"])
+    per = [mem["memory_bytes"][n] / requests for n in names]
+    bytes_.bar(names, per, color=("#3c8cc8", "#e6b428"))
+    bytes_.set_ylabel("bytes per texel", fontsize=8)
+    bytes_.set_title(f"memory read: {mem['bytes_per_texel']:.3f} B/texel", fontsize=9)
+    labels, tpc = ["this run"], [rep["texels_per_clock"]]
+    if "zero_latency_cycles" in mem:
+        labels.append("zero latency")
+        tpc.append(rep["requests"] / max(1, mem["zero_latency_cycles"]))
+    rates.bar(labels, tpc, color=("#3ca03c", "#aaaaaa")[:len(tpc)])
+    rates.set_ylim(0, 1.05 * max(1.0, *tpc))
+    rates.set_ylabel("texels per clock", fontsize=8)
+    rates.set_title("texels per clock" + (f" ({mem['of_zero_latency']:.3f} of zero latency)"
+                                          if "of_zero_latency" in mem else ""), fontsize=9)
+    for a in axes:
+        a.tick_params(labelsize=8)
 
 
 def save_cycle_plot(rep: dict, path: str) -> None:

@@ -14,6 +14,7 @@ from amaranth.sim import Simulator
 
 from tests import support
 from tests.support import edge_pixels, filter_set
+from tests.support.reload import reload_mid_stream
 from vqtex.golden import filter as spec
 from vqtex.golden.geometry import Geometry
 from vqtex.golden.memory.cache import CacheShape
@@ -131,53 +132,11 @@ def test_drain_rule_with_misses_in_flight():
     shift = spec.coordinate_frac_bits(COORD_BITS) - frac
     rows = np.stack([np.asarray(px[f], np.int64) << (shift if f in ("s", "t") else 0) for f in FIELDS], 1)
     packed = pysim.pack_rows(dut.i.p.shape(), FIELDS, rows, 16)
-    n = len(rows)
-    rlay = dut.o.p.shape()
     slave = AxiMemory(bytes(image), cfg.make_memory(), cfg.bus_bytes)
-    first = load_writes(ts, g, old).astype(np.int64)
-    log = {"accept": [], "transfer": [], "rgba": [], "ack": []}
-
-    async def bench(ctx):
-        await pysim.load_over_bus(ctx, dut.bus, first)
-        n_in = n_out = cycle = 0
-        slave.start(ctx, dut.axi)
-        ctx.set(dut.o.ready, 1)
-        while n_out < n:
-            assert cycle < 30000, "hung"
-            ctx.set(dut.i.valid, int(n_in < n))
-            if n_in < n:
-                ctx.set(dut.i.p.as_value(), packed[n_in])
-            slave.step(ctx, dut.axi, cycle)
-            if ctx.get(dut.o.valid):
-                p = ctx.get(dut.o.p.as_value())
-                assert (p >> rlay["tag"].offset) & 0xFFFF == n_out
-                log["rgba"].append([(p >> rlay[c].offset) & 255 for c in "rgba"])
-                log["transfer"].append(cycle)
-                n_out += 1
-            if n_in < n and ctx.get(dut.i.ready):
-                log["accept"].append(cycle)
-                n_in += 1
-            if ctx.get(dut.bus.ack):
-                log["ack"].append(cycle)
-            cycle += 1
-            await ctx.tick()
-
-    async def host(ctx):                    # the reload, 20 cycles into the pixels
-        await ctx.tick().repeat(load_cycles(len(first)) + 20)
-        await pysim.load_over_bus(ctx, dut.bus, load_writes(ts, g, new).astype(np.int64))
-
-    sim = Simulator(dut)
-    sim.add_clock(1e-6)
-    sim.add_testbench(bench)
-    sim.add_testbench(host)
-    sim.run()
-    assert log["ack"], "the reload never got in"
-    first_ack = min(log["ack"])
-    k = sum(t < first_ack for t in log["accept"])      # pixels accepted before the writes
-    assert 0 < k < n and len(log["rgba"]) == n
-    assert max(log["transfer"][:k]) < first_ack        # drained first
-    assert min(log["accept"][k:]) > max(log["ack"])      # none entered during the load
+    log, k = reload_mid_stream(dut, slave, packed, load_writes(ts, g, old).astype(np.int64),
+                               load_writes(ts, g, new).astype(np.int64), tag_bits=16, limit=30000)
     assert (np.array(log["rgba"], np.uint8) == golden_colors(ts, px, frac)).all()
+    first_ack = min(log["ack"])
     ar, addresses = np.array(slave.ar), np.array(slave.addresses)
     assert (addresses[ar < first_ack] < 0x10000).all() and (addresses[ar > max(log["ack"])] >= 0x10000).all()
     assert (ar > max(log["ack"])).any()

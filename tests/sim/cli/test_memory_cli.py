@@ -142,3 +142,31 @@ def test_demo_with_external_memory(capsys, tmp_path):
         assert rep["frames"][0]["latency"] == 19
     assert_one_error(capsys, ["demo", "-o", tmp_path / "e", "--memory", "external", "--unit", "full"], "no --unit")
     assert_one_error(capsys, ["demo", "-o", tmp_path / "e", "--cache-size", "4096"], "needs --memory external")
+
+
+def test_report_cycles_plot_draws_the_memory_figures(capsys, trace):
+    """``report cycles --memory external --plot``: the cycle bar's memory stall names its miss and
+    bandwidth split, and a second row draws each cache's hit rate, the bytes per texel by cache and
+    the texels per clock beside the zero-latency unit's, each equal to the report's numbers."""
+    from vqtex.sim.reports.plotting import cycle_figure
+    from vqtex.golden.render.imageio import read_image
+    d, _, _ = trace
+    png = d / "memory.png"
+    code, text, err = run_cli(capsys, "report", "cycles", d / "t.vqt", d / "r.npy", "--memory", "external", *SMALL,
+                              "--memory-latency", "60", "--plot", png, "--json")
+    assert code == 0, err
+    rep = json.loads(text)
+    mem = rep["memory"]
+    assert read_image(png).shape[0] > 400
+    fig = cycle_figure(rep)
+    bar, hit, rates, bytes_ = fig.axes
+    legend = [t.get_text() for t in bar.get_legend().get_texts()]
+    detail = mem["stall_detail"]
+    assert detail["miss"] > 0 and any(f"miss {detail['miss']}, bandwidth {detail['bandwidth']}" in t for t in legend)
+    assert [p.get_height() for p in hit.patches] == pytest.approx([100 * mem["hit_rate"]["index"],
+                                                                   100 * mem["hit_rate"]["raw"]])
+    assert [p.get_height() for p in bytes_.patches] == pytest.approx(
+        [mem["memory_bytes"]["index"] / rep["requests"], mem["memory_bytes"]["raw"] / rep["requests"]])
+    this, zero = [p.get_height() for p in rates.patches]
+    assert this == pytest.approx(rep["texels_per_clock"]) and zero == pytest.approx(
+        rep["requests"] / mem["zero_latency_cycles"]) and this < zero
