@@ -559,7 +559,10 @@ class CachedReader(wiring.Component):
             derived += [(f"{cache.name}_{k}", v, w) for k, (v, w) in cache.derive(line).items()]
         width = sum(w for _, _, w in derived)
         bundle = Signal(width, name="lookup_bundle_in")
-        m.d.comb += bundle.eq(Cat(*(Value.cast(v)[:w] if len(Value.cast(v)) >= w else v for _, v, w in derived)))
+        # (a gate, not a plain wire: one packed wire holding bits of ``ra`` and bits computed from
+        # them, Yosys makes it the driver of ``ra``'s bits and Verilator sees a cycle: see ``new``)
+        with m.If(self.i.valid):
+            m.d.comb += bundle.eq(Cat(*(Value.cast(v)[:w] if len(Value.cast(v)) >= w else v for _, v, w in derived)))
         buf = [Signal(width, name=f"lookup_buffer{j}") for j in range(3)]
         wp = Signal(3, name="lookup_buffer_write", init=1)      # one-hot
         rp = Signal(3, name="lookup_buffer_read", init=1)       # one-hot: the oldest request not taken
