@@ -1,4 +1,4 @@
-"""BackEnd: codebook index -> RGBA response (stages 8-14 of TexelFetch).
+"""BackEnd: codebook index -> RGBA response (stages 9-15 of TexelFetch).
 
 codebook ROM -> colour matrix -> the colour part of the skid register and the output multiplexer
 (the tags are the front end's), every register
@@ -33,7 +33,7 @@ _ROM_INPUTS = ("cb_base", "raw_addr", "compressed", "x", "y", "log2bw", "color",
 
 
 class BackEnd(wiring.Component):
-    """Stages 8-11 (codebook ROM), 12-14 (colour matrix) and the colour part of the skid register.
+    """Stages 9-12 (codebook ROM), 13-15 (colour matrix) and the colour part of the skid register.
 
     Latency: the colour for the index on ``link.index`` in cycle ``t`` is the last stage's in cycle
     ``t + 7`` when the pipeline advanced in between. Throughput: one per cycle. ``rgba`` shows the
@@ -108,7 +108,7 @@ class BackEnd(wiring.Component):
             m.d.comb += [rom.load.eq(self.load), cm.load.eq(self.load),
                          self.load_data.eq(rom.load_data | cm.load_data)]
 
-        # Stages 8-11: codebook ROM (and raw memory). The side fields a specialised unit does not
+        # Stages 9-12: codebook ROM (and raw memory). The side fields a specialised unit does not
         # carry are constants the ROM knows from the features, or fields it does not use.
         carried = {name for name, _ in link.side.shape()}
         m.d.comb += rom.index.eq(link.index)
@@ -118,7 +118,7 @@ class BackEnd(wiring.Component):
         en = ({name: link.copies[k] for k, name in enumerate(ADVANCE_COPIES)} if load is not None
               else dict.fromkeys(ADVANCE_COPIES, link.advance))
         m.d.comb += rom.en.eq(en["codebook_rom"])
-        # Stages 12-14: colour matrix.
+        # Stages 13-15: colour matrix.
         m.d.comb += [
             cm.samples.eq(rom.samples), cm.color.eq(rom.color_out), cm.en.eq(en["color_matrix"]),
         ]

@@ -255,7 +255,8 @@ class _ReadData:
 
 
 def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int | None = None, pack=None,
-                  unpack=None, name: str, read_addr, read_en, data_r=None, own_port: bool = False):
+                  unpack=None, name: str, read_addr, read_en, data_r=None, own_port: bool = False,
+                  data_en=None):
     """Give ``mem`` (an ``amaranth.lib.memory.Memory``, not yet elaborated) a write port for the load
     command ``load``, and its one read port, shared: the pipeline reads at ``read_addr`` when
     ``read_en``; a bus read takes the port in the cycle of its command (the pipeline is empty then:
@@ -288,6 +289,16 @@ def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int
     that register into the block RAM and, with the attribute, may share port B between the bus's
     read and write. With a synchronous port Amaranth states the read-during-write result (the old
     word) and Yosys keeps two copies of the memory instead.
+   
+    With ``data_en`` (a memory in LUTs: the loadable descriptor table) the read takes two stages:
+    the read address is registered here, in a register of this memory's own (its copy of the
+    address: loaded with ``read_addr`` when ``read_en``, with the bus's row in the cycle of a bus
+    read), the memory is read asynchronously from it (the LUT RAMs' read and the multiplexer
+    between them) and the data registered when ``data_en`` (the next stage's enable) or in the
+    cycle after a bus read: ``read_port.data`` is that register, two cycles after ``read_addr``.
+    No net of the caller's fans out to the LUT RAMs' addresses, and the bus's read data is the
+    same register (no ``data_r``). The bus's answer keeps its timing. Not with ``own_port`` or
+    ``data_r``.
     """
     width = Shape.cast(mem.shape).width
     mine = Signal(name=f"{name}_mine")
@@ -301,10 +312,20 @@ def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int
         wp = mem.write_port()
         m.d.comb += [wp.addr.eq(row), wp.en.eq(load.write & mine)]
         m.d.comb += wp.data.eq(pack(load.data) if pack is not None else load.data[:width])
-    rp = mem.read_port(domain="sync")
+    if data_en is not None and (own_port or data_r is not None):
+        raise ValueError("a registered read address (data_en) takes neither own_port nor data_r")
     bus_read = Signal(name=f"{name}_bus_read")
     m.d.comb += bus_read.eq(load.read & mine)
-    if own_port:                    # the bus's read beside its write: the block RAM's second port
+    rp = mem.read_port(domain="comb" if data_en is not None else "sync")
+    if data_en is not None:         # the address registered here, the read asynchronous, its data registered
+        addr_r = Signal.like(rp.addr, name=f"{name}_read_addr")
+        with m.If(read_en | bus_read):
+            m.d.sync += addr_r.eq(Mux(bus_read, row, read_addr))
+        m.d.comb += rp.addr.eq(addr_r)
+        comb_data = rp.data
+        data_r = Signal.like(comb_data, name=f"{name}_read_data")
+        bp = rp = _ReadData(data_r)
+    elif own_port:                    # the bus's read beside its write: the block RAM's second port
         bp = rp
         comb = mem.read_port(domain="comb")
         rp = _ReadData(Signal.like(comb.data, name=f"{name}_read_data"))
@@ -318,10 +339,14 @@ def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int
     hit_r = Signal(name=f"{name}_hit_r")            # the read data is on the port
     hit_rr = Signal(name=f"{name}_hit_rr")          # ... and in data_r
     m.d.sync += [hit_r.eq(bus_read), hit_rr.eq(hit_r)]
-    if data_r is None:
-        data_r = Signal.like(rp.data, name=f"{name}_data_r")
-    with m.If(hit_r):
-        m.d.sync += Value.cast(data_r).eq(bp.data)
+    if data_en is not None:
+        with m.If(data_en | hit_r):
+            m.d.sync += data_r.eq(comb_data)
+    else:
+        if data_r is None:
+            data_r = Signal.like(rp.data, name=f"{name}_data_r")
+        with m.If(hit_r):
+            m.d.sync += Value.cast(data_r).eq(bp.data)
     if wide:
         lane_r = Signal(len(lane), name=f"{name}_lane_r")
         lane_rr = Signal(len(lane), name=f"{name}_lane_rr")

@@ -84,6 +84,17 @@ class DescriptorTable(wiring.Component):
     ``en`` is high appears on ``row`` in the next cycle and stays there while ``en`` is low).
     Throughput: one lookup per cycle.
 
+    With ``registered`` (the texel pipeline's table: its stages ``request`` and ``descriptor``,
+    :data:`hw.pipeline.STAGES`), latency 2: ``texture`` and ``level`` are registered when ``en`` is
+    high (the request stage), then the table is read and ``row`` registered when ``row_en`` is high
+    (the descriptor stage), so ``row`` holds the row of the address ``en`` took, from the cycle
+    after ``row_en`` on. Nothing that drives ``texture`` and ``level`` reaches the memory's address
+    inputs: a ROM registers the address itself (a block RAM's own address register; Yosys puts a
+    ROM in logic behind registers of its own), and the loadable table has a register of the
+    address per memory (:func:`hw.bus_port.attach_memory` with ``data_en``), so each group of LUT
+    RAMs (``TRELLIS_DPR16X4``, 16 rows each) is read from a copy of its own and the multiplexer
+    between them (by ``texture``) ends at the ``row`` register. Throughput: one lookup per cycle.
+
     Specialised (``features`` of a set, :class:`hw.features.Features`): the table stores only the
     fields the unit reads that differ between rows (``features.stored_fields``), decodes only
     ``features.level_bits`` bits of the level and ``features.texture_bits`` of the texture, and is
@@ -105,6 +116,8 @@ class DescriptorTable(wiring.Component):
         The field widths and the rows (default ``Geometry.of(ts)``).
     load : data.StructLayout, optional
         The bus port's load command (:func:`hw.bus_port.load_layout`): the table is loadable.
+    registered : bool
+        Latency 2: the address registered in front of the table (above; member ``row_en``).
 
     Members
     -------
@@ -113,7 +126,9 @@ class DescriptorTable(wiring.Component):
     level : In(4)
         Level inside the texture (0..15).
     en : In(1)
-        Read enable (the pipeline's advance).
+        Read enable (the pipeline's advance); with ``registered``, the address register's enable.
+    row_en : In(1)
+        Only with ``registered``: the ``row`` register's enable (the descriptor stage's).
     row : Out(DescriptorLayout)
         The descriptor row (the stored fields), registered.
     load : In(load), load_data : Out(32)
@@ -121,7 +136,7 @@ class DescriptorTable(wiring.Component):
     """
 
     def __init__(self, ts: TextureSet | None = None, *, features: Features | None = None,
-                 geometry: Geometry | None = None, load=None):
+                 geometry: Geometry | None = None, load=None, registered: bool = False):
         if ts is None and (geometry is None or load is None):
             raise TypeError("a descriptor table without contents needs a geometry and a load port")
         self._ts = ts
@@ -129,12 +144,14 @@ class DescriptorTable(wiring.Component):
         self._features = features if features is not None else Features.full(ts)
         self._widths = self._geometry.descriptor_widths()
         self._load = load
+        self._registered = bool(registered)
         stored = [n for n in self._features.stored_fields if n in READ_BY_TABLE or load is None]
         self._layout = DescriptorLayout(self._widths, stored)
         super().__init__({
             "texture": In(self._geometry.texture_bits),
             "level": In(LEVEL_BITS),
             "en": In(1),
+            **({"row_en": In(1)} if self._registered else {}),
             "row": Out(self._layout),
             **({} if load is None else {"load": In(load), "load_data": Out(DATA_WIDTH)}),
         })
@@ -142,6 +159,11 @@ class DescriptorTable(wiring.Component):
     @property
     def layout(self) -> DescriptorLayout:
         return self._layout
+
+    @property
+    def latency(self) -> int:
+        """Cycles from ``en`` taking an address to its row on ``row``: 2 with ``registered``, else 1."""
+        return 2 if self._registered else 1
 
     @property
     def widths(self) -> dict:
@@ -185,8 +207,14 @@ class DescriptorTable(wiring.Component):
         m.d.comb += [
             port.addr.eq(Cat(self.level[:lb], self.texture[:tb])),
             port.en.eq(self.en),
-            self.row.eq(port.data),
         ]
+        if self._registered:                # the ROM's own address register, then the row's
+            row = Signal.like(port.data, name="row_r")
+            with m.If(self.row_en):
+                m.d.sync += row.eq(port.data)
+            m.d.comb += self.row.eq(row)
+        else:
+            m.d.comb += self.row.eq(port.data)
         return m
 
     def _elaborate_loadable(self):
@@ -227,7 +255,7 @@ class DescriptorTable(wiring.Component):
 
             port, answer = attach_memory(m, mem, command, hit=hit, row=row_of, lane=lane, only_lane=w,
                                          pack=pack, unpack=unpack, name=f"word{w}_load", read_addr=addr,
-                                         read_en=self.en)
+                                         read_en=self.en, data_en=self.row_en if self._registered else None)
             answers.append(answer)
             for name, _ in present:
                 row[name] = getattr(port.data, name)

@@ -1,6 +1,7 @@
-"""FrontEnd: request -> codebook index, and the pipeline control (stages 1-7 of TexelFetch).
+"""FrontEnd: request -> codebook index, and the pipeline control (stages 1-8 of TexelFetch).
 
-descriptor table -> block address shifter -> index reader, with every valid bit, the ``advance``
+request register -> descriptor table -> block address shifter -> index reader, with every valid
+bit, the ``advance``
 flip-flop, the skid register's valid bit and the request tags. Its ``link`` output
 (:class:`hw.pipeline.LinkLayout`) is all that :class:`hw.back_end.BackEnd` needs from it; nothing
 comes back (see :mod:`hw.pipeline`).
@@ -59,10 +60,10 @@ class _OutsideIndex:
 
 
 class FrontEnd(wiring.Component):
-    """Stages 1-7 (descriptor, address, the index reader's five) and the pipeline control.
+    """Stages 1-8 (request, descriptor, address, the index reader's five) and the pipeline control.
 
-    Latency: the index of a request accepted in cycle ``t`` is on ``link.index`` in cycle ``t + 7``
-    when the pipeline advanced in between. Throughput: one request per advancing cycle (one-port:
+    Latency: the index of a request accepted in cycle ``t`` is on ``link.index`` in cycle ``t + 8``
+    (``FRONT_STAGES``) when the pipeline advanced in between. Throughput: one request per advancing cycle (one-port:
     a straddling index costs one more).
 
     Control (the rules of :class:`hw.texel_fetch.TexelFetch`): ``advance`` is a flip-flop set to
@@ -157,7 +158,7 @@ class FrontEnd(wiring.Component):
         widths = g.descriptor_widths()
         kb = g.k_bits
 
-        m.submodules.descriptor = desc = DescriptorTable(ts, features=feat, geometry=g, load=load)
+        m.submodules.descriptor = desc = DescriptorTable(ts, features=feat, geometry=g, load=load, registered=True)
         m.submodules.address = addr = BlockAddress(
             base_bits=widths["base"], k_bits=kb, raw_bits=addr_bits(g.raw_words), raw=feat.raw,
             twiddle=feat.twiddled, linear=0 in feat.layouts)
@@ -193,9 +194,9 @@ class FrontEnd(wiring.Component):
         ]
         m.d.sync += [advance.eq(~self.stall_output), skid_valid.eq(self.stall_output)]
         # The loadable unit: the data registers' enables from copies of ``advance`` (one per block,
-        # hw.pipeline.advance_copies), the valid bits, tags, control and stage 1 (the descriptor
-        # table's read and the request's i, j: they take the input, which a copy's first cycle
-        # after a reset would miss) from ``advance`` itself.
+        # hw.pipeline.advance_copies), the valid bits, tags, control and stage 1 (the request: the
+        # descriptor table's address registers and the request's i, j: they take the input, which
+        # a copy's first cycle after a reset would miss) from ``advance`` itself.
         if load is not None:
             copies = dict(zip(ADVANCE_COPIES, advance_copies(m, self.stall_output, len(ADVANCE_COPIES))))
             en_desc = Signal(name="upstream_address")
@@ -217,19 +218,23 @@ class FrontEnd(wiring.Component):
         def carry(value, en, name):
             return enabled_register(m, en, value, name)
 
-        # Stage 1: descriptor.
+        # Stages 1 and 2: the request registered (the table's address registers: its own copies of
+        # texture and level), then the table read.
         m.d.comb += [
             desc.texture.eq(self.i.p.texture),
             desc.level.eq(self.i.p.level),
             desc.en.eq(upstream),
+            desc.row_en.eq(en_desc),
         ]
         row = desc.fields()
-        i1 = carry(self.i.p.i, upstream, "i_descriptor")
-        j1 = carry(self.i.p.j, upstream, "j_descriptor")
+        i1 = carry(self.i.p.i, upstream, "i_request")
+        j1 = carry(self.i.p.j, upstream, "j_request")
+        i2 = carry(i1, en_desc, "i_descriptor")
+        j2 = carry(j1, en_desc, "j_descriptor")
 
-        # Stage 2: block address.
+        # Stage 3: block address.
         m.d.comb += [
-            addr.i.eq(i1), addr.j.eq(j1),
+            addr.i.eq(i2), addr.j.eq(j2),
             addr.log2w.eq(row.log2w), addr.log2bw.eq(row.log2bw), addr.log2bh.eq(row.log2bh),
             addr.base.eq(row.base),
             addr.en.eq(en_desc),
@@ -238,10 +243,10 @@ class FrontEnd(wiring.Component):
             m.d.comb += [addr.layout.eq(row.layout), addr.log2h.eq(row.log2h)]
         d2 = desc.fields(carry(desc.row, en_desc, "row_address"))
 
-        # Stages 3-7: index reader (stage 3 moves on upstream: the reader gates it with its hold).
+        # Stages 4-8: index reader (stage 4 moves on upstream: the reader gates it with its hold).
         if feat.compressed and self._index_port:
             m.d.comb += [
-                self.index_request.valid.eq(valid[1] & d2.compressed),
+                self.index_request.valid.eq(valid[STAGES.index("address")] & d2.compressed),
                 self.index_request.k.eq(addr.k),
                 self.index_request.b.eq(d2.index_bits),
                 self.index_request.base.eq(d2.base),
@@ -253,7 +258,7 @@ class FrontEnd(wiring.Component):
                 m.d.comb += self.index_request.gh.eq(d2.log2h - d2.log2bh)
         elif feat.compressed:
             m.d.comb += [
-                idx.valid.eq(valid[1] & d2.compressed),
+                idx.valid.eq(valid[STAGES.index("address")] & d2.compressed),
                 idx.k.eq(addr.k),
                 idx.b.eq(d2.index_bits),
                 idx.base.eq(d2.base),
@@ -271,9 +276,10 @@ class FrontEnd(wiring.Component):
             "x": addr.x, "y": addr.y, "log2bw": d2.log2bw, "color": d2.color,
             "texel_off": d2.texel_off, "u_off": d2.u_off, "v_off": d2.v_off,
         }))
-        index_stages = STAGES[2:2 + index_reader.LATENCY]
+        first = STAGES.index("index_bit")
+        index_stages = STAGES[first:first + index_reader.LATENCY]
         for n, name in enumerate(index_stages):
-            en = en_desc if n + 2 < UPSTREAM_STAGES else en_side
+            en = en_desc if n + first < UPSTREAM_STAGES else en_side
             if self._summed and n == len(index_stages) - 1:
                 m.d.comb += idx.add.eq(side.cb_base)     # the item entering the extract stage
             side = carry(side, en, f"side_{name}")

@@ -3,10 +3,11 @@
 
 :class:`hw.texel_fetch.TexelFetch` is two components wired back to back (see docs/hardware.md):
 
-* the **front end** (:class:`hw.front_end.FrontEnd`): descriptor table, block address shifter, index
-  reader (stages 1-7) and all the pipeline control (valid bits, ``advance``, the skid register's
-  valid bit), and the request tags (with the tag part of the skid register);
-* the **back end** (:class:`hw.back_end.BackEnd`): codebook ROM, colour matrix (stages 8-14) and the
+* the **front end** (:class:`hw.front_end.FrontEnd`): the request register, descriptor table,
+  block address shifter, index reader (stages 1-8) and all the pipeline control (valid bits,
+  ``advance``, the skid register's valid bit), and the request tags (with the tag part of the skid
+  register);
+* the **back end** (:class:`hw.back_end.BackEnd`): codebook ROM, colour matrix (stages 9-15) and the
   skid register's data.
 
 Everything the back end needs from the front end in a cycle is one registered value, the ``link``
@@ -34,6 +35,7 @@ __all__ = ["STAGES", "LATENCY", "UPSTREAM_STAGES", "REGISTERS", "FRONT_STAGES", 
 #: Pipeline registers in order, one per cycle of latency; bit ``k`` of ``TexelFetch.valid`` is the
 #: valid bit of ``STAGES[k]``.
 STAGES = (
+    "request",                                                          # the request registered
     "descriptor",                                                       # descriptor table
     "address",                                                          # block address shifter
     "index_bit", "index_word", "index_data", "index_pair", "index",     # index reader
@@ -42,12 +44,13 @@ STAGES = (
 )
 #: Cycles from accepting a request to presenting its response (one per stage).
 LATENCY = len(STAGES)
-assert LATENCY == (1 + 1 + index_reader.LATENCY + codebook_rom.LATENCY + color_matrix.LATENCY)
+assert LATENCY == (2 + 1 + index_reader.LATENCY + codebook_rom.LATENCY + color_matrix.LATENCY)
 #: The stages of the front end (the rest are the back end's).
-FRONT_STAGES = 2 + index_reader.LATENCY
-#: The first stages (descriptor, address, index_bit), which move on ``upstream``: with ``one_port``
-#: they and the input wait while the index reader's bit-address stage holds a straddling index.
-UPSTREAM_STAGES = 3
+FRONT_STAGES = 3 + index_reader.LATENCY
+#: The first stages (request, descriptor, address, index_bit), which move on ``upstream``: with
+#: ``one_port`` they and the input wait while the index reader's bit-address stage holds a
+#: straddling index.
+UPSTREAM_STAGES = STAGES.index("index_bit") + 1
 #: Registers with a valid bit (bit ``k`` of the ``valid`` output is ``REGISTERS[k]``, and each has
 #: an occupancy entry in the simulation reports): the stages, then the skid register in front of
 #: the output.
@@ -176,9 +179,10 @@ class LinkLayout(data.StructLayout):
 
 
 #: The copies of ``advance`` the loadable unit keeps (:func:`advance_copies`): the front end's
-#: address stage (and the index reader's first, which moves with it), its index reader, its
-#: side-field carries; the back end's codebook ROM, colour matrix and skid register. Stage 1 (the
-#: descriptor) moves on ``advance`` itself: it takes the input. Never more than ``len(_COPY_KINDS)``.
+#: descriptor and address stages (and the index reader's first, which moves with them), its index
+#: reader, its side-field carries; the back end's codebook ROM, colour matrix and skid register.
+#: Stage 1 (the request) moves on ``advance`` itself: it takes the input. Never more than
+#: ``len(_COPY_KINDS)``.
 ADVANCE_COPIES = ("address", "index_reader", "side", "codebook_rom", "color_matrix", "skid")
 
 # (reset value, reset-less, inverted) of each copy: no two alike, and none like ``advance`` itself

@@ -2,16 +2,19 @@
 
 A request (texture, level, i, j, tag) reads as a story through the blocks::
 
-    descriptor table -> block address shifter -> index reader -> codebook ROM -> colour matrix
-      (1 cycle)          (1 cycle)                (5 cycles)      (4 cycles)      (3 cycles)
+    request register -> descriptor table -> block address shifter -> index reader -> codebook ROM -> colour matrix
+       (1 cycle)          (1 cycle)          (1 cycle)                (5 cycles)      (4 cycles)      (3 cycles)
 
-and leaves as an RGBA8888 response with its tag, in request order, ``LATENCY`` = 14 cycles later.
+and leaves as an RGBA8888 response with its tag, in request order, ``LATENCY`` = 15 cycles later.
+The request is registered before the table is read (the table's address inputs, and in the
+loadable unit the multiplexer between its LUT RAMs, start from flip-flops of the unit's own:
+docs/area.md, "The descriptor stage").
 Raw levels take the same path (the shifter computes the raw address, the codebook ROM stage reads
 the raw memory, the colour matrix passes the word through), so the latency does not depend on the
 request.
 
 The unit is two halves wired back to back (:mod:`hw.pipeline`): the front end
-(:class:`hw.front_end.FrontEnd`: descriptor, address, index reader and the pipeline control) and the
+(:class:`hw.front_end.FrontEnd`: request, descriptor, address, index reader and the pipeline control) and the
 back end (:class:`hw.back_end.BackEnd`: codebook ROM, colour matrix, the skid register's data),
 joined by one registered ``link``. Pipeline control is in one place (:class:`hw.front_end.FrontEnd`). Every register advances on
 ``advance``, a flip-flop: ``advance`` is high in a cycle when the output was not stalled in the
@@ -45,8 +48,8 @@ __all__ = ["TexelFetch", "RequestLayout", "ResponseLayout", "LATENCY", "STAGES",
 class TexelFetch(wiring.Component):
     """The texel-fetch unit holding the memories of one texture set.
 
-    Latency: ``LATENCY`` = 14 cycles, a constant. A request accepted in cycle ``t`` (``i.valid`` and
-    ``i.ready`` high) is presented on ``o`` (``o.valid`` high) in cycle ``t + 14`` when no
+    Latency: ``LATENCY`` = 15 cycles, a constant. A request accepted in cycle ``t`` (``i.valid`` and
+    ``i.ready`` high) is presented on ``o`` (``o.valid`` high) in cycle ``t + 15`` when no
     backpressure or one-port stall intervened.
 
     Throughput: one request per cycle whenever the output is not stalled, whatever the index width
@@ -132,8 +135,8 @@ class TexelFetch(wiring.Component):
     stall_output : Out(1)
         ``o.valid & ~o.ready``: a cycle of output backpressure.
     valid : Out(len(REGISTERS))
-        Valid bits of the registers, bit ``k`` for ``REGISTERS[k]`` (the 14 stages, then the skid
-        register; ``o.valid`` is ``valid[13] | valid[14]``), for occupancy reports. One vector, so
+        Valid bits of the registers, bit ``k`` for ``REGISTERS[k]`` (the 15 stages, then the skid
+        register; ``o.valid`` is ``valid[14] | valid[15]``), for occupancy reports. One vector, so
         that a simulator samples every stage with one read.
 
     bus : In(hw.bus_port.wishbone_signature(...))
@@ -210,7 +213,7 @@ class TexelFetch(wiring.Component):
 
     @property
     def latency(self) -> int:
-        """Cycles from accepting a request to presenting its response: ``LATENCY`` (14)."""
+        """Cycles from accepting a request to presenting its response: ``LATENCY`` (15)."""
         return LATENCY
 
     @property

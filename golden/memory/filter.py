@@ -33,7 +33,9 @@ its slots (``k + lanes g`` of every pixel's group ``g``) through its own index a
   transfers ``BLEND_LATENCY`` cycles after its last group's: ``cycles = T[last] + BLEND_LATENCY + 1``.
 
 With every reference a hit: ``cycles = groups + FOOTPRINT_LATENCY + ADDRESS_STAGES + LOOKUP_STAGES
-+ 2 + LATENCY + BLEND_LATENCY`` = ``groups + 29`` (the on-chip filter: ``groups + 23``). With one lane the rules are
++ 2 + LATENCY + BLEND_LATENCY`` = ``groups + 30`` with the texel pipeline's ``LATENCY`` of 15 (the
+on-chip filter: ``groups + 24``). ``LATENCY`` is an argument (``latency``: the caller passes
+``hw.texel_fetch.LATENCY``; golden does not import hw), as in :mod:`golden.memory.timing`. With one lane the rules are
 :func:`golden.memory.timing.run`'s exactly (the tests hold them equal).
 
 Output backpressure (``run(..., ready_pattern=)``): ``o.ready`` low holds the blend (its output
@@ -56,14 +58,12 @@ from .arbiter import Arbiter
 from .system import Layout, MemoryConfig
 from .timing import ADDRESS_STAGES, FILL_READ, LOOKUP_STAGES, VICTIM_READ, TexelPipeline, accept_and_lookup, attempt, fifo_slack, first_check, plan
 
-__all__ = ["FOOTPRINT_LATENCY", "BLEND_LATENCY", "FETCH_LATENCY", "lane_requests", "run", "run_pixels"]
+__all__ = ["FOOTPRINT_LATENCY", "BLEND_LATENCY", "lane_requests", "run", "run_pixels"]
 
 #: The footprint's stages (``hw.filter.footprint.LATENCY``).
 FOOTPRINT_LATENCY = 5
 #: The blend's stages (``hw.filter.blend.LATENCY``).
 BLEND_LATENCY = 4
-#: The texel pipeline's latency (``hw.texel_fetch.LATENCY``).
-FETCH_LATENCY = 14
 
 
 def lane_requests(ts: TextureSet, pixels: dict, lanes: int, frac: int):
@@ -154,10 +154,11 @@ class BlendStages:
             self._step(None)
 
 
-def run(plans: list, config: MemoryConfig, last: np.ndarray, *, start: int = FOOTPRINT_LATENCY,
-        latency: int = FETCH_LATENCY, blend: int = BLEND_LATENCY, ready_pattern=None) -> dict:
+def run(plans: list, config: MemoryConfig, last: np.ndarray, *, latency: int, start: int = FOOTPRINT_LATENCY,
+        blend: int = BLEND_LATENCY, ready_pattern=None) -> dict:
     """Walk the rules of the module docstring over the lanes' :class:`golden.memory.timing.Plan`
     (one per lane, over the same G groups). ``last`` (G,) marks each pixel's last group.
+    ``latency``: the texel pipeline's (``hw.texel_fetch.LATENCY``).
     ``ready_pattern(length)`` (bool array of ``o.ready`` for cycles ``0 .. length-1``, every length a
     prefix of one sequence; :func:`sim.streams.ready_pattern`): output backpressure. The texel
     pipelines then take group n as :class:`golden.memory.timing.TexelPipeline` says, their outputs
@@ -285,16 +286,17 @@ def run(plans: list, config: MemoryConfig, last: np.ndarray, *, start: int = FOO
 
 
 def run_pixels(ts: TextureSet, pixels: dict, config: MemoryConfig, lanes: int, frac: int,
-               ideal: bool = False, layout: Layout | None = None, ready_pattern=None) -> dict:
+               ideal: bool = False, layout: Layout | None = None, ready_pattern=None, *, latency: int) -> dict:
     """:func:`lane_requests`, a :func:`golden.memory.timing.plan` per lane (``layout``: where the set
     lies in external memory, default ``Layout.of(ts)``; the loadable filter's base registers), then
-    :func:`run` (``ready_pattern``: output backpressure, as there); adds
+    :func:`run` (``ready_pattern``: output backpressure, as there; ``latency``: the texel pipeline's,
+    ``hw.texel_fetch.LATENCY``); adds
     ``pixels``, ``groups``, ``pixels_per_clock``, ``on_chip_cycles`` (the on-chip filter's ``groups +
-    23``), ``references``/``hit_rate`` per cache (over all lanes), ``bytes_per_pixel`` and
+    FOOTPRINT_LATENCY + latency + BLEND_LATENCY``, ``groups + 24``), ``references``/``hit_rate`` per cache (over all lanes), ``bytes_per_pixel`` and
     ``bytes_per_texel`` (per texel slot fetched). ``ideal``: every reference hits."""
     req, last = lane_requests(ts, pixels, lanes, frac)
     plans = [plan(ts, req[k], config, ideal=ideal, layout=layout) for k in range(lanes)]
-    out = run(plans, config, last, ready_pattern=ready_pattern)
+    out = run(plans, config, last, latency=latency, ready_pattern=ready_pattern)
     m, groups = int(last.sum()), len(last)
     refs = [sum(p.references[c] for p in plans) for c in (0, 1)]
     hits = [sum(p.hits[c] for p in plans) for c in (0, 1)]
@@ -302,7 +304,7 @@ def run_pixels(ts: TextureSet, pixels: dict, config: MemoryConfig, lanes: int, f
     out.update({
         "pixels": m, "groups": groups, "lanes": lanes,
         "pixels_per_clock": m / out["cycles"] if out["cycles"] else 0.0,
-        "on_chip_cycles": groups + FOOTPRINT_LATENCY + FETCH_LATENCY + BLEND_LATENCY if groups else 0,
+        "on_chip_cycles": groups + FOOTPRINT_LATENCY + int(latency) + BLEND_LATENCY if groups else 0,
         "references": {"index": refs[0], "raw": refs[1]},
         "hit_rate": {name: (hits[c] / refs[c] if refs[c] else None) for c, name in enumerate(("index", "raw"))},
         "bytes_per_pixel": total / m if m else 0.0,

@@ -1,7 +1,7 @@
 """TextureFilter: the texture sampler in the RTL. A filter request (texture, s, t, level of detail,
 mode, addressing, tag) goes in; the filtered RGBA8888 colour comes out with its tag, in order::
 
-    footprint (5 cycles) -> sequencer -> texel-fetch lanes (14 cycles) -> blend (4 cycles)
+    footprint (5 cycles) -> sequencer -> texel-fetch lanes (15 cycles) -> blend (4 cycles)
 
 * :class:`hw.filter.footprint.Footprint` computes the pixel's texel slots and weights (the twin of
   :func:`golden.filter.footprint`);
@@ -22,7 +22,7 @@ Throughput: one group per cycle, so with ``lanes`` = 1 a point pixel per clock, 
 4 and a trilinear pixel every 8; with 4 lanes a bilinear pixel per clock and a trilinear pixel every 2;
 with 8 lanes (the second set) a trilinear pixel per clock. Latency (``LATENCY``): a pixel accepted in
 cycle ``t`` whose slots go out in ``g`` groups without stalls is on ``o`` in cycle
-``t + LATENCY + g - 1`` with ``LATENCY = 5 + 14 + 4 = 23``.
+``t + LATENCY + g - 1`` with ``LATENCY = 5 + 15 + 4 = 24``.
 
 Loadable (``loadable=True``, from a ``geometry``): every lane is the loadable texel-fetch unit
 with its own copy of the memories (``index_banks="lane"``), the footprint's level table is loaded

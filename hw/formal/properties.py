@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import fnmatch
 
-from ..texel_fetch import TexelFetch
+from ..filter.texture_filter import LATENCY as FILTER_LATENCY
+from ..texel_fetch import LATENCY, UPSTREAM_STAGES, TexelFetch
 from . import address, features, index_reader, memory, texture_filter
 from . import texel_fetch as fetch
 from .harness import Property
@@ -22,27 +23,33 @@ _STREAM = "the {}'s output keeps valid and payload until ready, under any reques
 _ORDER = ("the {} never loses, duplicates or reorders a response, and each leaves after exactly LATENCY "
           "cycles of free output")
 _INDEX = "the index reader{} equals golden's read_index for every k, b and base of an index in the memory"
+#: The depths that follow the pipeline's latency: a seeded bug in the texel pipeline shows at its
+#: output within LATENCY + 3 cycles of reset; the miters' induction depth and their bug's; the
+#: filter's bug (its LATENCY + 2).
+_FETCH_BUG = LATENCY + 3
+_MITER_K, _MITER_BUG = LATENCY + 3, LATENCY + 1
+_FILTER_BUG = FILTER_LATENCY + 2
 
 PROPERTIES = (
     Property("texel_fetch.stream.specialised", "texel_fetch", _STREAM.format("specialised unit"),
-             lambda bug: fetch.StreamHarness(_unit(), bug), "induction", 3, fetch.SKID_NEVER_SHOWS, 17, quick=True),
+             lambda bug: fetch.StreamHarness(_unit(), bug), "induction", 3, fetch.SKID_NEVER_SHOWS, _FETCH_BUG, quick=True),
     Property("texel_fetch.stream.full", "texel_fetch", _STREAM.format("full unit"),
-             lambda bug: fetch.StreamHarness(_unit(specialise=False), bug), "induction", 3, fetch.SKID_NEVER_SHOWS, 17),
+             lambda bug: fetch.StreamHarness(_unit(specialise=False), bug), "induction", 3, fetch.SKID_NEVER_SHOWS, _FETCH_BUG),
     Property("texel_fetch.stream.one_port", "texel_fetch", _STREAM.format("one-port unit"),
-             lambda bug: fetch.StreamHarness(_unit(one_port=True), bug), "induction", 3, fetch.SKID_NEVER_SHOWS, 17),
+             lambda bug: fetch.StreamHarness(_unit(one_port=True), bug), "induction", 3, fetch.SKID_NEVER_SHOWS, _FETCH_BUG),
     Property("texel_fetch.stream.loadable", "texel_fetch",
              _STREAM.format("loadable unit") + ", and any traffic on its bus port",
-             lambda bug: fetch.StreamHarness(_unit(loadable=True), bug), "induction", 3, fetch.SKID_NEVER_SHOWS, 17),
+             lambda bug: fetch.StreamHarness(_unit(loadable=True), bug), "induction", 3, fetch.SKID_NEVER_SHOWS, _FETCH_BUG),
     Property("texel_fetch.order.specialised", "texel_fetch", _ORDER.format("specialised unit"),
-             lambda bug: fetch.OrderHarness(_unit(), bug), "induction", 3, fetch.SKID_SHOWS_TWICE, 17, quick=True),
+             lambda bug: fetch.OrderHarness(_unit(), bug), "induction", 3, fetch.SKID_SHOWS_TWICE, _FETCH_BUG, quick=True),
     Property("texel_fetch.order.full", "texel_fetch", _ORDER.format("full unit"),
-             lambda bug: fetch.OrderHarness(_unit(specialise=False), bug), "induction", 3, fetch.SKID_NEVER_SHOWS, 17),
+             lambda bug: fetch.OrderHarness(_unit(specialise=False), bug), "induction", 3, fetch.SKID_NEVER_SHOWS, _FETCH_BUG),
     Property("texel_fetch.order.one_port", "texel_fetch",
              "the one-port unit never loses, duplicates or reorders a response, and each leaves after exactly "
-             "LATENCY cycles of free output plus one per one-port bubble it waited behind (at most 3)",
-             lambda bug: fetch.OrderHarness(_unit(one_port=True), bug), "induction", 3, fetch.HOLD_IGNORED, 17),
+             f"LATENCY cycles of free output plus one per one-port bubble it waited behind (at most {UPSTREAM_STAGES})",
+             lambda bug: fetch.OrderHarness(_unit(one_port=True), bug), "induction", 3, fetch.HOLD_IGNORED, _FETCH_BUG),
     Property("texel_fetch.order.loadable", "texel_fetch", _ORDER.format("loadable unit") + ", whatever its bus port does",
-             lambda bug: fetch.OrderHarness(_unit(loadable=True), bug), "induction", 3, fetch.SKID_NEVER_SHOWS, 17,
+             lambda bug: fetch.OrderHarness(_unit(loadable=True), bug), "induction", 3, fetch.SKID_NEVER_SHOWS, _FETCH_BUG,
              quick_control=False),
     Property("address.formula", "address",
              "the block address shifter equals golden's block_address (k, x, y, raw address) for every valid request",
@@ -64,32 +71,32 @@ PROPERTIES = (
     Property("features.miter.yuv", "features",
              "the specialised unit answers every valid request as the full unit does (a yuv411 set with straddling "
              "12-bit indices, mipmaps and raw levels; output always ready)",
-             lambda bug: features.MiterHarness(yuv_set, False, bug), "induction", 17, features.MATRIX_SHIFT_SHORT,
-             15),
+             lambda bug: features.MiterHarness(yuv_set, False, bug), "induction", _MITER_K, features.MATRIX_SHIFT_SHORT,
+             _MITER_BUG),
     Property("features.miter.rgb", "features",
              "the same for a set of two rgb textures with 8-bit indices (constant descriptor fields, no colour "
              "matrix, one index bank; output always ready)",
-             lambda bug: features.MiterHarness(rgb_set, False, bug), "induction", 17, features.TEXEL_STRIDE_SHORT,
-             15, quick_control=False),
+             lambda bug: features.MiterHarness(rgb_set, False, bug), "induction", _MITER_K, features.TEXEL_STRIDE_SHORT,
+             _MITER_BUG, quick_control=False),
     Property("features.miter.pvr2", "features",
              "the same for a PowerVR2 set (argb1555 8x8 and yuv422 16x8: twiddled maps, texel expansion, the "
              "Dreamcast matrix) against the PowerVR2 unit (output always ready)",
-             lambda bug: features.MiterHarness(pvr2_set, False, bug), "induction", 17, features.TWIDDLE_SQUARE_LARGER,
-             15, quick_control=False),
+             lambda bug: features.MiterHarness(pvr2_set, False, bug), "induction", _MITER_K, features.TWIDDLE_SQUARE_LARGER,
+             _MITER_BUG, quick_control=False),
     Property("features.miter.yuv_backpressure", "features",
              "the specialised unit answers every valid request as the full unit does, under any backpressure",
-             lambda bug: features.MiterHarness(yuv_set, True, bug), "bmc", 20, features.MATRIX_SHIFT_SHORT, 15,
+             lambda bug: features.MiterHarness(yuv_set, True, bug), "bmc", LATENCY + 6, features.MATRIX_SHIFT_SHORT, _MITER_BUG,
              quick_control=False),
     Property("texture_filter.stream.lanes1", "texture_filter",
              "every stream of the one-lane texture filter (output, footprint, lane requests and responses) keeps "
              "valid and payload until ready, under any requests and backpressure",
              lambda bug: texture_filter.FilterStreamHarness(yuv_set, 1, bug), "induction", 3,
-             texture_filter.BLEND_IGNORES_READY, 25),
+             texture_filter.BLEND_IGNORES_READY, _FILTER_BUG),
     Property("texture_filter.stream.lanes2", "texture_filter",
              "every stream of the two-lane texture filter (the lanes sharing the index memory's parity banks) "
              "keeps valid and payload until ready, under any requests and backpressure",
              lambda bug: texture_filter.FilterStreamHarness(yuv_set, 2, bug), "induction", 3,
-             texture_filter.BLEND_IGNORES_READY, 25, quick_control=False),
+             texture_filter.BLEND_IGNORES_READY, _FILTER_BUG, quick_control=False),
     Property("memory.reader.prefetch", "memory",
              "every word the cached reader (2-entry FIFO) hands on is the memory's word at its request's address, "
              "and no line is read twice while its burst is in flight, under any requests, backpressure and memory "

@@ -34,7 +34,7 @@ bases' layout); a load of N writes takes ``golden.register_map.load_cycles(N)``.
 
 Timing: :func:`golden.memory.filter.run` (with output backpressure too), cycle for cycle; with every reference a
 hit, one group of ``lanes`` texel slots per clock (a bilinear pixel per clock with 4 lanes) and
-``LATENCY`` = 27 cycles from a one-group pixel's acceptance to its colour (the on-chip filter's 23,
+``LATENCY`` = 29 cycles from a one-group pixel's acceptance to its colour (the on-chip filter's 24,
 plus the address stages, the tag check and the data read). A miss in any lane holds the group
 (the pixel) until its line is filled; the hits behind it keep being checked, up to each reader's
 FIFO depth (``config.prefetch``; 1 is blocking). Colours leave in order, with stream backpressure
@@ -171,6 +171,11 @@ class CachedTextureFilter(wiring.Component):
     @property
     def loadable(self) -> bool:
         return self._loadable
+
+    @property
+    def features(self) -> Features:
+        """What every lane's texel pipeline is built for (``hw.features``)."""
+        return self._features
 
     @property
     def geometry(self) -> Geometry:

@@ -12,7 +12,7 @@ The address stages (the unit's own :class:`hw.descriptor.DescriptorTable` and
 base + (k * b >> log2 W)`` and whether the index straddles, or the raw word); the
 :class:`hw.memory.reader.CachedReader` reads them through the caches; the texel pipeline
 (:class:`hw.texel_fetch.TexelFetch`, with its index reader and raw memory outside) takes the request
-when it advances and, seven advancing cycles later, gets the index (extracted here from the carried
+when it advances and, ``FRONT_STAGES`` (8) advancing cycles later, gets the index (extracted here from the carried
 words) and the raw word on ``index_response`` and ``raw_in``. The codebook, the descriptor tables
 and the colour matrix stay on chip (baked from ``texture_set``, or loaded: below).
 
@@ -75,7 +75,7 @@ from ..bus_port import ANSWER_LATENCY, BusPort, delayed, or_all, wishbone_signat
 from ..descriptor import DescriptorTable
 from ..features import Features
 from ..pipeline import RequestLayout, ResponseLayout
-from ..texel_fetch import LATENCY, TexelFetch
+from ..texel_fetch import FRONT_STAGES, LATENCY, TexelFetch
 from .axi import axi4_read_signature
 from .reader import CachedReader
 
@@ -214,7 +214,8 @@ def cached_lane(m, prefix: str, ts, feat, config, layout, tf, request, en, joint
     block address, loaded on ``en = (en1, en2)``, the enables of the two stream registers, which the
     caller drives and whose valid bits it keeps), a :class:`hw.memory.reader.CachedReader` (returned;
     the caller drives ``i.valid``, ``o.ready`` and connects ``axi``), and the texel pipeline ``tf``'s
-    payload, ``index_response`` and ``raw_in`` (the words riding beside its first seven stages). The
+    payload, ``index_response`` and ``raw_in`` (the words riding beside its first ``FRONT_STAGES``
+    stages). The
     caller drives ``tf.i.valid``. ``request``: the payload entering the first address stage (a
     ``hw.pipeline.RequestLayout`` view). Submodules are named with ``prefix``. ``joint``: the
     reader's tag check waits for ``check_go`` (every lane's check together, driven by the caller).
@@ -284,19 +285,19 @@ def cached_lane(m, prefix: str, ts, feat, config, layout, tf, request, en, joint
     out = Signal(ride, name=prefix + "out")
     m.d.comb += out.eq(reader.o.p.tag)
     m.d.comb += tf.i.p.as_value().eq(out.request)
-    # The words ride beside the texel pipeline's first seven stages (its advance: no output stall
+    # The words ride beside the texel pipeline's first FRONT_STAGES stages (its advance: no output stall
     # in the previous cycle), to arrive with the request at the index stage.
     advance = Signal(init=1, name=prefix + "advance")
     m.d.sync += advance.eq(~tf.stall_output)
     wide = len(reader.o.p.word0)
     carry = data.StructLayout({"pair": wide + W, "off": len(out.off), "b": 5, "raw": 32})
-    shadow = [Signal(carry, name=f"{prefix}words_{n + 1}") for n in range(7)]
+    shadow = [Signal(carry, name=f"{prefix}words_{n + 1}") for n in range(FRONT_STAGES)]
     first = Signal(carry, name=prefix + "words_0")
     m.d.comb += [first.pair.eq(Cat(reader.o.p.word0[:W], reader.o.p.word1)), first.off.eq(out.off),
                  first.b.eq(out.b), first.raw.eq(reader.o.p.word0[:32])]
     with m.If(advance):
         m.d.sync += shadow[0].eq(first)
-        m.d.sync += [shadow[n].eq(shadow[n - 1]) for n in range(1, 7)]
+        m.d.sync += [shadow[n].eq(shadow[n - 1]) for n in range(1, FRONT_STAGES)]
     last = shadow[-1]
     if "index_response" in tf.signature.members:
         ib = len(tf.index_response)

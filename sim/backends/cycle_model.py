@@ -5,20 +5,20 @@ occupancy exactly (tests compare it with pysim), without simulating the datapath
 
 How the RTL moves (see ``docs/hardware.md``)
 ---------------------------------------------
-``LATENCY`` = 14 registers ``R1..R14`` (``hw.texel_fetch.STAGES``), then a skid register in front of
-the output: ``o.valid = skid_valid | R14.valid``, and ``o`` shows the skid register when it is full.
+``LATENCY`` = 15 registers ``R1..R15`` (``hw.texel_fetch.STAGES``), then a skid register in front of
+the output: ``o.valid = skid_valid | R15.valid``, and ``o`` shows the skid register when it is full.
 Every register moves on ``advance``, a flip-flop holding ``~(o.valid & ~o.ready)`` of the previous
-cycle; in an advancing cycle the skid register takes the response leaving ``R14`` (it counts as
+cycle; in an advancing cycle the skid register takes the response leaving ``R15`` (it counts as
 full if that response was valid and not taken), so ``skid_valid = ~advance``. With ``one_port`` the
-first ``UPSTREAM_STAGES`` = 3 registers (``R3`` holds the bit address the index reader is reading)
-and the input *hold* for one advancing cycle when ``R3``'s item straddles a word boundary on the
-first of its two reads: ``R4`` receives a bubble. Requests are presented back to back from cycle 0.
+first ``UPSTREAM_STAGES`` = 4 registers (``R4`` holds the bit address the index reader is reading)
+and the input *hold* for one advancing cycle when ``R4``'s item straddles a word boundary on the
+first of its two reads: ``R5`` receives a bubble. Requests are presented back to back from cycle 0.
 
-So the items entering ``R4``, one per advance, are: 3 bubbles (the pipeline filling), then for each
+So the items entering ``R5``, one per advance, are: 4 bubbles (the pipeline filling), then for each
 request a bubble if it is a one-port straddler, then the request. The output shows that sequence in
 order, and a bubble there costs exactly one cycle: after a response transfers in cycle ``T``, the
-next item is at the output in cycle ``T + 1`` (in ``R14``, which either moved on in cycle ``T`` or
-was frozen behind the skid register), and a bubble in ``R14`` is never stalled (the skid register
+next item is at the output in cycle ``T + 1`` (in ``R15``, which either moved on in cycle ``T`` or
+was frozen behind the skid register), and a bubble in ``R15`` is never stalled (the skid register
 is empty then, ``advance`` is high). A response waits for a cycle with ``o.ready`` high. Hence the
 transfer cycle of request n::
 
@@ -150,7 +150,8 @@ def run_flags(strad: np.ndarray, *, stall: float = 0.0, seed: int = 0, one_port:
 
 
 def _occupancy(n, bubbles, ov, ready, cycles, latency):
-    """Per-register valid fractions, from the sequence of items entering R4 (see the module doc)."""
+    """Per-register valid fractions, from the sequence of items entering R(UPSTREAM_STAGES + 1) (see the
+    module doc)."""
     h = UPSTREAM_STAGES
     stall = ov & ~ready
     adv = np.concatenate([[True], ~stall[:-1]])          # the registered advance

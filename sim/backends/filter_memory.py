@@ -65,9 +65,11 @@ def simulate_cached_filter(ts, pixels: dict, config, *, backend: str = "golden",
         load = load_cycles(len(load_writes(ts, geometry, layout or Layout.of(ts))))
     if backend == "golden":
         from vqtex.golden.memory.filter import run_pixels
+        from vqtex.hw.texel_fetch import LATENCY as FETCH_LATENCY
         from ..streams import ready_pattern
         pattern = (lambda m: ready_pattern(seed, stall, m)) if stall else None
-        model = run_pixels(ts, p, config, lanes, frac, layout=layout, ready_pattern=pattern)
+        model = run_pixels(ts, p, config, lanes, frac, layout=layout, ready_pattern=pattern,
+                           latency=FETCH_LATENCY)
         sc = model["stall_cycles"]
         memory = {k: model[k] for k in ("bursts", "memory_bytes", "bytes_per_pixel", "bytes_per_texel",
                                         "references", "hit_rate", "on_chip_cycles", "ar")}
@@ -204,9 +206,10 @@ def compiled_build(ts, config, *, lanes: int = 4, frac: int | None = None, backe
         from .toolchain import find_cxx
         flags = list(CXXFLAGS)
         if "clang" in os.path.basename(find_cxx()):
-            # the arbiter's queues (lanes * (2 Q + 2) entries, 256 at 4 lanes and Q = 16) are read
-            # through multiplexers CXXRTL writes as nested expressions, deeper than clang's default
-            # of 256 brackets (a compile error)
+            # the arbiter's queues in flip-flops (lanes * (2 Q + 2) entries, 256 at 4 lanes and Q = 16)
+            # were read through multiplexers CXXRTL wrote as nested expressions, deeper than clang's
+            # default of 256 brackets (a compile error); they are LUT RAM now, the flag is kept (not
+            # re-measured without it)
             flags.append("-fbracket-depth=4096")
         return build_design(info, cxxflags=flags)
     from . import verilator

@@ -3,6 +3,12 @@
 ``vqtex export FILE.vqt --memory external [--cache-size B --raw-cache-size B --cache-line B --cache-ways N
 --prefetch Q --bus-bytes B] -o OUT.sv``.
 
+``vqtex export [FILE.vqt] --filter-lanes N --memory external [--unit loadable --geometry NAME] -o OUT.sv``
+exports the texture filter through the memory system (:class:`hw.memory.filter.CachedTextureFilter`,
+docs/memory.md): N lanes, each behind its own caches of the options' shape, one AXI4 read master
+(``axi_*``); with ``--unit loadable`` the loadable filter (no texture data, the Wishbone port
+``bus_*``, the loadable cached unit's register map and C header beside it).
+
 ``--memory external`` exports the cached unit (:class:`hw.memory.unit.CachedTexelFetch`, docs/memory.md):
 the index map and raw levels in a memory outside it, read by its AXI4 read master (ports ``axi_*``)
 through the caches the options shape (the same options as ``vqtex sim``; the memory's own timing
@@ -95,9 +101,12 @@ def cmd_export(args) -> int:
     if args.filter_lanes is None and args.index_banks is not None:
         raise ExportError("--index-banks is how the texture filter's lanes hold the index memory: it needs "
                           "--filter-lanes")
-    if args.filter_lanes is not None and args.unit is not None:
+    if args.filter_lanes is not None and args.unit not in (None, "loadable" if args.memory == "external" else None):
         raise ExportError("--filter-lanes builds specialised texel-fetch lanes; --unit applies to the texel-fetch "
-                          "unit alone")
+                          "unit alone (and --unit loadable to the filter through memory, --memory external)")
+    if args.filter_lanes is not None and args.memory == "external" and args.index_banks is not None:
+        raise ExportError("--index-banks: the filter through memory reads through a cache per lane (no index memory "
+                          "to bank)")
     args.unit = args.unit or "specialised"
     args.index_banks = args.index_banks or "parity"
     if args.filter_lanes is not None and (args.one_port or args.dialect != "sv"):
@@ -144,7 +153,7 @@ def cmd_export(args) -> int:
               "one_port": bool(args.one_port), "unit": args.unit, "dialect": args.dialect, "tag_width": args.tag_width,
               "latency": latency, "ports": ports, "lint": "clean" if args.lint else "not run",
               "top": "texel fetch" if args.filter_lanes is None else f"texture filter, {args.filter_lanes} lane(s)"}
-    if args.filter_lanes is not None:
+    if args.filter_lanes is not None and memory is None:
         report["index_banks"] = args.index_banks
     if memory is not None:
         from vqtex.sim.testbench.write import memory_dict
@@ -182,9 +191,10 @@ def _memory(args):
     memory = memory_config(args)                    # a CliError (one line, exit 2) if refused
     if memory is None:
         return None
-    if args.filter_lanes is not None or args.one_port or args.unit == "full" or args.dialect != "sv":
-        raise ExportError("--memory external exports the cached unit: specialised or loadable, two index banks, "
-                          "SystemVerilog (no --filter-lanes, --one-port, --unit full or --dialect v2005)")
+    if args.one_port or args.unit == "full" or args.dialect != "sv":
+        raise ExportError("--memory external exports the cached unit or, with --filter-lanes, the filter through "
+                          "memory: specialised or loadable, two index banks, SystemVerilog (no --one-port, --unit "
+                          "full or --dialect v2005)")
     return memory
 
 
@@ -202,10 +212,16 @@ def _export(args, out, memory=None):
         except FormatError as e:
             raise ExportError(f"{args.file}: {e}") from None
     geometry = unit_geometry(args, ts, args.file)
-    if geometry is not None and args.filter_lanes is not None:
-        raise ExportError("--filter-lanes exports the baked texture filter; --unit loadable is the texel-fetch unit")
+    if geometry is not None and args.filter_lanes is not None and memory is None:
+        raise ExportError("--filter-lanes exports the baked texture filter on chip; --unit loadable is the texel-fetch "
+                          "unit, or with --memory external the filter through memory")
     ports = {}
-    if memory is not None:
+    if memory is not None and args.filter_lanes is not None:
+        from vqtex.hw.memory.filter import LATENCY as latency
+        from vqtex.sim.backends.verilog import export_cached_filter_verilog
+        text = export_cached_filter_verilog(ts, memory, lanes=args.filter_lanes, tag_width=args.tag_width,
+                                            name=args.name, geometry=geometry, ports=ports)
+    elif memory is not None:
         from vqtex.sim.backends.verilog import export_cached_verilog
         text, top = export_cached_verilog(ts, memory, tag_width=args.tag_width, name=args.name, ports=ports,
                                           geometry=geometry)
@@ -246,7 +262,9 @@ def add_parser(sub) -> None:
                    help=with_default("top module name", "texel_fetch, or texture_filter with --filter-lanes"))
     e.add_argument("--filter-lanes", type=int, choices=[1, 2, 4, 8], default=None,
                    help=with_default("export the texture filter (hw.filter, docs/filter.md) with this many "
-                                     "texel-fetch lanes instead of the texel-fetch unit", "the texel-fetch unit"))
+                                     "texel-fetch lanes instead of the texel-fetch unit; with --memory external "
+                                     "the filter through memory, a cache per lane (docs/memory.md), baked or "
+                                     "--unit loadable", "the texel-fetch unit"))
     add_index_banks(e)
     add_memory_options(e)
     e.add_argument("--dialect", choices=["sv", "v2005"], default="sv",

@@ -531,7 +531,7 @@ def memory_summary(memory, per_frame) -> dict:
 
 def _filter_memory_summary(memory, per_frame) -> dict:
     """The filter's external-memory figures over the frames: bytes per pixel, hit rates (golden),
-    the on-chip filter's pixels per clock on the same pixels (``groups + 23`` cycles a frame)."""
+    the on-chip filter's pixels per clock on the same pixels (``groups + hw.filter.LATENCY`` cycles a frame)."""
     from vqtex.hw.filter import LATENCY
     nbytes = sum(sum(f["memory"]["memory_bytes"].values()) for f in per_frame)
     pixels = sum(f["pixels"] for f in per_frame)

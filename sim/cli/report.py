@@ -62,15 +62,17 @@ def cmd_report_area(args) -> int:
                            "hardware (give the caches, --prefetch and --bus-bytes)")
         bad = [opt for opt, on in (("--one-port", args.one_port),
                                    (f"--unit {args.unit}", args.unit not in (None, "loadable")),
-                                   ("--filter-lanes", args.filter_lanes is not None)) if on]
+                                   ("--index-banks", args.index_banks is not None)) if on]
         if bad:
-            raise CliError("report area: --memory external is the specialised baked unit behind caches (or, with "
-                           f"--unit loadable, the loadable one): not with {bad[0]}")
+            raise CliError("report area: --memory external is the specialised baked unit or, with --filter-lanes, "
+                           "texture filter behind caches (or, with --unit loadable, the loadable one): not with "
+                           f"{bad[0]}")
     lanes = args.filter_lanes is not None
     resolve(args, "index_banks", "parity", lanes, "is how the texture filter's lanes hold the index memory: "
             "it needs --filter-lanes")
-    resolve(args, "unit", "specialised", not lanes, "applies to the texel-fetch unit alone (--filter-lanes builds "
-            "specialised texel-fetch lanes)")
+    resolve(args, "unit", "specialised", not lanes or (memory is not None and args.unit == "loadable"),
+            "applies to the texel-fetch unit alone (--filter-lanes builds specialised texel-fetch lanes; with "
+            "--memory external, --unit loadable the loadable filter through memory)")
     resolve(args, "freq", 150.0, not args.no_pnr, "is the clock nextpnr places for: it does not go with --no-pnr")
     resolve(args, "seed", 1, not args.no_pnr, "seeds nextpnr's placement: it does not go with --no-pnr",
             "--placer-seed")

@@ -17,6 +17,7 @@ INSTALL_HINT = "pip install '.[plot]' (matplotlib)"
 #: What each part of the cycle bar means, in order: (key, label, colour).
 CYCLE_PARTS = (
     ("requests", "one cycle per request (the unit's throughput)", "#3ca03c"),
+    ("groups", "a group of lanes texel slots per clock (the filter)", "#50a050"),
     ("latency", "pipeline fill: the latency of the first response", "#7878dc"),
     ("output_backpressure", "stall: the consumer held ready low (--stall)", "#dc5a3c"),
     ("one_port_straddle", "stall: a straddling index on a one-port index memory", "#e6b428"),
@@ -48,7 +49,12 @@ def cycle_figure(rep: dict):
     per clock against the zero-latency unit's; its memory stall's legend entry splits the wait into
     miss and bandwidth where the report has the split (``stall_detail``)."""
     plt = require()
-    values = {"requests": rep["requests"], "latency": rep["latency"], **rep["stall_cycles"]}
+    if "pixels" in rep:             # the filter through memory: a group of lanes texels a clock, at best
+        held = rep["stall_cycles"]["output_backpressure"]
+        values = {"groups": rep["groups"], "latency": rep["latency"], "output_backpressure": held,
+                  "memory": max(0, rep["cycles"] - rep["groups"] - rep["latency"] - held)}
+    else:
+        values = {"requests": rep["requests"], "latency": rep["latency"], **rep["stall_cycles"]}
     known = {k for k, _, _ in CYCLE_PARTS}
     parts = [(k, label, col) for k, label, col in CYCLE_PARTS if k in values]
     parts += [(k, f"stall: {k.replace('_', ' ')}", "#9650b4") for k in values if k not in known]
@@ -60,7 +66,7 @@ def cycle_figure(rep: dict):
         ax = fig.add_subplot(grid[0, :])
     else:
         fig, ax = plt.subplots(figsize=(9, 3.2), dpi=100)
-    detail = (mem or {}).get("stall_detail")
+    detail = (mem or {}).get("stall_detail") if "pixels" not in rep else None   # (the filter's: lane-cycles)
     left = 0
     for key, label, colour in parts:
         v = values[key]
@@ -74,8 +80,12 @@ def cycle_figure(rep: dict):
     ax.set_xlim(0, total)
     ax.set_yticks([])
     ax.set_xlabel("clock cycles")
-    ax.set_title(f"Where the {rep['cycles']} cycles went: {rep['requests']} requests, {rep['backend']} backend, "
-                 f"{rep['index_reader']} index reader, {rep['texels_per_clock']:.3f} texels/clock", fontsize=9)
+    if "pixels" in rep:
+        ax.set_title(f"Where the {rep['cycles']} cycles went: {rep['pixels']} pixels, {rep['top']}, "
+                     f"{rep['backend']} backend, {rep['pixels_per_clock']:.3f} pixels/clock", fontsize=9)
+    else:
+        ax.set_title(f"Where the {rep['cycles']} cycles went: {rep['requests']} requests, {rep['backend']} backend, "
+                     f"{rep['index_reader']} index reader, {rep['texels_per_clock']:.3f} texels/clock", fontsize=9)
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.35), fontsize=8, frameon=False)
     if mem:
         memory_axes(fig, [fig.add_subplot(grid[1, k]) for k in range(3)], rep)
@@ -88,17 +98,35 @@ def memory_axes(fig, axes, rep: dict) -> None:
     """The memory row of :func:`cycle_figure` on three axes: the index and raw caches' hit rates
     (percent; a cache no request used is drawn empty and labelled "unused"), the bytes read from
     memory per texel split by cache, and the texels per clock of this run beside the zero-latency
-    unit's on the same stream (when the report has it: the golden model's ``zero_latency_cycles``)."""
+    unit's on the same stream (when the report has it: the golden model's ``zero_latency_cycles``).
+    For the texture filter through memory (``rep["pixels"]``, :func:`sim.reports.cycles.
+    filter_cycle_report`): bytes per pixel, and pixels per clock beside the on-chip filter's on the
+    same pixels; the hit rates are golden's (an RTL run's are labelled "not measured")."""
     mem = rep["memory"]
     hit, rates, bytes_ = axes
     names = ("index", "raw")
-    rate = [mem["hit_rate"][n] for n in names]
+    measured = "hit_rate" in mem
+    rate = [mem["hit_rate"][n] if measured else None for n in names]
     hit.bar(names, [100 * r if r is not None else 0 for r in rate], color=("#3c8cc8", "#e6b428"))
     for x, r in enumerate(rate):
-        hit.text(x, 2, f"{100 * r:.1f}%" if r is not None else "unused", ha="center", fontsize=8)
+        hit.text(x, 2, f"{100 * r:.1f}%" if r is not None else "unused" if measured else "not measured",
+                 ha="center", fontsize=8)
     hit.set_ylim(0, 100)
     hit.set_ylabel("hit rate (%)", fontsize=8)
     hit.set_title("cache hit rate", fontsize=9)
+    if "pixels" in rep:
+        per = [mem["memory_bytes"][n] / max(1, rep["pixels"]) for n in names]
+        bytes_.bar(names, per, color=("#3c8cc8", "#e6b428"))
+        bytes_.set_ylabel("bytes per pixel", fontsize=8)
+        bytes_.set_title(f"memory read: {mem['bytes_per_pixel']:.3f} B/pixel", fontsize=9)
+        ppc = [rep["pixels_per_clock"], rep["on_chip_pixels_per_clock"]]
+        rates.bar(["this run", "on-chip filter"], ppc, color=("#3ca03c", "#aaaaaa"))
+        rates.set_ylim(0, 1.05 * max(1.0, *ppc))
+        rates.set_ylabel("pixels per clock", fontsize=8)
+        rates.set_title(f"pixels per clock ({ppc[0] / max(ppc[1], 1e-12):.3f} of on-chip)", fontsize=9)
+        for a in axes:
+            a.tick_params(labelsize=8)
+        return
     requests = max(1, rep["requests"])
     per = [mem["memory_bytes"][n] / requests for n in names]
     bytes_.bar(names, per, color=("#3c8cc8", "#e6b428"))

@@ -329,7 +329,7 @@ class Bench:
 
     def check_latency(self, latency: int) -> dict:
         """A response shows ``latency`` cycles after its request was taken when no output stall or
-        one-port bubble came between (hw.texel_fetch: "presented on o in cycle t + 14"), and never sooner.
+        one-port bubble came between (hw.texel_fetch: "presented on o in cycle t + LATENCY"), and never sooner.
         The external-memory unit: never sooner (``latency`` is its latency when every reference hits;
         a miss waits for the memory, whose timing is the bus model's)."""
         taken, shown = np.array(self.accepted, np.int64), np.array(self.presented, np.int64)

@@ -95,7 +95,7 @@ def test_decode_every_texel_of_a_level():
 def test_latency_of_a_single_request():
     ts = support.texture_set("rgb_4x4_b8_mip")
     dut = TexelFetch(ts)
-    assert dut.latency == LATENCY == len(STAGES) == 14
+    assert dut.latency == LATENCY == len(STAGES) == 15
     req = (0, 1, 5, 7)
     seen = {}
 

@@ -9,7 +9,7 @@ rates and where the stall cycles went.
 The cycles are the golden cycle model's (:func:`golden.memory.filter.run_pixels`: exact, the RTL
 matches it cycle for cycle on pysim and CXXRTL with ``o.ready`` high); no RTL runs here (the
 compiled RTL's caches are flip-flops, so caches of several KB per lane are not a build to make per
-row). The on-chip filter's cycles are ``groups + 23`` (docs/filter.md): with 4 lanes 1.0 bilinear
+row). The on-chip filter's cycles are ``groups + 24`` (docs/filter.md): with 4 lanes 1.0 bilinear
 pixel per clock, 0.5 trilinear. Each lane's index and raw caches have the size in the row (32-byte
 lines, 4 ways; 16-byte bus, a fixed memory of ``--latency`` cycles and 16 bytes per clock, or the
 DDR3 part with ``--dram``). "shared B/px" is what one index and one raw cache of the row's size
@@ -53,6 +53,7 @@ def filter_memory(scene_name="topspin", frames=(0,), modes=("bilinear",), lanes:
                   prefetch=(16,), latency: int = 100, dram: bool = False, line: int = 32, ways: int = 4) -> list:
     from vqtex.golden.memory.cache import CacheShape
     from vqtex.golden.memory.filter import run_pixels
+    from vqtex.hw.texel_fetch import LATENCY as FETCH_LATENCY
     from vqtex.golden.memory.system import MemoryConfig
     from vqtex.golden.render.scene import build_texture_set, load_scene
     scene = load_scene(scene_name)
@@ -67,7 +68,7 @@ def filter_memory(scene_name="topspin", frames=(0,), modes=("bilinear",), lanes:
                     cfg = MemoryConfig(index_cache=shape, raw_cache=shape, prefetch=q, latency=latency,
                                        kind="dram" if dram else "fixed")
                     t0 = time.perf_counter()
-                    r = run_pixels(ts, px, cfg, lanes, frac)
+                    r = run_pixels(ts, px, cfg, lanes, frac, latency=FETCH_LATENCY)
                     seconds = time.perf_counter() - t0
                     on_chip = r["on_chip_cycles"]
                     m = r["pixels"]

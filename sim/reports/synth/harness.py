@@ -60,9 +60,16 @@ def design_memories(ts, *, one_port: bool = False, tag_width: int = 8, specialis
     :class:`hw.banked_rom.BankedROM` are memories of their own. With ``filter_lanes``, those of
     ``TextureFilter(ts, lanes=filter_lanes)`` (``filter.lane0.back.codebook_rom.codebook.bank0``, ...).
     With ``memory``, those of ``CachedTexelFetch(ts, memory)`` (``unit.reader.index_tags0``,
-    ``unit.texel.back.codebook_rom.codebook.bank0``, ...; with ``geometry`` too, the loadable one's)."""
+    ``unit.texel.back.codebook_rom.codebook.bank0``, ...; with ``geometry`` too, the loadable one's); with
+    ``memory`` and ``filter_lanes``, those of ``CachedTextureFilter`` (``unit.lane0_reader.index_tags0``,
+    ``unit.lane0.back.codebook_rom.codebook.bank0``, ``unit.arbiter.ar_queue0``, ...)."""
     from vqtex.hw.memories import elaborate, memories
-    if memory is not None:
+    if memory is not None and filter_lanes is not None:
+        from vqtex.hw.memory.filter import CachedTextureFilter
+        unit = {} if geometry is None else {"geometry": geometry, "loadable": True}
+        top, prefix = CachedTextureFilter(None if geometry is not None else ts, memory, lanes=filter_lanes,
+                                          tag_width=tag_width, **unit), "unit"
+    elif memory is not None:
         from vqtex.hw.memory.unit import CachedTexelFetch
         unit = {} if geometry is None else {"geometry": geometry, "loadable": True}
         top, prefix = CachedTexelFetch(None if geometry is not None else ts, memory, tag_width=tag_width,

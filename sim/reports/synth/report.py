@@ -28,7 +28,10 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
     :class:`golden.memory.system.MemoryConfig`), the cached unit (``hw.memory.unit.CachedTexelFetch``:
     the index map and raw levels in external memory behind its caches, its AXI4 read master as ports;
     with ``geometry`` too, the loadable cached unit of that geometry;
-    only the cache shapes, FIFO depth and bus width shape the hardware).
+    only the cache shapes, FIFO depth and bus width shape the hardware). With ``memory`` and
+    ``filter_lanes``, the texture filter through memory (``hw.memory.filter.CachedTextureFilter``:
+    that many lanes, a cache of ``memory``'s shapes per lane, one AXI4 read master; with
+    ``geometry``, the loadable one).
 
     ``router`` is nextpnr's router (``router1``, its default, or ``router2``: much faster on the
     loadable topspin geometry, :data:`.tools.ROUTERS`). ``route=False``: placement only, Fmax is nextpnr's
@@ -51,7 +54,13 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
     t0 = time.perf_counter()
     progress("elaborating the unit (Amaranth to RTLIL)")
     unit = None
-    if filter_lanes is not None:
+    if filter_lanes is not None and memory is not None:
+        from vqtex.hw.memory.unit import ADDRESS_STAGES
+        from vqtex.sim.backends.design import CachedFilterTop
+        unit = CachedFilterTop(None if geometry is not None else ts, memory, lanes=filter_lanes, tag_width=tag_width,
+                               geometry=geometry)
+        LATENCY = unit.latency
+    elif filter_lanes is not None:
         from vqtex.sim.backends.design import FilterTop
         unit = FilterTop(ts, lanes=filter_lanes, tag_width=tag_width, index_banks=index_banks)
     elif memory is not None:
@@ -66,7 +75,9 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
     shapes = design_memories(ts, one_port=one_port, tag_width=tag_width, specialise=specialise,
                              filter_lanes=filter_lanes, index_banks=index_banks, geometry=geometry,
                              memory=memory)
-    if memory is not None:
+    if memory is not None and filter_lanes is not None:
+        features = harness.unit.unit.features
+    elif memory is not None:
         features = harness.unit.unit.fetch.features
     elif filter_lanes is None:
         features = harness.unit.fetch.features
@@ -81,7 +92,10 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
         top = syn["stat"].get(HARNESS_NAME) or {}
         rep = {
             "design": name or "texture set",
-            "top": (f"texel fetch, external memory (cached{', loadable' if geometry is not None else ''})"
+            "top": (f"texture filter, {filter_lanes} lane(s), external memory (a cache per lane"
+                    f"{', loadable' if geometry is not None else ''})"
+                    if memory is not None and filter_lanes is not None else
+                    f"texel fetch, external memory (cached{', loadable' if geometry is not None else ''})"
                     if memory is not None else
                     "texel fetch" if filter_lanes is None else
                     f"texture filter, {filter_lanes} lane(s), index memory "

@@ -30,6 +30,13 @@ _SUBMODULES = {
     "codebook_rom": "codebook ROM",
     "color_matrix": "colour matrix",
 }
+#: The filter through memory's own blocks (beside its lanes).
+_FILTER_MEMORY = {
+    "footprint": "filter footprint",
+    "blend": "filter blend",
+    "arbiter": "AXI arbiter (lanes' queues)",
+    "bus_port": "bus port",
+}
 _TOP_FIELDS = [
     # the blocks' output registers, named after the top's wires that carry them
     (r"^row\b", "descriptor table"),
@@ -61,6 +68,16 @@ def stage_of(name: str) -> str:
     # unit.fetch.<submodule>.<signal> or unit.fetch.<signal> or unit.<port>
     # the cached unit (hw.memory.unit): unit.unit.<reader|descriptor|address|texel>...; its texel
     # pipeline is named as the on-chip unit's
+    if len(parts) >= 3 and parts[1] == "unit":
+        # the filter through memory (hw.memory.filter): unit.unit.<laneK|laneK_reader|laneK_descriptor|
+        # laneK_address|footprint|blend|arbiter|bus_port>...; each lane's texel pipeline named as the unit's
+        lane = re.fullmatch(r"lane\d+(_(\w+))?", parts[2])
+        if lane and lane.group(2) is None:
+            parts = ["unit", "fetch"] + parts[3:]
+        elif lane:
+            parts = parts[:2] + [lane.group(2)] + parts[3:]
+        elif parts[2] in _FILTER_MEMORY:
+            return _FILTER_MEMORY[parts[2]]
     if len(parts) >= 3 and parts[1] == "unit":
         if parts[2] == "texel":
             parts = ["unit", "fetch"] + parts[3:]

@@ -1,6 +1,6 @@
 """golden.memory.filter: the texture filter's cycle model through the memory system (numpy lane
 streams, the per-group loop): its lane streams are the footprints' slots; a perfect cache gives
-``groups + 28``; one lane is golden.memory.timing.run's model exactly (shifted by the footprint);
+``groups + 29`` (with the texel pipeline's LATENCY, 15); one lane is golden.memory.timing.run's model exactly (shifted by the footprint);
 the arbiter's order; never faster than a perfect cache, never faster with a longer latency."""
 
 import numpy as np
@@ -13,6 +13,7 @@ from vqtex.golden.memory import timing
 from vqtex.golden.memory.cache import CacheShape
 from vqtex.golden.memory.system import MemoryConfig
 from vqtex.hw.filter.footprint import level_table
+from vqtex.hw.texel_fetch import LATENCY
 
 
 def setup(n=150, seed=1):
@@ -47,10 +48,10 @@ def test_lane_streams_are_the_footprint_slots(lanes):
 
 
 @pytest.mark.parametrize("lanes", [1, 2, 4, 8])
-def test_perfect_cache_is_groups_plus_29(lanes):
+def test_perfect_cache_is_groups_plus_30(lanes):
     ts, px, frac = setup()
-    r = gf.run_pixels(ts, px, config(), lanes, frac, ideal=True)
-    assert r["cycles"] == r["groups"] + 29 == r["on_chip_cycles"] + 6
+    r = gf.run_pixels(ts, px, config(), lanes, frac, ideal=True, latency=LATENCY)
+    assert r["cycles"] == r["groups"] + 30 == r["on_chip_cycles"] + 6
     assert r["bursts"] == 0 and r["stall_cycles"]["miss"] == 0
     # the colours leave one group apart, in order
     assert (np.diff(r["transfer"]) >= 1).all()
@@ -63,8 +64,8 @@ def test_one_lane_is_the_texel_fetch_units_model(prefetch, latency, kind):
     cfg = config(latency or 1, prefetch, kind=kind)
     req, last = gf.lane_requests(ts, px, 1, frac)
     p = timing.plan(ts, req[0], cfg)
-    single = timing.run(p, cfg, gf.FETCH_LATENCY, lambda m: np.ones(m, bool))
-    r = gf.run([p], cfg, last)
+    single = timing.run(p, cfg, LATENCY, lambda m: np.ones(m, bool))
+    r = gf.run([p], cfg, last, latency=LATENCY)
     assert (r["group_transfer"] == single["transfer"] + gf.FOOTPRINT_LATENCY).all()
     assert (r["tag"] == single["tag"] + gf.FOOTPRINT_LATENCY).all()
     assert r["stall_cycles"]["miss"] == single["stall_cycles"]["miss"] > 0
@@ -77,7 +78,7 @@ def test_arbiter_order_and_bounds(lanes):
     cfg = config(30, 4)
     req, last = gf.lane_requests(ts, px, lanes, frac)
     plans = [timing.plan(ts, req[k], cfg) for k in range(lanes)]
-    r = gf.run(plans, cfg, last)
+    r = gf.run(plans, cfg, last, latency=LATENCY)
     assert (np.diff(r["ar"]) >= 1).all()                       # one AR per cycle, in order
     # every lane's bursts in its own order, as many as its misses
     assert np.bincount(r["ar_lane"], minlength=lanes).tolist() == [int(p.misses.sum()) for p in plans]
@@ -92,10 +93,10 @@ def test_arbiter_order_and_bounds(lanes):
 @pytest.mark.parametrize("lanes", [2, 4])
 def test_slower_memory_never_faster(lanes):
     ts, px, frac = setup(150, 5)
-    ideal = gf.run_pixels(ts, px, config(), lanes, frac, ideal=True)["cycles"]
+    ideal = gf.run_pixels(ts, px, config(), lanes, frac, ideal=True, latency=LATENCY)["cycles"]
     prev = 0
     for latency in (1, 10, 50, 200):
-        c = gf.run_pixels(ts, px, config(latency), lanes, frac)["cycles"]
+        c = gf.run_pixels(ts, px, config(latency), lanes, frac, latency=LATENCY)["cycles"]
         assert c >= max(prev, ideal)
         prev = c
 
@@ -109,17 +110,17 @@ def test_backpressure_model(lanes):
     ts, px, frac = setup(80, lanes)
     req, last = gf.lane_requests(ts, px, lanes, frac)
     plans = [timing.plan(ts, req[k], config()) for k in range(lanes)]
-    free = gf.run(plans, config(), last)
-    high = gf.run(plans, config(), last, ready_pattern=lambda m: np.ones(m, bool))
+    free = gf.run(plans, config(), last, latency=LATENCY)
+    high = gf.run(plans, config(), last, latency=LATENCY, ready_pattern=lambda m: np.ones(m, bool))
     for key in ("transfer", "group_transfer", "tag", "enter", "ar"):
         assert high[key].tolist() == free[key].tolist()
     assert high["cycles"] == free["cycles"] and high["stall_cycles"]["output_backpressure"] == 0
     for stall in (0.3, 0.8):
-        r = gf.run(plans, config(), last, ready_pattern=lambda m: ready_pattern(2, stall, m))
+        r = gf.run(plans, config(), last, latency=LATENCY, ready_pattern=lambda m: ready_pattern(2, stall, m))
         bp = r["stall_cycles"]["output_backpressure"]
         assert bp > 0 and r["cycles"] >= free["cycles"] + (stall > 0.5)
         assert len(r["transfer"]) == last.sum() and (np.diff(r["transfer"]) >= 1).all()
         ready = ready_pattern(2, stall, r["cycles"])
         assert ready[r["transfer"]].all()                      # a colour leaves only when o.ready is high
     with pytest.raises(ValueError, match="4 stages"):
-        gf.run(plans, config(), last, blend=3, ready_pattern=lambda m: np.ones(m, bool))
+        gf.run(plans, config(), last, latency=LATENCY, blend=3, ready_pattern=lambda m: np.ones(m, bool))

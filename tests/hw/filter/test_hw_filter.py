@@ -73,7 +73,7 @@ def test_filter_against_golden(lanes, stall):
         # throughput: one group of ``lanes`` slots per clock (1, 4, 8 slots per point, bilinear,
         # trilinear pixel); latency 23
         groups = -(-np.array([1, 4, 8])[px["mode"]] // lanes)
-        assert res.cycles == int(groups.sum()) + LATENCY and LATENCY == 23
+        assert res.cycles == int(groups.sum()) + LATENCY and LATENCY == 24
         assert res.stall_cycles["output_backpressure"] == 0
     else:
         assert res.stall_cycles["output_backpressure"] > 0

@@ -82,4 +82,4 @@ def test_cached_filter_refuses_bad_configuration():
         simulate_cached_filter(ts, px, config(5, 4), backend="golden", stall=1.2)
     with pytest.raises(ValueError, match="runs on"):
         simulate_cached_filter(ts, px, config(5, 4), backend="icarus")
-    assert LATENCY == 28
+    assert LATENCY == 29

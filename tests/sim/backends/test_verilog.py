@@ -30,7 +30,7 @@ def test_export_cli_ports_and_constructs(mixed_file, tmp_path, capsys):
     out = tmp_path / "tf.v"
     assert main(["export", mixed_file, "-o", str(out), "--json"]) == 0
     rep = json.loads(capsys.readouterr().out)
-    assert rep["module"] == "texel_fetch" and rep["latency"] == 14 and rep["dialect"] == "sv"
+    assert rep["module"] == "texel_fetch" and rep["latency"] == 15 and rep["dialect"] == "sv"
     for port in ("i_valid", "i_ready", "i_texture", "i_level", "i_i", "i_j", "i_tag",
                  "o_valid", "o_ready", "o_r", "o_g", "o_b", "o_a", "o_tag", "straddle", "stall_one_port"):
         assert port in rep["ports"], port

@@ -116,7 +116,7 @@ def test_export_filter_verilog_lint_clean(tmp_path, capsys, lanes, banks):
     assert main(["export", str(vqt), "-o", str(out), "--filter-lanes", lanes, "--index-banks", banks, "--lint",
                  "--json"]) == 0
     rep = json.loads(capsys.readouterr().out)
-    assert rep["module"] == "texture_filter" and rep["latency"] == 23 and rep["lint"] == "clean"
+    assert rep["module"] == "texture_filter" and rep["latency"] == 24 and rep["lint"] == "clean"
     assert rep["index_banks"] == banks
     assert set(rep["ports"]) == {"i_valid", "i_ready", "i_payload", "o_valid", "o_ready", "o_payload",
                                  "stall_output", "busy", "bank_conflict"}

@@ -35,7 +35,7 @@ def test_sim_unit_on_pysim(tmp_path, rgb8_file, capsys, unit):
                              "--unit", unit, "--stall", "0.2", "--json")
     assert code == 0, err
     rep = json.loads(stdout)
-    assert rep["unit"] == unit and rep["cycles"] >= len(req) + 14
+    assert rep["unit"] == unit and rep["cycles"] >= len(req) + 15
     assert np.array_equal(np.load(out), fetch(ts, *req.T))
 
 
@@ -62,7 +62,7 @@ def _fake_report(ts, *, specialise, **kw):
     from vqtex.hw.features import Features
     f = Features.for_set(ts, specialise)
     return {"design": kw.get("name"), "device": "LFE5U-85F-8 CABGA381", "index_reader": "two-bank",
-            "unit": "specialised" if specialise else "full", "features": f.to_dict(), "tag_width": 8, "latency": 14,
+            "unit": "specialised" if specialise else "full", "features": f.to_dict(), "tag_width": 8, "latency": 15,
             "textures": ts.n_textures, "memory_images": {},
             "utilisation": {"luts": 1000 if specialise else 2000, "ffs": 900, "brams": 3, "dsps": 0 if specialise else 5,
                             "carry": 10, "dist_ram": 0, "wide_mux": 4},

@@ -331,7 +331,7 @@ def test_report_area_tiny(tmp_path, capsys, monkeypatch):
     assert raw0["mapped_to"] == "block RAM" and raw0["DP16KD"] > 0 and (raw0["depth"], raw0["width"]) == (512, 32)
     assert mem["fetch.back.codebook_rom.raw.bank1"]["depth"] == 256
     assert mem["fetch.front.descriptor.table"]["mapped_to"] == "logic"
-    assert rep["latency"] == 14
+    assert rep["latency"] == 15
     assert sum(m["DP16KD"] for m in mem.values()) == u["brams"]
     t = rep["timing"]
     assert 10 < t["fmax_mhz"] < 500 and t["target_mhz"] == 150 and t["met"] == (t["fmax_mhz"] >= 150)
@@ -452,6 +452,56 @@ def test_loadable_cached_harness_and_memories():
     assert any(n.startswith("unit.texel.back.codebook_rom.codebook") for n in mems)
     assert not any(".index_reader." in n or ".codebook_rom.raw." in n for n in mems)
 
+def test_cached_filter_harness_and_memories():
+    """The texture filter through memory in the harness (2 lanes, baked and loadable): a cache per
+    lane (the cached unit's memories, once per lane), each lane's texel pipeline with its codebook,
+    the arbiter's two queues as memories (the AR queue in two banks); the netlist names go to the
+    cached unit's stages, the filter's own blocks to theirs."""
+    from vqtex.golden.geometry import Geometry
+    from vqtex.sim.backends.design import CachedFilterTop
+    ts = builtin_set("tiny")
+    cfg = _small_caches()
+    unit = synth.design_memories(ts, memory=cfg)
+    for geometry in (None, Geometry.of(ts)):
+        top = CachedFilterTop(None if geometry else ts, cfg, lanes=2, tag_width=8, geometry=geometry)
+        assert ("bus_adr" in top.signature.members) == (geometry is not None)
+        harness = synth.Harness(ts, unit=top, geometry=geometry)
+        assert "vqtex_harness.unit" in harness.rtlil()
+        mems = synth.design_memories(ts, memory=cfg, filter_lanes=2, geometry=geometry)
+        for k in (0, 1):        # (the reference FIFO's entries carry the lane's tag: its width differs)
+            assert ({n.replace(f"lane{k}_reader", "reader"): v for n, v in mems.items()
+                     if f".lane{k}_reader." in n and "references" not in n}
+                    == {n: v for n, v in unit.items() if ".reader." in n and "references" not in n})
+            assert mems[f"unit.lane{k}_reader.references"][0] == unit["unit.reader.references"][0]
+            assert any(n.startswith(f"unit.lane{k}.back.codebook_rom.codebook") for n in mems)
+        depth = top.unit.arbiter_depth()
+        assert mems["unit.arbiter.ar_queue0"][0] == mems["unit.arbiter.ar_queue1"][0] == depth // 2
+        assert mems["unit.arbiter.r_lanes"] == (depth, 1)
+    assert synth.stage_of("unit.unit.lane1_reader.index_tags0") == "cache (tag check, FIFO, AXI, data read)"
+    assert synth.stage_of("unit.unit.lane1.back.codebook_rom.window1") == "codebook ROM"
+    assert synth.stage_of("unit.unit.lane0_address.k") == "cached unit's block address"
+    assert synth.stage_of("unit.unit.arbiter.ar_queue0") == "AXI arbiter (lanes' queues)"
+    assert synth.stage_of("unit.unit.footprint.s") == "filter footprint"
+
+
+def test_report_area_filter_memory_synthesis(capsys):
+    """Synthesis only: the filter through memory (one lane, small caches): its report and text; the
+    arbiter's queues are LUT RAM (the 4-lane filter's 2,048-entry queues at a FIFO of 128 in flip-flops
+    ran Yosys out of memory)."""
+    _need_tools()
+    code, out, err = _run(capsys, "report", "area", "--builtin", "tiny", "--memory", "external", *SMALL_CACHES,
+                          "--filter-lanes", "1", "--no-pnr", "--json")
+    assert code == 0, err
+    rep = json.loads(out)
+    from vqtex.hw.memory.filter import LATENCY
+    assert rep["top"] == "texture filter, 1 lane(s), external memory (a cache per lane)" and rep["latency"] == LATENCY
+    mem = rep["memories"]
+    for n in ("unit.arbiter.ar_queue", "unit.arbiter.r_lanes", "unit.lane0_reader.references"):
+        assert mem[n]["mapped_to"] == "distributed RAM", (n, mem[n])
+    assert rep["utilisation"]["luts"] > 0 and rep["utilisation"]["dist_ram"] > 0
+    assert "external memory: index cache 512 B" in synth.area_text(rep)
+
+
 @pytest.mark.parametrize("extra, pattern", [
     (["--memory-latency", "40"], "--memory-latency is the memory's timing"),
     (["--memory-model", "dram"], "--memory-model is the memory's timing"),
@@ -459,7 +509,8 @@ def test_loadable_cached_harness_and_memories():
     (["--unit", "both"], "the loadable one): not with --unit both"),
     (["--unit", "loadable", "--one-port"], "the loadable one): not with --one-port"),
     (["--one-port"], "the loadable one): not with --one-port"),
-    (["--filter-lanes", "2"], "the loadable one): not with --filter-lanes"),
+    (["--filter-lanes", "2", "--index-banks", "lane"], "the loadable one): not with --index-banks"),
+    (["--filter-lanes", "2", "--unit", "full"], "the loadable one): not with --unit full"),
     (["--cache-line", "128", "--cache-size", "256"], "--memory external: a 256-byte cache cannot hold"),
 ])
 def test_memory_external_refuses(capsys, extra, pattern):
@@ -476,7 +527,7 @@ def test_report_area_memory_external_synthesis(tmp_path, capsys):
                           "--no-pnr", "--json")
     assert code == 0, err
     rep = json.loads(out)
-    assert rep["top"] == "texel fetch, external memory (cached)" and rep["latency"] == 20
+    assert rep["top"] == "texel fetch, external memory (cached)" and rep["latency"] == 21
     assert rep["memory"]["index_cache"]["size"] == 512 and rep["memory"]["prefetch"] == 4
     mem = rep["memories"]
     lut_ram = [n for n in mem if n.startswith("unit.reader.") and "_lines" not in n]
