@@ -58,6 +58,23 @@ def filter_cycle_report(res, *, backend: str, stall: float = 0.0, extra: dict | 
     return rep
 
 
+def _cache_lines(mem: dict, noun: str) -> list:
+    """One line per cache (index, raw): its references and, if it had any, its hit rate."""
+    lines = []
+    for name in ("index", "raw"):
+        hr = mem["hit_rate"][name]
+        lines.append(f"{name + ' ' + noun:<18} {mem['references'][name]} references"
+                     + (f", hit rate {100 * hr:.2f}%" if hr is not None else ""))
+    return lines
+
+
+def _load_lines(rep: dict, lines: list, what: str) -> None:
+    """A loadable unit's lines (its geometry second, the load's cycles before ``what``), in place."""
+    if rep.get("load_cycles") is not None:
+        lines.insert(1, f"unit               loadable, geometry {rep['geometry']}")
+        lines.append(f"load (bus writes)  {rep['load_cycles']} cycles, before the {what}")
+
+
 def _filter_text(rep: dict) -> list:
     mem = rep["memory"]
     lines = [
@@ -69,14 +86,9 @@ def _filter_text(rep: dict) -> list:
         f"latency            {rep['latency']} cycles when every reference hits",
         f"memory             {mem['configuration']}, a cache per lane",
     ]
-    if rep.get("load_cycles") is not None:
-        lines.insert(1, f"unit               loadable, geometry {rep['geometry']}")
-        lines.append(f"load (bus writes)  {rep['load_cycles']} cycles, before the pixels")
+    _load_lines(rep, lines, "pixels")
     if "references" in mem:
-        for name in ("index", "raw"):
-            hr = mem["hit_rate"][name]
-            lines.append(f"{name + ' caches':<18} {mem['references'][name]} references"
-                         + (f", hit rate {100 * hr:.2f}%" if hr is not None else ""))
+        lines += _cache_lines(mem, "caches")
     lines.append(f"memory read        {mem['bursts']} bursts, {sum(mem['memory_bytes'].values())} bytes, "
                  f"{mem['bytes_per_pixel']:.4f} bytes per pixel")
     lines.append(f"stalls: output     {rep['stall_cycles']['output_backpressure']} cycles")
@@ -100,16 +112,11 @@ def cycle_text(rep: dict) -> str:
         f"latency            {rep['latency']} cycles",
         f"straddling reads   {rep['straddling_index_reads']}",
     ]
-    if rep.get("load_cycles") is not None:
-        lines.insert(1, f"unit               loadable, geometry {rep['geometry']}")
-        lines.append(f"load (bus writes)  {rep['load_cycles']} cycles, before the requests")
+    _load_lines(rep, lines, "requests")
     mem = rep.get("memory")
     if mem:
         lines.append(f"memory             {mem['configuration']}")
-        for name in ("index", "raw"):
-            hr = mem["hit_rate"][name]
-            lines.append(f"{name + ' cache':<18} {mem['references'][name]} references"
-                         + (f", hit rate {100 * hr:.2f}%" if hr is not None else ""))
+        lines += _cache_lines(mem, "cache")
         lines.append(f"memory read        {mem['bursts']} bursts, {sum(mem['memory_bytes'].values())} bytes, "
                      f"{mem['bytes_per_texel']:.4f} bytes per texel")
         if "of_zero_latency" in mem:

@@ -25,7 +25,8 @@ def test_list(capsys):
     assert code == 0 and err == ""
     lines = out.splitlines()
     assert [line.split()[0] for line in lines] == [p.name for p in PROPERTIES]
-    assert "induction k=3" in out and "BMC depth 20" in out
+    bmc = [p for p in PROPERTIES if p.method == "bmc"]
+    assert "induction k=3" in out and bmc and all(f"BMC depth {p.depth}" in out for p in bmc)
     code, out, _ = run_cli(capsys, "verify", "--list", "--quick", "--json")
     listed = json.loads(out)["properties"]
     assert code == 0 and listed and all(p["quick"] for p in listed)
