@@ -579,14 +579,28 @@ class CachedReader(wiring.Component):
         with m.If(take):
             m.d.sync += rp.eq(rp.rotate_left(1))
         m.d.sync += count.eq(count + accept - take)
-        # the entry the lookup reads: the oldest not taken, or the one after it while that is checked
-        sel = Signal(3, name="lookup_buffer_select")
-        m.d.comb += sel.eq(Mux(lv, rp.rotate_left(1), rp))
-        src = Signal(width, name="lookup_bundle")
-        m.d.comb += src.eq(Mux(sel[0], buf[0], 0) | Mux(sel[1], buf[1], 0) | Mux(sel[2], buf[2], 0))
+        # The entry the lookup reads: the oldest not taken, or the one after it while that is checked
+        # (``Mux(lv, rp.rotate_left(1), rp)``). It is chosen a cycle ahead, into a register the
+        # lookup reads (``lookup_bundle``), so the lookup's path starts at flip-flops and not at
+        # ``lv``'s fan-out and the buffer's multiplexers: from the buffer as it will be (a request
+        # accepted now is written into its entry at this edge, so it is taken from ``bundle``), at
+        # the read pointer and valid bit of the next cycle. ``take`` chooses last between the two
+        # entries it may leave there: ``take`` (the check held ``lv``: the lookup's request comes
+        # next, at ``rp + 1``, and the one after it when the buffer holds two or more) or not
+        # (``lv`` killed: ``rp`` again; or the lookup takes ``rp`` and ``rp + 1`` comes next).
         have = Signal(name="lookup_has_request")
         m.d.comb += have.eq(Mux(lv, count >= 2, count != 0))
         m.d.sync += lv.eq(have & ~(lv & ~take))
+        nbuf = [Mux(accept & wp[j], bundle, buf[j]) for j in range(3)]
+
+        def pick(sel):
+            return Mux(sel[0], nbuf[0], 0) | Mux(sel[1], nbuf[1], 0) | Mux(sel[2], nbuf[2], 0)
+        sel_taken = Signal(3, name="lookup_select_taken")
+        sel_held = Signal(3, name="lookup_select_held")
+        m.d.comb += [sel_taken.eq(Mux(count >= 2, rp.rotate_left(2), rp.rotate_left(1))),
+                     sel_held.eq(Mux(have & ~lv, rp.rotate_left(1), rp))]
+        src = Signal(width, name="lookup_bundle")
+        m.d.sync += src.eq(Mux(take, pick(sel_taken), pick(sel_held)))
         look = {}
         pos = 0
         for name, _, w in derived:
