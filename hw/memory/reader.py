@@ -662,6 +662,9 @@ class CachedReader(wiring.Component):
         fifo_w, fifo_r = fifo.write_port(), fifo.read_port(domain="comb")   # fifo_r: the entry after the head
         level = Signal(range(Q + 1))
         head = Signal(range(max(Q, 2)))
+        # the entry after the head's address, a register of its own (no carry chain before the
+        # FIFO's read multiplexers): ``head + 1`` mod Q
+        head1 = Signal(range(max(Q, 2)), init=1 % Q, name="head_after")
         tail = Signal(range(max(Q, 2)))
         pop = Signal()
         o_free = Signal()
@@ -670,7 +673,7 @@ class CachedReader(wiring.Component):
         # LUT RAM read multiplexers): loaded with the entry after it when the head is read, or with
         # the entry being written when that one becomes the head (the FIFO empty, or about to be).
         headv = Signal(entry, name="head_entry")
-        m.d.comb += fifo_r.addr.eq(Mux(head == Q - 1, 0, head + 1))
+        m.d.comb += fifo_r.addr.eq(head1)
         # Whether the head's lines are filled, in a register (``head_filled``: the data read's
         # ``pop`` is then a gate of flip-flops): loaded each cycle for the entry that is the head in
         # the next one, from the fills before this cycle: the head's own lines when it stays, the
@@ -742,7 +745,7 @@ class CachedReader(wiring.Component):
         with m.If(take):
             m.d.sync += tail.eq(Mux(tail == Q - 1, 0, tail + 1))
         with m.If(pop):
-            m.d.sync += head.eq(Mux(head == Q - 1, 0, head + 1))
+            m.d.sync += [head.eq(head1), head1.eq(Mux(head1 == Q - 1, 0, head1 + 1))]
         m.d.sync += level.eq(level + take - pop)
         with m.If(pop):
             # the entry after the head: being checked (level 1), in the write register (level 2 and
