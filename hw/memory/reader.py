@@ -20,7 +20,9 @@ consumer; with every reference a hit: one request per cycle, 4 cycles from ``i``
   a check is tried every ``REPLAY`` = 2 cycles until it is taken. The requests accepted and not yet
   taken (at most three) wait in a three-entry buffer in front of the lookup, so ``i.ready`` is the
   registered ``count != 3``, i.e. ``b[n] >= g[n-3] + 1``; a request is looked up from the cycle after
-  its acceptance (its sets and tags computed into the buffer when it is accepted).
+  its acceptance (its sets and tags computed into the buffer when it is accepted). The entry the
+  lookup reads is chosen a cycle ahead into a register (``lookup_bundle``), so the lookup starts
+  at flip-flops.
 * **Tag check** (first tried in cycle ``max(b + 2, g[n-1] + 1)``, from the lookup's registers): the
   request's references (an index request reads word ``w``, and ``w + 1`` when ``straddle``, a second
   lookup when it lies in the next line; a raw request one raw word) hit or miss. A miss allocates
