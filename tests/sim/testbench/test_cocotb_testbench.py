@@ -396,6 +396,37 @@ def test_loadable_external_memory_unit(capsys, tmp_path, sim):
         _assert_loads(cov, ["tb_set.vqt", "tb_set.vqt (other bytes)"], reload=True)
 
 
+@pytest.mark.parametrize("name", sorted(SETS))
+def test_reload_other_bytes(name):
+    """The reload's set (``other_bytes``): the same geometry and layout, on-chip memories equal,
+    every raw word and every stored index changed (indices inside their codebook, the padding bits
+    kept: applied twice it gives the set back), and ``probe`` finds a request whose texel differs."""
+    import numpy as np
+    from vqtex.golden.memory.system import Layout
+    from vqtex.sim.testbench.tb_texel_fetch import probe
+    ts = SETS[name]()
+    other = other_bytes(ts)
+    assert Geometry.of(other) == Geometry.of(ts) and Layout.at(other, 4100, 8196) == Layout.at(ts, 4100, 8196)
+    assert (other.codebook == ts.codebook).all() and (other.descriptors == ts.descriptors).all()
+    assert len(ts.raw_words) == 0 or (other.raw_words != ts.raw_words).all()
+    from vqtex.golden.format import unpack_indices
+    maps = 0
+    for t, info in enumerate(ts.textures):
+        for level in range(info.levels if info.codebook >= 0 else 0):
+            row = ts.descriptors[t, level]
+            if row["compressed"]:
+                n = (1 << int(row["log2w"]) >> int(row["log2bw"])) * (1 << int(row["log2h"]) >> int(row["log2bh"]))
+                old, new = (unpack_indices(s.index_words, int(row["index_bits"]), n, int(row["base"]), ts.word_bits)
+                            for s in (ts, other))
+                assert (new == ts.codebooks[info.codebook].size - 1 - old).all(), (t, level)
+                maps += 1
+    assert maps > 0
+    twice = other_bytes(other)
+    assert (twice.index_words == ts.index_words).all() and (twice.raw_words == ts.raw_words).all()
+    p = probe(ts, other, np.random.default_rng(1))
+    assert (fetch(ts, *p.T) != fetch(other, *p.T)).any()
+
+
 def test_loadable_external_reload_check_can_fail(capsys, tmp_path):
     """Negative control of the reload: the Verilog's reader no longer emptied by bus writes (its reset
     is the unit's alone). The bench's default reload puts the set's other bytes (``other_bytes``) at
