@@ -16,14 +16,15 @@ its slots (``k + lanes g`` of every pixel's group ``g``) through its own index a
 
 - ``a[n]`` (group n enters the address stages) ``>= a[n-1] + 1``, ``>= b[n - ADDRESS_STAGES]``;
   ``a[0] = FOOTPRINT_LATENCY``;
-- ``b[n]`` (every lane's lookup, the tag check's first cycle, takes group n; two places, its ready
-  registered) ``>= a[n] + ADDRESS_STAGES``, ``>= b[n-1] + 1``, ``>= g[n-2] + 1``;
-- ``g[n]`` (every lane's tag check, the same cycle) ``>= b[n] + LOOKUP_STAGES``, ``>= g[n-1] +
-  max(1, max_k misses_k[n-1])``, and for every lane ``>= p_k[n-Q]`` and ``>= p_k[v_k] + 1`` (its
-  victim rule);
+- ``b[n]`` (every lane's cache block takes group n into its lookup's buffer, which holds three
+  groups, its ready registered) ``>= a[n] + ADDRESS_STAGES``, ``>= b[n-1] + 1``, ``>= g[n-3] + 1``;
+- ``g[n]`` (every lane's tag check, the same cycle): first tried in ``max(b[n] + LOOKUP_STAGES,
+  g[n-1] + 1)``, then every ``REPLAY`` cycles (:func:`golden.memory.timing.attempt`), the first try
+  ``>= g[n-1] + max_k misses_k[n-1]`` and, for every lane, ``>= p_k[n-Q] + fifo_slack(Q)`` and
+  ``>= p_k[v_k] + VICTIM_READ`` (its victim rule);
 - lane k's j-th burst of group n is offered in ``g[n] + 1 + j`` and issued by the arbiter's rule
   (:class:`golden.memory.arbiter.Arbiter`, offers in (cycle, lane) order) into one memory model;
-  its line is filled the cycle after its last beat;
+  its line is readable ``FILL_READ`` cycles after its last beat;
 - ``p_k[n]`` (lane k's data read) ``>= g[n] + 1``, ``>= p_k[n-1] + 1``, ``>= e[n-1]``, and ``>=``
   the fills of its lines;
 - ``e[n]`` (the texel pipelines take group n): ``max(max_k p_k[n] + 1, e[n-1] + 1)`` (with
@@ -32,7 +33,7 @@ its slots (``k + lanes g`` of every pixel's group ``g``) through its own index a
   transfers ``BLEND_LATENCY`` cycles after its last group's: ``cycles = T[last] + BLEND_LATENCY + 1``.
 
 With every reference a hit: ``cycles = groups + FOOTPRINT_LATENCY + ADDRESS_STAGES + LOOKUP_STAGES
-+ 2 + LATENCY + BLEND_LATENCY`` = ``groups + 29`` with the texel pipeline's ``LATENCY`` of 15 (the
++ 2 + LATENCY + BLEND_LATENCY`` = ``groups + 30`` with the texel pipeline's ``LATENCY`` of 15 (the
 on-chip filter: ``groups + 24``). ``LATENCY`` is an argument (``latency``: the caller passes
 ``hw.texel_fetch.LATENCY``; golden does not import hw), as in :mod:`golden.memory.timing`. With one lane the rules are
 :func:`golden.memory.timing.run`'s exactly (the tests hold them equal).
@@ -55,7 +56,7 @@ from .. import filter as spec
 from ..format import TextureSet
 from .arbiter import Arbiter
 from .system import Layout, MemoryConfig
-from .timing import ADDRESS_STAGES, LOOKUP_STAGES, TexelPipeline, accept_and_lookup, plan
+from .timing import ADDRESS_STAGES, FILL_READ, LOOKUP_STAGES, VICTIM_READ, TexelPipeline, accept_and_lookup, attempt, fifo_slack, first_check, plan
 
 __all__ = ["FOOTPRINT_LATENCY", "BLEND_LATENCY", "lane_requests", "run", "run_pixels"]
 
@@ -176,6 +177,7 @@ def run(plans: list, config: MemoryConfig, last: np.ndarray, *, latency: int, st
     lanes = len(plans)
     n = len(last)
     La, Q, L = ADDRESS_STAGES, config.prefetch, int(latency)
+    slack = fifo_slack(Q)
     mem = config.make_memory()
     d = mem.beat_interval
     arb = Arbiter()
@@ -205,22 +207,21 @@ def run(plans: list, config: MemoryConfig, last: np.ndarray, *, latency: int, st
     for i in range(n):
         ai, bi = accept_and_lookup(i, a, lk, g, La, start)
         lk[i] = bi
-        gi = bi + LOOKUP_STAGES
-        if i and g[i - 1] + max(1, maxmiss[i - 1]) > gi:
-            gi = g[i - 1] + max(1, maxmiss[i - 1])
+        gi = first_check(i, bi, g)
+        if i:
+            gi = attempt(gi, g[i - 1] + maxmiss[i - 1])
         if i >= Q:
-            f = max(pr[k][i - Q] for k in K)
-            if f > gi:
-                fifo_c += f - gi
-                gi = f
+            t = attempt(gi, max(pr[k][i - Q] for k in K) + slack)
+            fifo_c += t - gi
+            gi = t
         vt = -1
         for k in K:
             v = victim[k][i]
-            if v >= 0 and pr[k][v] + 1 > vt:
-                vt = pr[k][v] + 1
-        if vt > gi:
-            victim_c += vt - gi
-            gi = vt
+            if v >= 0 and pr[k][v] + VICTIM_READ > vt:
+                vt = pr[k][v] + VICTIM_READ
+        t = attempt(gi, vt)
+        victim_c += t - gi
+        gi = t
         g[i] = gi
         a[i] = ai
         for j in range(maxmiss[i]):
@@ -230,7 +231,7 @@ def run(plans: list, config: MemoryConfig, last: np.ndarray, *, latency: int, st
                     t = arb.issue(gi + 1 + j)
                     f = mem.read(t, address[k][b], beats[k][b])
                     queued[k][b] = mem.queued
-                    filled[k][b] = f + (beats[k][b] - 1) * d + 1
+                    filled[k][b] = f + (beats[k][b] - 1) * d + FILL_READ
                     ar.append(t)
                     ar_lane.append(k)
                     burst[k] = b + 1

@@ -12,9 +12,10 @@ The unit (docs/memory.md)
                                                                                           responses
 
 The address stages (descriptor, block address) compute the words a request reads; the tag check
-takes two cycles: the lookup (``LOOKUP_STAGES``: two places, a main and a skid register, so its
-ready is a register) reads the tag rows of the request's sets and registers them (a row the check
-writes in that cycle is forwarded to it), and the check proper compares them for its references
+takes two cycles: the lookup (``LOOKUP_STAGES``; its input holds the requests accepted and not
+yet taken, so its ready is a register) reads the tag rows and the counts of the request's sets,
+compares the tags and registers the results (what the check writes in that cycle is forwarded to
+it), and the check proper decides from them for its references
 (:mod:`golden.memory.system`) in the index or raw cache, allocating a line and issuing its burst
 on a miss; the reference waits in a FIFO of ``Q = config.prefetch`` entries until
 its lines are filled; the data read takes the words from the cache into an output register, which
@@ -28,16 +29,23 @@ back to back from cycle 0; ``x[n-k]`` for ``n < k`` imposes nothing):
   stages are a chain of stream registers that moves as a whole against the lookup's acceptance: a
   stage takes a new item when its item leaves, in the same cycle).
 - ``b[n]`` (the lookup, the tag check's first cycle, takes request n): ``>= a[n] + ADDRESS_STAGES``;
-  ``>= b[n-1] + 1``; ``>= g[n-2] + 1`` (the lookup has two places, a main and a skid register, and
-  its ready is the registered ``~skid_valid``: it takes a request when at most one of those it holds
-  was still unchecked at the start of the cycle). With ``address_stages = 0``, ``a[n] = b[n]``.
-- ``g[n]`` (tag check, its second cycle, where it is decided and the state written): ``>= b[n] +
-  LOOKUP_STAGES``; ``>= g[n-1] + max(1, misses[n-1])`` (one burst
-  issued per cycle); ``>= p[n-Q]`` (a FIFO entry frees when its reference is read); for a miss whose
-  victim line has a reference ``v`` not yet read, ``>= p[v] + 1`` (a line is never replaced under a
-  waiting reference).
+  ``>= b[n-1] + 1``; ``>= g[n - LOOKUP_PLACES] + 1`` (the lookup's buffer holds the requests
+  accepted and not yet taken by the check, at most three, and its ready is the registered ``count
+  != 3``). With ``address_stages = 0``, ``a[n] = b[n]``.
+- ``g[n]`` (tag check, its second cycle, where it is decided and the state written): the check is
+  first tried in cycle ``c = max(b[n] + LOOKUP_STAGES, g[n-1] + 1)`` (:func:`first_check`: the lookup
+  takes request n while n-1 is checked, as if n-1 were taken); a try whose rules do not hold is
+  killed and request n looked up again, so it is tried again ``REPLAY`` cycles later: ``g[n]`` is
+  the first of ``c, c + REPLAY, c + 2 REPLAY, ...`` (:func:`attempt`) that is ``>= g[n-1] +
+  misses[n-1]`` (one burst issued per cycle); ``>= p[n-Q] + fifo_slack(Q)`` (a FIFO entry frees
+  when its reference is read: the check sees the room in the FIFO's registered level, so from the
+  cycle after the read, for ``Q > 1``; the blocking cache, ``Q = 1``, takes the read's room in the
+  same cycle); for a miss whose victim line has a reference ``v`` not yet read, ``>= p[v] +
+  VICTIM_READ`` (a line is never replaced under a waiting reference; the lookup, a cycle before the
+  check, reads the counts of references read out as the reads before its own cycle left them).
 - The j-th miss of request n issues its burst (AR) in cycle ``g[n] + 1 + j``; the memory model gives
-  the first beat ``f``; the line is filled, readable, from ``f + (beats - 1) * beat_interval + 1``.
+  the first beat ``f``; the line is filled, readable by the data read, from ``f + (beats - 1) *
+  beat_interval + FILL_READ``.
 - ``p[n]`` (data read): ``>= g[n] + 1``; ``>= p[n-1] + 1``; ``>= e[n-1]`` (the output register is
   free: the pipeline takes n-1 from it that cycle); ``>=`` the fill of every line n references that
   was brought in by a miss (its own or an earlier request's: a line refilled while references wait on
@@ -60,7 +68,8 @@ unit counts them); ``miss`` and ``bandwidth``: the cycles by which a line fill h
 beyond its other rules, split into the wait of the binding burst behind earlier bursts in the memory
 (``bandwidth``: the memory's ``queued``) and the rest (``miss``: the memory's latency);
 ``fifo_full`` and ``victim``: cycles by which the FIFO's capacity or a waiting reference to the victim
-line held a tag check back.
+line held a tag check back (counted in that order, each from the try the previous rules left,
+``REPLAY`` rounding included).
 
 Why a loop over requests: the rules chain each request's times to its predecessors' through maxima
 with the backpressure pattern and the memory's state (a DRAM's open rows and refresh), so the model
@@ -80,13 +89,27 @@ from ..format import TextureSet
 from .cache import classify
 from .system import Layout, MemoryConfig, references
 
-__all__ = ["ADDRESS_STAGES", "LOOKUP_STAGES", "FRONT_LATENCY", "Plan", "plan", "accept_and_lookup", "run", "run_requests", "TexelPipeline", "StreamSink"]
+__all__ = ["ADDRESS_STAGES", "LOOKUP_STAGES", "LOOKUP_PLACES", "REPLAY", "VICTIM_READ", "FILL_READ", "FRONT_LATENCY", "first_check", "attempt", "Plan", "plan", "fifo_slack", "accept_and_lookup", "run", "run_requests", "TexelPipeline", "StreamSink"]
 
 #: The unit's address stages before the cache block (descriptor, block address).
 ADDRESS_STAGES = 2
-#: The tag check's first cycle (the lookup: the set's tag row read and registered), a stream
-#: register of the cache block in the chain in front of the tag check.
-LOOKUP_STAGES = 1
+#: Cycles from the cache block's acceptance of a request to its first tag check: the lookup's
+#: buffer (the request's sets and tags computed and registered) and the lookup (the sets' tag rows
+#: and counts read, the tags compared, registered).
+LOOKUP_STAGES = 2
+#: Requests the cache block holds accepted and not yet taken by the tag check (the lookup's buffer:
+#: the one checked, the one looked up, the one arriving): ``b[n] >= g[n - LOOKUP_PLACES] + 1``.
+LOOKUP_PLACES = 3
+#: Cycles between two tries of a tag check that does not take its request (the lookup took the
+#: next request meanwhile: killed, and the request looked up again).
+REPLAY = 2
+#: Cycles after the read of a line's last waiting reference before a tag check may replace the
+#: line: the lookup (the cycle before the check) reads the counts of references read out, as
+#: written by the reads before its own cycle.
+VICTIM_READ = 2
+#: Cycles from a line's last beat to the first data read of it: the fill is written at the end of
+#: the beat's cycle and the data read's ``filled`` register takes it the cycle after.
+FILL_READ = 2
 #: Cycles from accepting a request to offering it to the texel pipeline when every reference hits:
 #: the address stages, the lookup, the tag check and the data read.
 FRONT_LATENCY = ADDRESS_STAGES + LOOKUP_STAGES + 2
@@ -231,12 +254,36 @@ class StreamSink:
 
 
 
+def fifo_slack(q: int) -> int:
+    """Cycles after the read of reference ``n - q`` before the tag check may put reference ``n`` in
+    a FIFO of ``q`` entries (the rule ``g[n] >= p[n-q] + fifo_slack(q)``): 1 for a prefetching FIFO
+    (``q > 1``: the check's ready sees the room in the FIFO's registered level only, so the data
+    read's ``pop`` stays off the check's path), 0 for the blocking cache (``q = 1``: a read and the
+    next check in the same cycle, else every reference would take two cycles)."""
+    return 1 if q > 1 else 0
+
+
+def first_check(i: int, b_i: int, g: list) -> int:
+    """The cycle request (or group) ``i`` is first in the tag check: ``>= b[i] + LOOKUP_STAGES``
+    (looked up), ``>= g[i-1] + 1`` (the lookup takes it while its predecessor is checked, as if that
+    one were taken)."""
+    c = b_i + LOOKUP_STAGES
+    return g[i - 1] + 1 if i and g[i - 1] + 1 > c else c
+
+
+def attempt(c: int, r: int) -> int:
+    """The first cycle ``>= r`` at which a check first tried in cycle ``c`` is tried again: a check
+    not taken is killed and looked up again, so its tries are ``c, c + REPLAY, c + 2 REPLAY, ...``
+    (``attempt(attempt(c, r1), r2) == attempt(c, max(r1, r2))``)."""
+    return c if r <= c else c + -(-(r - c) // REPLAY) * REPLAY
+
+
 def accept_and_lookup(i: int, a: list, b: list, g: list, La: int, start: int) -> tuple:
     """Request (or group) ``i``'s accept and lookup cycles ``(a[i], b[i])`` from its predecessors'
     (the rules of the module docstring; one definition for :func:`run` and the filter's
     :func:`golden.memory.filter.run`): ``a[i] >= a[i-1] + 1`` (``start`` for the first),
     ``>= b[i - La]`` (the address stages move against the lookup); ``b[i] >= a[i] + La``, ``>= b[i-1]
-    + 1``, ``>= g[i-2] + 1`` (the lookup's two places). ``La``: the address stages (0: the cache
+    + 1``, ``>= g[i-3] + 1`` (the lookup's buffer). ``La``: the address stages (0: the cache
     block alone). Lists of ints, filled up to ``i - 1``."""
     ai = a[i - 1] + 1 if i else start
     if La and i >= La and b[i - La] > ai:
@@ -244,8 +291,8 @@ def accept_and_lookup(i: int, a: list, b: list, g: list, La: int, start: int) ->
     bi = ai + La
     if i and b[i - 1] + 1 > bi:
         bi = b[i - 1] + 1
-    if i >= 2 and g[i - 2] + 1 > bi:
-        bi = g[i - 2] + 1
+    if i >= LOOKUP_PLACES and g[i - LOOKUP_PLACES] + 1 > bi:
+        bi = g[i - LOOKUP_PLACES] + 1
     return ai, bi
 
 def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_hint: int = 0,
@@ -263,6 +310,7 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
     ``read``, ``enter`` (int64 (N,))."""
     n = len(p.misses)
     La, Q, L = int(address_stages), config.prefetch, int(pipeline_latency)
+    slack = fifo_slack(Q)
     mem = config.make_memory()
     d = mem.beat_interval
     pipe = consumer if consumer is not None else TexelPipeline(L, ready_pattern, max(64, 2 * n + L + 64, n_hint))
@@ -281,23 +329,25 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
         # accept, lookup and tag check
         ai, bi = accept_and_lookup(i, a, b, g, La, 0)
         b[i] = bi
-        gi = bi + LOOKUP_STAGES
-        if i and g[i - 1] + max(1, misses[i - 1]) > gi:
-            gi = g[i - 1] + max(1, misses[i - 1])
-        if i >= Q and pr[i - Q] > gi:
-            fifo_c += pr[i - Q] - gi
-            gi = pr[i - Q]
+        gi = first_check(i, bi, g)
+        if i:
+            gi = attempt(gi, g[i - 1] + misses[i - 1])
+        if i >= Q:
+            t = attempt(gi, pr[i - Q] + slack)
+            fifo_c += t - gi
+            gi = t
         v = victim[i]
-        if v >= 0 and pr[v] + 1 > gi:
-            victim_c += pr[v] + 1 - gi
-            gi = pr[v] + 1
+        if v >= 0:
+            t = attempt(gi, pr[v] + VICTIM_READ)
+            victim_c += t - gi
+            gi = t
         g[i] = gi
         a[i] = bi if La == 0 else ai
         for j in range(misses[i]):
             f = mem.read(gi + 1 + j, address[burst], beats[burst])
             first_beat[burst] = f
             queued[burst] = mem.queued
-            filled[burst] = f + (beats[burst] - 1) * d + 1
+            filled[burst] = f + (beats[burst] - 1) * d + FILL_READ
             burst += 1
         # data read
         pi = gi + 1

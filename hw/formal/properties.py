@@ -101,10 +101,10 @@ PROPERTIES = (
              "every word the cached reader (2-entry FIFO) hands on is the memory's word at its request's address, "
              "and no line is read twice while its burst is in flight, under any requests, backpressure and memory "
              "timing (a free AXI slave)",
-             lambda bug: memory.ReaderHarness(2, 16, bug), "bmc", 11, memory.DATA_READ_EARLY, 11),
+             lambda bug: memory.ReaderHarness(2, 16, bug), "bmc", 15, memory.DATA_READ_EARLY, 15),
     Property("memory.reader.blocking", "memory",
              "the same for the blocking cached reader (one reference waits at a time)",
-             lambda bug: memory.ReaderHarness(1, 16, bug), "bmc", 15, memory.wrong_lane(4, 16), 15),
+             lambda bug: memory.ReaderHarness(1, 16, bug), "bmc", 20, memory.wrong_lane(4, 16), 20),
 )
 
 

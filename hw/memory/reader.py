@@ -3,25 +3,37 @@
 The cache block of the cached unit (docs/memory.md), without the address stages in front of it and
 the texel pipeline behind it::
 
-    i (raw, word, straddle, tag) -> lookup (2 places) -> tag check -> reference FIFO (Q) -> data read -> o
-                                                              | AR (one burst per miss)      ^
-                                                              v                              | R (line fills)
-                                                            AXI4 read master  <-----------  memory
+    i (raw, word, straddle, tag) -> buffer (3) -> lookup -> tag check -> reference FIFO (Q) -> data read -> o
+                                                                 | AR (one burst per miss)      ^
+                                                                 v                              | R (line fills)
+                                                               AXI4 read master  <-----------  memory
 
 Timing (cycle for cycle :mod:`golden.memory.timing` with ``address_stages=0`` and a stream sink as
-consumer; with every reference a hit: one request per cycle, 3 cycles from ``i`` to ``o``):
+consumer; with every reference a hit: one request per cycle, 4 cycles from ``i`` to ``o``):
 
-* **Lookup** (the tag check's first cycle; ``i`` transfers in cycle ``b``): the request's lines, sets
-  and tags are computed and each bank's tag row (tags, LRU ages, valid bits) is read from LUT RAM and
-  registered, the row the check writes in that cycle forwarded. The lookup has two places, a main
-  register (read by the check) and a skid register (a request arriving while the main one waits),
-  so ``i.ready`` is a register: ``~skid_valid``, i.e. ``b[n] >= g[n-2] + 1``.
-* **Tag check** (cycle ``g >= b + 1``, from the main register): the request's references are compared
-  (an index request reads word ``w``, and ``w + 1`` when ``straddle``, a second lookup when it lies
-  in the next line; a raw request one raw word). A miss allocates the LRU way at once (an empty way
-  first) and queues its burst; the reference enters the FIFO. The check waits while the FIFO is full
-  (and not read this cycle), while the second of two bursts of the previous request waits, or while
-  a miss's victim line still has a reference in the FIFO.
+* **Lookup** (the tag check's first cycle; ``i`` transfers in cycle ``b``, into the buffer): the request's sets
+  and tags are computed, each bank's tag row (tags, LRU ages, valid bits) and counts (issued,
+  retired) read from LUT RAM, the tags compared and whether each way has references waiting found,
+  and all of it registered, what the check writes in that cycle forwarded. The lookup's registers
+  load every cycle (no clock enable): while the check works on request n the lookup takes n + 1 as
+  if n were taken; when n is not taken, what the lookup took is killed and n is looked up again, so
+  a check is tried every ``REPLAY`` = 2 cycles until it is taken. The requests accepted and not yet
+  taken (at most three) wait in a three-entry buffer in front of the lookup, so ``i.ready`` is the
+  registered ``count != 3``, i.e. ``b[n] >= g[n-3] + 1``; a request is looked up from the cycle after
+  its acceptance (its sets and tags computed into the buffer when it is accepted). The entry the
+  lookup reads is chosen a cycle ahead into a register (``lookup_bundle``), so the lookup starts
+  at flip-flops.
+* **Tag check** (first tried in cycle ``max(b + 2, g[n-1] + 1)``, from the lookup's registers): the
+  request's references (an index request reads word ``w``, and ``w + 1`` when ``straddle``, a second
+  lookup when it lies in the next line; a raw request one raw word) hit or miss. A miss allocates
+  the LRU way at once (an empty way first) and queues its burst; the reference enters the FIFO. The
+  check is not taken while the FIFO is full at the start of the cycle (its registered level; for
+  ``Q = 1``, the blocking cache: full and not read this cycle), while the second of two bursts of
+  the previous request waits, or while a miss's victim line still has a reference in the FIFO that
+  was not read before the lookup's cycle (golden's ``VICTIM_READ``). The check's writes (tag rows,
+  counts, the FIFO, the bursts in flight) land one cycle later from write registers, every read
+  of them forwarding the pending write, so the decision ``take`` reaches flip-flops' data inputs
+  and a few enables, no LUT RAM write enable.
 * **AR**: the j-th burst of a request checked in cycle ``g`` is on AR in cycle ``g + 1 + j`` (when
   ``arready`` is high, as the golden memory assumes; otherwise it waits and holds the tag check).
   INCR, ``line / bus`` beats, ``araddr`` the line's byte address, never crossing 4 KB.
@@ -90,17 +102,12 @@ def _log2(v: int) -> int:
     return v.bit_length() - 1
 
 
-def _skid(m, nx, name, load, sv):
-    """The lookup's two places for one field: the main register (returned; the check reads it),
-    loaded when ``load`` from the skid register when that holds a request (``sv``), else from
-    ``nx`` (the request on ``i``); and the skid register, loading ``nx`` whenever it is empty."""
+def _reg(m, nx, name):
+    """A lookup register of ``nx`` (returned; the check reads it): loaded every cycle, no clock
+    enable (a request the check does not take is killed and sent again: :class:`CachedReader`)."""
     nx = Value.cast(nx)
     r = Signal(len(nx), name=name)
-    sk = Signal(len(nx), name=f"skid_{name}")
-    with m.If(~sv):
-        m.d.sync += sk.eq(nx)
-    with m.If(load):
-        m.d.sync += r.eq(Mux(sv, sk, nx))
+    m.d.sync += r.eq(nx)
     return r
 
 
@@ -122,32 +129,60 @@ class _Rows:
     parity, for the index cache, whose straddling index checks two consecutive sets in one cycle).
     Each memory has one write port (what a LUT RAM has) and one asynchronous (combinational) read
     port per party that reads it; a party works on each bank apart (its logic per bank), so no
-    row-wide multiplexer sits between the banks."""
+    row-wide multiplexer sits between the banks.
 
-    def __init__(self, m, name, shape, sets, banks):
+    ``behind``: the writes land one cycle late, from a write register per bank (address, row and
+    enable, loaded every cycle: the writer's decision reaches flip-flops' data inputs, not the LUT
+    RAM's write enables); a read sees the pending write (``read`` forwards it), so to its readers
+    the memory is written at the clock edge as without the register."""
+
+    def __init__(self, m, name, shape, sets, banks, behind=False):
         self.shape = shape
         self.banks = banks
         self.mems = []
+        self.pending = []
         for b in range(banks):
-            m.submodules[f"{name}{b}" if banks > 1 else name] = mem = memory.Memory(
+            n = f"{name}{b}" if banks > 1 else name
+            m.submodules[n] = mem = memory.Memory(
                 shape=shape, depth=sets // banks, init=[], attrs={"ram_style": "distributed"})
             self.mems.append(mem)
+            if behind:
+                self.pending.append((Signal(max(1, _log2(sets // banks)), name=f"{n}_w_addr"),
+                                     Signal(shape, name=f"{n}_w_data"), Signal(name=f"{n}_w_en")))
 
     def row(self, s):
         """The row of set ``s`` in its bank."""
         return s >> _log2(self.banks)
 
+    def forwarded(self, b, r):
+        """Whether bank ``b``'s pending write (``behind``) is to row ``r``, and the row it writes."""
+        a, d, e = self.pending[b]
+        return e & (a == r), d
+
     def read(self, m, b, s, name):
-        """Bank ``b``'s row of set ``s`` (a set of that bank), combinational."""
+        """Bank ``b``'s row of set ``s`` (a set of that bank), combinational (with the pending write
+        forwarded, ``behind``)."""
         port = self.mems[b].read_port(domain="comb")
         out = Signal(self.shape, name=name)
-        m.d.comb += [port.addr.eq(self.row(s)), out.eq(port.data)]
+        m.d.comb += port.addr.eq(self.row(s))
+        if self.pending:
+            hit, d = self.forwarded(b, self.row(s))
+            m.d.comb += out.eq(Mux(hit, d, port.data))
+        else:
+            m.d.comb += out.eq(port.data)
         return out
 
     def write(self, m, b, s, en, data):
-        """Write bank ``b``'s row of set ``s`` at the clock edge when ``en`` (one call per bank)."""
+        """Write bank ``b``'s row of set ``s`` at the clock edge when ``en`` (one call per bank); with
+        ``behind``, into the write register, and from it into the memory at the next edge. Returns
+        the address and enable of the memory's write."""
         port = self.mems[b].write_port()
-        m.d.comb += [port.addr.eq(self.row(s)), port.en.eq(en), port.data.eq(data)]
+        if self.pending:
+            a, d, e = self.pending[b]
+            m.d.sync += [a.eq(self.row(s)), d.eq(data), e.eq(en)]
+            m.d.comb += [port.addr.eq(a), port.en.eq(e), port.data.eq(d)]
+        else:
+            m.d.comb += [port.addr.eq(self.row(s)), port.en.eq(en), port.data.eq(data)]
         return port.addr, port.en
 
 
@@ -182,10 +217,10 @@ class _Cache:
                         for b in range(banks)]
         way = data.StructLayout({"tag": tag_bits, "age": self.age_bits})
         self.lines = _Rows(m, f"{name}_tags", data.StructLayout({"way": data.ArrayLayout(way, W), "valid": W}),
-                           S, banks)
-        self.issued = _Rows(m, f"{name}_issued", data.ArrayLayout(count_bits, W), S, banks)
-        self.retired = _Rows(m, f"{name}_retired", data.ArrayLayout(count_bits, W), S, banks)
-        self.alloc = _Rows(m, f"{name}_alloc", W, S, banks)
+                           S, banks, behind=True)
+        self.issued = _Rows(m, f"{name}_issued", data.ArrayLayout(count_bits, W), S, banks, behind=True)
+        self.retired = _Rows(m, f"{name}_retired", data.ArrayLayout(count_bits, W), S, banks, behind=True)
+        self.alloc = _Rows(m, f"{name}_alloc", W, S, banks, behind=True)
         self.fill = _Rows(m, f"{name}_fill", W, S, banks)
         # what the tag check writes into each bank's tag row this cycle (for the lookup's forwarding):
         # the row, its address, and whether the bank's port is active (a request is being checked)
@@ -193,6 +228,9 @@ class _Cache:
         self.w_addr = [Signal(rb, name=f"{name}_fwd_addr{b}") for b in range(banks)]
         self.w_act = [Signal(name=f"{name}_fwd_act{b}") for b in range(banks)]
         self.w_row = [Signal(self.lines.shape, name=f"{name}_fwd_row{b}") for b in range(banks)]
+        # and the way it accesses (hit or allocated) and the issued row it writes
+        self.w_way = [Signal(max(1, self.way_bits), name=f"{name}_fwd_way{b}") for b in range(banks)]
+        self.w_issued = [Signal(self.issued.shape, name=f"{name}_fwd_issued{b}") for b in range(banks)]
 
     def slot_bits(self):
         return max(1, _log2(self.sets * self.ways))
@@ -223,66 +261,82 @@ class _Cache:
         """The value of the bank holding set ``s`` (small signals: hit, way, ...)."""
         return per_bank[0] if self.banks == 1 else Mux(s[0], per_bank[1], per_bank[0])
 
-    def lookup(self, m, line, load, sv):
-        """The tag check's first cycle: the lookup registers the set and tag of ``line`` (and of
-        ``line + 1``: a second port, when the cache has two banks), and each bank's tag row and
-        touched bit for them, read from the LUT RAM (a bank holds the port whose set has its parity),
-        in two places (:func:`_skid`): the main register, which the check reads, loaded when
-        ``load``; and the skid register, which holds a request that arrived while the main one
-        waited (``sv``). A row the tag check writes in this same cycle (the request ahead, leaving
-        the check) is forwarded into the main register: it takes the written row and touched bit,
-        not the memory's (or the skid register's) old ones. Only the tag check writes these rows,
-        and only when its request leaves, which is when the main register loads: so no register
-        holds a stale row (the skid register is loaded only in cycles without a write, and moves
-        into the main register, forwarded, in the cycle of the next one)."""
-        nports = self.banks
-        sb = max(1, self.set_bits)
-        nsets, ntags = [], []
-        self.rset, self.rtag = [], []
-        for k in range(nports):
+    def derive(self, line):
+        """The sets and tags a lookup of ``line`` needs (and of ``line + 1``: a second port, when the
+        cache has two banks), combinational: ``set{k}``, ``tag{k}`` per port, and with two banks
+        ``bset{b}``, ``btag{b}``: the set and tag each bank holds (the port whose set has the bank's
+        parity). Computed when a request enters the lookup's buffer, so that the lookup starts
+        from flip-flops."""
+        d = {}
+        for k in range(self.banks):
             ln = line if k == 0 else line + 1
-            s = Signal(sb, name=f"{self.name}_next_set{k}")
-            t = Signal(self.tag_bits, name=f"{self.name}_next_tag{k}")
-            m.d.comb += [s.eq(ln[:self.set_bits] if self.set_bits else 0), t.eq(ln >> self.set_bits)]
-            nsets.append(s)
-            ntags.append(t)
-            self.rset.append(_skid(m, s, f"{self.name}_set{k}", load, sv))
-            self.rtag.append(_skid(m, t, f"{self.name}_line_tag{k}", load, sv))
+            d[f"set{k}"] = (ln[:self.set_bits] if self.set_bits else C(0, 1), max(1, self.set_bits))
+            d[f"tag{k}"] = ((ln >> self.set_bits)[:self.tag_bits], self.tag_bits)
+        if self.banks == 2:
+            for b in range(2):
+                mine = d["set0"][0][0] == b
+                d[f"bset{b}"] = (Mux(mine, d["set0"][0], d["set1"][0]), max(1, self.set_bits))
+                d[f"btag{b}"] = (Mux(mine, d["tag0"][0], d["tag1"][0]), self.tag_bits)
+        return d
+
+    def lookup(self, m, d):
+        """The tag check's first cycle: the lookup registers the sets and tags of :meth:`derive`
+        (``d``: their values, from the lookup's buffer), and each bank's tag row and touched bit
+        for them, read from the LUT RAM. The registers load every cycle (:func:`_reg`, no clock
+        enable): what they hold is checked the next cycle, or killed there. A row the tag check
+        writes in this same cycle (the request ahead, leaving the check) is forwarded: the register
+        takes the written row and touched bit, not the memory's old ones (when the check does not
+        take its request, the looked-up request is killed anyway). Only the tag check writes these
+        rows, so no register holds a stale row."""
+        nports = self.banks
+        nsets = [d[f"set{k}"] for k in range(nports)]
+        ntags = [d[f"tag{k}"] for k in range(nports)]
+        self.rset = [_reg(m, nsets[k], f"{self.name}_set{k}") for k in range(nports)]
+        self.rtag = [_reg(m, ntags[k], f"{self.name}_line_tag{k}") for k in range(nports)]
         self.rrow = [Signal(self.lines.shape, name=f"{self.name}{b}_row" if self.banks > 1 else f"{self.name}_row")
                      for b in range(self.banks)]
         self.rtouched = [Signal(name=f"{self.name}{b}_row_touched" if self.banks > 1 else f"{self.name}_row_touched")
                          for b in range(self.banks)]
+        nm = [f"{self.name}{b}" if self.banks > 1 else self.name for b in range(self.banks)]
+        self.rmatch = [Signal(self.ways, name=f"{n}_match") for n in nm]
+        self.rwaiting = [Signal(self.ways, name=f"{n}_waiting") for n in nm]
+        self.rissued = [Signal(self.issued.shape, name=f"{n}_row_issued") for n in nm]
+        self.rretired = [Signal(self.retired.shape, name=f"{n}_row_retired") for n in nm]
         self.rbank = []
         for b in range(self.banks):
             n = f"{self.name}{b}" if self.banks > 1 else self.name
             if self.banks == 1:
-                s = nsets[0]
+                s, t = nsets[0], ntags[0]
                 self.rbank.append((self.rset[0], self.rtag[0]))
             else:
                 # the bank's set and tag (of the port whose set has the bank's parity), registered
-                s = Signal(sb, name=f"{n}_next_set")
-                t = Signal(self.tag_bits, name=f"{n}_next_tag")
-                m.d.comb += [s.eq(Mux(nsets[0][0] == b, nsets[0], nsets[1])),
-                             t.eq(Mux(nsets[0][0] == b, ntags[0], ntags[1]))]
-                self.rbank.append((_skid(m, s, f"{n}_set", load, sv), _skid(m, t, f"{n}_tag", load, sv)))
+                s, t = d[f"bset{b}"], d[f"btag{b}"]
+                self.rbank.append((_reg(m, s, f"{n}_set"), _reg(m, t, f"{n}_tag")))
             rd = self.lines.read(m, b, s, f"{n}_next_row")
             r = self.lines.row(s)
             touched = self.touched[b]
             here = touched.bit_select(r, 1) if len(touched) > 1 else touched
-            # the skid register's row, its address and touched bit
-            sk_row = Signal(self.lines.shape, name=f"skid_{n}_row")
-            sk_addr = Signal(len(r), name=f"skid_{n}_row_addr")
-            sk_t = Signal(name=f"skid_{n}_row_touched")
-            with m.If(~sv):
-                m.d.sync += [sk_row.eq(rd), sk_addr.eq(r), sk_t.eq(here)]
-            src_row = Signal(self.lines.shape, name=f"{n}_src_row")
-            src_addr = Signal(len(r), name=f"{n}_src_row_addr")
-            m.d.comb += [src_row.eq(Mux(sv, sk_row, rd)), src_addr.eq(Mux(sv, sk_addr, r))]
             fwd = Signal(name=f"{n}_fwd")
-            m.d.comb += fwd.eq(self.w_act[b] & (self.w_addr[b] == src_addr) if len(touched) > 1 else self.w_act[b])
-            with m.If(load):
-                m.d.sync += [self.rrow[b].eq(Mux(fwd, self.w_row[b], src_row)),
-                             self.rtouched[b].eq(Mux(sv, sk_t, here) | fwd)]
+            m.d.comb += fwd.eq(self.w_act[b] & (self.w_addr[b] == r) if len(touched) > 1 else self.w_act[b])
+            pend, _ = self.lines.forwarded(b, r)     # the check's write of the cycle before (rd has it)
+            m.d.sync += [self.rrow[b].eq(Mux(fwd, self.w_row[b], rd)), self.rtouched[b].eq(here | fwd | pend)]
+            # The tag compare, done here: each way's tag against the request's. When the check writes
+            # this row (``fwd``) it changes one way's tag, the way it accesses, to its own tag (a
+            # hit's is that tag already): that way compares the two requests' tags.
+            cw = self.w_way[b]
+            eq = Signal(self.ways, name=f"{n}_next_match")
+            m.d.comb += eq.eq(Cat(*(Mux(fwd & (cw == w), t == self.rbank[b][1], rd.way[w].tag == t)
+                                    for w in range(self.ways))))
+            m.d.sync += self.rmatch[b].eq(eq)
+            # The counts: issued (only the check writes it: forwarded as the row), retired (the data
+            # read writes it: what was read out before this cycle), and whether each way has
+            # references waiting (the way the check accesses has at least its own).
+            iss = self.issued.read(m, b, s, f"{n}_issued_row")
+            ret = self.retired.read(m, b, s, f"{n}_retired_row")
+            wt = Signal(self.ways, name=f"{n}_next_waiting")
+            m.d.comb += wt.eq(Cat(*((fwd & (cw == w)) | (iss[w] != ret[w]) for w in range(self.ways))))
+            m.d.sync += [self.rissued[b].eq(Mux(fwd, self.w_issued[b], iss)), self.rretired[b].eq(ret),
+                         self.rwaiting[b].eq(wt)]
 
     def check(self, m, actives, take):
         """The tag check's second cycle, on what :meth:`lookup` registered: ``actives`` is whether each
@@ -299,8 +353,7 @@ class _Cache:
         for b, (s, t, act) in enumerate(banked):
             n = f"{self.name}{b}" if self.banks > 1 else self.name
             lines = self.rrow[b]
-            issued = self.issued.read(m, b, s, f"{n}_issued_row")
-            retired = self.retired.read(m, b, s, f"{n}_retired_check")
+            issued, retired = self.rissued[b], self.rretired[b]
             alloc = self.alloc.read(m, b, s, f"{n}_alloc_check")
             fill = self.fill.read(m, b, s, f"{n}_fill_check")
             touched = self.touched[b]
@@ -308,7 +361,7 @@ class _Cache:
             valid = Signal(W, name=f"{n}_valid")
             m.d.comb += valid.eq(Mux(self.rtouched[b], lines.valid, 0))
             row = lines.way
-            hits = [valid[w] & (row[w].tag == t) for w in range(W)]
+            hits = [valid[w] & self.rmatch[b][w] for w in range(W)]
             hit = Signal(name=f"{n}_hit")
             way = Signal(max(1, self.way_bits), name=f"{n}_way")
             busy = Signal(name=f"{n}_busy")
@@ -328,10 +381,8 @@ class _Cache:
                     m.d.comb += vway.eq(w)
             m.d.comb += way.eq(Mux(hit, hway, vway))
             # a way's references wait when its counts differ (mod 2^n: equal is none waiting), found
-            # for every way beside the tag compare, then chosen by the victim (no subtract after it)
-            waiting = Signal(W, name=f"{n}_waiting")
-            m.d.comb += waiting.eq(Cat(*(issued[w] != retired[w] for w in range(W))))
-            m.d.comb += busy.eq(~hit & (valid & waiting).bit_select(vway, 1))
+            # for every way by the lookup (what was read out before its cycle), chosen by the victim
+            m.d.comb += busy.eq(~hit & (valid & self.rwaiting[b]).bit_select(vway, 1))
             # LRU: the accessed way becomes the youngest; younger valid ways age by one. A miss puts
             # the line's tag in the way, rebases its count on what was read out, and clears its fill.
             acc_age = Signal(self.age_bits + 1, name=f"{n}_acc_age")
@@ -353,45 +404,60 @@ class _Cache:
             addr, en = self.lines.write(m, b, s, act & take, new_row)
             self.issued.write(m, b, s, act & take, new_issued)
             self.alloc.write(m, b, s, act & take, new_alloc)
-            m.d.comb += [self.w_addr[b].eq(self.lines.row(s)), self.w_act[b].eq(act), self.w_row[b].eq(new_row)]
+            m.d.comb += [self.w_addr[b].eq(self.lines.row(s)), self.w_act[b].eq(act), self.w_row[b].eq(new_row),
+                         self.w_way[b].eq(way), self.w_issued[b].eq(new_issued)]
             # a set is touched when its row is written (a decoder of the bank's write address)
             with m.If(en):
                 m.d.sync += (touched.bit_select(addr, 1) if len(touched) > 1 else touched).eq(1)
-            results.append((hit, way, busy))
+            # a hit on a filled line (what the data read's register takes when this reference is
+            # the next head: the fills of the cycles before this one)
+            filled = Signal(name=f"{n}_hit_filled")
+            m.d.comb += filled.eq(hit & (alloc.bit_select(way, 1) == fill.bit_select(way, 1)))
+            results.append((hit, way, busy, filled))
         out = []
         for k, s in enumerate(sets):
             hit = Signal(name=f"{self.name}_hit{k}")
             way = Signal(max(1, self.way_bits), name=f"{self.name}_way{k}")
             busy = Signal(name=f"{self.name}_busy{k}")
+            filled = Signal(name=f"{self.name}_hit_filled{k}")
             m.d.comb += [hit.eq(self._unbank(m, s, [r[0] for r in results])),
                          way.eq(self._unbank(m, s, [r[1] for r in results])),
-                         busy.eq(self._unbank(m, s, [r[2] for r in results]))]
-            out.append((s, hit, way, busy))
+                         busy.eq(self._unbank(m, s, [r[2] for r in results])),
+                         filled.eq(self._unbank(m, s, [r[3] for r in results]))]
+            out.append((s, hit, way, busy, filled))
         return out
 
-    def read_out(self, m, slots, retire):
-        """The data read: whether every line of ``slots`` (one, or two in consecutive sets, or the
-        same twice) is filled, combinational; ``retire`` (one enable per slot; the second only when
-        the slots differ) counts a reference read out of each at the clock edge."""
+    def filled(self, m, slots, name):
+        """Whether each line of ``slots`` (one, or two in consecutive sets, or the same twice) is
+        filled, combinational (the fills before this cycle)."""
+        sets = [Signal(max(1, self.set_bits), name=f"{self.name}_{name}_set{k}") for k in range(len(slots))]
+        m.d.comb += [s.eq(self.set_of(slot)) for s, slot in zip(sets, slots)]
+        banked = self._banked(m, [(s, self.way_of(slot)) for s, slot in zip(sets, slots)], name)
+        filled_b = []
+        for b, (s, w) in enumerate(banked):
+            n = f"{self.name}{b}" if self.banks > 1 else self.name
+            alloc = self.alloc.read(m, b, s, f"{n}_alloc_{name}")
+            fill = self.fill.read(m, b, s, f"{n}_fill_{name}")
+            f = Signal(name=f"{n}_{name}_filled")
+            m.d.comb += f.eq(alloc.bit_select(w, 1) == fill.bit_select(w, 1))
+            filled_b.append(f)
+        filled = Signal(len(slots), name=f"{self.name}_{name}_filled")
+        m.d.comb += [filled[k].eq(self._unbank(m, s, filled_b)) for k, s in enumerate(sets)]
+        return filled
+
+    def retire(self, m, slots, retire):
+        """The data read counts a reference read out of each line of ``slots`` at the clock edge
+        (``retire``: one enable per slot; the second only when the slots differ)."""
         sets = [Signal(max(1, self.set_bits), name=f"{self.name}_head_set{k}") for k in range(len(slots))]
         m.d.comb += [s.eq(self.set_of(slot)) for s, slot in zip(sets, slots)]
         banked = self._banked(m, [(s, self.way_of(slot), en) for s, slot, en in zip(sets, slots, retire)], "head")
-        filled_b = []
         for b, (s, w, en) in enumerate(banked):
             n = f"{self.name}{b}" if self.banks > 1 else self.name
-            alloc = self.alloc.read(m, b, s, f"{n}_alloc_head")
-            fill = self.fill.read(m, b, s, f"{n}_fill_head")
             retired = self.retired.read(m, b, s, f"{n}_retired_head")
-            f = Signal(name=f"{n}_head_filled")
-            m.d.comb += f.eq(alloc.bit_select(w, 1) == fill.bit_select(w, 1))
-            filled_b.append(f)
             new = Signal(self.retired.shape, name=f"{n}_new_retired")
             m.d.comb += new.eq(Cat(*(Mux(w == x, retired[x] + 1, retired[x])[:self.count_bits]
                                      for x in range(self.ways))))
             self.retired.write(m, b, s, en, new)
-        filled = Signal(len(slots), name=f"{self.name}_head_filled")
-        m.d.comb += [filled[k].eq(self._unbank(m, s, filled_b)) for k, s in enumerate(sets)]
-        return filled
 
     def fill_line(self, m, slot, en):
         """A burst's last beat fills the line of ``slot`` at the clock edge (``en``)."""
@@ -436,13 +502,13 @@ class CachedReader(wiring.Component):
             **({"check_ready": Out(1), "check_go": In(1)} if joint else {}),
         })
 
-    #: Cycles from ``i`` to ``o`` when every reference hits: lookup, tag check, data read
+    #: Cycles from ``i`` to ``o`` when every reference hits: buffer, lookup, tag check, data read
     #: (golden's ``FRONT_LATENCY`` is the unit's address stages plus this).
-    LATENCY = 3
+    LATENCY = 4
 
     @property
     def latency(self) -> int:
-        """Cycles from ``i`` to ``o`` when every reference hits (lookup, tag check, data read): 3."""
+        """Cycles from ``i`` to ``o`` when every reference hits (buffer, lookup, tag check, data read): 4."""
         return self.LATENCY
 
     def elaborate(self, platform):
@@ -461,51 +527,111 @@ class CachedReader(wiring.Component):
         rc = _Cache(m, "raw", cfg.raw_cache, 1, count_bits,
                     max(1, aw - _log2(cfg.raw_cache.line) - _log2(cfg.raw_cache.sets)))
         beats = [ic.shape.line // bus, rc.shape.line // bus]
+        # -- the lookup's input: the requests accepted on i and not yet taken by the check (at most three) --
+        # What the lookup needs of a request (its sets and tags in each cache, the FIFO entry's
+        # fields) is computed from ``i`` when the request is accepted, into a three-entry buffer,
+        # so the lookup starts from flip-flops. The lookup's registers load every cycle (no clock
+        # enable, so the check's decision ``take`` reaches a handful of flip-flops, not the ~500 of
+        # the lookup): while the check works on request n (``lv``), the lookup takes n + 1 from the
+        # buffer as if n were taken. When it is not, the check kills what the lookup took (``lv``
+        # low the next cycle) and the lookup takes n again: a check not taken is tried again two
+        # cycles later (golden's ``REPLAY``). The buffer holds the requests accepted and not yet
+        # taken (n in the check, n + 1 in the lookup, n + 2 arriving), so ``i.ready`` is the
+        # registered ``count != 3`` (``b[n] >= g[n-3] + 1``), and a request accepted in cycle
+        # ``b`` is looked up from ``b + 1`` and checked from ``b + 2`` (golden's ``LOOKUP_STAGES``).
         req = self.i.p
-
-        # -- the references of the request on i, registered by the lookup (the tag check's first cycle) --
         a0 = Signal(self._addr_width + 8)
         a1 = Signal(self._addr_width + 8)
         ra = Signal(self._addr_width + 8)
         m.d.comb += [a0.eq(req.word * wb), a1.eq((req.word + 1) * wb), ra.eq(self._raw_base + req.word * 4)]
         il, rl = _log2(ic.shape.line), _log2(rc.shape.line)
         line0, line1, rline = a0 >> il, a1 >> il, ra >> rl
-        # The lookup holds up to two requests: the main register (``lv``), which the check works
-        # from, and a skid register (``sv``) that takes the request on ``i`` while the main one waits,
-        # so that ``i.ready`` is a register (``~sv``) and the check's decision (``take``) does not
-        # reach the stages in front. The main register loads when empty or when its request leaves
-        # the check (``take``): from the skid register when that holds one, else from ``i``.
+        nb = max(1, _log2(max(beats)))
+        derived = [
+            ("raw", req.raw, 1),
+            ("two", ~req.raw & req.straddle & (line1 != line0), 1),
+            ("tag", req.tag, max(1, self._tag_width)),
+            ("beat0", Mux(req.raw, (ra & (rc.shape.line - 1)) >> _log2(bus), (a0 & (ic.shape.line - 1)) >> _log2(bus))[:nb], nb),
+            ("beat1", ((a1 & (ic.shape.line - 1)) >> _log2(bus))[:nb], nb),
+            ("off0", Mux(req.raw, (ra & (bus - 1)) >> 2, (a0 & (bus - 1)) >> _log2(wb))[:max(1, _log2(bus // min(wb, 4)) or 1)],
+             max(1, _log2(bus // min(wb, 4)) or 1)),
+            ("off1", ((a1 & (bus - 1)) >> _log2(wb))[:max(1, _log2(bus // wb) or 1)], max(1, _log2(bus // wb) or 1)),
+        ]
+        for cache, line in ((ic, line0), (rc, rline)):
+            derived += [(f"{cache.name}_{k}", v, w) for k, (v, w) in cache.derive(line).items()]
+        width = sum(w for _, _, w in derived)
+        bundle = Signal(width, name="lookup_bundle_in")
+        # (a gate, not a plain wire: one packed wire holding bits of ``ra`` and bits computed from
+        # them, Yosys makes it the driver of ``ra``'s bits and Verilator sees a cycle: see ``new``)
+        with m.If(self.i.valid):
+            m.d.comb += bundle.eq(Cat(*(Value.cast(v)[:w] if len(Value.cast(v)) >= w else v for _, v, w in derived)))
+        buf = [Signal(width, name=f"lookup_buffer{j}") for j in range(3)]
+        wp = Signal(3, name="lookup_buffer_write", init=1)      # one-hot
+        rp = Signal(3, name="lookup_buffer_read", init=1)       # one-hot: the oldest request not taken
+        count = Signal(range(4), name="lookup_buffer_count")
         lv = Signal(name="lookup_valid")
-        sv = Signal(name="skid_valid")
-        load = Signal()
         take = Signal()
-        m.d.comb += load.eq(~lv | take)
-        with m.If(load):
-            m.d.sync += lv.eq(sv | self.i.valid)
-        with m.If(sv):
-            m.d.sync += sv.eq(~take)
-        with m.Else():
-            m.d.sync += sv.eq(self.i.valid & lv & ~take)
-        ic.lookup(m, line0, load, sv)
-        rc.lookup(m, rline, load, sv)
+        accept = Signal()
+        m.d.comb += accept.eq(self.i.valid & (count != 3))
+        for j in range(3):
+            with m.If(accept & wp[j]):
+                m.d.sync += buf[j].eq(bundle)
+        with m.If(accept):
+            m.d.sync += wp.eq(wp.rotate_left(1))
+        with m.If(take):
+            m.d.sync += rp.eq(rp.rotate_left(1))
+        m.d.sync += count.eq(count + accept - take)
+        # The entry the lookup reads: the oldest not taken, or the one after it while that is checked
+        # (``Mux(lv, rp.rotate_left(1), rp)``). It is chosen a cycle ahead, into a register the
+        # lookup reads (``lookup_bundle``), so the lookup's path starts at flip-flops and not at
+        # ``lv``'s fan-out and the buffer's multiplexers: from the buffer as it will be (a request
+        # accepted now is written into its entry at this edge, so it is taken from ``bundle``), at
+        # the read pointer and valid bit of the next cycle. ``take`` chooses last between the two
+        # entries it may leave there: ``take`` (the check held ``lv``: the lookup's request comes
+        # next, at ``rp + 1``, and the one after it when the buffer holds two or more) or not
+        # (``lv`` killed: ``rp`` again; or the lookup takes ``rp`` and ``rp + 1`` comes next).
+        have = Signal(name="lookup_has_request")
+        m.d.comb += have.eq(Mux(lv, count >= 2, count != 0))
+        m.d.sync += lv.eq(have & ~(lv & ~take))
+        nbuf = [Mux(accept & wp[j], bundle, buf[j]) for j in range(3)]
 
-        def field(nx, name):
-            return _skid(m, nx, name, load, sv)
-        l_raw = field(req.raw, "lookup_raw")
-        l_two = field(~req.raw & req.straddle & (line1 != line0), "lookup_two")
-        l_tag = field(req.tag, "lookup_tag") if self._tag_width else C(0, 1)
-        l_beat0 = field(Mux(req.raw, (ra & (rc.shape.line - 1)) >> _log2(bus), (a0 & (ic.shape.line - 1)) >> _log2(bus))
-                        [:max(1, _log2(max(beats)))], "lookup_beat0")
-        l_beat1 = field(((a1 & (ic.shape.line - 1)) >> _log2(bus))[:max(1, _log2(max(beats)))], "lookup_beat1")
-        l_off0 = field(Mux(req.raw, (ra & (bus - 1)) >> 2, (a0 & (bus - 1)) >> _log2(wb))[:max(1, _log2(bus // min(wb, 4)) or 1)],
-                       "lookup_off0")
-        l_off1 = field(((a1 & (bus - 1)) >> _log2(wb))[:max(1, _log2(bus // wb) or 1)], "lookup_off1")
-        l_addr = [field((x << sh)[:self._addr_width], f"lookup_line_addr{j}")     # line0, line0 + 1, raw
-                  for j, (x, sh) in enumerate(((line0, il), (line0 + 1, il), (rline, rl)))]
+        def pick(sel):
+            return Mux(sel[0], nbuf[0], 0) | Mux(sel[1], nbuf[1], 0) | Mux(sel[2], nbuf[2], 0)
+        sel_taken = Signal(3, name="lookup_select_taken")
+        sel_held = Signal(3, name="lookup_select_held")
+        m.d.comb += [sel_taken.eq(Mux(count >= 2, rp.rotate_left(2), rp.rotate_left(1))),
+                     sel_held.eq(Mux(have & ~lv, rp.rotate_left(1), rp))]
+        src = Signal(width, name="lookup_bundle")
+        m.d.sync += src.eq(Mux(take, pick(sel_taken), pick(sel_held)))
+        look = {}
+        pos = 0
+        for name, _, w in derived:
+            sig = Signal(w, name=f"lookup_next_{name}")
+            m.d.comb += sig.eq(src[pos:pos + w])
+            look[name] = sig
+            pos += w
+        ic.lookup(m, {k[len("index_"):]: v for k, v in look.items() if k.startswith("index_")})
+        rc.lookup(m, {k[len("raw_"):]: v for k, v in look.items() if k.startswith("raw_") and k != "raw"})
+
+        def field(name):
+            return _reg(m, look[name], f"lookup_{name}")
+        l_raw = field("raw")
+        l_two = field("two")
+        l_tag = field("tag") if self._tag_width else C(0, 1)
+        l_beat0, l_beat1, l_off0, l_off1 = field("beat0"), field("beat1"), field("off0"), field("off1")
+        # the bursts' line addresses (line0, line0 + 1, raw) from the sets and tags the lookup
+        # registered for the compare (not registered again: fewer flip-flops on ``take``'s enable)
+        def line_addr(cache, k, sh):
+            st, tg = cache.rset[k], cache.rtag[k]
+            return (Cat(st[:cache.set_bits], tg) << sh)[:self._addr_width] if cache.set_bits else \
+                (tg << sh)[:self._addr_width]
+        l_addr = [line_addr(ic, 0, il), line_addr(ic, 1, il), line_addr(rc, 0, rl)]
         two = l_two
         # port 1 looks up the line after line0 (line1 when ``two``; unused otherwise)
-        (s0, hit0, way0, busy0), (s1, hit1, way1, busy1) = ic.check(m, [lv & ~l_raw, lv & two], take)
-        (sr, hitr, wayr, busyr), = rc.check(m, [lv & l_raw], take)
+        (s0, hit0, way0, busy0, fill0), (s1, hit1, way1, busy1, fill1) = ic.check(m, [lv & ~l_raw, lv & two], take)
+        (sr, hitr, wayr, busyr, fillr), = rc.check(m, [lv & l_raw], take)
+        new_filled = Signal(name="new_filled")       # the request's lines hit and are filled
+        m.d.comb += new_filled.eq(Mux(l_raw, fillr, fill0 & (~two | fill1)))
         miss0 = ~l_raw & ~hit0
         miss1 = two & ~hit1
         missr = l_raw & ~hitr
@@ -538,6 +664,9 @@ class CachedReader(wiring.Component):
         fifo_w, fifo_r = fifo.write_port(), fifo.read_port(domain="comb")   # fifo_r: the entry after the head
         level = Signal(range(Q + 1))
         head = Signal(range(max(Q, 2)))
+        # the entry after the head's address, a register of its own (no carry chain before the
+        # FIFO's read multiplexers): ``head + 1`` mod Q
+        head1 = Signal(range(max(Q, 2)), init=1 % Q, name="head_after")
         tail = Signal(range(max(Q, 2)))
         pop = Signal()
         o_free = Signal()
@@ -546,19 +675,44 @@ class CachedReader(wiring.Component):
         # LUT RAM read multiplexers): loaded with the entry after it when the head is read, or with
         # the entry being written when that one becomes the head (the FIFO empty, or about to be).
         headv = Signal(entry, name="head_entry")
-        m.d.comb += fifo_r.addr.eq(Mux(head == Q - 1, 0, head + 1))
-        # the head's lines filled? (a read out of the index cache retires one reference per line)
-        i_filled = ic.read_out(m, [headv.slot0[:islot], headv.slot1],
-                               [pop & ~headv.raw, pop & ~headv.raw & (headv.slot1 != headv.slot0[:islot])])
-        r_filled = rc.read_out(m, [headv.slot0[:rslot]], [pop & headv.raw])
-        head_filled = Mux(headv.raw, r_filled, i_filled.all())
+        m.d.comb += fifo_r.addr.eq(head1)
+        # Whether the head's lines are filled, in a register (``head_filled``: the data read's
+        # ``pop`` is then a gate of flip-flops): loaded each cycle for the entry that is the head in
+        # the next one, from the fills before this cycle: the head's own lines when it stays, the
+        # entry after it when it is read, or the entry being checked when that one becomes the head
+        # (the check's hit on a filled line). So a line's fill is seen by the data read the second
+        # cycle after its last beat (golden's ``FILL_READ``).
+        # the FIFO's write register (below)
+        fw_addr = Signal.like(tail, name="fifo_w_addr")
+        fw_data = Signal(entry, name="fifo_w_data")
+        fw_en = Signal(name="fifo_w_en")
+        nextv = Signal(entry, name="head_next")
+        m.d.comb += nextv.eq(Mux(fw_en & (level == 2), fw_data, fifo_r.data))
+
+        def lines_filled(v, name):
+            i_f = ic.filled(m, [v.slot0[:islot], v.slot1], name)
+            r_f = rc.filled(m, [v.slot0[:rslot]], name)
+            return Mux(v.raw, r_f, i_f.all())
+        head_now = lines_filled(headv, "head")
+        next_now = lines_filled(nextv, "next")
+        head_filled = Signal(name="head_filled")
         m.d.comb += pop.eq((level != 0) & head_filled & o_free)
         m.d.comb += self.stall_fill.eq((level != 0) & ~head_filled & o_free)
+        # a read out of the index cache retires one reference per line
+        ic.retire(m, [headv.slot0[:islot], headv.slot1],
+                  [pop & ~headv.raw, pop & ~headv.raw & (headv.slot1 != headv.slot0[:islot])])
+        rc.retire(m, [headv.slot0[:rslot]], [pop & headv.raw])
 
+        # Room in the FIFO: from the registered level alone (``pop``, the end of the data read's
+        # path through the fill LUT RAMs, stays off the check's ready and ``take``), so an entry freed
+        # by a read is taken from the next cycle (golden's ``fifo_slack``); the blocking cache
+        # (Q = 1) keeps the read's room in the same cycle (else every reference would take two).
+        room = Signal(name="fifo_room")
+        m.d.comb += room.eq((level != Q) | pop if Q == 1 else level != Q)
         m.d.comb += [
-            check_ready.eq(~slot_v[1] & (~slot_v[0] | self.axi.arready) & ((level != Q) | pop) & ~busy),
+            check_ready.eq(~slot_v[1] & (~slot_v[0] | self.axi.arready) & room & ~busy),
             take.eq(lv & (self.check_go if self._joint else check_ready)),
-            self.i.ready.eq(~sv),
+            self.i.ready.eq(count != 3),
         ]
         # the entry of the request being checked
         # The entry's fields as separate signals, joined only where the FIFO stores them, and there
@@ -582,18 +736,28 @@ class CachedReader(wiring.Component):
             new.beat0.eq(l_beat0), new.beat1.eq(l_beat1), new.off0.eq(l_off0), new.off1.eq(l_off1),
             new.tag.eq(l_tag),
         ]
-        m.d.comb += [fifo_w.addr.eq(tail), fifo_w.en.eq(take)]
-        with m.If(take):        # (a gate, not a plain wire: see ``new`` above)
-            m.d.comb += fifo_w.data.eq(new.value(entry))
+        # The FIFO is written one cycle behind the check, from a write register loaded every cycle
+        # (``take`` reaches its enable's data input, not the LUT RAM's write enables); the data read
+        # takes a reference the cycle after its check from ``new`` (the FIFO empty) or from the
+        # write register (below), so it sees no difference.
+        m.d.sync += [fw_addr.eq(tail), fw_en.eq(take)]
+        with m.If(lv):          # (a gate, not a plain wire: see ``new`` above)
+            m.d.sync += fw_data.eq(new.value(entry))
+        m.d.comb += [fifo_w.addr.eq(fw_addr), fifo_w.en.eq(fw_en), fifo_w.data.eq(fw_data)]
         with m.If(take):
             m.d.sync += tail.eq(Mux(tail == Q - 1, 0, tail + 1))
         with m.If(pop):
-            m.d.sync += head.eq(Mux(head == Q - 1, 0, head + 1))
+            m.d.sync += [head.eq(head1), head1.eq(Mux(head1 == Q - 1, 0, head1 + 1))]
         m.d.sync += level.eq(level + take - pop)
         with m.If(pop):
-            m.d.sync += headv.eq(Mux(level == 1, new.value(entry), fifo_r.data))
+            # the entry after the head: being checked (level 1), in the write register (level 2 and
+            # a write pending: the newest entry is the one after the head), or in the LUT RAM
+            m.d.sync += [headv.eq(Mux(level == 1, new.value(entry), nextv)),
+                         head_filled.eq(Mux(level == 1, new_filled, next_now))]
         with m.Elif(level == 0):
-            m.d.sync += headv.eq(new.value(entry))
+            m.d.sync += [headv.eq(new.value(entry)), head_filled.eq(new_filled)]
+        with m.Else():
+            m.d.sync += head_filled.eq(head_now)
 
         # AR slots: shift on issue; a tag check with misses loads them (its first burst in slot 0).
         burst_addr = [Signal(self._addr_width, name=f"miss_addr{j}") for j in range(2)]
@@ -632,11 +796,18 @@ class CachedReader(wiring.Component):
         queue = take & (nmiss != 0)
         m.d.comb += [first.eq(Mux(l_raw, fl(slotr, 1), Mux(miss0, fl(slot0, 0), fl(slot1, 0)))),
                      second.eq(fl(slot1, 0))]
+        # written one cycle behind the check, from a write register per bank (``take`` reaches no
+        # write enable of the LUT RAM): a burst's AR leaves at least a cycle after its check and its
+        # first beat at least a cycle after that, when the entry is in the LUT RAM
         t1 = (f_tail + 1)[:len(f_tail)]
         for b, (wp, rp) in enumerate(flight):
             mine = f_tail[0] == b
-            m.d.comb += [wp.addr.eq(Mux(mine, f_tail >> 1, t1 >> 1)), wp.data.eq(Mux(mine, first, second)),
-                         wp.en.eq(queue & (mine | (nmiss == 2))), rp.addr.eq(f_head >> 1)]
+            w_addr = Signal(len(f_tail) - 1, name=f"flight{b}_w_addr")
+            w_data = Signal(1 + sw, name=f"flight{b}_w_data")
+            w_en = Signal(name=f"flight{b}_w_en")
+            m.d.sync += [w_addr.eq(Mux(mine, f_tail >> 1, t1 >> 1)), w_data.eq(Mux(mine, first, second)),
+                         w_en.eq(queue & (mine | (nmiss == 2)))]
+            m.d.comb += [wp.addr.eq(w_addr), wp.data.eq(w_data), wp.en.eq(w_en), rp.addr.eq(f_head >> 1)]
         with m.If(queue):
             m.d.sync += f_tail.eq(Mux(nmiss == 2, f_tail + 2, f_tail + 1))
         cur = Signal(1 + sw)

@@ -197,10 +197,12 @@ def main(argv=None) -> int:
             print(f"run_tb: {args.sim}: {cov['bursts']} AXI bursts (golden's caches: {cov['golden_bursts']}), "
                   f"hit rate index {cov['hit_rate']['index']}, raw {cov['hit_rate']['raw']}; requests that hit "
                   f"{cov['memory_bins']['hit']}, missed {cov['memory_bins']['miss']}")
+        extra = (f", {cov['requests']['reload']} probe requests (the first load's last, the reload's first)"
+                 if cov["requests"].get("reload") else "")
         print(f"run_tb: {args.sim}: {cov['responses']} responses, {cov['mismatches']} mismatches; coverage "
               f"{cov['hit']}/{cov['reachable']} reachable bins ({cov['percent']} %), {cov['hit_by_random']} by "
               f"{cov['requests']['random']} random requests, {cov['hit_by_closure']} by {cov['requests']['closure']} "
-              f"closure requests; {report}")
+              f"closure requests{extra}; {report}")
         if cov["missed"]:
             print("run_tb: missed bins: " + ", ".join(cov["missed"]))
     print(f"run_tb: {args.sim}: {'PASS' if tests and not failed else 'FAIL'}")

@@ -17,9 +17,10 @@ it does, in one cocotb test, ``texel_fetch_against_golden``:
    bench puts it (:func:`placements`) and tells the unit by the ``INDEX_BASE``/``RAW_BASE`` writes
    of its load.
    **Several loads** (the loadable units): steps 2-5 run for each set given (``VQTEX_TB_SET``, a
-   path list) in turn, in one simulation; the loadable cached unit given one set loads it twice, the
-   second time at other, overlapping bases (:func:`loads`), so a line kept from the first load
-   would hold other bytes.
+   path list) in turn, in one simulation, each at other bases overlapping the previous placement;
+   the loadable cached unit given one set loads it, then :func:`other_bytes` of it at the same
+   bases (:func:`loads`), the probe request (:func:`probe`) the last of the first load and the
+   first of the second, so a line kept from the first load is hit and holds other bytes.
 3. **Random phase**: ``requests`` requests; every bin the set can reach (``vqtex.sim.testbench.bins``)
    gets ``per_bin`` requests drawn from its blocks, the rest are ``golden.fetch.random_requests``,
    shuffled. The **driver** offers them on ``i_*`` with random idle cycles (``gap``), holding valid
@@ -394,22 +395,70 @@ async def _start(dut, memory_bytes: int = 0):
     return ram
 
 
-def placements(sets: list, rng) -> list:
+def placements(sets: list, rng, reload: bool = False) -> list:
     """Where the host puts each load's set in external memory (the loadable cached unit; its
     ``INDEX_BASE`` and ``RAW_BASE``): ``Layout.at`` with the index base an odd number of index words
     past 4 KB and the raw base an odd number of 4-byte words past the next 64-byte boundary after the
     index memory (so neither is on a cache line of two words or more), both moving from one load to
     the next while the regions overlap: the host reuses its buffer, so a line the caches kept from
     the previous load holds other bytes at the same address, and only emptied caches give golden's
-    texels and golden's bursts."""
+    texels and golden's bursts. ``reload`` (``sets`` a set and its :func:`other_bytes`): the second
+    load at the first one's bases, so every line the caches kept holds the first set's bytes at an
+    address the second set reads, other bytes there (:func:`probe`)."""
     out = []
     for k, ts in enumerate(sets):
+        if reload and k:
+            out.append(Layout.at(ts, out[0].index_base, out[0].raw_base))
+            continue
         wb = ts.word_bits // 8
         index_base = 4096 + wb * int(1 + 8 * k + 2 * rng.integers(0, 4))
         index_end = index_base + len(ts.index_words) * wb
         raw_base = -(-index_end // 64) * 64 + 4 * int(1 + 8 * k + 2 * rng.integers(0, 4))
         out.append(Layout.at(ts, index_base, raw_base))
     return out
+
+
+def other_bytes(ts: TextureSet) -> TextureSet:
+    """``ts`` with other bytes in external memory and the same geometry, layout and on-chip memories
+    (descriptors, codebook, colour matrix): every index ``x`` of a codebook of ``n`` entries becomes
+    ``n - 1 - x`` (still inside its codebook), every raw word is inverted. The loadable cached unit's
+    reload (:func:`loads`): a line kept from ``ts`` at the same bases answers ``ts``'s words, so a
+    request reading it gets ``fetch(ts, ...)`` where ``fetch(other_bytes(ts), ...)`` is due."""
+    from dataclasses import replace
+    from vqtex.golden.format import pack_indices, unpack_indices
+    words = np.array(ts.index_words, copy=True)
+    done = set()
+    for t, info in enumerate(ts.textures):
+        if info.codebook < 0:
+            continue
+        size = ts.codebooks[info.codebook].size
+        for level in range(info.levels):
+            row = ts.descriptors[t, level]
+            first = not int(row["sublevel"]) or not ts.descriptors[t, level - 1]["compressed"]
+            if not row["compressed"] or not first or int(row["base"]) in done:
+                continue                # a group's map once (its sub-levels and a shared map read it too)
+            done.add(int(row["base"]))
+            n = (1 << int(row["log2w"]) >> int(row["log2bw"])) * (1 << int(row["log2h"]) >> int(row["log2bh"]))
+            b, base = int(row["index_bits"]), int(row["base"])
+            packed = pack_indices(size - 1 - unpack_indices(ts.index_words, b, n, base, ts.word_bits), b, ts.word_bits)
+            last = np.asarray(ts.index_words[base + len(packed) - 1]).astype(np.uint64)
+            spare = np.uint64(((1 << ts.word_bits) - 1) ^ ((1 << ((n * b - 1) % ts.word_bits + 1)) - 1))
+            packed[-1] |= (last & spare).astype(packed.dtype)      # the bits past the map's last index kept
+            words[base: base + len(packed)] = packed
+    out = replace(ts, index_words=words, raw_words=~np.asarray(ts.raw_words))
+    out.check_indices()
+    return out
+
+
+def probe(ts: TextureSet, reload: TextureSet, rng, n: int = 256) -> np.ndarray:
+    """A request (1, 4) whose texel differs between ``ts`` and ``reload`` (:func:`other_bytes`):
+    the last request of ``ts``'s load and the first of the reload's, at the same bases. Its lines
+    are in the caches when the reload starts (nothing was read after them), so a reader the reload
+    did not empty answers it with ``ts``'s texel and fails the scoreboard; an emptied one misses."""
+    cand = random_requests(ts, n, seed=int(rng.integers(0, 2**31)))
+    differ = np.flatnonzero((fetch(ts, *cand.T) != fetch(reload, *cand.T)).any(axis=1))
+    assert len(differ), f"no request of {n} reads other texels after the reload (other_bytes)"
+    return cand[differ[:1]]
 
 
 class Host:
@@ -498,9 +547,10 @@ def _check_set(ts: TextureSet, cfg: dict, path: str):
 def loads(cfg: dict, sets: list) -> list:
     """The sets the run serves, in turn: a baked unit its own (no load); a loadable unit each set
     given, loaded over the bus one after the other in one simulation; the loadable cached unit given
-    one set loads it twice (the reload at other bases)."""
+    one set loads it, then reloads it with :func:`other_bytes` at the same bases (:func:`placements`,
+    :func:`probe`)."""
     if cfg["unit"] == "loadable" and cfg["memory"] is not None and len(sets) == 1:
-        return [sets[0], sets[0]]
+        return [sets[0], other_bytes(sets[0])]
     return sets
 
 
@@ -514,6 +564,9 @@ async def texel_fetch_against_golden(dut):
         sets.append(ts)
         names[id(ts)] = os.path.basename(path)
     run = loads(cfg, sets)
+    reload = len(run) > len(sets)           # the loadable cached unit's one set, then its other_bytes
+    if reload:
+        names[id(run[1])] = names[id(sets[0])] + " (other bytes)"
     rng = np.random.default_rng(cfg["seed"])
     cands = [candidates(ts) for ts in run]
     reachable = {(*key, stall) for c in cands for key in c for stall in (False, True)}
@@ -523,7 +576,7 @@ async def texel_fetch_against_golden(dut):
                   ", ".join(cfg["set_paths"]), len(run), len(sets), len(reachable), cfg["requests"], cfg["seed"],
                   cfg["stall"], cfg["gap"])
     # where each set lies in external memory: the loadable cached unit's bases, else Layout.of
-    layouts = (placements(run, rng) if loadable else [Layout.of(ts) for ts in run]) if external else [None] * len(run)
+    layouts = (placements(run, rng, reload) if loadable else [Layout.of(ts) for ts in run]) if external else [None] * len(run)
     size = max((-(-lay.end // 4096) * 4096 for lay in layouts if lay is not None), default=0)
     ram = await _start(dut, size)
     host = None
@@ -534,7 +587,8 @@ async def texel_fetch_against_golden(dut):
     strobes = cocotb.start_soon(bench.count_strobes()) if hasattr(dut, "straddle") else None
     ar = cocotb.start_soon(bench.watch_ar(size)) if external else None
 
-    per_load, closure_total, random_total, after_random = [], 0, 0, set()
+    per_load, closure_total, random_total, reload_total, after_random = [], 0, 0, 0, set()
+    last = probe(run[0], run[1], rng) if reload else None
     for k, (ts, layout, cand) in enumerate(zip(run, layouts, cands)):
         entry = {"set": names[id(ts)]}
         if ram is not None:                 # the host writes the set's bytes where its bases say
@@ -544,6 +598,10 @@ async def texel_fetch_against_golden(dut):
             entry["writes"] = await host.load(ts, entry["set"], layout if external else None, dut._log)
             entry["port"] = await host.check_port(ts, layout if external else None, bench.mismatches)
         bench.begin(ts, layout)
+        entry["first_response"] = bench.received
+        if reload and k == 1:               # the reload's first request: the lines the first load read last
+            await bench.run(last, [None])
+            reload_total += 1
         req = random_phase(ts, cand, cfg["requests"], cfg["per_bin"], rng)
         await bench.run(req, [None] * len(req))
         after_random |= coverage.hit() & reachable
@@ -558,6 +616,9 @@ async def texel_fetch_against_golden(dut):
         if closure:
             creq = np.array([c[0] for c in closure], np.int64)
             await bench.run(creq, [c[1] for c in closure])
+        if reload and k == 0:               # the first load's last request: its lines stay in the caches
+            await bench.run(last, [None])
+            reload_total += 1
         random_total, closure_total = random_total + len(req), closure_total + len(closure)
         if external:
             entry.update(bench.check_bursts())
@@ -579,7 +640,7 @@ async def texel_fetch_against_golden(dut):
         bench.check_strobes()
     timing = bench.check_latency(cfg["latency"])
 
-    phases = {"requests": {"random": random_total, "closure": closure_total},
+    phases = {"requests": {"random": random_total, "closure": closure_total, "reload": reload_total},
               "hit_by_random": len(after_random), "hit_by_closure": len((coverage.hit() & reachable) - after_random),
               "mismatches": len(bench.mismatches), "responses": bench.received,
               "straddling_requests": bench.straddling, "straddle_strobes": bench.strobes["straddle"], **timing,

@@ -48,10 +48,10 @@ def test_lane_streams_are_the_footprint_slots(lanes):
 
 
 @pytest.mark.parametrize("lanes", [1, 2, 4, 8])
-def test_perfect_cache_is_groups_plus_29(lanes):
+def test_perfect_cache_is_groups_plus_30(lanes):
     ts, px, frac = setup()
     r = gf.run_pixels(ts, px, config(), lanes, frac, ideal=True, latency=LATENCY)
-    assert r["cycles"] == r["groups"] + 29 == r["on_chip_cycles"] + 5
+    assert r["cycles"] == r["groups"] + 30 == r["on_chip_cycles"] + 6
     assert r["bursts"] == 0 and r["stall_cycles"]["miss"] == 0
     # the colours leave one group apart, in order
     assert (np.diff(r["transfer"]) >= 1).all()

@@ -114,7 +114,7 @@ def check(ts, req, cfg, stall, seed, prelude=None):
     p = plan(ts, req, cfg)
     model = run(p, cfg, 0, None, address_stages=0, consumer=sink)
     assert got["accept"] == model["accept"].tolist()
-    assert (model["tag"] >= model["accept"] + 1).all()       # the lookup takes a cycle
+    assert (model["tag"] >= model["accept"] + 2).all()       # the buffer and the lookup take a cycle each
     assert len(got["ar"]) == model["bursts"]
     ar = [g + 1 + j for g, m in zip(model["tag"].tolist(), p.misses.tolist()) for j in range(m)]
     assert got["ar"] == ar

@@ -156,7 +156,7 @@ def test_demo_loadable_cached(capsys, tmp_path):
     assert f"loaded over the bus port before each frame: {want} cycles" in text
     m = rep["memory"]
     assert m["configuration"].startswith("index cache 1 KB") and 0.9 < m["hit_rate"]["index"] < 1
-    assert rep["frames"][0]["cycles"] > rep["frames"][0]["requests"] and rep["frames"][0]["latency"] == 20
+    assert rep["frames"][0]["cycles"] > rep["frames"][0]["requests"] and rep["frames"][0]["latency"] == 21
     small_geometry = tmp_path / "small.toml"
     small_geometry.write_text(Geometry.of(texture_set("rgb_4x4_b8_mip")).dumps())
     assert_one_error(capsys, ["demo", "-o", tmp_path / "e", "--memory", "external", "--unit", "loadable",

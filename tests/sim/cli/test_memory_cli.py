@@ -139,7 +139,7 @@ def test_demo_with_external_memory(capsys, tmp_path):
         m = rep["memory"]
         assert 0.99 < m["hit_rate"]["index"] < 1 and 0.99 < m["hit_rate"]["raw"] < 1
         assert m["bytes_per_pixel"] > 0 and rep["frames"][0]["stall_cycles"]["memory"] > 0
-        assert rep["frames"][0]["latency"] == 20
+        assert rep["frames"][0]["latency"] == 21
     assert_one_error(capsys, ["demo", "-o", tmp_path / "e", "--memory", "external", "--unit", "full"], "no --unit")
     assert_one_error(capsys, ["demo", "-o", tmp_path / "e", "--cache-size", "4096"], "needs --memory external")
 

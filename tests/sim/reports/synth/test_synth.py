@@ -527,7 +527,7 @@ def test_report_area_memory_external_synthesis(tmp_path, capsys):
                           "--no-pnr", "--json")
     assert code == 0, err
     rep = json.loads(out)
-    assert rep["top"] == "texel fetch, external memory (cached)" and rep["latency"] == 20
+    assert rep["top"] == "texel fetch, external memory (cached)" and rep["latency"] == 21
     assert rep["memory"]["index_cache"]["size"] == 512 and rep["memory"]["prefetch"] == 4
     mem = rep["memories"]
     lut_ram = [n for n in mem if n.startswith("unit.reader.") and "_lines" not in n]
