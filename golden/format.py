@@ -483,9 +483,10 @@ class TextureSet:
                     if not group["compressed"] or int(group["sublevel"]) != first - (L - s) or group["base"] != row["base"]:
                         raise FormatError(f"{where}: sub-level {s} does not read its level group's index map")
 
-    def check_indices(self) -> None:
-        """Raise FormatError if an index in any map points past its codebook (the hardware would
-        read another codebook's entry, or past the memory)."""
+    def index_maps(self):
+        """Each stored index map once, from the first stored level of its group (sub-levels read
+        their group's map): ``(texture, level, base, index_bits, n, codebook_size)``, with ``n`` the
+        map's indices. Texture and level order; a loop over maps, not over indices."""
         for t, info in enumerate(self.textures):
             if info.codebook < 0:
                 continue
@@ -494,15 +495,20 @@ class TextureSet:
                 row = self.descriptors[t, L]
                 s = int(row["sublevel"])
                 if not row["compressed"] or (s and self.descriptors[t, L - 1]["compressed"]):
-                    continue                          # checked from the group's first stored level
+                    continue                          # the group's first stored level reads it
                 n = (1 << int(row["log2w"]) >> int(row["log2bw"])) * (1 << int(row["log2h"]) >> int(row["log2bh"]))
-                b = int(row["index_bits"])
-                step = self.word_bits * (1 << 14)          # indices per chunk: a whole number of words
-                for k in range(0, n, step):
-                    idx = unpack_indices(self.index_words, b, min(step, n - k), int(row["base"]) + k * b // self.word_bits,
-                                         self.word_bits)
-                    if int(idx.max()) >= size:
-                        raise FormatError(f"texture {t} level {L}: index {int(idx.max())} past codebook of {size}")
+                yield t, L, int(row["base"]), int(row["index_bits"]), n, size
+
+    def check_indices(self) -> None:
+        """Raise FormatError if an index in any map points past its codebook (the hardware would
+        read another codebook's entry, or past the memory)."""
+        for t, L, base, b, n, size in self.index_maps():
+            step = self.word_bits * (1 << 14)          # indices per chunk: a whole number of words
+            for k in range(0, n, step):
+                idx = unpack_indices(self.index_words, b, min(step, n - k), base + k * b // self.word_bits,
+                                     self.word_bits)
+                if int(idx.max()) >= size:
+                    raise FormatError(f"texture {t} level {L}: index {int(idx.max())} past codebook of {size}")
 
     # -- combining --------------------------------------------------------------------------------
     @classmethod

@@ -428,23 +428,15 @@ def other_bytes(ts: TextureSet) -> TextureSet:
     from vqtex.golden.format import pack_indices, unpack_indices
     words = np.array(ts.index_words, copy=True)
     done = set()
-    for t, info in enumerate(ts.textures):
-        if info.codebook < 0:
-            continue
-        size = ts.codebooks[info.codebook].size
-        for level in range(info.levels):
-            row = ts.descriptors[t, level]
-            first = not int(row["sublevel"]) or not ts.descriptors[t, level - 1]["compressed"]
-            if not row["compressed"] or not first or int(row["base"]) in done:
-                continue                # a group's map once (its sub-levels and a shared map read it too)
-            done.add(int(row["base"]))
-            n = (1 << int(row["log2w"]) >> int(row["log2bw"])) * (1 << int(row["log2h"]) >> int(row["log2bh"]))
-            b, base = int(row["index_bits"]), int(row["base"])
-            packed = pack_indices(size - 1 - unpack_indices(ts.index_words, b, n, base, ts.word_bits), b, ts.word_bits)
-            last = np.asarray(ts.index_words[base + len(packed) - 1]).astype(np.uint64)
-            spare = np.uint64(((1 << ts.word_bits) - 1) ^ ((1 << ((n * b - 1) % ts.word_bits + 1)) - 1))
-            packed[-1] |= (last & spare).astype(packed.dtype)      # the bits past the map's last index kept
-            words[base: base + len(packed)] = packed
+    for _t, _level, base, b, n, size in ts.index_maps():
+        if base in done:
+            continue                    # a map shared by two textures once
+        done.add(base)
+        packed = pack_indices(size - 1 - unpack_indices(ts.index_words, b, n, base, ts.word_bits), b, ts.word_bits)
+        last = np.asarray(ts.index_words[base + len(packed) - 1]).astype(np.uint64)
+        spare = np.uint64(((1 << ts.word_bits) - 1) ^ ((1 << ((n * b - 1) % ts.word_bits + 1)) - 1))
+        packed[-1] |= (last & spare).astype(packed.dtype)      # the bits past the map's last index kept
+        words[base: base + len(packed)] = packed
     out = replace(ts, index_words=words, raw_words=~np.asarray(ts.raw_words))
     out.check_indices()
     return out
