@@ -142,12 +142,58 @@ def resolve_stage(il: str, stage: str) -> str:
     return hits[0]
 
 
+#: User I/O pins of the target package (LFE5U-85F in CABGA381): a block with more port bits than
+#: this gets the chain harness of :func:`stage_rtlil` instead of a pin per port bit.
+PACKAGE_IOS = 205
+
+
+def _slice(wire: str, lo: int, width: int) -> str:
+    return f"{wire} [{lo}]" if width == 1 else f"{wire} [{lo + width - 1}:{lo}]"
+
+
+def _dff(name: str, width: int, d: str, q: str) -> list:
+    return [f"  cell $dff {name}\n", f"    parameter \\WIDTH {width}\n", "    parameter \\CLK_POLARITY 1\n",
+            "    connect \\CLK \\clk\n", f"    connect \\D {d}\n", f"    connect \\Q {q}\n", "  end\n"]
+
+
+def _chain_wrapper(ports: list) -> tuple:
+    """The harness of a block with more port bits than the package has pins: its inputs the bits of
+    one shift register fed from a pin ``si``, its outputs registered and XORed into one flip-flop on
+    a pin ``so`` (every port bit still starts or ends at a flip-flop, none is a constant, none is
+    optimised away). Returns ``(wrapper lines, cell connection lines, flip-flops added)``."""
+    ins = [(n, w) for n, w, way in ports if way == "input" and n not in ("clk", "rst")]
+    outs = [(n, w) for n, w, way in ports if way == "output"]
+    n_in, n_out = sum(w for _, w in ins), sum(w for _, w in outs)
+    names = [n for n, _, _ in ports if n in ("clk", "rst")]
+    wrapper = [f"  wire width 1 input {k} \\{n}\n" for k, n in enumerate(names)]
+    wrapper += [f"  wire width 1 input {len(names)} \\si\n", f"  wire width 1 output {len(names) + 1} \\so\n",
+                f"  wire width {n_in} \\in_chain\n", f"  wire width {n_out} \\out_d\n",
+                f"  wire width {n_out} \\out_q\n", "  wire width 1 \\so_d\n"]
+    chain = "\\in_chain"
+    shifted = "\\si" if n_in == 1 else f"{{ {_slice(chain, 0, n_in - 1)} \\si }}"
+    wrapper += _dff("$in_chain", n_in, shifted, "\\in_chain")
+    wrapper += _dff("$out_regs", n_out, "\\out_d", "\\out_q")
+    wrapper += ["  cell $reduce_xor $out_xor\n", "    parameter \\A_SIGNED 0\n", f"    parameter \\A_WIDTH {n_out}\n",
+                "    parameter \\Y_WIDTH 1\n", "    connect \\A \\out_q\n", "    connect \\Y \\so_d\n", "  end\n"]
+    wrapper += _dff("$so", 1, "\\so_d", "\\so")
+    cell, pos = [f"    connect \\{n} \\{n}\n" for n in names], {"input": 0, "output": 0}
+    for name, width, way in ports:
+        if name in ("clk", "rst"):
+            continue
+        wire = "\\in_chain" if way == "input" else "\\out_d"
+        cell.append(f"    connect \\{name} {_slice(wire, pos[way], width)}\n")
+        pos[way] += width
+    return wrapper, cell, n_in + n_out + 1
+
+
 def stage_rtlil(il: str, stage: str) -> tuple:
     """One block of the unit alone, out of context: ``il`` (RTLIL of :class:`Harness`) cut down to
     the block at ``stage`` (:func:`resolve_stage`) and its submodules, the block renamed to the
     unit's module (``vqtex_harness.unit``, so that the flow counts it as it counts a unit) inside a
     new harness with a flip-flop on every port but ``clk`` and ``rst`` (as :class:`Harness` does for
-    the unit): only the block's own paths count in Fmax. What the rest of the unit drives into the
+    the unit): only the block's own paths count in Fmax. A block with more port bits than the
+    package has pins (:data:`PACKAGE_IOS`; the cached unit's reader) takes its inputs from one
+    shift chain and XORs its registered outputs into one pin instead (:func:`_chain_wrapper`). What the rest of the unit drives into the
     block (a constant included) becomes a free, registered input. Returns ``(rtlil, path,
     port_bits)``: the RTLIL, the block's path and the flip-flops the new harness adds."""
     path = resolve_stage(il, stage)
@@ -158,9 +204,13 @@ def stage_rtlil(il: str, stage: str) -> tuple:
     out = []
     for n, text in keep.items():            # the block becomes vqtex_harness.unit, its submodules under it
         out.append(text.replace(f"\\{old}", f"\\{UNIT_NAME}").replace("attribute \\top 1\n", ""))
-    wrapper = ["attribute \\top 1\n", f"module \\{HARNESS_NAME}\n"]
+    head = ["attribute \\top 1\n", f"module \\{HARNESS_NAME}\n"]
     cell = [f"  cell \\{UNIT_NAME} \\unit\n"]
-    bits = 0
+    if sum(w for n, w, _ in ports if n not in ("clk", "rst")) > PACKAGE_IOS:
+        wrapper, connections, bits = _chain_wrapper(ports)
+        wrapper = head + wrapper + cell + connections + ["  end\n", "end\n"]
+        return "".join(out) + "".join(wrapper), path, bits
+    wrapper, bits = head, 0
     for k, (name, width, way) in enumerate(ports):
         wrapper.append(f"  wire width {width} {way} {k} \\{name}\n")
         if name in ("clk", "rst"):

@@ -79,3 +79,40 @@ def test_report_area_stage_synthesis(capsys):
     assert 0 < rep["harness_ffs"] <= rep["port_bits"] < 200
     assert rep["memories"] == {}
     assert "block fetch.back.color_matrix alone" in synth.area_text(rep)
+
+
+def test_chain_harness_when_ports_exceed_the_pins(tiny_rtlil, monkeypatch):
+    """A block with more port bits than the package has pins (the cached unit's reader, ~365): its
+    inputs are one shift chain from a pin, its outputs registered and XORed into one pin."""
+    plain, path, bits = synth.stage_rtlil(tiny_rtlil, "color_matrix")
+    monkeypatch.setattr(synth.harness, "PACKAGE_IOS", bits - 1)
+    il, path2, chain_bits = synth.stage_rtlil(tiny_rtlil, "color_matrix")
+    assert path2 == path and chain_bits == bits + 1            # every port bit and the XOR's flip-flop
+    top = _module(il, synth.HARNESS_NAME)
+    pins = re.findall(r"^  wire width (\d+) (input|output) \d+ \\(\S+)$", top, re.M)
+    assert sorted(n for _, _, n in pins) == ["clk", "rst", "si", "so"] and all(w == "1" for w, _, _ in pins)
+    assert top.count("cell $dff ") == 3 and "cell $reduce_xor" in top
+    assert re.search(r"connect \\D \{ \\in_chain \[\d+:0\] \\si \}", top)
+    # each port of the block gets its own slice of the chain or of the output register, no bit twice
+    block = _module(tiny_rtlil, f"{synth.UNIT_NAME}.{path}")
+    widths = {p[-1].lstrip("\\"): (int(p[p.index("width") + 1]), "input" in p)
+              for p in (ln.split() for ln in block.splitlines() if re.match(r"  wire .*\b(input|output)\b", ln))}
+    seen = {"\\in_chain": set(), "\\out_d": set()}
+    for name, wire, hi, lo in re.findall(r"connect \\(\S+) (\\in_chain|\\out_d) \[(\d+)(?::(\d+))?\]", top):
+        lo = int(lo or hi)
+        assert int(hi) - lo + 1 == widths[name][0] and (wire == "\\in_chain") == widths[name][1]
+        assert not seen[wire] & set(range(lo, int(hi) + 1))
+        seen[wire] |= set(range(lo, int(hi) + 1))
+    assert len(seen["\\in_chain"]) + len(seen["\\out_d"]) == bits
+
+
+def test_report_area_stage_chain_synthesis(capsys, monkeypatch):
+    """The chain harness goes through Yosys: the colour matrix keeps its multipliers."""
+    _need_tools()
+    monkeypatch.setattr(synth.harness, "PACKAGE_IOS", 8)
+    code, out, err = _run(capsys, "report", "area", "--builtin", "tiny", "--unit", "loadable", "--stage",
+                          "color_matrix", "--no-pnr", "--json")
+    assert code == 0, err
+    rep = json.loads(out)
+    # more flip-flops than pins: the chain and the output register, kept (their bits feed the block)
+    assert 8 < rep["harness_ffs"] <= rep["port_bits"] and rep["utilisation"]["dsps"] > 0
