@@ -156,6 +156,25 @@ def _dff(name: str, width: int, d: str, q: str) -> list:
             "    connect \\CLK \\clk\n", f"    connect \\D {d}\n", f"    connect \\Q {q}\n", "  end\n"]
 
 
+def _pin_wrapper(ports: list) -> tuple:
+    """The harness of a block whose port bits fit the package's pins: each port a pin of its own and
+    a flip-flop between the pin and the block (none on ``clk`` and ``rst``). Returns what
+    :func:`_chain_wrapper` does."""
+    wrapper, cell, bits = [], [], 0
+    for k, (name, width, way) in enumerate(ports):
+        wrapper.append(f"  wire width {width} {way} {k} \\{name}\n")
+        if name in ("clk", "rst"):
+            cell.append(f"    connect \\{name} \\{name}\n")
+            continue
+        inner = f"\\{name}$q"
+        wrapper.append(f"  wire width {width} {inner}\n")
+        d, q = (f"\\{name}", inner) if way == "input" else (inner, f"\\{name}")
+        wrapper += _dff(f"$port_ff{k}", width, d, q)
+        cell.append(f"    connect \\{name} {inner}\n")
+        bits += width
+    return wrapper, cell, bits
+
+
 def _chain_wrapper(ports: list) -> tuple:
     """The harness of a block with more port bits than the package has pins: its inputs the bits of
     one shift register fed from a pin ``si``, its outputs registered and XORed into one flip-flop on
@@ -171,7 +190,7 @@ def _chain_wrapper(ports: list) -> tuple:
                 f"  wire width {n_out} \\out_q\n", "  wire width 1 \\so_d\n"]
     chain = "\\in_chain"
     shifted = "\\si" if n_in == 1 else f"{{ {_slice(chain, 0, n_in - 1)} \\si }}"
-    wrapper += _dff("$in_chain", n_in, shifted, "\\in_chain")
+    wrapper += _dff("$in_chain", n_in, shifted, chain)
     wrapper += _dff("$out_regs", n_out, "\\out_d", "\\out_q")
     wrapper += ["  cell $reduce_xor $out_xor\n", "    parameter \\A_SIGNED 0\n", f"    parameter \\A_WIDTH {n_out}\n",
                 "    parameter \\Y_WIDTH 1\n", "    connect \\A \\out_q\n", "    connect \\Y \\so_d\n", "  end\n"]
@@ -180,7 +199,7 @@ def _chain_wrapper(ports: list) -> tuple:
     for name, width, way in ports:
         if name in ("clk", "rst"):
             continue
-        wire = "\\in_chain" if way == "input" else "\\out_d"
+        wire = chain if way == "input" else "\\out_d"
         cell.append(f"    connect \\{name} {_slice(wire, pos[way], width)}\n")
         pos[way] += width
     return wrapper, cell, n_in + n_out + 1
@@ -204,25 +223,8 @@ def stage_rtlil(il: str, stage: str) -> tuple:
     out = []
     for n, text in keep.items():            # the block becomes vqtex_harness.unit, its submodules under it
         out.append(text.replace(f"\\{old}", f"\\{UNIT_NAME}").replace("attribute \\top 1\n", ""))
-    head = ["attribute \\top 1\n", f"module \\{HARNESS_NAME}\n"]
-    cell = [f"  cell \\{UNIT_NAME} \\unit\n"]
-    if sum(w for n, w, _ in ports if n not in ("clk", "rst")) > PACKAGE_IOS:
-        wrapper, connections, bits = _chain_wrapper(ports)
-        wrapper = head + wrapper + cell + connections + ["  end\n", "end\n"]
-        return "".join(out) + "".join(wrapper), path, bits
-    wrapper, bits = head, 0
-    for k, (name, width, way) in enumerate(ports):
-        wrapper.append(f"  wire width {width} {way} {k} \\{name}\n")
-        if name in ("clk", "rst"):
-            cell.append(f"    connect \\{name} \\{name}\n")
-            continue
-        inner = f"\\{name}$q"
-        wrapper.append(f"  wire width {width} {inner}\n")
-        d, q = (f"\\{name}", inner) if way == "input" else (inner, f"\\{name}")
-        wrapper += [f"  cell $dff $port_ff{k}\n", f"    parameter \\WIDTH {width}\n",
-                    "    parameter \\CLK_POLARITY 1\n", "    connect \\CLK \\clk\n",
-                    f"    connect \\D {d}\n", f"    connect \\Q {q}\n", "  end\n"]
-        cell.append(f"    connect \\{name} {inner}\n")
-        bits += width
-    wrapper += cell + ["  end\n", "end\n"]
+    chain = sum(w for n, w, _ in ports if n not in ("clk", "rst")) > PACKAGE_IOS
+    wrapper, connections, bits = (_chain_wrapper if chain else _pin_wrapper)(ports)
+    wrapper = (["attribute \\top 1\n", f"module \\{HARNESS_NAME}\n"] + wrapper
+               + [f"  cell \\{UNIT_NAME} \\unit\n"] + connections + ["  end\n", "end\n"])
     return "".join(out) + "".join(wrapper), path, bits
