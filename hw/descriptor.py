@@ -263,21 +263,19 @@ class DescriptorTable(wiring.Component):
                     out = out | (Value.cast(getattr(view, name)) << lsb)
                 return out[:DATA_WIDTH]
 
+            # A block RAM's port A is the pipeline's (its address register is the request stage,
+            # loaded on ``en``), port B the bus's (hw.bus_port.attach_memory with ``own_port``, as the
+            # codebook's banks), its data registered on ``row_en`` below; LUT RAM reads from a
+            # registered address (``data_en``).
+            port, answer = attach_memory(
+                m, mem, command, hit=hit, row=row_of, lane=lane, only_lane=w, pack=pack, unpack=unpack,
+                name=f"word{w}_load", read_addr=addr, read_en=self.en,
+                **({"own_port": True} if block else {"data_en": self.row_en if self._registered else None}))
+            data_r = port.data
             if block:
-                # The block RAM's port A is the pipeline's (its address register is the request
-                # stage, loaded on ``en``), port B the bus's (hw.bus_port.attach_memory with
-                # ``own_port``, as the codebook's banks); its data registered on ``row_en``.
-                port, answer = attach_memory(m, mem, command, hit=hit, row=row_of, lane=lane, only_lane=w,
-                                             pack=pack, unpack=unpack, name=f"word{w}_load", read_addr=addr,
-                                             read_en=self.en, own_port=True)
                 data_r = Signal.like(port.data, name=f"word{w}_row")
                 with m.If(self.row_en):
                     m.d.sync += data_r.eq(port.data)
-            else:
-                port, answer = attach_memory(m, mem, command, hit=hit, row=row_of, lane=lane, only_lane=w,
-                                             pack=pack, unpack=unpack, name=f"word{w}_load", read_addr=addr,
-                                             read_en=self.en, data_en=self.row_en if self._registered else None)
-                data_r = port.data
             answers.append(answer)
             for name, _ in present:
                 row[name] = getattr(data_r, name)
