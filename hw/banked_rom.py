@@ -20,7 +20,7 @@ from amaranth.utils import ceil_log2
 
 from .bus_port import DATA_WIDTH, LoadTarget, attach_memory, load_decode, or_all
 
-__all__ = ["BankedROM", "BANK_DEPTH", "LOADABLE_BANK_DEPTH", "LATENCY", "pick", "addr_bits"]
+__all__ = ["BankedROM", "BANK_DEPTH", "LOADABLE_BANK_DEPTH", "LATENCY", "pick", "pick_group", "addr_bits"]
 
 #: Words per bank: the depth of one DP16KD at its 36-bit width.
 BANK_DEPTH = 512
@@ -46,6 +46,22 @@ def pick(values: list, index):
         values = [Mux(index[bit], values[n + 1], values[n]) for n in range(0, len(values), 2)]
         bit += 1
     return values[0]
+
+
+def pick_group(values: list, index, group: int) -> list:
+    """The first half of ``pick(values, index)`` over two stages: the ``group`` values of ``index``'s
+    aligned group (``values[(index & ~(group - 1)) + lo]`` for ``lo`` in ``range(group)``), picked
+    by ``index``'s high bits, combinational. ``pick(pick_group(values, index, group),
+    index[:log2(group)])`` is ``pick(values, index)`` for every ``index`` (the list padded with its
+    last value, index bits above the tree ignored, as :func:`pick`). ``group``: a power of two."""
+    if group < 1 or group & (group - 1):
+        raise ValueError(f"group {group} is not a power of two")
+    values = list(values)
+    size = 1 << (len(values) - 1).bit_length() if len(values) > 1 else 1
+    values += [values[-1]] * (size - len(values))
+    values = [values[n % size] for n in range(max(size, group))]     # (the index modulo the tree)
+    g = group.bit_length() - 1
+    return [pick(values[lo::group], index[g:]) for lo in range(group)]
 
 
 def addr_bits(depth: int) -> int:
