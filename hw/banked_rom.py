@@ -18,7 +18,7 @@ from amaranth.lib import data, memory, wiring
 from amaranth.lib.wiring import In, Out
 from amaranth.utils import ceil_log2
 
-from .bus_port import DATA_WIDTH, LoadTarget, attach_memory, load_decode, or_all
+from .bus_port import DATA_WIDTH, LoadTarget, attach_memory, load_decode_banks, or_all
 
 __all__ = ["BankedROM", "BANK_DEPTH", "LOADABLE_BANK_DEPTH", "LATENCY", "pick", "pick_group", "addr_bits"]
 
@@ -175,11 +175,10 @@ class BankedROM(wiring.Component):
         # a shallower one shares the pipeline's read port with the bus's reads (a multiplexer on
         # the read address), which keeps it in one 512 x 36 block RAM per 36 bits instead of two.
         own_port = load is not None and self._depth > BANK_DEPTH
-        if load is not None:                # the command decoded once, then a bank compare each
-            hit, row, lane, command = load_decode(m, self.load, region=load.region, lanes=load.lanes,
-                                                  stride=load.stride, phase=load.phase, depth=self._depth, name="load")
-            if len(row) < offset_bits:
-                row = Cat(row, C(0, offset_bits - len(row)))
+        if load is not None:                # the command decoded per bank, into registers of each bank's own
+            decoded = load_decode_banks(m, self.load, region=load.region, lanes=load.lanes, stride=load.stride,
+                                        phase=load.phase, depth=self._depth, bank_depth=d, name="load",
+                                        write_lanes=stored // DATA_WIDTH if stored > DATA_WIDTH else 0)
         for k in range(self._banks):
             part = self._init[k * d:(k + 1) * d]
             depth = min(d, self._depth - k * d) if load is not None or self._depth > len(self._init) else len(part)
@@ -198,10 +197,10 @@ class BankedROM(wiring.Component):
             # block RAM's second port and a register of its own (hw.bus_port.attach_memory).
             q = Signal(stored, name=f"data{k}")
             if load is not None:
-                bank_hit = hit if self._banks == 1 else hit & (row[offset_bits:] == k)
-                rd, answer = attach_memory(m, mem, command, hit=bank_hit, row=row[:offset_bits], lane=lane,
+                command, row, lane, write_en = decoded[k]
+                rd, answer = attach_memory(m, mem, command, hit=C(1, 1), row=row[:offset_bits], lane=lane,
                                            name=f"bank{k}_load", read_addr=self.addr[:offset_bits], read_en=self.en,
-                                           own_port=own_port)
+                                           own_port=own_port, write_en=write_en)
                 answers.append(answer)
             else:
                 rd = mem.read_port(domain="sync")

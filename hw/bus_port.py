@@ -44,7 +44,8 @@ from amaranth.lib.wiring import In, Out
 from vqtex.golden.geometry import Geometry
 from vqtex.golden.register_map import (CONTROL, REGION_BITS, REGIONS, RegisterMap, geometry_words)
 
-__all__ = ["wishbone_signature", "load_layout", "BusPort", "LoadTarget", "load_decode", "attach_memory", "or_all",
+__all__ = ["wishbone_signature", "load_layout", "BusPort", "LoadTarget", "load_decode", "load_decode_banks",
+           "attach_memory", "or_all",
            "READ_LATENCY", "ANSWER_LATENCY", "delayed",
            "DATA_WIDTH"]
 
@@ -239,6 +240,51 @@ def load_decode(m, load, *, region: int, lanes: int = 1, stride: int = 1, phase:
     return hit, row, lane, command
 
 
+def load_decode_banks(m, load, *, region: int, lanes: int = 1, stride: int = 1, phase: int = 0, depth: int,
+                      bank_depth: int, write_lanes: int = 0, name: str) -> list:
+    """:func:`load_decode` per bank of ``bank_depth`` rows (a :class:`hw.banked_rom.BankedROM`'s),
+    each bank's decode a register of its own, one cycle after ``load`` as :func:`load_decode`'s:
+    a list of ``(command, row, lane, write_en)`` per bank, where ``command``'s ``write`` and ``read``
+    are high only when the command addresses a row of this bank (``hit`` is then 1: pass
+    ``hit=C(1, 1)`` to :func:`attach_memory`), ``row`` is the row in the bank, and ``write_en``
+    (``write_lanes`` > 0, a memory wider than the bus) is the registered one-hot of the 32-bit lane
+    written (``write_lanes`` bits; else None). The command's other fields are loaded only when the
+    bank is addressed, so that the copies differ (Yosys keeps a register per bank): each bank's
+    write enables, bus address and write data start at flip-flops beside it, with no compare or
+    fan-out across the chip in the cycle before the block RAM (``fetch.back``'s critical path at
+    132.8 MHz, docs/area.md "Block by block")."""
+    lane_bits = (lanes - 1).bit_length()
+    stride_bits = (stride - 1).bit_length()
+    entry = load.offset[lane_bits:]
+    rows = entry[stride_bits:]
+    offset_bits = (bank_depth - 1).bit_length()
+    banks = -(-depth // bank_depth)
+    cond = load.region == region
+    if stride > 1:
+        cond &= entry[:stride_bits] == phase
+    out = []
+    for k in range(banks):
+        cond_k = cond & (rows < depth) if k == banks - 1 else cond
+        if banks > 1:
+            cond_k &= rows[offset_bits:] == k
+        strobes = Signal(2, name=f"{name}{k}_strobes")
+        rest = Signal(len(Value.cast(load)) - 2, name=f"{name}{k}_command")
+        m.d.sync += strobes.eq(Cat(load.write & cond_k, load.read & cond_k))
+        with m.If(cond_k):
+            m.d.sync += rest.eq(Value.cast(load)[2:])
+        command = load.shape()(Cat(strobes, rest))
+        row = Value.cast(command.offset)[lane_bits + stride_bits:]
+        row = Cat(row, C(0, max(0, offset_bits - len(row))))[:max(1, offset_bits)] if banks > 1 else row
+        lane = Value.cast(command.offset)[:lane_bits] if lane_bits else C(0, 1)
+        write_en = None
+        if write_lanes:
+            write_en = Signal(write_lanes, name=f"{name}{k}_write_lanes")
+            now = load.offset[:lane_bits] if lane_bits else C(0, 1)
+            m.d.sync += write_en.eq(Mux(load.write & cond_k, 1 << now, 0))
+        out.append((command, row, lane, write_en))
+    return out
+
+
 def delayed(m, value, cycles: int, *, name: str):
     """``value`` through ``cycles`` registers (a read answer brought to ``ANSWER_LATENCY``)."""
     for n in range(cycles):
@@ -256,7 +302,7 @@ class _ReadData:
 
 def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int | None = None, pack=None,
                   unpack=None, name: str, read_addr, read_en, data_r=None, own_port: bool = False,
-                  data_en=None):
+                  data_en=None, write_en=None):
     """Give ``mem`` (an ``amaranth.lib.memory.Memory``, not yet elaborated) a write port for the load
     command ``load``, and its one read port, shared: the pipeline reads at ``read_addr`` when
     ``read_en``; a bus read takes the port in the cycle of its command (the pipeline is empty then:
@@ -299,6 +345,9 @@ def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int
     No net of the caller's fans out to the LUT RAMs' addresses, and the bus's read data is the
     same register (no ``data_r``). The bus's answer keeps its timing. Not with ``own_port`` or
     ``data_r``.
+
+    With ``write_en`` (a memory wider than the bus: :func:`load_decode_banks`'s registered one-hot
+    of the lane written) the write port's lane enables are ``write_en`` itself, not decoded here.
     """
     width = Shape.cast(mem.shape).width
     mine = Signal(name=f"{name}_mine")
@@ -307,7 +356,7 @@ def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int
     if wide:
         wp = mem.write_port(granularity=DATA_WIDTH)
         m.d.comb += [wp.addr.eq(row), wp.data.eq(load.data.replicate(width // DATA_WIDTH)),
-                     wp.en.eq(Mux(load.write & mine, 1 << lane, 0))]
+                     wp.en.eq(Mux(load.write & mine, 1 << lane, 0) if write_en is None else write_en)]
     else:
         wp = mem.write_port()
         m.d.comb += [wp.addr.eq(row), wp.en.eq(load.write & mine)]
