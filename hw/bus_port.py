@@ -55,6 +55,11 @@ DATA_WIDTH = 32
 READ_LATENCY = 6
 #: Cycles from a read's acceptance to its answer on ``load_data`` (one register before ``dat_r``).
 ANSWER_LATENCY = READ_LATENCY - 1
+#: A memory of more 32-bit lanes than this (``max``'s 84-lane codebook) picks a read's lane over two
+#: cycles (:func:`attach_memory`): its group of ``LANE_GROUP`` lanes into registers, then the lane.
+SPLIT_LANES = 32
+#: Lanes per group of a split lane pick (a power of two).
+LANE_GROUP = 4
 
 
 def or_all(values):
@@ -346,6 +351,11 @@ def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int
     same register (no ``data_r``). The bus's answer keeps its timing. Not with ``own_port`` or
     ``data_r``.
 
+    A memory of more than ``SPLIT_LANES`` lanes picks the read's lane over two cycles: the
+    ``LANE_GROUP`` lanes of its group registered (each 0 unless this memory was addressed), then
+    the lane among them, combinational: ``answer`` is then a pick of registers, with the same
+    timing (the OR of the unit's answers into ``dat_r`` follows it).
+
     With ``write_en`` (a memory wider than the bus: :func:`load_decode_banks`'s registered one-hot
     of the lane written) the write port's lane enables are ``write_en`` itself, not decoded here.
     """
@@ -400,6 +410,19 @@ def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int
         lane_r = Signal(len(lane), name=f"{name}_lane_r")
         lane_rr = Signal(len(lane), name=f"{name}_lane_rr")
         m.d.sync += [lane_r.eq(lane), lane_rr.eq(lane_r)]
+        lanes = width // DATA_WIDTH
+        if lanes > SPLIT_LANES:             # the lane's group registered, the lane in it after
+            from .banked_rom import pick, pick_group
+            words = [Value.cast(data_r)[DATA_WIDTH * n:DATA_WIDTH * (n + 1)] for n in range(lanes)]
+            fine = LANE_GROUP.bit_length() - 1
+            lane_rrr = Signal(fine, name=f"{name}_lane_rrr")
+            group = []
+            for n, word in enumerate(pick_group(words, Cat(lane_rr, C(0, fine)), LANE_GROUP)):
+                r = Signal(DATA_WIDTH, name=f"{name}_answer{n}")
+                m.d.sync += r.eq(Mux(hit_rr, word, 0))
+                group.append(r)
+            m.d.sync += lane_rrr.eq(Cat(lane_rr, C(0, fine))[:fine])
+            return rp, pick(group, lane_rrr)
         word = Value.cast(data_r).word_select(lane_rr, DATA_WIDTH)
     else:
         word = unpack(data_r) if unpack is not None else Value.cast(data_r)

@@ -277,3 +277,13 @@ def test_split_codebook_picks(monkeypatch):
     test_load_then_fetch_then_reload(("rgb_4x4_b8_mip", "yuv_4x4_b12_mip"))
     monkeypatch.setattr(codebook_rom, "PICK_GROUP", 2)
     test_pvr2_sets_load()
+
+
+def test_split_lane_pick(monkeypatch):
+    """A memory of more than ``hw.bus_port.SPLIT_LANES`` 32-bit lanes (``max``'s codebook) picks a
+    bus read's lane over two cycles; forced here on every wide memory: the reads back and errors
+    with the same answers and READ_LATENCY (the bus transfers' timing is checked by the bench)."""
+    import vqtex.hw.bus_port as bus_port
+    monkeypatch.setattr(bus_port, "SPLIT_LANES", 0)
+    test_read_back_and_errors(None)
+    test_write_timing_and_read_latency()
