@@ -391,7 +391,9 @@ def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int
         m.d.comb += [bp.addr.eq(row), comb.addr.eq(read_addr)]
         with m.If(read_en):
             m.d.sync += rp.data.eq(comb.data)
-        data_r = Signal.like(bp.data, name=f"{name}_data_r")
+        # (no reset: it is read only under hit_rr, and a register without a reset is one the block
+        # RAM's output register can take, docs/area.md "--bram-outreg")
+        data_r = Signal.like(bp.data, name=f"{name}_data_r", reset_less=True)
     else:
         bp = rp
         m.d.comb += [rp.addr.eq(Mux(bus_read, row, read_addr)), rp.en.eq(read_en | bus_read)]
