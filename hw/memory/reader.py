@@ -746,7 +746,19 @@ class CachedReader(wiring.Component):
             return Mux(v.raw, r_f, i_f.all())
         head_now = lines_filled(headv, "head")
         next_now = lines_filled(nextv, "next")
+        # ``head_filled`` chosen from three registers, each loaded every cycle (so that no read of
+        # the ``alloc``/``fill`` LUT RAMs is shared between the head's and the next entry's lines
+        # through a multiplexer on ``pop``, which Yosys's ``share`` would build: a loop from
+        # ``pop`` through the read address back to ``head_filled``), by a fourth holding which
+        # one applies: the head's lines (it stays), the next entry's (the head was read), the
+        # check's hit (the entry being checked became the head).
+        f_stay = Signal(name="head_filled_stay")
+        f_next = Signal(name="head_filled_next")
+        f_new = Signal(name="head_filled_new")
+        f_from = Signal(2, name="head_filled_from")         # 0 stay, 1 next, 2 new
+        m.d.sync += [f_stay.eq(head_now), f_next.eq(next_now), f_new.eq(new_filled)]
         head_filled = Signal(name="head_filled")
+        m.d.comb += head_filled.eq(Mux(f_from[1], f_new, Mux(f_from[0], f_next, f_stay)))
         m.d.comb += pop.eq((level != 0) & head_filled & o_free)
         m.d.comb += self.stall_fill.eq((level != 0) & ~head_filled & o_free)
         # a read out of the index cache retires one reference per line
@@ -799,12 +811,11 @@ class CachedReader(wiring.Component):
         m.d.sync += level.eq(level + take - pop)
         with m.If(pop):
             # the entry after the head (level 2 or more), or the one being checked (level 1)
-            m.d.sync += [headv.eq(Mux(level == 1, new.value(entry), nextv)),
-                         head_filled.eq(Mux(level == 1, new_filled, next_now))]
+            m.d.sync += [headv.eq(Mux(level == 1, new.value(entry), nextv)), f_from.eq(Mux(level == 1, 2, 1))]
         with m.Elif(level == 0):
-            m.d.sync += [headv.eq(new.value(entry)), head_filled.eq(new_filled)]
+            m.d.sync += [headv.eq(new.value(entry)), f_from.eq(2)]
         with m.Else():
-            m.d.sync += head_filled.eq(head_now)
+            m.d.sync += f_from.eq(0)
         # the entry after the head: when the head is read, the one two after it (being checked at
         # level 2; in the write register at level 3 with a write pending: the newest entry; else in
         # the LUT RAM); when not, the one being checked once it becomes the second (level 1)
@@ -851,26 +862,36 @@ class CachedReader(wiring.Component):
         m.d.comb += [first.eq(Mux(l_raw, fl(slotr, 1), Mux(miss0, fl(slot0, 0), fl(slot1, 0)))),
                      second.eq(fl(slot1, 0))]
         # written one cycle behind the check, from a write register per bank (``take`` reaches no
-        # write enable of the LUT RAM): a burst's AR leaves at least a cycle after its check and its
-        # first beat at least a cycle after that, when the entry is in the LUT RAM
+        # write enable of the LUT RAM). The entry of the burst being filled is a register of its own
+        # (``flight_head_entry``: the fill's row update and the line RAM's write address start from
+        # flip-flops, not from the queue's LUT RAM read multiplexers), loaded every cycle with the
+        # entry at the next cycle's ``f_head`` (``f_head + 1`` after a last beat): each bank reads
+        # the one of ``f_head``, ``f_head + 1`` of its parity, the pending write forwarded. A burst's
+        # AR leaves at least a cycle after its check, when its entry is in the write register, and
+        # its first beat at least a cycle after that, when the register holds the entry.
+        f_head1 = Signal(range(depth), init=1, name="flight_head_after")     # f_head + 1
         t1 = (f_tail + 1)[:len(f_tail)]
+        ahead = []
         for b, (wp, rp) in enumerate(flight):
             mine = f_tail[0] == b
             w = _Behind(m, wp, len(f_tail) - 1, 1 + sw, f"flight{b}")
             w.write(m, Mux(mine, f_tail >> 1, t1 >> 1), Mux(mine, first, second), queue & (mine | (nmiss == 2)))
-            m.d.comb += rp.addr.eq(f_head >> 1)
+            row = Signal(len(f_tail) - 1, name=f"flight{b}_read_row")
+            m.d.comb += [row.eq(Mux(f_head[0] == b, f_head >> 1, f_head1 >> 1)), rp.addr.eq(row)]
+            pend, d = w.pending(row)
+            ahead.append(Mux(pend, d, rp.data))
         with m.If(queue):
             m.d.sync += f_tail.eq(Mux(nmiss == 2, f_tail + 2, f_tail + 1))
-        cur = Signal(1 + sw)
-        m.d.comb += cur.eq(Mux(f_head[0], flight[1][1].data, flight[0][1].data))
+        cur = Signal(1 + sw, name="flight_head_entry")
+        last = self.axi.rvalid & self.axi.rlast
+        m.d.sync += cur.eq(Mux(f_head[0] ^ last, ahead[1], ahead[0]))
         beat = Signal(range(max(beats) + 1))
         cur_raw = cur[-1]
         cur_slot = cur[:-1]
-        last = self.axi.rvalid & self.axi.rlast
         with m.If(self.axi.rvalid):
             m.d.sync += beat.eq(Mux(self.axi.rlast, 0, beat + 1))
         with m.If(last):
-            m.d.sync += f_head.eq(f_head + 1)
+            m.d.sync += [f_head.eq(f_head1), f_head1.eq(f_head1 + 1)]
 
         # -- line RAMs: a row per beat --------------------------------------------------------------------
         # The index lines in two banks, so that words w and w + 1 come from one read port each (a
