@@ -20,9 +20,10 @@ consumer; with every reference a hit: one request per cycle, 4 cycles from ``i``
   a check is tried every ``REPLAY`` = 2 cycles until it is taken. The requests accepted and not yet
   taken (at most three) wait in a three-entry buffer in front of the lookup, so ``i.ready`` is the
   registered ``count != 3``, i.e. ``b[n] >= g[n-3] + 1``; a request is looked up from the cycle after
-  its acceptance (its sets and tags computed into the buffer when it is accepted). The entry the
-  lookup reads is chosen a cycle ahead into a register (``lookup_bundle``), so the lookup starts
-  at flip-flops.
+  its acceptance (its sets and tags computed into the buffer when it is accepted). The sets and
+  tags of the entry the lookup reads are chosen a cycle ahead into a register (``lookup_bundle``),
+  so the lookup's reads start at flip-flops; its other fields are read from the buffer in the
+  lookup's cycle.
 * **Tag check** (first tried in cycle ``max(b + 2, g[n-1] + 1)``, from the lookup's registers): the
   request's references (an index request reads word ``w``, and ``w + 1`` when ``straddle``, a second
   lookup when it lies in the next line; a raw request one raw word) hit or miss. A miss allocates
@@ -40,7 +41,9 @@ consumer; with every reference a hit: one request per cycle, 4 cycles from ``i``
 * **R**: beats fill lines in burst order (``rready`` is always high); a line is readable the cycle
   after its last beat.
 * **Data read**: the FIFO's head is read when its lines are filled and ``o`` is empty or transferring;
-  ``o`` shows it the next cycle and holds it until ``o.ready``.
+  ``o`` shows it the next cycle and holds it until ``o.ready``. The head and the entry after it are
+  registers (the FIFO's LUT RAM is read two entries after the head), and whether the head's lines
+  are filled is a register, so the read's decision ``pop`` is a gate of flip-flops.
 
 Responses leave in request order, none lost or duplicated; a line is read from memory once while it
 stays in the cache, however many references wait on it; a line is not replaced while a reference to
@@ -315,11 +318,12 @@ class _Cache:
 
     def lookup(self, m, d):
         """The tag check's first cycle: the lookup registers the sets and tags of :meth:`derive`
-        (``d``: their values, from the lookup's buffer), and each bank's tag row and touched bit
-        for them, read from the LUT RAM. The registers load every cycle (:func:`_reg`, no clock
+        (``d``: their values, from the lookup's buffer), and each bank's tag row for them, read
+        from the LUT RAM, with its valid bits as the check counts them (cleared when the set is not
+        touched: the check starts from them). The registers load every cycle (:func:`_reg`, no clock
         enable): what they hold is checked the next cycle, or killed there. A row the tag check
         writes in this same cycle (the request ahead, leaving the check) is forwarded: the register
-        takes the written row and touched bit, not the memory's old ones (when the check does not
+        takes the written row and valid bits, not the memory's old ones (when the check does not
         take its request, the looked-up request is killed anyway). Only the tag check writes these
         rows, so no register holds a stale row."""
         nports = self.banks
@@ -329,8 +333,9 @@ class _Cache:
         self.rtag = [_reg(m, ntags[k], f"{self.name}_line_tag{k}") for k in range(nports)]
         self.rrow = [Signal(self.lines.shape, name=f"{self.name}{b}_row" if self.banks > 1 else f"{self.name}_row")
                      for b in range(self.banks)]
-        self.rtouched = [Signal(name=f"{self.name}{b}_row_touched" if self.banks > 1 else f"{self.name}_row_touched")
-                         for b in range(self.banks)]
+        # the row's valid bits, as the check counts them (none before its set is touched)
+        self.rvalid = [Signal(self.ways, name=f"{self.name}{b}_row_valid" if self.banks > 1 else f"{self.name}_row_valid")
+                       for b in range(self.banks)]
         nm = [f"{self.name}{b}" if self.banks > 1 else self.name for b in range(self.banks)]
         self.rmatch = [Signal(self.ways, name=f"{n}_match") for n in nm]
         self.rwaiting = [Signal(self.ways, name=f"{n}_waiting") for n in nm]
@@ -353,7 +358,8 @@ class _Cache:
             fwd = Signal(name=f"{n}_fwd")
             m.d.comb += fwd.eq(self.w_act[b] & (self.w_addr[b] == r) if len(touched) > 1 else self.w_act[b])
             pend, _ = self.lines.forwarded(b, r)     # the check's write of the cycle before (rd has it)
-            m.d.sync += [self.rrow[b].eq(Mux(fwd, self.w_row[b], rd)), self.rtouched[b].eq(here | fwd | pend)]
+            m.d.sync += [self.rrow[b].eq(Mux(fwd, self.w_row[b], rd)),
+                         self.rvalid[b].eq(Mux(fwd, self.w_row[b].valid, Mux(here | pend, rd.valid, 0)))]
             # The tag compare, done here: each way's tag against the request's. When the check writes
             # this row (``fwd``) it changes one way's tag, the way it accesses, to its own tag (a
             # hit's is that tag already): that way compares the two requests' tags.
@@ -393,7 +399,7 @@ class _Cache:
             touched = self.touched[b]
             # the row's valid bits count once its set has been written since reset
             valid = Signal(W, name=f"{n}_valid")
-            m.d.comb += valid.eq(Mux(self.rtouched[b], lines.valid, 0))
+            m.d.comb += valid.eq(self.rvalid[b])
             row = lines.way
             hits = [valid[w] & self.rmatch[b][w] for w in range(W)]
             hit = Signal(name=f"{n}_hit")
