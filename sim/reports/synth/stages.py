@@ -70,15 +70,15 @@ def stage_of(name: str) -> str:
     # pipeline is named as the on-chip unit's
     if len(parts) >= 3 and parts[1] == "unit":
         # the filter through memory (hw.memory.filter): unit.unit.<laneK|laneK_reader|laneK_descriptor|
-        # laneK_address|footprint|blend|arbiter|bus_port>...; each lane's texel pipeline named as the unit's
+        # laneK_address|footprint|blend|arbiter|bus_port>...; each lane's texel pipeline named as the
+        # unit's, each lane's reader, descriptor and address as the cached unit's
         lane = re.fullmatch(r"lane\d+(_(\w+))?", parts[2])
         if lane and lane.group(2) is None:
-            parts = ["unit", "fetch"] + parts[3:]
+            parts = parts[:2] + ["texel"] + parts[3:]
         elif lane:
             parts = parts[:2] + [lane.group(2)] + parts[3:]
         elif parts[2] in _FILTER_MEMORY:
             return _FILTER_MEMORY[parts[2]]
-    if len(parts) >= 3 and parts[1] == "unit":
         if parts[2] == "texel":
             parts = ["unit", "fetch"] + parts[3:]
         elif parts[2] == "reader":
