@@ -300,9 +300,9 @@ class _Cache:
 
     def derive(self, line):
         """The sets and tags a lookup of ``line`` needs (and of ``line + 1``: a second port, when the
-        cache has two banks), combinational: ``set0``, ``tag0``, or with two banks ``bset{b}``,
-        ``btag{b}``, the set and tag each bank holds (the port whose set has the bank's parity), and
-        ``par``, the parity of port 0's set. Computed when a request enters the lookup's buffer, so that the lookup starts
+        cache has two banks), combinational: ``set{k}``, ``tag{k}`` per port, and with two banks
+        ``bset{b}``, ``btag{b}``: the set and tag each bank holds (the port whose set has the bank's
+        parity). Computed when a request enters the lookup's buffer, so that the lookup starts
         from flip-flops."""
         d = {}
         for k in range(self.banks):
@@ -314,12 +314,6 @@ class _Cache:
                 mine = d["set0"][0][0] == b
                 d[f"bset{b}"] = (Mux(mine, d["set0"][0], d["set1"][0]), max(1, self.set_bits))
                 d[f"btag{b}"] = (Mux(mine, d["tag0"][0], d["tag1"][0]), self.tag_bits)
-            # the ports' sets and tags are the banks' by the parity of port 0's set (port 1's set,
-            # the next, has the other parity): only that bit is kept beside the banks' (fewer bits
-            # in ``lookup_bundle``, each one a load of ``take``)
-            d["par"] = (d["set0"][0][0], 1)
-            for k in range(2):
-                del d[f"set{k}"], d[f"tag{k}"]
         return d
 
     def lookup(self, m, d):
@@ -333,11 +327,8 @@ class _Cache:
         take its request, the looked-up request is killed anyway). Only the tag check writes these
         rows, so no register holds a stale row."""
         nports = self.banks
-        if self.banks == 1:
-            nsets, ntags = [d["set0"]], [d["tag0"]]
-        else:       # port 0's set has the parity ``par``, port 1's the other
-            nsets = [Mux(d["par"] ^ k, d["bset1"], d["bset0"]) for k in range(2)]
-            ntags = [Mux(d["par"] ^ k, d["btag1"], d["btag0"]) for k in range(2)]
+        nsets = [d[f"set{k}"] for k in range(nports)]
+        ntags = [d[f"tag{k}"] for k in range(nports)]
         self.rset = [_reg(m, nsets[k], f"{self.name}_set{k}") for k in range(nports)]
         self.rtag = [_reg(m, ntags[k], f"{self.name}_line_tag{k}") for k in range(nports)]
         self.rrow = [Signal(self.lines.shape, name=f"{self.name}{b}_row" if self.banks > 1 else f"{self.name}_row")
