@@ -20,9 +20,10 @@ consumer; with every reference a hit: one request per cycle, 4 cycles from ``i``
   a check is tried every ``REPLAY`` = 2 cycles until it is taken. The requests accepted and not yet
   taken (at most three) wait in a three-entry buffer in front of the lookup, so ``i.ready`` is the
   registered ``count != 3``, i.e. ``b[n] >= g[n-3] + 1``; a request is looked up from the cycle after
-  its acceptance (its sets and tags computed into the buffer when it is accepted). The entry the
-  lookup reads is chosen a cycle ahead into a register (``lookup_bundle``), so the lookup starts
-  at flip-flops.
+  its acceptance (its sets and tags computed into the buffer when it is accepted). The sets and
+  tags of the entry the lookup reads are chosen a cycle ahead into a register (``lookup_bundle``),
+  so the lookup's reads start at flip-flops; its other fields are read from the buffer in the
+  lookup's cycle.
 * **Tag check** (first tried in cycle ``max(b + 2, g[n-1] + 1)``, from the lookup's registers): the
   request's references (an index request reads word ``w``, and ``w + 1`` when ``straddle``, a second
   lookup when it lies in the next line; a raw request one raw word) hit or miss. A miss allocates
@@ -40,7 +41,9 @@ consumer; with every reference a hit: one request per cycle, 4 cycles from ``i``
 * **R**: beats fill lines in burst order (``rready`` is always high); a line is readable the cycle
   after its last beat.
 * **Data read**: the FIFO's head is read when its lines are filled and ``o`` is empty or transferring;
-  ``o`` shows it the next cycle and holds it until ``o.ready``.
+  ``o`` shows it the next cycle and holds it until ``o.ready``. The head and the entry after it are
+  registers (the FIFO's LUT RAM is read two entries after the head), and whether the head's lines
+  are filled is a register, so the read's decision ``pop`` is a gate of flip-flops.
 
 Responses leave in request order, none lost or duplicated; a line is read from memory once while it
 stays in the cache, however many references wait on it; a line is not replaced while a reference to
@@ -102,6 +105,14 @@ def _log2(v: int) -> int:
     return v.bit_length() - 1
 
 
+def _or(*vs):
+    """The OR of ``vs`` (0 when there are none)."""
+    out = C(0, 1)
+    for v in vs:
+        out = out | v
+    return out
+
+
 def _reg(m, nx, name):
     """A lookup register of ``nx`` (returned; the check reads it): loaded every cycle, no clock
     enable (a request the check does not take is killed and sent again: :class:`CachedReader`)."""
@@ -124,6 +135,35 @@ class _Fields:
         return Cat(*(sig for _, sig in parts))
 
 
+class _Behind:
+    """A memory's write port written one cycle behind its writer, from a write register (address,
+    data, enable: ``{name}_w_addr``, ``{name}_w_data``, ``{name}_w_en``) loaded every cycle, so the
+    writer's decision reaches flip-flops' data inputs, not the LUT RAM's write enable. A reader of
+    the memory sees the pending write through :meth:`pending` (the register's enable and address
+    compared with its own, and the data), so to it the memory is written at the edge as without
+    the register. ``write`` takes the data only when ``data_en`` (a gate: see ``CachedReader``'s
+    ``new``)."""
+
+    def __init__(self, m, port, addr_shape, data_shape, name):
+        self.addr = Signal(addr_shape, name=f"{name}_w_addr")
+        self.data = Signal(data_shape, name=f"{name}_w_data")
+        self.en = Signal(name=f"{name}_w_en")
+        m.d.comb += [port.addr.eq(self.addr), port.data.eq(self.data), port.en.eq(self.en)]
+
+    def write(self, m, addr, data, en, data_en=None):
+        """Write ``data`` at ``addr`` at the next edge but one when ``en``."""
+        m.d.sync += [self.addr.eq(addr), self.en.eq(en)]
+        if data_en is None:
+            m.d.sync += self.data.eq(data)
+        else:
+            with m.If(data_en):
+                m.d.sync += self.data.eq(data)
+
+    def pending(self, addr=None):
+        """Whether a write is pending (to ``addr``, when given), and its data."""
+        return (self.en if addr is None else self.en & (self.addr == addr)), self.data
+
+
 class _Rows:
     """One per-set field of a cache in LUT RAM: a row per set, in ``banks`` memories (2: by set
     parity, for the index cache, whose straddling index checks two consecutive sets in one cycle).
@@ -140,15 +180,14 @@ class _Rows:
         self.shape = shape
         self.banks = banks
         self.mems = []
-        self.pending = []
+        self.pending = []       # with ``behind``, a _Behind per bank
         for b in range(banks):
             n = f"{name}{b}" if banks > 1 else name
             m.submodules[n] = mem = memory.Memory(
                 shape=shape, depth=sets // banks, init=[], attrs={"ram_style": "distributed"})
             self.mems.append(mem)
             if behind:
-                self.pending.append((Signal(max(1, _log2(sets // banks)), name=f"{n}_w_addr"),
-                                     Signal(shape, name=f"{n}_w_data"), Signal(name=f"{n}_w_en")))
+                self.pending.append(_Behind(m, mem.write_port(), max(1, _log2(sets // banks)), shape, n))
 
     def row(self, s):
         """The row of set ``s`` in its bank."""
@@ -156,8 +195,7 @@ class _Rows:
 
     def forwarded(self, b, r):
         """Whether bank ``b``'s pending write (``behind``) is to row ``r``, and the row it writes."""
-        a, d, e = self.pending[b]
-        return e & (a == r), d
+        return self.pending[b].pending(r)
 
     def read(self, m, b, s, name):
         """Bank ``b``'s row of set ``s`` (a set of that bank), combinational (with the pending write
@@ -176,13 +214,12 @@ class _Rows:
         """Write bank ``b``'s row of set ``s`` at the clock edge when ``en`` (one call per bank); with
         ``behind``, into the write register, and from it into the memory at the next edge. Returns
         the address and enable of the memory's write."""
-        port = self.mems[b].write_port()
         if self.pending:
-            a, d, e = self.pending[b]
-            m.d.sync += [a.eq(self.row(s)), d.eq(data), e.eq(en)]
-            m.d.comb += [port.addr.eq(a), port.en.eq(e), port.data.eq(d)]
-        else:
-            m.d.comb += [port.addr.eq(self.row(s)), port.en.eq(en), port.data.eq(data)]
+            w = self.pending[b]
+            w.write(m, self.row(s), data, en)
+            return w.addr, w.en
+        port = self.mems[b].write_port()
+        m.d.comb += [port.addr.eq(self.row(s)), port.en.eq(en), port.data.eq(data)]
         return port.addr, port.en
 
 
@@ -228,8 +265,8 @@ class _Cache:
         self.w_addr = [Signal(rb, name=f"{name}_fwd_addr{b}") for b in range(banks)]
         self.w_act = [Signal(name=f"{name}_fwd_act{b}") for b in range(banks)]
         self.w_row = [Signal(self.lines.shape, name=f"{name}_fwd_row{b}") for b in range(banks)]
-        # and the way it accesses (hit or allocated) and the issued row it writes
-        self.w_way = [Signal(max(1, self.way_bits), name=f"{name}_fwd_way{b}") for b in range(banks)]
+        # and the way it accesses (hit or allocated; one-hot) and the issued row it writes
+        self.w_way = [Signal(self.ways, name=f"{name}_fwd_way{b}") for b in range(banks)]   # one-hot
         self.w_issued = [Signal(self.issued.shape, name=f"{name}_fwd_issued{b}") for b in range(banks)]
 
     def slot_bits(self):
@@ -281,11 +318,12 @@ class _Cache:
 
     def lookup(self, m, d):
         """The tag check's first cycle: the lookup registers the sets and tags of :meth:`derive`
-        (``d``: their values, from the lookup's buffer), and each bank's tag row and touched bit
-        for them, read from the LUT RAM. The registers load every cycle (:func:`_reg`, no clock
+        (``d``: their values, from the lookup's buffer), and each bank's tag row for them, read
+        from the LUT RAM, with its valid bits as the check counts them (cleared when the set is not
+        touched: the check starts from them). The registers load every cycle (:func:`_reg`, no clock
         enable): what they hold is checked the next cycle, or killed there. A row the tag check
         writes in this same cycle (the request ahead, leaving the check) is forwarded: the register
-        takes the written row and touched bit, not the memory's old ones (when the check does not
+        takes the written row and valid bits, not the memory's old ones (when the check does not
         take its request, the looked-up request is killed anyway). Only the tag check writes these
         rows, so no register holds a stale row."""
         nports = self.banks
@@ -295,8 +333,9 @@ class _Cache:
         self.rtag = [_reg(m, ntags[k], f"{self.name}_line_tag{k}") for k in range(nports)]
         self.rrow = [Signal(self.lines.shape, name=f"{self.name}{b}_row" if self.banks > 1 else f"{self.name}_row")
                      for b in range(self.banks)]
-        self.rtouched = [Signal(name=f"{self.name}{b}_row_touched" if self.banks > 1 else f"{self.name}_row_touched")
-                         for b in range(self.banks)]
+        # the row's valid bits, as the check counts them (none before its set is touched)
+        self.rvalid = [Signal(self.ways, name=f"{self.name}{b}_row_valid" if self.banks > 1 else f"{self.name}_row_valid")
+                       for b in range(self.banks)]
         nm = [f"{self.name}{b}" if self.banks > 1 else self.name for b in range(self.banks)]
         self.rmatch = [Signal(self.ways, name=f"{n}_match") for n in nm]
         self.rwaiting = [Signal(self.ways, name=f"{n}_waiting") for n in nm]
@@ -319,13 +358,14 @@ class _Cache:
             fwd = Signal(name=f"{n}_fwd")
             m.d.comb += fwd.eq(self.w_act[b] & (self.w_addr[b] == r) if len(touched) > 1 else self.w_act[b])
             pend, _ = self.lines.forwarded(b, r)     # the check's write of the cycle before (rd has it)
-            m.d.sync += [self.rrow[b].eq(Mux(fwd, self.w_row[b], rd)), self.rtouched[b].eq(here | fwd | pend)]
+            m.d.sync += [self.rrow[b].eq(Mux(fwd, self.w_row[b], rd)),
+                         self.rvalid[b].eq(Mux(fwd, self.w_row[b].valid, Mux(here | pend, rd.valid, 0)))]
             # The tag compare, done here: each way's tag against the request's. When the check writes
             # this row (``fwd``) it changes one way's tag, the way it accesses, to its own tag (a
             # hit's is that tag already): that way compares the two requests' tags.
             cw = self.w_way[b]
             eq = Signal(self.ways, name=f"{n}_next_match")
-            m.d.comb += eq.eq(Cat(*(Mux(fwd & (cw == w), t == self.rbank[b][1], rd.way[w].tag == t)
+            m.d.comb += eq.eq(Cat(*(Mux(fwd & cw[w], t == self.rbank[b][1], rd.way[w].tag == t)
                                     for w in range(self.ways))))
             m.d.sync += self.rmatch[b].eq(eq)
             # The counts: issued (only the check writes it: forwarded as the row), retired (the data
@@ -334,7 +374,7 @@ class _Cache:
             iss = self.issued.read(m, b, s, f"{n}_issued_row")
             ret = self.retired.read(m, b, s, f"{n}_retired_row")
             wt = Signal(self.ways, name=f"{n}_next_waiting")
-            m.d.comb += wt.eq(Cat(*((fwd & (cw == w)) | (iss[w] != ret[w]) for w in range(self.ways))))
+            m.d.comb += wt.eq(Cat(*((fwd & cw[w]) | (iss[w] != ret[w]) for w in range(self.ways))))
             m.d.sync += [self.rissued[b].eq(Mux(fwd, self.w_issued[b], iss)), self.rretired[b].eq(ret),
                          self.rwaiting[b].eq(wt)]
 
@@ -359,60 +399,61 @@ class _Cache:
             touched = self.touched[b]
             # the row's valid bits count once its set has been written since reset
             valid = Signal(W, name=f"{n}_valid")
-            m.d.comb += valid.eq(Mux(self.rtouched[b], lines.valid, 0))
+            m.d.comb += valid.eq(self.rvalid[b])
             row = lines.way
             hits = [valid[w] & self.rmatch[b][w] for w in range(W)]
             hit = Signal(name=f"{n}_hit")
             way = Signal(max(1, self.way_bits), name=f"{n}_way")
             busy = Signal(name=f"{n}_busy")
             m.d.comb += hit.eq(Cat(*hits).any())
-            # The way: the hit's; else the victim: the lowest empty way, else the oldest (age W-1).
-            # The victim is found from the registered row alone, beside the tag compare.
-            hway = Signal(max(1, self.way_bits), name=f"{n}_hit_way")
-            vway = Signal(max(1, self.way_bits), name=f"{n}_victim_way")
-            for w in reversed(range(W)):
-                with m.If(hits[w]):
-                    m.d.comb += hway.eq(w)
-            for w in reversed(range(W)):
-                with m.If(valid[w] & (row[w].age == W - 1)):
-                    m.d.comb += vway.eq(w)
-            for w in reversed(range(W)):
-                with m.If(~valid[w]):
-                    m.d.comb += vway.eq(w)
-            m.d.comb += way.eq(Mux(hit, hway, vway))
+            # The way, one-hot (``sel``; ``way`` its number): the hit's; else the victim: the lowest
+            # empty way, else the oldest (age W-1). The victim is found from the registered row alone,
+            # beside the tag compare, and the row's update works on the one-hot way, its ages compared
+            # pairwise beside it (no multiplexer by the way's number on the path to the new row).
+            def lowest(x):
+                return Cat(*(x[w] & ~x[:w].any() if w else x[0] for w in range(W)))
+            oldest = Cat(*(valid[w] & (row[w].age == W - 1) for w in range(W)))
+            vsel = Signal(W, name=f"{n}_victim_sel")
+            sel = Signal(W, name=f"{n}_way_sel")
+            m.d.comb += [vsel.eq(Mux(~valid.all(), lowest(~valid), Mux(oldest.any(), lowest(oldest), 1))),
+                         sel.eq(Mux(hit, lowest(Cat(*hits)), vsel))]
+            m.d.comb += way.eq(_or(*(Mux(sel[w], w, 0) for w in range(W))))
             # a way's references wait when its counts differ (mod 2^n: equal is none waiting), found
             # for every way by the lookup (what was read out before its cycle), chosen by the victim
-            m.d.comb += busy.eq(~hit & (valid & self.rwaiting[b]).bit_select(vway, 1))
-            # LRU: the accessed way becomes the youngest; younger valid ways age by one. A miss puts
-            # the line's tag in the way, rebases its count on what was read out, and clears its fill.
-            acc_age = Signal(self.age_bits + 1, name=f"{n}_acc_age")
-            m.d.comb += acc_age.eq(Mux(valid.bit_select(way, 1), Array(row[w].age for w in range(W))[way], W))
+            m.d.comb += busy.eq(~hit & (valid & self.rwaiting[b] & vsel).any())
+            # LRU: the accessed way becomes the youngest; younger valid ways age by one (every valid
+            # way when the accessed one was empty). A miss puts the line's tag in the way, rebases its
+            # count on what was read out, and clears its fill.
+            acc_valid = Signal(name=f"{n}_acc_valid")
+            m.d.comb += acc_valid.eq((valid & sel).any())
             new_row = Signal(self.lines.shape, name=f"{n}_new_row")
             new_issued = Signal(self.issued.shape, name=f"{n}_new_issued")
             new_alloc = Signal(W, name=f"{n}_new_alloc")
             ways, counts, allocs = [], [], []
             for w in range(W):
-                here = way == w
+                here = sel[w]
                 old_age = row[w].age
-                new_age = Mux(here, 0, Mux(valid[w] & (old_age < acc_age), old_age + 1, old_age))
+                younger = ~acc_valid | _or(*(sel[v] & (old_age < row[v].age) for v in range(W) if v != w))
+                new_age = Mux(here, 0, Mux(valid[w] & younger, old_age + 1, old_age))
                 ways.append(Cat(Mux(here & ~hit, t, row[w].tag)[:self.tag_bits], new_age[:self.age_bits]))
                 counts.append((Mux(here, Mux(hit, issued[w], retired[w]) + 1, issued[w]))[:self.count_bits])
                 allocs.append(Mux(here & ~hit, ~fill[w], alloc[w]))
             # each row assigned in one piece (CXXRTL would assemble a row written field by field)
-            m.d.comb += [new_row.eq(Cat(Cat(*ways), valid | (C(1, W) << way)[:W])), new_issued.eq(Cat(*counts)),
+            m.d.comb += [new_row.eq(Cat(Cat(*ways), valid | sel)), new_issued.eq(Cat(*counts)),
                          new_alloc.eq(Cat(*allocs))]
             addr, en = self.lines.write(m, b, s, act & take, new_row)
             self.issued.write(m, b, s, act & take, new_issued)
             self.alloc.write(m, b, s, act & take, new_alloc)
             m.d.comb += [self.w_addr[b].eq(self.lines.row(s)), self.w_act[b].eq(act), self.w_row[b].eq(new_row),
-                         self.w_way[b].eq(way), self.w_issued[b].eq(new_issued)]
+                         self.w_way[b].eq(sel), self.w_issued[b].eq(new_issued)]
             # a set is touched when its row is written (a decoder of the bank's write address)
             with m.If(en):
                 m.d.sync += (touched.bit_select(addr, 1) if len(touched) > 1 else touched).eq(1)
             # a hit on a filled line (what the data read's register takes when this reference is
             # the next head: the fills of the cycles before this one)
             filled = Signal(name=f"{n}_hit_filled")
-            m.d.comb += filled.eq(hit & (alloc.bit_select(way, 1) == fill.bit_select(way, 1)))
+            # (at most one way hits: a set holds a line once)
+            m.d.comb += filled.eq((Cat(*hits) & ~(alloc ^ fill)).any())
             results.append((hit, way, busy, filled))
         out = []
         for k, s in enumerate(sets):
@@ -601,13 +642,25 @@ class CachedReader(wiring.Component):
         sel_held = Signal(3, name="lookup_select_held")
         m.d.comb += [sel_taken.eq(Mux(count >= 2, rp.rotate_left(2), rp.rotate_left(1))),
                      sel_held.eq(Mux(have & ~lv, rp.rotate_left(1), rp))]
-        src = Signal(width, name="lookup_bundle")
-        m.d.sync += src.eq(Mux(take, pick(sel_taken), pick(sel_held)))
+        # Only the fields the lookup reads memories with (each cache's sets and tags: the last ones
+        # of ``derived``) are chosen a cycle ahead; the others (the FIFO entry's, ``raw``, ``two``),
+        # which the lookup only registers for the check, are read from the buffer in the lookup's own
+        # cycle, at ``Mux(lv, rp + 1, rp)`` (a multiplexer of flip-flops), so ``take`` reaches half
+        # as many multiplexers.
+        ahead = sum(w for name, _, w in derived if name.startswith(("index_", "raw_")))
+        assert all(name.startswith(("index_", "raw_")) for name, _, _ in derived[-len(ic.derive(line0)) - len(rc.derive(rline)):])
+        src = Signal(ahead, name="lookup_bundle")
+        m.d.sync += src.eq(Mux(take, pick(sel_taken), pick(sel_held))[width - ahead:])
+        sel_now = Signal(3, name="lookup_select")
+        m.d.comb += sel_now.eq(Mux(lv, rp.rotate_left(1), rp))
+        now = Signal(width - ahead, name="lookup_entry")
+        m.d.comb += now.eq((Mux(sel_now[0], buf[0], 0) | Mux(sel_now[1], buf[1], 0) |
+                            Mux(sel_now[2], buf[2], 0))[:width - ahead])
         look = {}
         pos = 0
         for name, _, w in derived:
             sig = Signal(w, name=f"lookup_next_{name}")
-            m.d.comb += sig.eq(src[pos:pos + w])
+            m.d.comb += sig.eq(now[pos:pos + w] if pos < width - ahead else src[pos - (width - ahead):pos - (width - ahead) + w])
             look[name] = sig
             pos += w
         ic.lookup(m, {k[len("index_"):]: v for k, v in look.items() if k.startswith("index_")})
@@ -661,21 +714,26 @@ class CachedReader(wiring.Component):
         # in LUT RAM: written at the tail by the tag check, read at the head by the data read
         m.submodules.references = fifo = memory.Memory(shape=entry, depth=Q, init=[],
                                                        attrs={"ram_style": "distributed"})
-        fifo_w, fifo_r = fifo.write_port(), fifo.read_port(domain="comb")   # fifo_r: the entry after the head
+        fifo_w, fifo_r = fifo.write_port(), fifo.read_port(domain="comb")   # fifo_r: two entries after the head
         level = Signal(range(Q + 1))
-        head = Signal(range(max(Q, 2)))
-        # the entry after the head's address, a register of its own (no carry chain before the
-        # FIFO's read multiplexers): ``head + 1`` mod Q
-        head1 = Signal(range(max(Q, 2)), init=1 % Q, name="head_after")
+        # the address of the entry two after the head, a register of its own (no carry chain before
+        # the FIFO's read multiplexers): ``head + 2`` mod Q
+        head2 = Signal(range(max(Q, 2)), init=2 % Q, name="head_after_next")
         tail = Signal(range(max(Q, 2)))
         pop = Signal()
         o_free = Signal()
         m.d.comb += o_free.eq(~self.o.valid | self.o.ready)
-        # The head entry in a register (so the data read starts from flip-flops, not from the FIFO's
-        # LUT RAM read multiplexers): loaded with the entry after it when the head is read, or with
-        # the entry being written when that one becomes the head (the FIFO empty, or about to be).
+        # The head entry and the entry after it in registers (so the data read starts from
+        # flip-flops, not from the FIFO's LUT RAM read multiplexers, and whether the next head's lines
+        # are filled is one LUT RAM read away from flip-flops): the head is loaded with the entry after
+        # it when the head is read, or with the entry being written when that one becomes the head
+        # (the FIFO empty, or about to be); the entry after the head (``head_next``, meaningful while
+        # the FIFO holds two or more) with the entry two after the head when the head is read (in
+        # the LUT RAM at ``head_after_next``, or in the write register, or being checked), or with the
+        # entry being checked when that one becomes the second.
         headv = Signal(entry, name="head_entry")
-        m.d.comb += fifo_r.addr.eq(head1)
+        nextv = Signal(entry, name="head_next")
+        m.d.comb += fifo_r.addr.eq(head2)
         # Whether the head's lines are filled, in a register (``head_filled``: the data read's
         # ``pop`` is then a gate of flip-flops): loaded each cycle for the entry that is the head in
         # the next one, from the fills before this cycle: the head's own lines when it stays, the
@@ -683,11 +741,10 @@ class CachedReader(wiring.Component):
         # (the check's hit on a filled line). So a line's fill is seen by the data read the second
         # cycle after its last beat (golden's ``FILL_READ``).
         # the FIFO's write register (below)
-        fw_addr = Signal.like(tail, name="fifo_w_addr")
-        fw_data = Signal(entry, name="fifo_w_data")
-        fw_en = Signal(name="fifo_w_en")
-        nextv = Signal(entry, name="head_next")
-        m.d.comb += nextv.eq(Mux(fw_en & (level == 2), fw_data, fifo_r.data))
+        fw = _Behind(m, fifo_w, tail.shape(), entry, "fifo")
+        after_next = Signal(entry, name="head_after_next_entry")
+        fw_en, fw_data = fw.pending()
+        m.d.comb += after_next.eq(Mux(fw_en & (level == 3), fw_data, fifo_r.data))
 
         def lines_filled(v, name):
             i_f = ic.filled(m, [v.slot0[:islot], v.slot1], name)
@@ -695,7 +752,19 @@ class CachedReader(wiring.Component):
             return Mux(v.raw, r_f, i_f.all())
         head_now = lines_filled(headv, "head")
         next_now = lines_filled(nextv, "next")
+        # ``head_filled`` chosen from three registers, each loaded every cycle (so that no read of
+        # the ``alloc``/``fill`` LUT RAMs is shared between the head's and the next entry's lines
+        # through a multiplexer on ``pop``, which Yosys's ``share`` would build: a loop from
+        # ``pop`` through the read address back to ``head_filled``), by a fourth holding which
+        # one applies: the head's lines (it stays), the next entry's (the head was read), the
+        # check's hit (the entry being checked became the head).
+        f_stay = Signal(name="head_filled_stay")
+        f_next = Signal(name="head_filled_next")
+        f_new = Signal(name="head_filled_new")
+        f_from = Signal(2, name="head_filled_from")         # 0 stay, 1 next, 2 new
+        m.d.sync += [f_stay.eq(head_now), f_next.eq(next_now), f_new.eq(new_filled)]
         head_filled = Signal(name="head_filled")
+        m.d.comb += head_filled.eq(Mux(f_from[1], f_new, Mux(f_from[0], f_next, f_stay)))
         m.d.comb += pop.eq((level != 0) & head_filled & o_free)
         m.d.comb += self.stall_fill.eq((level != 0) & ~head_filled & o_free)
         # a read out of the index cache retires one reference per line
@@ -740,24 +809,26 @@ class CachedReader(wiring.Component):
         # (``take`` reaches its enable's data input, not the LUT RAM's write enables); the data read
         # takes a reference the cycle after its check from ``new`` (the FIFO empty) or from the
         # write register (below), so it sees no difference.
-        m.d.sync += [fw_addr.eq(tail), fw_en.eq(take)]
-        with m.If(lv):          # (a gate, not a plain wire: see ``new`` above)
-            m.d.sync += fw_data.eq(new.value(entry))
-        m.d.comb += [fifo_w.addr.eq(fw_addr), fifo_w.en.eq(fw_en), fifo_w.data.eq(fw_data)]
+        fw.write(m, tail, new.value(entry), take, data_en=lv)    # (a gate, not a plain wire: see ``new`` above)
         with m.If(take):
             m.d.sync += tail.eq(Mux(tail == Q - 1, 0, tail + 1))
         with m.If(pop):
-            m.d.sync += [head.eq(head1), head1.eq(Mux(head1 == Q - 1, 0, head1 + 1))]
+            m.d.sync += head2.eq(Mux(head2 == Q - 1, 0, head2 + 1))
         m.d.sync += level.eq(level + take - pop)
         with m.If(pop):
-            # the entry after the head: being checked (level 1), in the write register (level 2 and
-            # a write pending: the newest entry is the one after the head), or in the LUT RAM
-            m.d.sync += [headv.eq(Mux(level == 1, new.value(entry), nextv)),
-                         head_filled.eq(Mux(level == 1, new_filled, next_now))]
+            # the entry after the head (level 2 or more), or the one being checked (level 1)
+            m.d.sync += [headv.eq(Mux(level == 1, new.value(entry), nextv)), f_from.eq(Mux(level == 1, 2, 1))]
         with m.Elif(level == 0):
-            m.d.sync += [headv.eq(new.value(entry)), head_filled.eq(new_filled)]
+            m.d.sync += [headv.eq(new.value(entry)), f_from.eq(2)]
         with m.Else():
-            m.d.sync += head_filled.eq(head_now)
+            m.d.sync += f_from.eq(0)
+        # the entry after the head: when the head is read, the one two after it (being checked at
+        # level 2; in the write register at level 3 with a write pending: the newest entry; else in
+        # the LUT RAM); when not, the one being checked once it becomes the second (level 1)
+        with m.If(pop):
+            m.d.sync += nextv.eq(Mux(level == 2, new.value(entry), after_next))
+        with m.Elif(level == 1):
+            m.d.sync += nextv.eq(new.value(entry))
 
         # AR slots: shift on issue; a tag check with misses loads them (its first burst in slot 0).
         burst_addr = [Signal(self._addr_width, name=f"miss_addr{j}") for j in range(2)]
@@ -797,29 +868,36 @@ class CachedReader(wiring.Component):
         m.d.comb += [first.eq(Mux(l_raw, fl(slotr, 1), Mux(miss0, fl(slot0, 0), fl(slot1, 0)))),
                      second.eq(fl(slot1, 0))]
         # written one cycle behind the check, from a write register per bank (``take`` reaches no
-        # write enable of the LUT RAM): a burst's AR leaves at least a cycle after its check and its
-        # first beat at least a cycle after that, when the entry is in the LUT RAM
+        # write enable of the LUT RAM). The entry of the burst being filled is a register of its own
+        # (``flight_head_entry``: the fill's row update and the line RAM's write address start from
+        # flip-flops, not from the queue's LUT RAM read multiplexers), loaded every cycle with the
+        # entry at the next cycle's ``f_head`` (``f_head + 1`` after a last beat): each bank reads
+        # the one of ``f_head``, ``f_head + 1`` of its parity, the pending write forwarded. A burst's
+        # AR leaves at least a cycle after its check, when its entry is in the write register, and
+        # its first beat at least a cycle after that, when the register holds the entry.
+        f_head1 = Signal(range(depth), init=1, name="flight_head_after")     # f_head + 1
         t1 = (f_tail + 1)[:len(f_tail)]
+        ahead = []
         for b, (wp, rp) in enumerate(flight):
             mine = f_tail[0] == b
-            w_addr = Signal(len(f_tail) - 1, name=f"flight{b}_w_addr")
-            w_data = Signal(1 + sw, name=f"flight{b}_w_data")
-            w_en = Signal(name=f"flight{b}_w_en")
-            m.d.sync += [w_addr.eq(Mux(mine, f_tail >> 1, t1 >> 1)), w_data.eq(Mux(mine, first, second)),
-                         w_en.eq(queue & (mine | (nmiss == 2)))]
-            m.d.comb += [wp.addr.eq(w_addr), wp.data.eq(w_data), wp.en.eq(w_en), rp.addr.eq(f_head >> 1)]
+            w = _Behind(m, wp, len(f_tail) - 1, 1 + sw, f"flight{b}")
+            w.write(m, Mux(mine, f_tail >> 1, t1 >> 1), Mux(mine, first, second), queue & (mine | (nmiss == 2)))
+            row = Signal(len(f_tail) - 1, name=f"flight{b}_read_row")
+            m.d.comb += [row.eq(Mux(f_head[0] == b, f_head >> 1, f_head1 >> 1)), rp.addr.eq(row)]
+            pend, d = w.pending(row)
+            ahead.append(Mux(pend, d, rp.data))
         with m.If(queue):
             m.d.sync += f_tail.eq(Mux(nmiss == 2, f_tail + 2, f_tail + 1))
-        cur = Signal(1 + sw)
-        m.d.comb += cur.eq(Mux(f_head[0], flight[1][1].data, flight[0][1].data))
+        cur = Signal(1 + sw, name="flight_head_entry")
+        last = self.axi.rvalid & self.axi.rlast
+        m.d.sync += cur.eq(Mux(f_head[0] ^ last, ahead[1], ahead[0]))
         beat = Signal(range(max(beats) + 1))
         cur_raw = cur[-1]
         cur_slot = cur[:-1]
-        last = self.axi.rvalid & self.axi.rlast
         with m.If(self.axi.rvalid):
             m.d.sync += beat.eq(Mux(self.axi.rlast, 0, beat + 1))
         with m.If(last):
-            m.d.sync += f_head.eq(f_head + 1)
+            m.d.sync += [f_head.eq(f_head1), f_head1.eq(f_head1 + 1)]
 
         # -- line RAMs: a row per beat --------------------------------------------------------------------
         # The index lines in two banks, so that words w and w + 1 come from one read port each (a

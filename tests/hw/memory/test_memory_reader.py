@@ -130,7 +130,7 @@ SHAPES = [
 
 
 @pytest.mark.parametrize("shape", range(len(SHAPES)))
-@pytest.mark.parametrize("prefetch", [1, 4])
+@pytest.mark.parametrize("prefetch", [1, 2, 4])
 def test_reader_equals_golden(shape, prefetch):
     ic, rc, bus = SHAPES[shape]
     ts = texture_set("yuv_4x4_b12_mip")
