@@ -18,9 +18,9 @@ from amaranth.lib import data, memory, wiring
 from amaranth.lib.wiring import In, Out
 from amaranth.utils import ceil_log2
 
-from .bus_port import DATA_WIDTH, LoadTarget, attach_memory, load_decode, or_all
+from .bus_port import DATA_WIDTH, LoadTarget, attach_memory, load_decode_banks, or_all
 
-__all__ = ["BankedROM", "BANK_DEPTH", "LOADABLE_BANK_DEPTH", "LATENCY", "pick", "addr_bits"]
+__all__ = ["BankedROM", "BANK_DEPTH", "LOADABLE_BANK_DEPTH", "LATENCY", "pick", "pick_group", "addr_bits"]
 
 #: Words per bank: the depth of one DP16KD at its 36-bit width.
 BANK_DEPTH = 512
@@ -46,6 +46,22 @@ def pick(values: list, index):
         values = [Mux(index[bit], values[n + 1], values[n]) for n in range(0, len(values), 2)]
         bit += 1
     return values[0]
+
+
+def pick_group(values: list, index, group: int) -> list:
+    """The first half of ``pick(values, index)`` over two stages: the ``group`` values of ``index``'s
+    aligned group (``values[(index & ~(group - 1)) + lo]`` for ``lo`` in ``range(group)``), picked
+    by ``index``'s high bits, combinational. ``pick(pick_group(values, index, group),
+    index[:log2(group)])`` is ``pick(values, index)`` for every ``index`` (the list padded with its
+    last value, index bits above the tree ignored, as :func:`pick`). ``group``: a power of two."""
+    if group < 1 or group & (group - 1):
+        raise ValueError(f"group {group} is not a power of two")
+    values = list(values)
+    size = 1 << (len(values) - 1).bit_length() if len(values) > 1 else 1
+    values += [values[-1]] * (size - len(values))
+    values = [values[n % size] for n in range(max(size, group))]     # (the index modulo the tree)
+    g = group.bit_length() - 1
+    return [pick(values[lo::group], index[g:]) for lo in range(group)]
 
 
 def addr_bits(depth: int) -> int:
@@ -159,11 +175,10 @@ class BankedROM(wiring.Component):
         # a shallower one shares the pipeline's read port with the bus's reads (a multiplexer on
         # the read address), which keeps it in one 512 x 36 block RAM per 36 bits instead of two.
         own_port = load is not None and self._depth > BANK_DEPTH
-        if load is not None:                # the command decoded once, then a bank compare each
-            hit, row, lane, command = load_decode(m, self.load, region=load.region, lanes=load.lanes,
-                                                  stride=load.stride, phase=load.phase, depth=self._depth, name="load")
-            if len(row) < offset_bits:
-                row = Cat(row, C(0, offset_bits - len(row)))
+        if load is not None:                # the command decoded per bank, into registers of each bank's own
+            decoded = load_decode_banks(m, self.load, region=load.region, lanes=load.lanes, stride=load.stride,
+                                        phase=load.phase, depth=self._depth, bank_depth=d, name="load",
+                                        write_lanes=stored // DATA_WIDTH if stored > DATA_WIDTH else 0)
         for k in range(self._banks):
             part = self._init[k * d:(k + 1) * d]
             depth = min(d, self._depth - k * d) if load is not None or self._depth > len(self._init) else len(part)
@@ -182,10 +197,10 @@ class BankedROM(wiring.Component):
             # block RAM's second port and a register of its own (hw.bus_port.attach_memory).
             q = Signal(stored, name=f"data{k}")
             if load is not None:
-                bank_hit = hit if self._banks == 1 else hit & (row[offset_bits:] == k)
-                rd, answer = attach_memory(m, mem, command, hit=bank_hit, row=row[:offset_bits], lane=lane,
+                command, row, lane, write_en = decoded[k]
+                rd, answer = attach_memory(m, mem, command, hit=C(1, 1), row=row[:offset_bits], lane=lane,
                                            name=f"bank{k}_load", read_addr=self.addr[:offset_bits], read_en=self.en,
-                                           own_port=own_port)
+                                           own_port=own_port, write_en=write_en)
                 answers.append(answer)
             else:
                 rd = mem.read_port(domain="sync")

@@ -44,7 +44,8 @@ from amaranth.lib.wiring import In, Out
 from vqtex.golden.geometry import Geometry
 from vqtex.golden.register_map import (CONTROL, REGION_BITS, REGIONS, RegisterMap, geometry_words)
 
-__all__ = ["wishbone_signature", "load_layout", "BusPort", "LoadTarget", "load_decode", "attach_memory", "or_all",
+__all__ = ["wishbone_signature", "load_layout", "BusPort", "LoadTarget", "load_decode", "load_decode_banks",
+           "attach_memory", "or_all",
            "READ_LATENCY", "ANSWER_LATENCY", "delayed",
            "DATA_WIDTH"]
 
@@ -54,6 +55,11 @@ DATA_WIDTH = 32
 READ_LATENCY = 6
 #: Cycles from a read's acceptance to its answer on ``load_data`` (one register before ``dat_r``).
 ANSWER_LATENCY = READ_LATENCY - 1
+#: A memory of more 32-bit lanes than this (``max``'s 84-lane codebook) picks a read's lane over two
+#: cycles (:func:`attach_memory`): its group of ``LANE_GROUP`` lanes into registers, then the lane.
+SPLIT_LANES = 32
+#: Lanes per group of a split lane pick (a power of two).
+LANE_GROUP = 4
 
 
 def or_all(values):
@@ -239,6 +245,51 @@ def load_decode(m, load, *, region: int, lanes: int = 1, stride: int = 1, phase:
     return hit, row, lane, command
 
 
+def load_decode_banks(m, load, *, region: int, lanes: int = 1, stride: int = 1, phase: int = 0, depth: int,
+                      bank_depth: int, write_lanes: int = 0, name: str) -> list:
+    """:func:`load_decode` per bank of ``bank_depth`` rows (a :class:`hw.banked_rom.BankedROM`'s),
+    each bank's decode a register of its own, one cycle after ``load`` as :func:`load_decode`'s:
+    a list of ``(command, row, lane, write_en)`` per bank, where ``command``'s ``write`` and ``read``
+    are high only when the command addresses a row of this bank (``hit`` is then 1: pass
+    ``hit=C(1, 1)`` to :func:`attach_memory`), ``row`` is the row in the bank, and ``write_en``
+    (``write_lanes`` > 0, a memory wider than the bus) is the registered one-hot of the 32-bit lane
+    written (``write_lanes`` bits; else None). The command's other fields are loaded only when the
+    bank is addressed, so that the copies differ (Yosys keeps a register per bank): each bank's
+    write enables, bus address and write data start at flip-flops beside it, with no compare or
+    fan-out across the chip in the cycle before the block RAM (``fetch.back``'s critical path at
+    132.8 MHz, docs/area.md "Block by block")."""
+    lane_bits = (lanes - 1).bit_length()
+    stride_bits = (stride - 1).bit_length()
+    entry = load.offset[lane_bits:]
+    rows = entry[stride_bits:]
+    offset_bits = (bank_depth - 1).bit_length()
+    banks = -(-depth // bank_depth)
+    cond = load.region == region
+    if stride > 1:
+        cond &= entry[:stride_bits] == phase
+    out = []
+    for k in range(banks):
+        cond_k = cond & (rows < depth) if k == banks - 1 else cond
+        if banks > 1:
+            cond_k &= rows[offset_bits:] == k
+        strobes = Signal(2, name=f"{name}{k}_strobes")
+        rest = Signal(len(Value.cast(load)) - 2, name=f"{name}{k}_command")
+        m.d.sync += strobes.eq(Cat(load.write & cond_k, load.read & cond_k))
+        with m.If(cond_k):
+            m.d.sync += rest.eq(Value.cast(load)[2:])
+        command = load.shape()(Cat(strobes, rest))
+        row = Value.cast(command.offset)[lane_bits + stride_bits:]
+        row = Cat(row, C(0, max(0, offset_bits - len(row))))[:max(1, offset_bits)] if banks > 1 else row
+        lane = Value.cast(command.offset)[:lane_bits] if lane_bits else C(0, 1)
+        write_en = None
+        if write_lanes:
+            write_en = Signal(write_lanes, name=f"{name}{k}_write_lanes")
+            now = load.offset[:lane_bits] if lane_bits else C(0, 1)
+            m.d.sync += write_en.eq(Mux(load.write & cond_k, 1 << now, 0))
+        out.append((command, row, lane, write_en))
+    return out
+
+
 def delayed(m, value, cycles: int, *, name: str):
     """``value`` through ``cycles`` registers (a read answer brought to ``ANSWER_LATENCY``)."""
     for n in range(cycles):
@@ -256,7 +307,7 @@ class _ReadData:
 
 def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int | None = None, pack=None,
                   unpack=None, name: str, read_addr, read_en, data_r=None, own_port: bool = False,
-                  data_en=None):
+                  data_en=None, write_en=None):
     """Give ``mem`` (an ``amaranth.lib.memory.Memory``, not yet elaborated) a write port for the load
     command ``load``, and its one read port, shared: the pipeline reads at ``read_addr`` when
     ``read_en``; a bus read takes the port in the cycle of its command (the pipeline is empty then:
@@ -299,6 +350,14 @@ def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int
     No net of the caller's fans out to the LUT RAMs' addresses, and the bus's read data is the
     same register (no ``data_r``). The bus's answer keeps its timing. Not with ``own_port`` or
     ``data_r``.
+
+    A memory of more than ``SPLIT_LANES`` lanes picks the read's lane over two cycles: the
+    ``LANE_GROUP`` lanes of its group registered (each 0 unless this memory was addressed), then
+    the lane among them, combinational: ``answer`` is then a pick of registers, with the same
+    timing (the OR of the unit's answers into ``dat_r`` follows it).
+
+    With ``write_en`` (a memory wider than the bus: :func:`load_decode_banks`'s registered one-hot
+    of the lane written) the write port's lane enables are ``write_en`` itself, not decoded here.
     """
     width = Shape.cast(mem.shape).width
     mine = Signal(name=f"{name}_mine")
@@ -307,7 +366,7 @@ def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int
     if wide:
         wp = mem.write_port(granularity=DATA_WIDTH)
         m.d.comb += [wp.addr.eq(row), wp.data.eq(load.data.replicate(width // DATA_WIDTH)),
-                     wp.en.eq(Mux(load.write & mine, 1 << lane, 0))]
+                     wp.en.eq(Mux(load.write & mine, 1 << lane, 0) if write_en is None else write_en)]
     else:
         wp = mem.write_port()
         m.d.comb += [wp.addr.eq(row), wp.en.eq(load.write & mine)]
@@ -332,7 +391,9 @@ def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int
         m.d.comb += [bp.addr.eq(row), comb.addr.eq(read_addr)]
         with m.If(read_en):
             m.d.sync += rp.data.eq(comb.data)
-        data_r = Signal.like(bp.data, name=f"{name}_data_r")
+        # (no reset: it is read only under hit_rr, and a register without a reset is one the block
+        # RAM's output register can take, docs/area.md "--bram-outreg")
+        data_r = Signal.like(bp.data, name=f"{name}_data_r", reset_less=True)
     else:
         bp = rp
         m.d.comb += [rp.addr.eq(Mux(bus_read, row, read_addr)), rp.en.eq(read_en | bus_read)]
@@ -351,6 +412,19 @@ def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int
         lane_r = Signal(len(lane), name=f"{name}_lane_r")
         lane_rr = Signal(len(lane), name=f"{name}_lane_rr")
         m.d.sync += [lane_r.eq(lane), lane_rr.eq(lane_r)]
+        lanes = width // DATA_WIDTH
+        if lanes > SPLIT_LANES:             # the lane's group registered, the lane in it after
+            from .banked_rom import pick, pick_group
+            words = [Value.cast(data_r)[DATA_WIDTH * n:DATA_WIDTH * (n + 1)] for n in range(lanes)]
+            fine = LANE_GROUP.bit_length() - 1
+            lane_rrr = Signal(fine, name=f"{name}_lane_rrr")
+            group = []
+            for n, word in enumerate(pick_group(words, Cat(lane_rr, C(0, fine)), LANE_GROUP)):
+                r = Signal(DATA_WIDTH, name=f"{name}_answer{n}")
+                m.d.sync += r.eq(Mux(hit_rr, word, 0))
+                group.append(r)
+            m.d.sync += lane_rrr.eq(Cat(lane_rr, C(0, fine))[:fine])
+            return rp, pick(group, lane_rrr)
         word = Value.cast(data_r).word_select(lane_rr, DATA_WIDTH)
     else:
         word = unpack(data_r) if unpack is not None else Value.cast(data_r)

@@ -20,7 +20,7 @@ from vqtex.golden.format import COLOR_CODES
 from vqtex.golden.geometry import entry_lanes
 from vqtex.golden.register_map import REGIONS
 
-from .banked_rom import BANK_DEPTH, BankedROM, pick
+from .banked_rom import BANK_DEPTH, BankedROM, pick, pick_group
 from .bus_port import DATA_WIDTH, LoadTarget, or_all
 from .features import Features
 from .registers import enabled_register
@@ -29,6 +29,12 @@ __all__ = ["CodebookROM", "SamplesLayout", "LATENCY", "expand_texel"]
 
 #: Cycles from the index to the samples.
 LATENCY = 4
+#: The loadable ROM's entries of more 4-byte words than this (``max``'s 336-byte entries: 85 words,
+#: against ``paper``'s 22) have their word picks over two stages: a group of ``PICK_GROUP`` words
+#: picked in stage 3, the word in the group in stage 4 (docs/area.md, "Block by block").
+SPLIT_PICK_WORDS = 32
+#: Words per group of a split pick (a power of two).
+PICK_GROUP = 4
 
 #: Four 8-bit samples: (R,G,B,A), (R,G,B,-), (I,-,-,-) or (Y,U,V,-) as in ``read_codeword``.
 SamplesLayout = data.ArrayLayout(unsigned(8), 4)
@@ -107,6 +113,11 @@ class CodebookROM(wiring.Component):
        texel's bytes (a 64-bit window) and the words holding U and V; the raw word of the selected
        raw bank. Registered.
     4. *select*: the bank's windows selected, then the bytes inside them; registered as ``samples``.
+
+    A loadable ROM whose entries have more than ``SPLIT_PICK_WORDS`` 4-byte words picks each of
+    its words over stages 3 and 4: stage 3 registers the ``PICK_GROUP`` candidates of the word's
+    aligned group (:func:`hw.banked_rom.pick_group`), stage 4 picks the word among them. Same
+    values, same latency.
 
     Latency 4 (every stage advances when ``en`` is high). Throughput: one texel per cycle.
 
@@ -351,6 +362,17 @@ class CodebookROM(wiring.Component):
         # U and V, each picked from a list of words by the word number (a multiplexer of whole
         # words; no shifter). The entry is padded with three copies of its last byte, so that every
         # byte address up to last + 3 reads what the golden model's clamp reads, then with zeros.
+        # A loadable ROM of wide entries: each pick over two stages (the word's group here, the word
+        # in stage 4), ``fine`` bits of the word number carried to stage 4.
+        split = load is not None and feat.compressed and nwords - 1 > SPLIT_PICK_WORDS
+        fine = PICK_GROUP.bit_length() - 1 if split else 0
+
+        def word_pick(values, index, name):
+            """Stage 3's pick of ``values`` by ``index`` (registered): one value, or the group's."""
+            if not split:
+                return reg(pick(values, index), name)
+            return [reg(v, f"{name}_{lo}") for lo, v in enumerate(pick_group(values, index, PICK_GROUP))]
+
         windows, u_words, v_words = [], [], []
         for k in range(codebook.banks if feat.compressed else 0):
             entry = codebook.data[k]
@@ -358,16 +380,20 @@ class CodebookROM(wiring.Component):
             padded = Cat(entry, last, last, last)
             words = [Cat(padded[32 * n:32 * n + 32], C(0, max(0, 32 * n + 32 - len(padded))))
                      for n in range(nwords - 1)] + [C(0, 32)]
-            windows.append(reg(pick([Cat(words[n], words[n + 1]) for n in range(nwords - 1)], start[2:]),
-                               f"window{k}"))
+            windows.append(word_pick([Cat(words[n], words[n + 1]) for n in range(nwords - 1)], start[2:],
+                                     f"window{k}"))
             if yuv:
-                u_words.append(reg(pick(words, ustart[2:]), f"u_word{k}"))
-                v_words.append(reg(pick(words, vstart[2:]), f"v_word{k}"))
+                u_words.append(word_pick(words, ustart[2:], f"u_word{k}"))
+                v_words.append(word_pick(words, vstart[2:], f"v_word{k}"))
         bank = reg(codebook.bank, "bank_window") if feat.compressed else None
         raw_word = reg(raw.word, "raw_window") if feat.raw else None
-        low = {"start": start[:2]}
+        def low_bits(address):
+            """What stage 4 needs of a byte address: the byte in the word (and the word in its group)."""
+            return Cat(address, C(0, fine))[:2 + fine] if split else address[:2]
+
+        low = {"start": low_bits(start)}
         if yuv:
-            low.update(ustart=ustart[:2], vstart=vstart[:2])
+            low.update(ustart=low_bits(ustart), vstart=low_bits(vstart))
         low.update({name: getattr(f2, name) for name in ("compressed", "color") if name in ride})
         f3 = reg(Cat(*low.values()), "fields_window")
         f3 = data.StructLayout({name: len(v) for name, v in low.items()})(f3)
@@ -377,16 +403,19 @@ class CodebookROM(wiring.Component):
         # Stage 4: the bank's words, then the bytes.
         out = Signal(32)
         if feat.compressed:
-            window = pick(windows, bank)
+            def select(words, at, width):
+                """The bank's word (split: the word in its group first), then ``width`` bits at
+                byte ``at % 4``."""
+                if split:
+                    words, at = [pick(group, at[2:]) for group in words], at[:2]
+                return pick(words, bank).bit_select(at << 3, width)
+
             texel = Signal(32)
-            m.d.comb += texel.eq(window.bit_select(f3.start << 3, 32))
+            m.d.comb += texel.eq(select(windows, f3.start, 32))
             if yuv:
                 u = Signal(8)
                 v = Signal(8)
-                m.d.comb += [
-                    u.eq(pick(u_words, bank).bit_select(f3.ustart << 3, 8)),
-                    v.eq(pick(v_words, bank).bit_select(f3.vstart << 3, 8)),
-                ]
+                m.d.comb += [u.eq(select(u_words, f3.ustart, 8)), v.eq(select(v_words, f3.vstart, 8))]
         # (condition, samples, colour out or None for the level's own), first match; the last
         # unconditional. The colour matrix is told the paper's codes only.
         branches = []

@@ -78,6 +78,8 @@ def cmd_report_area(args) -> int:
             "--placer-seed")
     resolve(args, "router", "router1", not args.no_pnr and not args.no_route,
             "is nextpnr's router: it does not go with --no-pnr or --no-route")
+    if args.bram_outreg and args.no_pnr:
+        raise CliError("--bram-outreg changes the netlist nextpnr places: it does not go with --no-pnr")
     if args.no_route and args.no_pnr:
         raise CliError("--no-route places without routing: it does not go with --no-pnr")
     if args.filter_lanes is not None and args.one_port:
@@ -114,7 +116,7 @@ def cmd_report_area(args) -> int:
             seed=args.seed, router=args.router, route=not args.no_route, workdir=workdir, timeout=args.timeout, name=name, specialise=unit == "specialised",
             progress=lambda m, u=unit: progress_line(f"report area: {u + ' unit: ' if len(units) > 1 else ''}{m}"),
             filter_lanes=args.filter_lanes, index_banks=args.index_banks, geometry=geometry, memory=memory,
-            stage=args.stage)
+            stage=args.stage, bram_outreg=args.bram_outreg)
         except synth.StageError as e:   # a --stage that is not a block of this unit
             raise CliError(f"report area: {e}") from None
         if t_set is not None:
@@ -175,6 +177,10 @@ def add_parser(sub) -> None:
                         "routing a loadable preset takes an hour; default: place and route)")
     a.add_argument("--no-pnr", action="store_true",
                    help="synthesis only: utilisation, no Fmax (default: also place and route)")
+    a.add_argument("--bram-outreg", action="store_true",
+                   help="before place and route, move the fabric register behind each block RAM read port into "
+                        "the DP16KD's output register (REGMODE OUTREG, what Lattice's synthesis does and Yosys's "
+                        "mapping does not; same cycles; docs/area.md) (default: Yosys's netlist as it is)")
     a.add_argument("--stage", metavar="NAME", default=None,
                    help=with_default("one block of the unit alone, out of context, a flip-flop on each of its ports "
                                      "(its path inside the unit, fetch.back.codebook_rom, or a unique tail, "

@@ -265,3 +265,25 @@ def test_descriptor_table_in_block_ram(monkeypatch):
     test_load_then_fetch_then_reload(("rgba_2x2_b7_mip_w16", "rgb_2x2_b16_w16"))
     test_read_back_and_errors(None)
     test_drain_rule()
+
+
+def test_split_codebook_picks(monkeypatch):
+    """A loadable codebook ROM of wide entries (``max``'s: more than
+    ``hw.codebook_rom.SPLIT_PICK_WORDS`` words) picks its words over two stages; forced here on
+    small geometries (every entry split, groups of 4 and of 2): load, fetch and reload bit for bit
+    and cycle for cycle, yuv411's U and V and PowerVR2's yuv422 included."""
+    import vqtex.hw.codebook_rom as codebook_rom
+    monkeypatch.setattr(codebook_rom, "SPLIT_PICK_WORDS", 0)
+    test_load_then_fetch_then_reload(("rgb_4x4_b8_mip", "yuv_4x4_b12_mip"))
+    monkeypatch.setattr(codebook_rom, "PICK_GROUP", 2)
+    test_pvr2_sets_load()
+
+
+def test_split_lane_pick(monkeypatch):
+    """A memory of more than ``hw.bus_port.SPLIT_LANES`` 32-bit lanes (``max``'s codebook) picks a
+    bus read's lane over two cycles; forced here on every wide memory: the reads back and errors
+    with the same answers and READ_LATENCY (the bus transfers' timing is checked by the bench)."""
+    import vqtex.hw.bus_port as bus_port
+    monkeypatch.setattr(bus_port, "SPLIT_LANES", 0)
+    test_read_back_and_errors(None)
+    test_write_timing_and_read_latency()

@@ -9,6 +9,7 @@ import time
 
 from .harness import Harness, design_memories, stage_rtlil
 from .target import DEVICE, HARNESS_NAME, INSTALL_HINT, UNIT_NAME, SynthError
+from .outreg import absorb_netlist
 from .tools import run_nextpnr, run_yosys, tools_available
 
 __all__ = ["area_report"]
@@ -18,7 +19,8 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
                 seed: int = 1, workdir: str | None = None, timeout: float | None = None,
                 name: str | None = None, progress=None, specialise: bool = True,
                 filter_lanes: int | None = None, index_banks: str = "parity", geometry=None,
-                memory=None, router: str = "router1", route: bool = True, stage: str | None = None) -> dict:
+                memory=None, router: str = "router1", route: bool = True, stage: str | None = None,
+                bram_outreg: bool = False) -> dict:
     """Synthesize (and unless ``place`` is false, place and route) the unit holding ``ts``: the
     specialised texel-fetch unit (:class:`hw.features.Features`), or with ``specialise=False`` the
     full one; or with ``filter_lanes`` the texture filter (``hw.filter.TextureFilter``) with that many
@@ -43,6 +45,11 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
     its path; ``port_bits`` its ports'; the memories and the critical path's names are the unit's,
     ``unit.fetch.back.codebook_rom...``). :class:`.harness.StageError` (one line, the blocks listed)
     for a name that is not a block.
+
+    ``bram_outreg``: before place and route, the fabric register behind each block RAM read port
+    moved into the DP16KD's output register where it can be (:mod:`.outreg`; what Lattice's
+    synthesis does and Yosys's mapping does not; ``bram_outreg`` in the report counts the ports and
+    the flip-flops moved; ``utilisation`` stays Yosys's, those flip-flops included).
 
     ``progress(message)``, when given, is called as each long step starts (elaboration, synthesis,
     place and route).
@@ -142,6 +149,8 @@ def area_report(ts, *, one_port: bool = False, tag_width: int = 8, place: bool =
                              "raw_cache": vars(memory.raw_cache) | {"sets": memory.raw_cache.sets},
                              "prefetch": memory.prefetch, "bus_bytes": memory.bus_bytes,
                              "address_stages": ADDRESS_STAGES}
+        if place and bram_outreg:
+            rep["bram_outreg"] = absorb_netlist(syn["netlist"])
         if place:
             progress(f"place and route (nextpnr, {freq:g} MHz), typically 20-40 s")
             pnr = run_nextpnr(folder, freq=freq, seed=seed, timeout=timeout, router=router, route=route)

@@ -221,6 +221,7 @@ NOT_APPLYING = [
     (["report", "area", "--builtin", "tiny", "--no-pnr", "--router", "router2"], "--router"),
     (["report", "area", "--builtin", "tiny", "--no-route", "--router", "router2"], "--router"),
     (["report", "area", "--builtin", "tiny", "--no-pnr", "--no-route"], "--no-route"),
+    (["report", "area", "--builtin", "tiny", "--no-pnr", "--bram-outreg"], "--bram-outreg"),
     (["experiments", "table3", "--backend", "golden"], "--backend"),
     (["experiments", "table4", "--requests", "fixed"], "--requests"),
     (["experiments", "table5", "--paper-only"], "--paper-only"),
