@@ -44,6 +44,8 @@ from amaranth.lib.wiring import In, Out
 from vqtex.golden.geometry import Geometry
 from vqtex.golden.register_map import (CONTROL, REGION_BITS, REGIONS, RegisterMap, geometry_words)
 
+from .pick import pick, pick_group
+
 __all__ = ["wishbone_signature", "load_layout", "BusPort", "LoadTarget", "load_decode", "load_decode_banks",
            "attach_memory", "or_all",
            "READ_LATENCY", "ANSWER_LATENCY", "delayed",
@@ -414,7 +416,6 @@ def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int
         m.d.sync += [lane_r.eq(lane), lane_rr.eq(lane_r)]
         lanes = width // DATA_WIDTH
         if lanes > SPLIT_LANES:             # the lane's group registered, the lane in it after
-            from .banked_rom import pick, pick_group
             words = [Value.cast(data_r)[DATA_WIDTH * n:DATA_WIDTH * (n + 1)] for n in range(lanes)]
             fine = LANE_GROUP.bit_length() - 1
             lane_rrr = Signal(fine, name=f"{name}_lane_rrr")

@@ -20,7 +20,8 @@ from vqtex.golden.format import COLOR_CODES
 from vqtex.golden.geometry import entry_lanes
 from vqtex.golden.register_map import REGIONS
 
-from .banked_rom import BANK_DEPTH, BankedROM, pick, pick_group
+from .banked_rom import BANK_DEPTH, BankedROM
+from .pick import pick, pick_group
 from .bus_port import DATA_WIDTH, LoadTarget, or_all
 from .features import Features
 from .registers import enabled_register
@@ -116,7 +117,7 @@ class CodebookROM(wiring.Component):
 
     A loadable ROM whose entries have more than ``SPLIT_PICK_WORDS`` 4-byte words picks each of
     its words over stages 3 and 4: stage 3 registers the ``PICK_GROUP`` candidates of the word's
-    aligned group (:func:`hw.banked_rom.pick_group`), stage 4 picks the word among them. Same
+    aligned group (:func:`hw.pick.pick_group`), stage 4 picks the word among them. Same
     values, same latency.
 
     Latency 4 (every stage advances when ``en`` is high). Throughput: one texel per cycle.

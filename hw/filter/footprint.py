@@ -40,7 +40,7 @@ from amaranth.lib.wiring import In, Out
 from vqtex.golden import filter as spec
 
 from ..address import COORD_BITS
-from ..banked_rom import pick
+from ..pick import pick
 from ..descriptor import LEVEL_BITS
 
 __all__ = ["Footprint", "FilterRequestLayout", "FootprintLayout", "TexelSlotLayout", "LATENCY",

@@ -27,7 +27,8 @@ from amaranth.lib.wiring import In, Out
 
 from vqtex.golden.index_banks import BankedIndex
 
-from ..banked_rom import BANK_DEPTH, pick
+from ..banked_rom import BANK_DEPTH
+from ..pick import pick
 from ..index_reader import LATENCY, IndexReader, IndexRequestLayout
 
 __all__ = ["IndexBanks", "bank_map"]

@@ -51,7 +51,8 @@ from vqtex.golden.geometry import Geometry
 from vqtex.golden.register_map import RegisterMap
 
 from ..address import COORD_BITS
-from ..banked_rom import BANK_DEPTH, pick
+from ..banked_rom import BANK_DEPTH
+from ..pick import pick
 from ..bus_port import BusPort, wishbone_signature
 from ..descriptor import descriptor_widths, texture_bits
 from ..features import Features

@@ -1,4 +1,4 @@
-"""hw.banked_rom.pick_group: the first half of a pick over two stages equals the whole pick for
+"""hw.pick.pick_group: the first half of a pick over two stages equals the whole pick for
 every index (lists of any length, groups larger and smaller than the list, index wider than the
 tree), simulated exhaustively."""
 
@@ -8,7 +8,7 @@ import pytest
 from amaranth import *
 from amaranth.sim import Simulator
 
-from vqtex.hw.banked_rom import pick, pick_group
+from vqtex.hw.pick import pick, pick_group
 
 
 @pytest.mark.parametrize("n", [1, 3, 5, 22, 85])
