@@ -96,6 +96,7 @@ from amaranth import *
 from amaranth.lib import data, memory, stream, wiring
 from amaranth.lib.wiring import In, Out
 
+from ..bus_port import or_all
 from .axi import INCR, axi4_read_signature
 
 __all__ = ["CachedReader"]
@@ -103,14 +104,6 @@ __all__ = ["CachedReader"]
 
 def _log2(v: int) -> int:
     return v.bit_length() - 1
-
-
-def _or(*vs):
-    """The OR of ``vs`` (0 when there are none)."""
-    out = C(0, 1)
-    for v in vs:
-        out = out | v
-    return out
 
 
 def _reg(m, nx, name):
@@ -180,14 +173,14 @@ class _Rows:
         self.shape = shape
         self.banks = banks
         self.mems = []
-        self.pending = []       # with ``behind``, a _Behind per bank
+        self.behind = []        # with ``behind``, a _Behind per bank
         for b in range(banks):
             n = f"{name}{b}" if banks > 1 else name
             m.submodules[n] = mem = memory.Memory(
                 shape=shape, depth=sets // banks, init=[], attrs={"ram_style": "distributed"})
             self.mems.append(mem)
             if behind:
-                self.pending.append(_Behind(m, mem.write_port(), max(1, _log2(sets // banks)), shape, n))
+                self.behind.append(_Behind(m, mem.write_port(), max(1, _log2(sets // banks)), shape, n))
 
     def row(self, s):
         """The row of set ``s`` in its bank."""
@@ -195,7 +188,7 @@ class _Rows:
 
     def forwarded(self, b, r):
         """Whether bank ``b``'s pending write (``behind``) is to row ``r``, and the row it writes."""
-        return self.pending[b].pending(r)
+        return self.behind[b].pending(r)
 
     def read(self, m, b, s, name):
         """Bank ``b``'s row of set ``s`` (a set of that bank), combinational (with the pending write
@@ -203,7 +196,7 @@ class _Rows:
         port = self.mems[b].read_port(domain="comb")
         out = Signal(self.shape, name=name)
         m.d.comb += port.addr.eq(self.row(s))
-        if self.pending:
+        if self.behind:
             hit, d = self.forwarded(b, self.row(s))
             m.d.comb += out.eq(Mux(hit, d, port.data))
         else:
@@ -214,8 +207,8 @@ class _Rows:
         """Write bank ``b``'s row of set ``s`` at the clock edge when ``en`` (one call per bank); with
         ``behind``, into the write register, and from it into the memory at the next edge. Returns
         the address and enable of the memory's write."""
-        if self.pending:
-            w = self.pending[b]
+        if self.behind:
+            w = self.behind[b]
             w.write(m, self.row(s), data, en)
             return w.addr, w.en
         port = self.mems[b].write_port()
@@ -417,7 +410,7 @@ class _Cache:
             sel = Signal(W, name=f"{n}_way_sel")
             m.d.comb += [vsel.eq(Mux(~valid.all(), lowest(~valid), Mux(oldest.any(), lowest(oldest), 1))),
                          sel.eq(Mux(hit, lowest(Cat(*hits)), vsel))]
-            m.d.comb += way.eq(_or(*(Mux(sel[w], w, 0) for w in range(W))))
+            m.d.comb += way.eq(or_all(Mux(sel[w], w, 0) for w in range(W)))
             # a way's references wait when its counts differ (mod 2^n: equal is none waiting), found
             # for every way by the lookup (what was read out before its cycle), chosen by the victim
             m.d.comb += busy.eq(~hit & (valid & self.rwaiting[b] & vsel).any())
@@ -433,7 +426,7 @@ class _Cache:
             for w in range(W):
                 here = sel[w]
                 old_age = row[w].age
-                younger = ~acc_valid | _or(*(sel[v] & (old_age < row[v].age) for v in range(W) if v != w))
+                younger = ~acc_valid | Cat(*(sel[v] & (old_age < row[v].age) for v in range(W) if v != w)).any()
                 new_age = Mux(here, 0, Mux(valid[w] & younger, old_age + 1, old_age))
                 ways.append(Cat(Mux(here & ~hit, t, row[w].tag)[:self.tag_bits], new_age[:self.age_bits]))
                 counts.append((Mux(here, Mux(hit, issued[w], retired[w]) + 1, issued[w]))[:self.count_bits])
@@ -598,6 +591,9 @@ class CachedReader(wiring.Component):
              max(1, _log2(bus // min(wb, 4)) or 1)),
             ("off1", ((a1 & (bus - 1)) >> _log2(wb))[:max(1, _log2(bus // wb) or 1)], max(1, _log2(bus // wb) or 1)),
         ]
+        # the caches' sets and tags last: the fields the lookup's memory reads need, chosen a cycle
+        # ahead (``lookup_bundle`` below); the ``now_bits`` before them are read in the lookup's cycle
+        now_bits = sum(w for _, _, w in derived)
         for cache, line in ((ic, line0), (rc, rline)):
             derived += [(f"{cache.name}_{k}", v, w) for k, (v, w) in cache.derive(line).items()]
         width = sum(w for _, _, w in derived)
@@ -636,8 +632,9 @@ class CachedReader(wiring.Component):
         m.d.sync += lv.eq(have & ~(lv & ~take))
         nbuf = [Mux(accept & wp[j], bundle, buf[j]) for j in range(3)]
 
-        def pick(sel):
-            return Mux(sel[0], nbuf[0], 0) | Mux(sel[1], nbuf[1], 0) | Mux(sel[2], nbuf[2], 0)
+        def pick(entries, sel):
+            """The entry of the one-hot ``sel``."""
+            return or_all(Mux(sel[j], entries[j], 0) for j in range(3))
         sel_taken = Signal(3, name="lookup_select_taken")
         sel_held = Signal(3, name="lookup_select_held")
         m.d.comb += [sel_taken.eq(Mux(count >= 2, rp.rotate_left(2), rp.rotate_left(1))),
@@ -647,20 +644,17 @@ class CachedReader(wiring.Component):
         # which the lookup only registers for the check, are read from the buffer in the lookup's own
         # cycle, at ``Mux(lv, rp + 1, rp)`` (a multiplexer of flip-flops), so ``take`` reaches half
         # as many multiplexers.
-        ahead = sum(w for name, _, w in derived if name.startswith(("index_", "raw_")))
-        assert all(name.startswith(("index_", "raw_")) for name, _, _ in derived[-len(ic.derive(line0)) - len(rc.derive(rline)):])
-        src = Signal(ahead, name="lookup_bundle")
-        m.d.sync += src.eq(Mux(take, pick(sel_taken), pick(sel_held))[width - ahead:])
+        src = Signal(width - now_bits, name="lookup_bundle")
+        m.d.sync += src.eq(Mux(take, pick(nbuf, sel_taken), pick(nbuf, sel_held))[now_bits:])
         sel_now = Signal(3, name="lookup_select")
         m.d.comb += sel_now.eq(Mux(lv, rp.rotate_left(1), rp))
-        now = Signal(width - ahead, name="lookup_entry")
-        m.d.comb += now.eq((Mux(sel_now[0], buf[0], 0) | Mux(sel_now[1], buf[1], 0) |
-                            Mux(sel_now[2], buf[2], 0))[:width - ahead])
+        entry_now = Signal(now_bits, name="lookup_entry")
+        m.d.comb += entry_now.eq(pick(buf, sel_now)[:now_bits])
         look = {}
         pos = 0
         for name, _, w in derived:
             sig = Signal(w, name=f"lookup_next_{name}")
-            m.d.comb += sig.eq(now[pos:pos + w] if pos < width - ahead else src[pos - (width - ahead):pos - (width - ahead) + w])
+            m.d.comb += sig.eq(entry_now[pos:pos + w] if pos < now_bits else src[pos - now_bits:pos - now_bits + w])
             look[name] = sig
             pos += w
         ic.lookup(m, {k[len("index_"):]: v for k, v in look.items() if k.startswith("index_")})
