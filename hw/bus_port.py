@@ -221,6 +221,21 @@ class LoadTarget:
     phase: int = 0
 
 
+def _entries(load, *, region: int, lanes: int, stride: int, phase: int) -> tuple:
+    """The load command's address in a memory's terms (:func:`load_decode`): ``(cond, row,
+    lane_bits, stride_bits)``, where ``cond`` is high when the command's region is ``region`` and
+    its entry ``e`` has ``e % stride == phase``, ``row`` is ``e // stride`` (no depth check): the
+    offset's bits from ``lane_bits + stride_bits`` up, below them the entry's phase and the bus word
+    in the entry. Combinational."""
+    lane_bits = (lanes - 1).bit_length()
+    stride_bits = (stride - 1).bit_length()
+    entry = load.offset[lane_bits:]
+    cond = load.region == region
+    if stride > 1:
+        cond &= entry[:stride_bits] == phase
+    return cond, entry[stride_bits:], lane_bits, stride_bits
+
+
 def load_decode(m, load, *, region: int, lanes: int = 1, stride: int = 1, phase: int = 0, depth: int,
                 name: str) -> tuple:
     """Which word of a memory of ``depth`` words the load command addresses, decoded once for all
@@ -233,16 +248,11 @@ def load_decode(m, load, *, region: int, lanes: int = 1, stride: int = 1, phase:
 
     The register is each memory's own copy of the command, next to it: the compare and the fan-out
     to the memory's address and enable inputs start from flip-flops (150 MHz on the ECP5-8)."""
-    lane_bits = (lanes - 1).bit_length()
-    stride_bits = (stride - 1).bit_length()
-    entry = load.offset[lane_bits:]
-    row = Signal(max(1, len(entry) - stride_bits), name=f"{name}_row")
-    cond = (load.region == region) & (entry[stride_bits:] < depth)
-    if stride > 1:
-        cond &= entry[:stride_bits] == phase
+    cond, rows, lane_bits, stride_bits = _entries(load, region=region, lanes=lanes, stride=stride, phase=phase)
+    row = Signal(max(1, len(rows)), name=f"{name}_row")
     hit = Signal(name=f"{name}_hit")
     command = Signal.like(load, name=f"{name}_command")
-    m.d.sync += [hit.eq(cond), row.eq(entry[stride_bits:]), command.eq(load)]
+    m.d.sync += [hit.eq(cond & (rows < depth)), row.eq(rows), command.eq(load)]
     lane = Value.cast(command.offset)[:lane_bits] if lane_bits else C(0, 1)
     return hit, row, lane, command
 
@@ -260,15 +270,9 @@ def load_decode_banks(m, load, *, region: int, lanes: int = 1, stride: int = 1, 
     write enables, bus address and write data start at flip-flops beside it, with no compare or
     fan-out across the chip in the cycle before the block RAM (``fetch.back``'s critical path at
     132.8 MHz, docs/area.md "Block by block")."""
-    lane_bits = (lanes - 1).bit_length()
-    stride_bits = (stride - 1).bit_length()
-    entry = load.offset[lane_bits:]
-    rows = entry[stride_bits:]
+    cond, rows, lane_bits, stride_bits = _entries(load, region=region, lanes=lanes, stride=stride, phase=phase)
     offset_bits = (bank_depth - 1).bit_length()
     banks = -(-depth // bank_depth)
-    cond = load.region == region
-    if stride > 1:
-        cond &= entry[:stride_bits] == phase
     out = []
     for k in range(banks):
         cond_k = cond & (rows < depth) if k == banks - 1 else cond
