@@ -42,6 +42,11 @@ def _enable(ff) -> tuple:
     return ("1",), False
 
 
+def _reset(ff) -> list:
+    """A flip-flop's reset net (``["0"]`` when its LSR input is not used)."""
+    return ff["connections"].get("LSR", ["0"]) if _param(ff, "LSRMUX", "LSR") == "LSR" else ["0"]
+
+
 def absorb_output_registers(netlist: dict) -> dict:
     """Absorb the fabric registers behind DP16KD read ports into their output registers, in place
     (see the module docstring). Returns ``{"ports": n, "flip_flops": n}``: the ports changed to
@@ -82,16 +87,15 @@ def absorb_output_registers(netlist: dict) -> dict:
                     continue
                 first = cells[ffs[0][1]]
                 ce = _enable(first)
-                lsr = first["connections"].get("LSR", ["0"]) if _param(first, "LSRMUX", "LSR") == "LSR" else ["0"]
-                rst = conn.get(f"RST{side}", ["0"])
-                if lsr != rst and not (lsr == ["0"] and rst == ["0"]):
+                lsr = _reset(first)
+                if lsr != conn.get(f"RST{side}", ["0"]):
                     continue                    # the register's reset is not the port's
                 for _, f in ffs:
                     ff = cells[f]
                     fc = ff["connections"]
                     same = (fc.get("CLK") == conn.get(f"CLK{side}") and _param(ff, "CLKMUX", "CLK") == "CLK"
                             and _enable(ff) == ce
-                            and (fc.get("LSR", ["0"]) if _param(ff, "LSRMUX", "LSR") == "LSR" else ["0"]) == lsr
+                            and _reset(ff) == lsr
                             and _param(ff, "REGSET", "RESET") == "RESET"
                             and (lsr == ["0"] or _param(ff, "SRMODE", "LSR_OVER_CE") == "LSR_OVER_CE")
                             and _param(ff, "GSR", "DISABLED") == _param(ram, "GSR", "DISABLED"))
