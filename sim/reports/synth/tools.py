@@ -16,7 +16,7 @@ from .parsers import (count_memory_blocks, parse_memory_mapping, parse_nextpnr_l
 from .stages import signal_of, stage_of
 from .target import DEVICE, HARNESS_NAME, INSTALL_HINT, UNIT_NAME, SynthError
 
-__all__ = ["tools_available", "run_yowasp", "yosys_script", "run_yosys", "run_nextpnr", "ROUTERS"]
+__all__ = ["tools_available", "run_yowasp", "KEEP_REGISTERS", "yosys_script", "run_yosys", "run_nextpnr", "ROUTERS"]
 
 
 def tools_available() -> dict:
@@ -71,12 +71,20 @@ def run_yowasp(tool: str, args: list, cwd: str, log: str, timeout: float | None 
     return _run(tool, args, cwd, log, timeout)
 
 
+#: The Yosys step that keeps the copies of a register (``hw.copies``): every cell whose ``Q`` drives a
+#: wire marked ``keep`` (a flip-flop of Amaranth's RTLIL) gets ``keep`` itself, so ``opt_merge``
+#: does not merge it with its copies (it ignores a wire's ``keep``). A design without ``keep``
+#: signals is unchanged by it.
+KEEP_REGISTERS = "setattr -set keep 1 w:* a:keep %i %ci1:+[Q] c:* %i"
+
+
 def yosys_script(*, keep_unit: bool = True, abc9: bool = True) -> str:
-    """The Yosys script: read the RTLIL, keep the unit's module apart, ``synth_ecp5``, write the
+    """The Yosys script: read the RTLIL, keep the flip-flops marked ``keep`` apart
+    (:data:`KEEP_REGISTERS`), keep the unit's module apart, ``synth_ecp5``, write the
     netlist and ``stat -json``. ``abc9=False``: ``synth_ecp5`` run up to its ``map_luts`` step and
     from its ``map_cells`` step, the LUTs mapped between by ``abc -lut 4:7`` (what ``synth_ecp5
     -noabc9`` did before Yosys made abc9 its only mapper; the flag is now ignored)."""
-    lines = ["read_rtlil design.il", f"hierarchy -top {HARNESS_NAME}"]
+    lines = ["read_rtlil design.il", f"hierarchy -top {HARNESS_NAME}", KEEP_REGISTERS]
     if keep_unit:
         lines.append(f"setattr -mod -set keep_hierarchy 1 {UNIT_NAME}")
     if abc9:
