@@ -35,7 +35,8 @@ back to back from cycle 0; ``x[n-k]`` for ``n < k`` imposes nothing):
 - ``g[n]`` (tag check, its second cycle, where it is decided and the state written): the check is
   first tried in cycle ``c = max(b[n] + LOOKUP_STAGES, g[n-1] + 1)`` (:func:`first_check`: the lookup
   takes request n while n-1 is checked, as if n-1 were taken); a try whose rules do not hold is
-  killed and request n looked up again, so it is tried again ``REPLAY`` cycles later: ``g[n]`` is
+  killed and request n looked up again, so it is tried again ``REPLAY`` = 3 cycles later (the kill
+  acts from a register, a cycle after the try: :data:`REPLAY`): ``g[n]`` is
   the first of ``c, c + REPLAY, c + 2 REPLAY, ...`` (:func:`attempt`) that is ``>= g[n-1] +
   misses[n-1]`` (one burst issued per cycle); ``>= p[n-Q] + fifo_slack(Q)`` (a FIFO entry frees
   when its reference is read: the check sees the room in the FIFO's registered level, so from the
@@ -100,9 +101,14 @@ LOOKUP_STAGES = 2
 #: Requests the cache block holds accepted and not yet taken by the tag check (the lookup's buffer:
 #: the one checked, the one looked up, the one arriving): ``b[n] >= g[n - LOOKUP_PLACES] + 1``.
 LOOKUP_PLACES = 3
-#: Cycles between two tries of a tag check that does not take its request (the lookup took the
-#: next request meanwhile: killed, and the request looked up again).
-REPLAY = 2
+#: Cycles between two tries of a tag check that does not take its request. The lookup takes the
+#: next requests as if every check took its own; the check's decision ``take`` reaches only a few
+#: registers, among them the kill (``lookup_kill``), which acts the cycle after the try: then the
+#: request behind it in the check and the one in the lookup are killed, and the lookup takes the
+#: request not taken again, so the check tries it again in the third cycle after its try (try in
+#: ``c``, kill in ``c + 1``, looked up in ``c + 2``, checked in ``c + 3``). With the kill acting in
+#: the try's own cycle (``take`` choosing the lookup's next request: its ~250 loads) it was 2.
+REPLAY = 3
 #: Cycles after the read of a line's last waiting reference before a tag check may replace the
 #: line: the lookup (the cycle before the check) reads the counts of references read out, as
 #: written by the reads before its own cycle.

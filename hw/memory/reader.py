@@ -566,13 +566,18 @@ class CachedReader(wiring.Component):
         # fields) is computed from ``i`` when the request is accepted, into a three-entry buffer,
         # so the lookup starts from flip-flops. The lookup's registers load every cycle (no clock
         # enable, so the check's decision ``take`` reaches a handful of flip-flops, not the ~500 of
-        # the lookup): while the check works on request n (``lv``), the lookup takes n + 1 from the
-        # buffer as if n were taken. When it is not, the check kills what the lookup took (``lv``
-        # low the next cycle) and the lookup takes n again: a check not taken is tried again two
-        # cycles later (golden's ``REPLAY``). The buffer holds the requests accepted and not yet
-        # taken (n in the check, n + 1 in the lookup, n + 2 arriving), so ``i.ready`` is the
-        # registered ``count != 3`` (``b[n] >= g[n-3] + 1``), and a request accepted in cycle
-        # ``b`` is looked up from ``b + 1`` and checked from ``b + 2`` (golden's ``LOOKUP_STAGES``).
+        # the lookup): the lookup walks the buffer as if every check took its request (its own
+        # pointer ``lookup_pointer``), so while the check works on request n (``lv``) the lookup
+        # takes n + 1. When the check does not take n, the kill acts from a register a cycle later
+        # (``lookup_kill``): the request then behind n in the check (never valid: ``lv`` drops with
+        # the try) and the one the lookup takes in that cycle are dropped, and the lookup's pointer
+        # goes back to n, which is looked up again in the next cycle and checked in the one after:
+        # a check not taken is tried again three cycles later (golden's ``REPLAY``), and ``take``
+        # reaches neither the choice of the lookup's next request nor its ~100 multiplexers. The
+        # buffer holds the requests accepted and not yet taken (n in the check, n + 1 in the lookup,
+        # n + 2 arriving), so ``i.ready`` is the registered ``count != 3`` (``b[n] >= g[n-3] + 1``),
+        # and a request accepted in cycle ``b`` is looked up from ``b + 1`` and checked from ``b +
+        # 2`` (golden's ``LOOKUP_STAGES``).
         req = self.i.p
         a0 = Signal(self._addr_width + 8)
         a1 = Signal(self._addr_width + 8)
@@ -618,38 +623,42 @@ class CachedReader(wiring.Component):
         with m.If(take):
             m.d.sync += rp.eq(rp.rotate_left(1))
         m.d.sync += count.eq(count + accept - take)
-        # The entry the lookup reads: the oldest not taken, or the one after it while that is checked
-        # (``Mux(lv, rp.rotate_left(1), rp)``). It is chosen a cycle ahead, into a register the
-        # lookup reads (``lookup_bundle``), so the lookup's path starts at flip-flops and not at
-        # ``lv``'s fan-out and the buffer's multiplexers: from the buffer as it will be (a request
-        # accepted now is written into its entry at this edge, so it is taken from ``bundle``), at
-        # the read pointer and valid bit of the next cycle. ``take`` chooses last between the two
-        # entries it may leave there: ``take`` (the check held ``lv``: the lookup's request comes
-        # next, at ``rp + 1``, and the one after it when the buffer holds two or more) or not
-        # (``lv`` killed: ``rp`` again; or the lookup takes ``rp`` and ``rp + 1`` comes next).
+        # The lookup's own pointer (``lp``, one-hot: the entry it reads this cycle) and how many
+        # accepted requests lie at or after it (``ahead``; the lookup holds a request when it is not
+        # 0). It advances every cycle the lookup holds a request, as if the check ahead took its
+        # own; a kill (``lookup_kill``: the check did not take its request in the cycle before) sets
+        # it back to the oldest request not taken (``rp``: the one not taken; no request is taken
+        # in a kill's cycle, the check being empty then), with every request not taken ahead of it.
+        lp = Signal(3, name="lookup_pointer", init=1)
+        ahead = Signal(range(4), name="lookup_ahead")
+        kill = Signal(name="lookup_kill")
         have = Signal(name="lookup_has_request")
-        m.d.comb += have.eq(Mux(lv, count >= 2, count != 0))
-        m.d.sync += lv.eq(have & ~(lv & ~take))
+        lp_next = Signal(3, name="lookup_pointer_next")
+        m.d.comb += [have.eq(ahead != 0),
+                     lp_next.eq(Mux(kill, rp, Mux(have, lp.rotate_left(1), lp)))]
+        m.d.sync += [
+            kill.eq(lv & ~take),
+            lp.eq(lp_next),
+            ahead.eq(Mux(kill, count + accept, ahead + accept - have)),
+            # the check's request next cycle: the lookup's, unless a kill drops it (the one killed
+            # now, or the one whose check fails now: ``lv & ~take`` is the kill of the next cycle)
+            lv.eq(have & ~kill & ~(lv & ~take)),
+        ]
         nbuf = [Mux(accept & wp[j], bundle, buf[j]) for j in range(3)]
 
         def pick(entries, sel):
             """The entry of the one-hot ``sel``."""
             return or_all(Mux(sel[j], entries[j], 0) for j in range(3))
-        sel_taken = Signal(3, name="lookup_select_taken")
-        sel_held = Signal(3, name="lookup_select_held")
-        m.d.comb += [sel_taken.eq(Mux(count >= 2, rp.rotate_left(2), rp.rotate_left(1))),
-                     sel_held.eq(Mux(have & ~lv, rp.rotate_left(1), rp))]
         # Only the fields the lookup reads memories with (each cache's sets and tags: the last ones
-        # of ``derived``) are chosen a cycle ahead; the others (the FIFO entry's, ``raw``, ``two``),
-        # which the lookup only registers for the check, are read from the buffer in the lookup's own
-        # cycle, at ``Mux(lv, rp + 1, rp)`` (a multiplexer of flip-flops), so ``take`` reaches half
-        # as many multiplexers.
+        # of ``derived``) are chosen a cycle ahead, into ``lookup_bundle`` (the lookup's reads start
+        # at flip-flops), from the buffer as it will be (a request accepted now is written into its
+        # entry at this edge, so it is taken from ``bundle``) at the lookup's next pointer, which
+        # no ``take`` reaches; the others (the FIFO entry's, ``raw``, ``two``), which the lookup only
+        # registers for the check, are read from the buffer in the lookup's own cycle at ``lp``.
         src = Signal(width - now_bits, name="lookup_bundle")
-        m.d.sync += src.eq(Mux(take, pick(nbuf, sel_taken), pick(nbuf, sel_held))[now_bits:])
-        sel_now = Signal(3, name="lookup_select")
-        m.d.comb += sel_now.eq(Mux(lv, rp.rotate_left(1), rp))
+        m.d.sync += src.eq(pick(nbuf, lp_next)[now_bits:])
         entry_now = Signal(now_bits, name="lookup_entry")
-        m.d.comb += entry_now.eq(pick(buf, sel_now)[:now_bits])
+        m.d.comb += entry_now.eq(pick(buf, lp)[:now_bits])
         look = {}
         pos = 0
         for name, _, w in derived:
@@ -834,12 +843,21 @@ class CachedReader(wiring.Component):
             burst_raw[0].eq(l_raw),
             burst_addr[1].eq(l_addr[1]), burst_raw[1].eq(0),
         ]
+        # Only the valid bits follow ``take``; a free slot loads the check's burst every cycle
+        # whether or not the check takes it (valid only when it does), so ``take`` reaches two
+        # flip-flops here, not the ~70 enables of the slots' addresses. A slot's address moves only
+        # while the slot is empty or issuing (AXI: ``araddr`` is held while ``arvalid & ~arready``).
         with m.If(take & (nmiss != 0)):
-            m.d.sync += [slot_v[0].eq(1), slot_addr[0].eq(burst_addr[0]), slot_raw[0].eq(burst_raw[0]),
-                         slot_v[1].eq(nmiss == 2), slot_addr[1].eq(burst_addr[1]), slot_raw[1].eq(burst_raw[1])]
+            m.d.sync += [slot_v[0].eq(1), slot_v[1].eq(nmiss == 2)]
         with m.Elif(ar_go):
-            m.d.sync += [slot_v[0].eq(slot_v[1]), slot_addr[0].eq(slot_addr[1]), slot_raw[0].eq(slot_raw[1]),
-                         slot_v[1].eq(0)]
+            m.d.sync += [slot_v[0].eq(slot_v[1]), slot_v[1].eq(0)]
+        with m.If(slot_v[1]):
+            with m.If(ar_go):
+                m.d.sync += [slot_addr[0].eq(slot_addr[1]), slot_raw[0].eq(slot_raw[1])]
+        with m.Else():
+            m.d.sync += [slot_addr[1].eq(burst_addr[1]), slot_raw[1].eq(burst_raw[1])]
+            with m.If(~slot_v[0] | ar_go):
+                m.d.sync += [slot_addr[0].eq(burst_addr[0]), slot_raw[0].eq(burst_raw[0])]
 
         # -- bursts in flight: which line each fills, in AR order ----------------------------------------
         depth = 1 << (2 * Q + 4).bit_length()
