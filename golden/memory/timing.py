@@ -23,9 +23,10 @@ the texel pipeline (``hw.texel_fetch``'s, ``LATENCY`` registers and the skid reg
 its registered ``advance``) accepts. ``Q = 1`` is the blocking cache.
 
 The rules, in cycles (each event at the first cycle that meets all its rules; requests are presented
-back to back from cycle 0; ``x[n-k]`` for ``n < k`` imposes nothing):
+back to back from cycle 0, or for the cache block alone, ``address_stages = 0``, request n from
+cycle ``offer[n]`` on, held until taken; ``x[n-k]`` for ``n < k`` imposes nothing):
 
-- ``a[n]`` (request n accepted): ``>= a[n-1] + 1``, ``>= b[n - ADDRESS_STAGES]`` (the address
+- ``a[n]`` (request n accepted): ``>= a[n-1] + 1``, ``>= offer[n]`` (0 by default), ``>= b[n - ADDRESS_STAGES]`` (the address
   stages are a chain of stream registers that moves as a whole against the lookup's acceptance: a
   stage takes a new item when its item leaves, in the same cycle).
 - ``b[n]`` (the lookup, the tag check's first cycle, takes request n): ``>= a[n] + ADDRESS_STAGES``;
@@ -302,7 +303,7 @@ def accept_and_lookup(i: int, a: list, b: list, g: list, La: int, start: int) ->
     return ai, bi
 
 def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_hint: int = 0,
-        address_stages: int = ADDRESS_STAGES, consumer=None) -> dict:
+        address_stages: int = ADDRESS_STAGES, consumer=None, offer=None) -> dict:
     """Walk the rules of the module docstring over a :class:`Plan`.
 
     ``ready_pattern(length)`` gives ``o.ready`` for cycles ``0 .. length-1`` (bool array, every
@@ -310,12 +311,20 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
     (``hw.memory``): the input handshake is the lookup's (``a[n] = b[n]``).
     ``consumer`` (default the texel pipeline, :class:`TexelPipeline`) takes each item from the
     output register (``take(s) -> e``; :class:`StreamSink` for the cache block alone, whose
-    ``transfer`` are then the output's transfers). Returns a dict: ``cycles``, ``transfer`` (int64 (N,)),
+    ``transfer`` are then the output's transfers). ``offer`` (int (N,), nondecreasing; the cache
+    block alone only, ``address_stages = 0``): the first cycle request n is offered on ``i`` (held
+    until taken); default back to back from cycle 0. Returns a dict: ``cycles``, ``transfer`` (int64 (N,)),
     ``stall_cycles`` (cause -> cycles), ``bursts``, ``memory_bytes`` (per cache), ``burst_first``
     (int64 (B,), the first beat of each burst) and the per-stage event times ``accept``, ``lookup``, ``tag``,
     ``read``, ``enter`` (int64 (N,))."""
     n = len(p.misses)
     La, Q, L = int(address_stages), config.prefetch, int(pipeline_latency)
+    if offer is not None:
+        if La:
+            raise ValueError("offer: the cache block alone only (address_stages=0)")
+        offer = np.asarray(offer, np.int64).tolist()
+        if len(offer) != n:
+            raise ValueError(f"offer: {len(offer)} cycles for {n} requests")
     slack = fifo_slack(Q)
     mem = config.make_memory()
     d = mem.beat_interval
@@ -334,6 +343,8 @@ def run(p: Plan, config: MemoryConfig, pipeline_latency: int, ready_pattern, n_h
     for i in range(n):
         # accept, lookup and tag check
         ai, bi = accept_and_lookup(i, a, b, g, La, 0)
+        if offer is not None and offer[i] > bi:     # the cache block alone: a[i] = b[i]
+            bi = offer[i]
         b[i] = bi
         gi = first_check(i, bi, g)
         if i:
