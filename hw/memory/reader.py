@@ -15,9 +15,13 @@ consumer; with every reference a hit: one request per cycle, 4 cycles from ``i``
   and tags are computed, each bank's tag row (tags, LRU ages, valid bits) and counts (issued,
   retired) read from LUT RAM, the tags compared and whether each way has references waiting found,
   and all of it registered, what the check writes in that cycle forwarded. The lookup's registers
-  load every cycle (no clock enable): while the check works on request n the lookup takes n + 1 as
-  if n were taken; when n is not taken, what the lookup took is killed and n is looked up again, so
-  a check is tried every ``REPLAY`` = 2 cycles until it is taken. The requests accepted and not yet
+  load every cycle (no clock enable): the lookup walks the requests as if every check took its
+  own, so while the check works on request n the lookup takes n + 1; when n is not taken, the kill
+  acts from a register the next cycle (``lookup_kill``: what the lookup holds then is dropped) and
+  n is looked up again the cycle after, so a check is tried every ``REPLAY`` = 3 cycles until it is
+  taken, and ``take`` reaches neither the lookup's choice of request nor its multiplexers (it loads
+  some 40 flip-flops: the kill, ``lookup_valid``, the buffer's, FIFO's and burst queue's pointers,
+  the write registers' enables, the AR slots' valid bits). The requests accepted and not yet
   taken (at most three) wait in a three-entry buffer in front of the lookup, so ``i.ready`` is the
   registered ``count != 3``, i.e. ``b[n] >= g[n-3] + 1``; a request is looked up from the cycle after
   its acceptance (its sets and tags computed into the buffer when it is accepted). The sets and
@@ -37,6 +41,8 @@ consumer; with every reference a hit: one request per cycle, 4 cycles from ``i``
   and a few enables, no LUT RAM write enable.
 * **AR**: the j-th burst of a request checked in cycle ``g`` is on AR in cycle ``g + 1 + j`` (when
   ``arready`` is high, as the golden memory assumes; otherwise it waits and holds the tag check).
+  A free AR slot loads the check's burst address every cycle (valid only when the check takes its
+  request); a slot waiting for ``arready`` holds its address.
   INCR, ``line / bus`` beats, ``araddr`` the line's byte address, never crossing 4 KB.
 * **R**: beats fill lines in burst order (``rready`` is always high); a line is readable the cycle
   after its last beat.
