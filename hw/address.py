@@ -159,7 +159,13 @@ class BlockAddress(wiring.Component):
         """The PowerVR2 layout (``layout`` high): the twiddled (Morton) block number
         ``((bx | by) >> lm) << 2 lm | interleave(bx mod 2**lm, by mod 2**lm)`` (``by`` bit n at bit
         2n, ``bx`` bit n at bit 2n + 1; ``lm`` the log2 of the smaller side of the block grid) and
-        the offsets transposed. The interleave is wiring; the rest two shifters and masks."""
+        the offsets transposed.
+
+        Built as one shifter: bit ``p`` of the number is bit ``p`` of the full interleave of ``bx``
+        and ``by`` below ``2 lm`` (wiring) and bit ``p`` of ``(bx | by) << lm`` from ``2 lm`` up
+        (``(square << 2 lm)[p] = (bx | by)[p - lm]``), a per-bit choice by a thermometer of ``lm``:
+        the same value as the shift right then left of the formula, one shifter fewer in the cycle
+        (docs/area.md, "The paths between blocks")."""
         gw = Signal(4)
         gh = Signal(4)
         lm = Signal(4)                      # log2 of the twiddled squares' side, in blocks
@@ -168,14 +174,11 @@ class BlockAddress(wiring.Component):
             gh.eq(self.log2h - self.log2bh),
             lm.eq(Mux(gw < gh, gw, gh)),
         ]
-        low = ~(C((1 << COORD_BITS) - 1, COORD_BITS) << lm)
-        sx = Signal(COORD_BITS)
-        sy = Signal(COORD_BITS)
-        square = Signal(COORD_BITS)         # which square along the longer side
-        m.d.comb += [sx.eq(bx & low), sy.eq(by & low), square.eq((bx | by) >> lm)]
-        morton = Cat(*(Cat(sy[n], sx[n]) for n in range(COORD_BITS)))
+        interleave = Cat(*(Cat(by[n], bx[n]) for n in range(COORD_BITS)))
+        squares = Signal(2 * COORD_BITS)    # (bx | by) << lm: the square's number in place
+        m.d.comb += squares.eq((bx | by) << lm)
         k_tw = Signal(2 * COORD_BITS)
-        m.d.comb += k_tw.eq((square << (lm << 1)) | morton)
+        m.d.comb += k_tw.eq(Cat(*(Mux(lm > (p >> 1), interleave[p], squares[p]) for p in range(2 * COORD_BITS))))
         if not self._linear:                # every compressed level twiddled: no multiplexer
             return k_tw, y, x
         return (Mux(self.layout, k_tw, k), Mux(self.layout, y, x), Mux(self.layout, x, y))

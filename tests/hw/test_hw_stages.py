@@ -6,7 +6,7 @@ import pytest
 
 from tests import support
 from vqtex.golden.fetch import block_address, lookup_descriptor, read_codeword, read_index
-from vqtex.golden.format import DESCRIPTOR_DTYPE, DESCRIPTOR_FIELDS, MAX_LEVELS, pack_indices
+from vqtex.golden.format import DESCRIPTOR_DTYPE, DESCRIPTOR_FIELDS, LAYOUT_CODES, MAX_LEVELS, pack_indices
 from vqtex.hw import banked_rom, codebook_rom, index_reader
 from vqtex.hw.address import BlockAddress
 from vqtex.hw.banked_rom import BankedROM
@@ -50,6 +50,34 @@ def test_block_address_random_levels():
     assert res["x"] == x.tolist()
     assert res["y"] == y.tolist()
     assert res["raw_addr"] == (d["base"].astype(np.int64) + (j << d["log2w"].astype(np.int64)) + i).tolist()
+
+
+@pytest.mark.parametrize("linear", [True, False], ids=["both_maps", "twiddled_only"])
+def test_block_address_twiddled_random_levels(linear):
+    """The PowerVR2 shifter against golden's twiddled block numbers: random levels of every aspect
+    (square, wide, tall: the squares along either side), block sides 1..8 no larger than the level,
+    both maps with ``layout`` random (or every level twiddled), under random enables."""
+    rng = np.random.default_rng(11)
+    n = 400
+    d = np.zeros(n, DESCRIPTOR_DTYPE)
+    d["log2w"] = rng.integers(0, 13, n)
+    d["log2h"] = rng.integers(0, 13, n)
+    d["log2bw"] = np.minimum(rng.integers(0, 4, n), d["log2w"])
+    d["log2bh"] = np.minimum(rng.integers(0, 4, n), d["log2h"])
+    d["layout"] = rng.integers(0, 2, n) if linear else LAYOUT_CODES["pvr2"]
+    i = (rng.random(n) * (1 << d["log2w"].astype(np.int64))).astype(np.int64)
+    j = (rng.random(n) * (1 << d["log2h"].astype(np.int64))).astype(np.int64)
+    i[:4], j[:4] = (1 << d["log2w"][:4].astype(np.int64)) - 1, (1 << d["log2h"][:4].astype(np.int64)) - 1
+    dut = BlockAddress(base_bits=21, k_bits=24, raw_bits=26, twiddle=True, linear=linear)
+    inputs = {"i": i, "j": j, "log2w": d["log2w"], "log2h": d["log2h"], "log2bw": d["log2bw"],
+              "log2bh": d["log2bh"], "layout": d["layout"], "base": d["base"]}
+    res = run_lockstep(dut, {k: np.asarray(v).tolist() for k, v in inputs.items()}, ["k", "x", "y"], 1,
+                       en_pattern=rng.random(1000) > 0.2)
+    k, x, y = block_address(d, i, j)
+    assert (d["layout"] == LAYOUT_CODES["pvr2"]).sum() > n // 3
+    assert res["k"] == k.tolist()
+    assert res["x"] == x.tolist()
+    assert res["y"] == y.tolist()
 
 
 class _Words:
