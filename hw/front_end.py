@@ -20,11 +20,12 @@ from . import index_reader
 from .address import BlockAddress
 from .banked_rom import BANK_DEPTH
 from .bus_port import DATA_WIDTH, or_all
+from .copies import register_copies
 from .descriptor import DescriptorTable, as_geometry
 from .features import Features
 from .index_reader import IndexReader, IndexRequestLayout
 from .registers import enabled_register
-from .pipeline import (ADVANCE_COPIES, STAGES, UPSTREAM_STAGES, REGISTERS, LinkLayout, RequestLayout, SideLayout,
+from .pipeline import (ADVANCE_COPIES, DATA_COPIES, STAGES, UPSTREAM_STAGES, REGISTERS, LinkLayout, RequestLayout, SideLayout,
                        addr_bits, advance_copies, pack)
 
 __all__ = ["FrontEnd", "index_port_members"]
@@ -144,7 +145,7 @@ class FrontEnd(wiring.Component):
             "valid": Out(len(REGISTERS)),
             "o_tag": Out(tag_width),
             "link": Out(LinkLayout(g, self._features, summed=self._summed,
-                                   copies=len(ADVANCE_COPIES) if load is not None else 0)),
+                                   copies=len(ADVANCE_COPIES) + DATA_COPIES if load is not None else 0)),
             **(index_port_members(g, self._features) if self._index_port else {}),
             **({} if load is None else {"pause": In(1), "load": In(load), "load_data": Out(DATA_WIDTH)}),
         })
@@ -199,6 +200,9 @@ class FrontEnd(wiring.Component):
         # a copy's first cycle after a reset would miss) from ``advance`` itself.
         if load is not None:
             copies = dict(zip(ADVANCE_COPIES, advance_copies(m, self.stall_output, len(ADVANCE_COPIES))))
+            # (the codebook ROM's data registers' shares: equal to ``advance`` itself, kept apart by ``keep``)
+            copies.update(enumerate(register_copies(m, ~self.stall_output, DATA_COPIES, name="advance_data",
+                                                    init=1)))
             en_desc = Signal(name="upstream_address")
             m.d.comb += en_desc.eq(copies["address"] & ~idx.hold)
             en_idx, en_side = copies["index_reader"], copies["side"]
