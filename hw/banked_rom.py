@@ -185,20 +185,16 @@ class BankedROM(wiring.Component):
             else:
                 rd = mem.read_port(domain="sync")
                 m.d.comb += [rd.addr.eq(self.addr[:offset_bits]), rd.en.eq(self.en)]
-            if self._data_copies:           # each share of the bits a register on its own copy of ``en``
+            q = Signal(stored, name=f"data{k}")
+            if self._data_copies:           # each share of the bits on its own copy of ``en``
                 n, total = self._data_copies, self._banks * stored
-                pieces = []
                 for s in range(n):
                     lo = max(s * total // n, k * stored) - k * stored
                     hi = min((s + 1) * total // n, (k + 1) * stored) - k * stored
                     if lo < hi:
-                        piece = Signal(hi - lo, name=f"data{k}_{s}")
                         with m.If(self.en_data[s]):
-                            m.d.sync += piece.eq(rd.data[lo:hi])
-                        pieces.append(piece)
-                q = Cat(*pieces)
+                            m.d.sync += q[lo:hi].eq(rd.data[lo:hi])
             else:
-                q = Signal(stored, name=f"data{k}")
                 with m.If(self.en):
                     m.d.sync += q.eq(rd.data)
             data.append(q if stored == self._width else q[:self._width])
