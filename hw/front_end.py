@@ -25,7 +25,7 @@ from .descriptor import DescriptorTable, as_geometry
 from .features import Features
 from .index_reader import IndexReader, IndexRequestLayout
 from .registers import enabled_register
-from .pipeline import (ADVANCE_COPIES, DATA_COPIES, STAGES, UPSTREAM_STAGES, REGISTERS, LinkLayout, RequestLayout, SideLayout,
+from .pipeline import (ADVANCE_COPIES, DATA_COPIES, INDEX_DATA_COPIES, STAGES, UPSTREAM_STAGES, REGISTERS, LinkLayout, RequestLayout, SideLayout,
                        addr_bits, advance_copies, pack)
 
 __all__ = ["FrontEnd", "index_port_members"]
@@ -170,7 +170,8 @@ class FrontEnd(wiring.Component):
                 ts.index_words if ts is not None else (), word_bits=g.word_bits, k_bits=kb, base_bits=widths["base"],
                 one_port=self._one_port, bank_depth=self._bank_depth,
                 widths=feat.index_widths if feat.specialised else None, straddle=feat.straddle,
-                depth=g.index_words, load=load, add_bits=widths["cb_base"] if self._summed else 0)
+                depth=g.index_words, load=load, add_bits=widths["cb_base"] if self._summed else 0,
+                data_copies=INDEX_DATA_COPIES if load is not None else 0)
         else:                               # every level raw: no index reader, the index is 0
             idx = _NoIndex()
 
@@ -268,6 +269,9 @@ class FrontEnd(wiring.Component):
                 idx.base.eq(d2.base),
                 idx.en.eq(en_idx),
             ]
+            if load is not None:            # the index memories' data registers on copies of their own
+                m.d.comb += idx.en_data.eq(Cat(*register_copies(m, ~self.stall_output, INDEX_DATA_COPIES,
+                                                                name="advance_index", init=1)))
         if load is not None:                # the read answers of the table and the index memory
             inside = feat.compressed and not self._index_port       # an index memory here
             m.d.comb += self.load_data.eq(or_all([desc.load_data] + ([idx.load_data] if inside else [])))

@@ -126,6 +126,12 @@ class IndexReader(wiring.Component):
     add : In(add_bits)
         Only with ``add_bits``: added to the index in the extract stage (the value for the item
         entering that stage, i.e. moving in the same cycle as stage 4's register).
+    en_data : In(data_copies)
+        Only with ``data_copies`` ``n`` > 0: copies of ``en`` (the loadable front end gives copies of
+        ``advance``, equal to ``en`` but in a reset's first cycle, when every stage is empty), the
+        enables of the index memories' data registers (:class:`hw.banked_rom.BankedROM`
+        ``data_copies``; two banks: half each), so that ``en`` is not the clock enable of them all
+        (1,241 loads on ``max``, docs/area.md "The paths between blocks").
 
     Raises
     ------
@@ -135,7 +141,7 @@ class IndexReader(wiring.Component):
 
     def __init__(self, words=(), *, word_bits: int, k_bits: int, base_bits: int, one_port: bool = False,
                  bank_depth: int = BANK_DEPTH, widths=None, straddle: bool = True, depth: int | None = None,
-                 load=None, add_bits: int = 0):
+                 load=None, add_bits: int = 0, data_copies: int = 0):
         if word_bits not in (16, 32, 64):
             raise ValueError(f"index word width {word_bits} is not 16, 32 or 64")
         if widths is not None:
@@ -152,6 +158,8 @@ class IndexReader(wiring.Component):
         self._widths = widths
         self._straddle = bool(straddle)
         self._add_bits = int(add_bits)
+        self._data_copies = int(data_copies)
+        self._copies_used = 0
         index_bits = INDEX_BITS if widths is None else widths[-1]
         super().__init__({
             "valid": In(1),
@@ -164,6 +172,7 @@ class IndexReader(wiring.Component):
             "index": Out(max(index_bits, self._add_bits) + 1 if self._add_bits else index_bits),
             **({"add": In(self._add_bits)} if self._add_bits else {}),
             **({} if load is None else {"load": In(load), "load_data": Out(DATA_WIDTH)}),
+            **({"en_data": In(self._data_copies)} if self._data_copies else {}),
         })
 
     @property
@@ -232,8 +241,14 @@ class IndexReader(wiring.Component):
             max(1, (self._depth - phase + stride - 1) // stride)
         target = None if self._load is None else LoadTarget(
             self._load, REGIONS["index"], lanes=index_lanes(self._word_bits), stride=stride, phase=phase)
+        n = self._data_copies
+        share = (n if stride == 1 else (n + 1 - phase) // 2) if n else 0     # two banks: half each
+        copies = {"data_copies": share} if share else {}
         m.submodules[name] = mem = BankedROM(words, width=self._word_bits,
-                                             bank_depth=self._bank_depth, depth=depth, load=target)
+                                             bank_depth=self._bank_depth, depth=depth, load=target, **copies)
+        if share:
+            first = 0 if stride == 1 else phase * ((n + 1) // 2)
+            m.d.comb += mem.en_data.eq(self.en_data[first:first + share])
         if target is not None:
             m.d.comb += mem.load.eq(self.load)
             self._answers.append(mem.load_data)

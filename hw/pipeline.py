@@ -191,6 +191,9 @@ ADVANCE_COPIES = ("address", "index_reader", "side", "codebook_rom", "color_matr
 #: enable of 2,243 (``paper``) to 3,847 (``max``) flip-flops and block RAM ports (docs/area.md,
 #: "The paths between blocks").
 DATA_COPIES = 8
+#: Copies of ``advance`` in the loadable front end for the index memories' data registers
+#: (:class:`hw.index_reader.IndexReader` ``data_copies``), made and used in the front end.
+INDEX_DATA_COPIES = 4
 
 # (reset value, reset-less, inverted) of each copy: no two alike, and none like ``advance`` itself
 # (reset value 1, reset, not inverted) or ``skid_valid`` (its complement: reset value 0, reset,
