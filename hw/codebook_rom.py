@@ -24,6 +24,7 @@ from .banked_rom import BANK_DEPTH, BankedROM
 from .pick import pick, pick_group
 from .bus_port import DATA_WIDTH, LoadTarget, or_all
 from .features import Features
+from .copies import register_copies
 from .registers import enabled_register
 
 __all__ = ["CodebookROM", "SamplesLayout", "LATENCY", "expand_texel"]
@@ -393,23 +394,42 @@ class CodebookROM(wiring.Component):
         fine = PICK_GROUP.bit_length() - 1 if split else 0
 
         def word_pick(values, index, name):
-            """Stage 3's pick of ``values`` by ``index`` (registered): one value, or the group's."""
+            """Stage 3's pick of ``values`` by ``index`` (registered): one value, or the group's
+            (``index`` a list: one select per value of the group)."""
+            indices = index if isinstance(index, list) else [index]
             if not split:
-                return reg(pick(values, index), name)
-            return [reg(v, f"{name}_{lo}") for lo, v in enumerate(pick_group(values, index, PICK_GROUP))]
+                return reg(pick(values, indices[0]), name)
+            return [reg(pick_group(values, indices[lo % len(indices)], PICK_GROUP)[lo], f"{name}_{lo}")
+                    for lo in range(PICK_GROUP)]
+
+        banks = codebook.banks if feat.compressed else 0
+        # The loadable ROM: the picks' selects (stage 2's word numbers) in copies of their own, one
+        # per bank and per value of a split pick's group (hw.copies: equal to ``fields_data``'s,
+        # kept apart), where one register's bit drove the picks of every bank (1,022 loads on
+        # ``paper``, 1,653 on ``max``: docs/area.md "The paths between blocks").
+        per_bank = PICK_GROUP if split else 1
+        selects = {}
+        for name in ("start", "ustart", "vstart") if load is not None and banks else ():
+            if name in ride:
+                copies = register_copies(m, registered[name][2:], banks * per_bank, name=f"{name}_pick",
+                                         enable=self.en)
+                selects[name] = [copies[k * per_bank:(k + 1) * per_bank] for k in range(banks)]
+
+        def select_of(name, value, k):
+            return selects[name][k] if name in selects else value[2:]
 
         windows, u_words, v_words = [], [], []
-        for k in range(codebook.banks if feat.compressed else 0):
+        for k in range(banks):
             entry = codebook.data[k]
             last = entry[(nbytes - 1) * 8:]
             padded = Cat(entry, last, last, last)
             words = [Cat(padded[32 * n:32 * n + 32], C(0, max(0, 32 * n + 32 - len(padded))))
                      for n in range(nwords - 1)] + [C(0, 32)]
-            windows.append(word_pick([Cat(words[n], words[n + 1]) for n in range(nwords - 1)], start[2:],
-                                     f"window{k}"))
+            windows.append(word_pick([Cat(words[n], words[n + 1]) for n in range(nwords - 1)],
+                                     select_of("start", start, k), f"window{k}"))
             if yuv:
-                u_words.append(word_pick(words, ustart[2:], f"u_word{k}"))
-                v_words.append(word_pick(words, vstart[2:], f"v_word{k}"))
+                u_words.append(word_pick(words, select_of("ustart", ustart, k), f"u_word{k}"))
+                v_words.append(word_pick(words, select_of("vstart", vstart, k), f"v_word{k}"))
         bank = reg(codebook.bank, "bank_window") if feat.compressed else None
         raw_word = reg(raw.word, "raw_window") if feat.raw else None
         def low_bits(address):
