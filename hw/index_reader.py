@@ -55,6 +55,11 @@ class IndexRequestLayout(data.StructLayout):
         })
 
 
+#: The loadable reader's stage 4 shifts the word pair by whole ``2**COARSE_SHIFT``-bit steps of the
+#: index's offset, stage 5 by the rest (``_elaborate_specialised``).
+COARSE_SHIFT = 3
+
+
 class IndexReader(wiring.Component):
     """The packed index reader.
 
@@ -269,14 +274,17 @@ class IndexReader(wiring.Component):
         m.d.comb += w_next.eq(base_next + words)
         return w_next
 
-    def _read_words(self, m, w, carried, *, straddle: bool, w_next=None):
+    def _read_words(self, m, w, carried, *, straddle: bool, w_next=None, pre=None):
         """Stages 2-4, the memory organisation both readers share: the read of word ``w`` (and
         ``w + 1`` with ``straddle``), and ``carried`` (the fields stage 5 needs) registered twice
         beside it. Returns ``(lo, hi, fields)``: ``lo`` = word[w] and ``hi`` = word[w + 1]
         registered in stage 4 (``hi`` a 0-bit constant without ``straddle``), ``fields`` the carried
         value after stage 3. Two banks (even and odd words, read together); with ``one_port`` one
         bank read twice for a straddling index (``hold`` high for the first); without ``straddle``
-        one bank, one word. ``w_next``, when given, is ``w + 1`` (:meth:`_next_word`)."""
+        one bank, one word. ``w_next``, when given, is ``w + 1`` (:meth:`_next_word`).
+        ``pre``, with two banks: stage 4 registers ``pre(word pair, fields)`` as ``lo`` instead
+        (``hi`` then a 0-bit constant), the pair ``Cat(word[w], word[w + 1])`` and ``fields`` the
+        carried value in stage 4."""
         W = self._word_bits
 
         def reg(value, name):
@@ -301,6 +309,12 @@ class IndexReader(wiring.Component):
             fields3 = reg(reg(Cat(carried, w[0]), "fields_word"), "fields_data")
             parity = fields3[-1]
             # Stage 4: word[w] is in the odd bank when w is odd.
+            if pre is not None:
+                pair = pre(Cat(Mux(parity, odd.word, even.word), Mux(parity, even.word, odd.word)), fields3[:-1])
+                lo = Signal(len(pair), name="pair")
+                with m.If(self.en):
+                    m.d.sync += lo.eq(pair)
+                return lo, C(0, 0), fields3[:-1]
             with m.If(self.en):
                 m.d.sync += [
                     lo.eq(Mux(parity, odd.word, even.word)),
@@ -376,8 +390,21 @@ class IndexReader(wiring.Component):
         if straddle:
             m.d.comb += self.straddle.eq(valid1 & ((off << log2u) + b1 > W))
 
+        # The loadable reader with two banks: the shift by whole units split over stages 4 and 5,
+        # by whole bytes (``COARSE_SHIFT``) beside the bank select, within the byte in stage 5 (max's
+        # 32-position shift, mask and ``+ cb_base`` in one cycle: docs/area.md "Block by block").
+        F = COARSE_SHIFT
+        coarse = self._load is not None and straddle and not self._one_port and W > unit and log2u < F
+        keep = ib + (1 << F) - 1                       # what stage 5 can still need of the pair
+
+        def pre(pair, fields):
+            at = Cat(C(0, log2u), fields[:len(off)])
+            pair = Cat(pair, C(0, max(0, W + keep - len(pair))))
+            return (pair >> Cat(C(0, F), at[F:]))[:keep]
+
         lo, hi, fields3 = self._read_words(m, w, Cat(off, b1[:bw_bits]), straddle=straddle,
-                                           w_next=self._next_word(m, self.en & ~self.hold, bit >> log2W, len(w)))
+                                           w_next=self._next_word(m, self.en & ~self.hold, bit >> log2W, len(w)),
+                                           pre=pre if coarse else None)
 
         # Stage 5: the index at offset ``off`` units of the word (pair): a right shift by whole units
         # (``off`` with log2(unit) zeros below it), masked to b bits when there are several widths.
@@ -389,7 +416,10 @@ class IndexReader(wiring.Component):
         data = Cat(lo, hi)
         pad = max(0, W - unit + ib - len(data))      # past the word (pair) the index reads zeros
         data = Cat(data, C(0, pad)) if pad else data
-        value = (data >> Cat(C(0, log2u), off4))[:ib] if W > unit else data[:ib]
+        if coarse:                                      # the pair already shifted by whole bytes
+            value = (data >> Cat(C(0, log2u), off4)[:F])[:ib]
+        else:
+            value = (data >> Cat(C(0, log2u), off4))[:ib] if W > unit else data[:ib]
         if several:
             mask = Signal(ib)
             m.d.comb += mask.eq(~(C((1 << ib) - 1, ib) << b4)[:ib])

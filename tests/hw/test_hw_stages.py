@@ -123,6 +123,29 @@ def test_index_reader_every_width_and_offset(word_bits, one_port, bank_depth):
     assert res["index"] == want.tolist()
 
 
+@pytest.mark.parametrize("word_bits", [16, 32, 64])
+def test_loadable_index_reader_every_width_and_offset(word_bits):
+    """The loadable reader (its contents the initial value, no bus write), every width 1..16 at every
+    offset: the word pair shifted by whole bytes in stage 4 and within the byte in stage 5
+    (``hw.index_reader.COARSE_SHIFT``), under random enables."""
+    from amaranth.lib import data as _data
+    from vqtex.hw.bus_port import DATA_WIDTH, REGION_BITS
+    rng = np.random.default_rng(100 + word_bits)
+    words, maps = _index_memory(word_bits, rng)
+    reqs = np.array([(base, b, k) for base, b, n in maps for k in range(n)], dtype=np.int64)
+    reqs = reqs[rng.permutation(len(reqs))]
+    d = np.zeros(len(reqs), DESCRIPTOR_DTYPE)
+    d["base"], d["index_bits"] = reqs[:, 0], reqs[:, 1]
+    want = read_index(_Words(words, word_bits), d, reqs[:, 2])
+    load = _data.StructLayout({"write": 1, "read": 1, "region": REGION_BITS, "offset": 16, "data": DATA_WIDTH})
+    dut = IndexReader(words, word_bits=word_bits, k_bits=7, base_bits=12, bank_depth=16,
+                      widths=tuple(range(1, 17)), load=load)
+    res = run_lockstep(dut, {"base": reqs[:, 0].tolist(), "b": reqs[:, 1].tolist(), "k": reqs[:, 2].tolist(),
+                             "valid": [1] * len(reqs)}, ["index"], index_reader.LATENCY,
+                       en_pattern=rng.random(4 * len(reqs)) > 0.15)
+    assert res["index"] == want.tolist()
+
+
 @pytest.mark.parametrize("name,bank_depth", [("combined", 512), ("combined", 8), ("yuv_2x4_b12_mip_w64", 512),
                                              ("rgba_2x2_b7_mip_w16", 4)])
 def test_codebook_rom_every_level(name, bank_depth):
