@@ -403,13 +403,15 @@ class CodebookROM(wiring.Component):
                     for lo in range(PICK_GROUP)]
 
         banks = codebook.banks if feat.compressed else 0
-        # The loadable ROM: the picks' selects (stage 2's word numbers) in copies of their own, one
-        # per bank and per value of a split pick's group (hw.copies: equal to ``fields_data``'s,
-        # kept apart), where one register's bit drove the picks of every bank (1,022 loads on
-        # ``paper``, 1,653 on ``max``: docs/area.md "The paths between blocks").
-        per_bank = PICK_GROUP if split else 1
+        # The loadable ROM of several banks: the picks' selects (stage 2's word numbers) in a copy of
+        # their own per bank (hw.copies: equal to ``fields_data``'s, kept apart), where one
+        # register's bit drove the picks of every bank (1,022 loads on ``paper``: docs/area.md "The
+        # paths between blocks"). Not per value of a split pick's group: the group's candidates
+        # overlap (a window is two words), and with selects of their own abc9 no longer shares
+        # their multiplexers (``max``: 1,300 LUT4 more).
+        per_bank = 1
         selects = {}
-        for name in ("start", "ustart", "vstart") if load is not None and banks else ():
+        for name in ("start", "ustart", "vstart") if load is not None and banks > 1 else ():
             if name in ride:
                 copies = register_copies(m, registered[name][2:], banks * per_bank, name=f"{name}_pick",
                                          enable=self.en)
