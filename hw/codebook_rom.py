@@ -394,13 +394,10 @@ class CodebookROM(wiring.Component):
         fine = PICK_GROUP.bit_length() - 1 if split else 0
 
         def word_pick(values, index, name):
-            """Stage 3's pick of ``values`` by ``index`` (registered): one value, or the group's
-            (``index`` a list: one select per value of the group)."""
-            indices = index if isinstance(index, list) else [index]
+            """Stage 3's pick of ``values`` by ``index`` (registered): one value, or the group's."""
             if not split:
-                return reg(pick(values, indices[0]), name)
-            return [reg(pick_group(values, indices[lo % len(indices)], PICK_GROUP)[lo], f"{name}_{lo}")
-                    for lo in range(PICK_GROUP)]
+                return reg(pick(values, index), name)
+            return [reg(v, f"{name}_{lo}") for lo, v in enumerate(pick_group(values, index, PICK_GROUP))]
 
         banks = codebook.banks if feat.compressed else 0
         # The loadable ROM of several banks: the picks' selects (stage 2's word numbers) in a copy of
@@ -409,13 +406,11 @@ class CodebookROM(wiring.Component):
         # paths between blocks"). Not per value of a split pick's group: the group's candidates
         # overlap (a window is two words), and with selects of their own abc9 no longer shares
         # their multiplexers (``max``: 1,300 LUT4 more).
-        per_bank = 1
         selects = {}
         for name in ("start", "ustart", "vstart") if load is not None and banks > 1 else ():
             if name in ride:
-                copies = register_copies(m, registered[name][2:], banks * per_bank, name=f"{name}_pick",
-                                         enable=self.en)
-                selects[name] = [copies[k * per_bank:(k + 1) * per_bank] for k in range(banks)]
+                selects[name] = register_copies(m, registered[name][2:], banks, name=f"{name}_pick",
+                                                enable=self.en)
 
         def select_of(name, value, k):
             return selects[name][k] if name in selects else value[2:]
