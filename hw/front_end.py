@@ -162,7 +162,7 @@ class FrontEnd(wiring.Component):
         m.submodules.descriptor = desc = DescriptorTable(ts, features=feat, geometry=g, load=load, registered=True)
         m.submodules.address = addr = BlockAddress(
             base_bits=widths["base"], k_bits=kb, raw_bits=addr_bits(g.raw_words), raw=feat.raw,
-            twiddle=feat.twiddled, linear=0 in feat.layouts)
+            twiddle=feat.twiddled, linear=0 in feat.layouts, one_shifter=load is not None)
         if feat.compressed and self._index_port:
             idx = _OutsideIndex(self.index_response)
         elif feat.compressed:

@@ -52,9 +52,11 @@ def test_block_address_random_levels():
     assert res["raw_addr"] == (d["base"].astype(np.int64) + (j << d["log2w"].astype(np.int64)) + i).tolist()
 
 
+@pytest.mark.parametrize("one_shifter", [False, True], ids=["baked", "one_shifter"])
 @pytest.mark.parametrize("linear", [True, False], ids=["both_maps", "twiddled_only"])
-def test_block_address_twiddled_random_levels(linear):
-    """The PowerVR2 shifter against golden's twiddled block numbers: random levels of every aspect
+def test_block_address_twiddled_random_levels(linear, one_shifter):
+    """The PowerVR2 shifter (the formula's, and the loadable unit's one shifter) against golden's
+    twiddled block numbers: random levels of every aspect
     (square, wide, tall: the squares along either side), block sides 1..8 no larger than the level,
     both maps with ``layout`` random (or every level twiddled), under random enables."""
     rng = np.random.default_rng(11)
@@ -68,7 +70,7 @@ def test_block_address_twiddled_random_levels(linear):
     i = (rng.random(n) * (1 << d["log2w"].astype(np.int64))).astype(np.int64)
     j = (rng.random(n) * (1 << d["log2h"].astype(np.int64))).astype(np.int64)
     i[:4], j[:4] = (1 << d["log2w"][:4].astype(np.int64)) - 1, (1 << d["log2h"][:4].astype(np.int64)) - 1
-    dut = BlockAddress(base_bits=21, k_bits=24, raw_bits=26, twiddle=True, linear=linear)
+    dut = BlockAddress(base_bits=21, k_bits=24, raw_bits=26, twiddle=True, linear=linear, one_shifter=one_shifter)
     inputs = {"i": i, "j": j, "log2w": d["log2w"], "log2h": d["log2h"], "log2bw": d["log2bw"],
               "log2bh": d["log2bh"], "layout": d["layout"], "base": d["base"]}
     res = run_lockstep(dut, {k: np.asarray(v).tolist() for k, v in inputs.items()}, ["k", "x", "y"], 1,
