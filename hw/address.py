@@ -53,6 +53,10 @@ class BlockAddress(wiring.Component):
         in the next cycle): ``bit = k * index_bits``, ``word = base + (bit >> log2 word_bits)``,
         ``bit_offset = bit mod word_bits`` and ``straddle = bit_offset + index_bits > word_bits``
         (the on-chip unit's index reader does this in stages of its own). Default None: not built.
+    one_shifter : bool
+        With ``twiddle``: the twiddled number as one shifter and a per-bit choice (:meth:`_twiddled`;
+        the loadable unit's, whose ``max`` preset it took from 10.5 logic levels to 7); default
+        False, the shift right and left of the formula (the baked units, their netlists as before).
 
     Members
     -------
@@ -84,7 +88,7 @@ class BlockAddress(wiring.Component):
     """
 
     def __init__(self, *, base_bits: int, k_bits: int, raw_bits: int, twiddle: bool = False,
-                 raw: bool = True, linear: bool = True, word_bits: int | None = None):
+                 raw: bool = True, linear: bool = True, word_bits: int | None = None, one_shifter: bool = False):
         for name, v in (("base_bits", base_bits), ("k_bits", k_bits), ("raw_bits", raw_bits)):
             if not isinstance(v, int) or v < 1:
                 raise TypeError(f"{name} must be a positive integer, not {v!r}")
@@ -94,6 +98,7 @@ class BlockAddress(wiring.Component):
         self._twiddle = bool(twiddle)
         self._linear = bool(linear) or not self._twiddle
         self._raw = bool(raw)
+        self._one_shifter = bool(one_shifter)
         if word_bits not in (None, 16, 32, 64):
             raise ValueError(f"word_bits {word_bits!r}: 16, 32 or 64 (or None)")
         self._word_bits = word_bits
@@ -159,7 +164,14 @@ class BlockAddress(wiring.Component):
         """The PowerVR2 layout (``layout`` high): the twiddled (Morton) block number
         ``((bx | by) >> lm) << 2 lm | interleave(bx mod 2**lm, by mod 2**lm)`` (``by`` bit n at bit
         2n, ``bx`` bit n at bit 2n + 1; ``lm`` the log2 of the smaller side of the block grid) and
-        the offsets transposed. The interleave is wiring; the rest two shifters and masks."""
+        the offsets transposed.
+
+        With ``one_shifter``, one shifter: bit ``p`` of the number is bit ``p`` of the full
+        interleave of ``bx`` and ``by`` below ``2 lm`` (wiring) and bit ``p`` of ``(bx | by) << lm``
+        from ``2 lm`` up
+        (``(square << 2 lm)[p] = (bx | by)[p - lm]``), a per-bit choice by a thermometer of ``lm``:
+        the same value as the shift right then left of the formula, one shifter fewer in the cycle
+        (docs/area.md, "The paths between blocks")."""
         gw = Signal(4)
         gh = Signal(4)
         lm = Signal(4)                      # log2 of the twiddled squares' side, in blocks
@@ -168,14 +180,22 @@ class BlockAddress(wiring.Component):
             gh.eq(self.log2h - self.log2bh),
             lm.eq(Mux(gw < gh, gw, gh)),
         ]
-        low = ~(C((1 << COORD_BITS) - 1, COORD_BITS) << lm)
-        sx = Signal(COORD_BITS)
-        sy = Signal(COORD_BITS)
-        square = Signal(COORD_BITS)         # which square along the longer side
-        m.d.comb += [sx.eq(bx & low), sy.eq(by & low), square.eq((bx | by) >> lm)]
-        morton = Cat(*(Cat(sy[n], sx[n]) for n in range(COORD_BITS)))
-        k_tw = Signal(2 * COORD_BITS)
-        m.d.comb += k_tw.eq((square << (lm << 1)) | morton)
+        if self._one_shifter:
+            k_tw = Signal(2 * COORD_BITS)
+            interleave = Cat(*(Cat(by[n], bx[n]) for n in range(COORD_BITS)))
+            squares = Signal(2 * COORD_BITS)    # (bx | by) << lm: the square's number in place
+            m.d.comb += squares.eq((bx | by) << lm)
+            m.d.comb += k_tw.eq(Cat(*(Mux(lm > (p >> 1), interleave[p], squares[p])
+                                      for p in range(2 * COORD_BITS))))
+        else:
+            low = ~(C((1 << COORD_BITS) - 1, COORD_BITS) << lm)
+            sx = Signal(COORD_BITS)
+            sy = Signal(COORD_BITS)
+            square = Signal(COORD_BITS)         # which square along the longer side
+            m.d.comb += [sx.eq(bx & low), sy.eq(by & low), square.eq((bx | by) >> lm)]
+            morton = Cat(*(Cat(sy[n], sx[n]) for n in range(COORD_BITS)))
+            k_tw = Signal(2 * COORD_BITS)
+            m.d.comb += k_tw.eq((square << (lm << 1)) | morton)
         if not self._linear:                # every compressed level twiddled: no multiplexer
             return k_tw, y, x
         return (Mux(self.layout, k_tw, k), Mux(self.layout, y, x), Mux(self.layout, x, y))

@@ -24,7 +24,7 @@ from .codebook_rom import CodebookROM
 from .color_matrix import ColorMatrix
 from .descriptor import as_geometry
 from .features import Features
-from .pipeline import ADVANCE_COPIES, LinkLayout, RGBALayout, addr_bits
+from .pipeline import ADVANCE_COPIES, DATA_COPIES, LinkLayout, RGBALayout, addr_bits
 
 __all__ = ["BackEnd"]
 
@@ -78,7 +78,7 @@ class BackEnd(wiring.Component):
         self._summed = bool(summed) and self._features.compressed
         super().__init__({
             "link": In(LinkLayout(self._geometry, self._features, summed=self._summed,
-                                  copies=len(ADVANCE_COPIES) if load is not None else 0)),
+                                  copies=len(ADVANCE_COPIES) + DATA_COPIES if load is not None else 0)),
             "rgba": Out(RGBALayout),
             **({} if load is None else {"load": In(load), "load_data": Out(DATA_WIDTH)}),
             **({"raw_in": In(32)} if self._raw_port else {}),
@@ -98,6 +98,7 @@ class BackEnd(wiring.Component):
             off_bits=widths["texel_off"], bank_depth=self._bank_depth, features=feat,
             color_bits=widths["color"], entries=g.codebook_entries, entry_bytes=g.entry_bytes,
             raw_depth=g.raw_words, load=load, raw_port=self._raw_port,
+            data_copies=DATA_COPIES if load is not None else 0,
             index_bits=len(link.index) if self._summed else None)
         if self._raw_port:
             m.d.comb += rom.raw_in.eq(self.raw_in)
@@ -118,6 +119,8 @@ class BackEnd(wiring.Component):
         en = ({name: link.copies[k] for k, name in enumerate(ADVANCE_COPIES)} if load is not None
               else dict.fromkeys(ADVANCE_COPIES, link.advance))
         m.d.comb += rom.en.eq(en["codebook_rom"])
+        if load is not None:
+            m.d.comb += rom.en_data.eq(link.copies[len(ADVANCE_COPIES):])
         # Stages 13-15: colour matrix.
         m.d.comb += [
             cm.samples.eq(rom.samples), cm.color.eq(rom.color_out), cm.en.eq(en["color_matrix"]),

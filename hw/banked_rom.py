@@ -56,6 +56,12 @@ class BankedROM(wiring.Component):
         exercise the bank select with small memories).
     depth : int, optional
         Words of the memory (default ``len(init)``; more: the rest start as zero).
+    data_copies : int
+        With ``n`` > 0, the banks' data registers (the fabric registers behind the block RAMs) are
+        enabled by the ``n`` bits of ``en_data`` instead of ``en``, each by one bit for a share
+        of ``n`` contiguous shares of their bits (the memories' reads and ``bank`` stay on
+        ``en``): the caller gives copies of ``en`` (equal in every cycle), so that no one net is
+        the clock enable of them all. Default 0: ``en`` only, no ``en_data``.
     load : hw.bus_port.LoadTarget, optional
         Loadable: where the memory sits in the register map; each bank gets a write port, and a
         bank wider than 32 bits is padded to whole bus words. A memory deeper than 512 words
@@ -70,6 +76,8 @@ class BankedROM(wiring.Component):
         Word address.
     en : In(1)
         Pipeline advance: read enable of the memories and enable of every register.
+    en_data : In(data_copies)
+        Only with ``data_copies``: copies of ``en``, the enables of the data registers' shares.
     data : Out(ArrayLayout(width, banks))
         Each bank's word at ``addr % bank_depth``, registered twice.
     bank : Out(max(1, bits(banks - 1)))
@@ -98,7 +106,7 @@ class BankedROM(wiring.Component):
         return super().__new__(cls, init, width=width, bank_depth=bank_depth, **kwargs)
 
     def __init__(self, init=(), *, width: int, bank_depth: int = BANK_DEPTH, depth: int | None = None,
-                 load: LoadTarget | None = None):
+                 load: LoadTarget | None = None, data_copies: int = 0):
         self._init = [int(v) for v in init] or [0]
         self._depth = max(1, len(self._init) if depth is None else int(depth))
         if len(self._init) > self._depth:
@@ -107,6 +115,7 @@ class BankedROM(wiring.Component):
         self._bank_depth = bank_depth
         self._banks = -(-self._depth // bank_depth)
         self._load = load
+        self._data_copies = int(data_copies)
         members = {
             "addr": In(addr_bits(self._depth)),
             "en": In(1),
@@ -116,6 +125,8 @@ class BankedROM(wiring.Component):
         }
         if load is not None:
             members.update(load=In(load.layout), load_data=Out(DATA_WIDTH))
+        if self._data_copies:
+            members["en_data"] = In(self._data_copies)
         super().__init__(members)
 
     @property
@@ -165,7 +176,6 @@ class BankedROM(wiring.Component):
                                                            attrs={"no_rw_check": 1} if own_port else {})
             # The fabric register behind the block RAM (stored bits); a bus read comes through the
             # block RAM's second port and a register of its own (hw.bus_port.attach_memory).
-            q = Signal(stored, name=f"data{k}")
             if load is not None:
                 command, row, lane, write_en = decoded[k]
                 rd, answer = attach_memory(m, mem, command, hit=C(1, 1), row=row[:offset_bits], lane=lane,
@@ -175,8 +185,18 @@ class BankedROM(wiring.Component):
             else:
                 rd = mem.read_port(domain="sync")
                 m.d.comb += [rd.addr.eq(self.addr[:offset_bits]), rd.en.eq(self.en)]
-            with m.If(self.en):
-                m.d.sync += q.eq(rd.data)
+            q = Signal(stored, name=f"data{k}")
+            if self._data_copies:           # each share of the bits on its own copy of ``en``
+                n, total = self._data_copies, self._banks * stored
+                for s in range(n):
+                    lo = max(s * total // n, k * stored) - k * stored
+                    hi = min((s + 1) * total // n, (k + 1) * stored) - k * stored
+                    if lo < hi:
+                        with m.If(self.en_data[s]):
+                            m.d.sync += q[lo:hi].eq(rd.data[lo:hi])
+            else:
+                with m.If(self.en):
+                    m.d.sync += q.eq(rd.data)
             data.append(q if stored == self._width else q[:self._width])
         # A register of its own per bank, and ``data`` driven as one concatenation (pure wiring):
         # simulators (CXXRTL) then read each bank's register directly instead of assembling and

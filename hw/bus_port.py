@@ -409,9 +409,15 @@ def attach_memory(m, mem: memory.Memory, load, *, hit, row, lane, only_lane: int
     if data_en is not None:
         with m.If(data_en | hit_r):
             m.d.sync += data_r.eq(comb_data)
-    else:
+    elif own_port or data_r is None:
+        # The bus's own data register loads the port's data in every cycle: it is read only under
+        # ``hit_rr``, when it holds what the port read in the cycle of ``hit_r``. No enable: ``hit_r``
+        # would otherwise be the clock enable of every bit of it (672 flip-flops a bank on
+        # ``paper``'s codebook, 2,688 on ``max``'s, docs/area.md "The paths between blocks").
         if data_r is None:
             data_r = Signal.like(rp.data, name=f"{name}_data_r")
+        m.d.sync += Value.cast(data_r).eq(bp.data)
+    else:                               # the caller's register (the pipeline's): loaded on a bus read too
         with m.If(hit_r):
             m.d.sync += Value.cast(data_r).eq(bp.data)
     if wide:

@@ -24,6 +24,7 @@ from .banked_rom import BANK_DEPTH, BankedROM
 from .pick import pick, pick_group
 from .bus_port import DATA_WIDTH, LoadTarget, or_all
 from .features import Features
+from .copies import register_copies
 from .registers import enabled_register
 
 __all__ = ["CodebookROM", "SamplesLayout", "LATENCY", "expand_texel"]
@@ -147,6 +148,11 @@ class CodebookROM(wiring.Component):
     load : data.StructLayout, optional
         The bus port's load command (:func:`hw.bus_port.load_layout`): both memories are loadable
         (regions ``codebook`` and ``raw``); members ``load`` and ``load_data``.
+    data_copies : int
+        With ``n`` > 0 (the loadable unit): the codebook and raw memories' data registers (stage 2)
+        are enabled by ``en_data``, ``n`` copies of ``en`` (:class:`hw.banked_rom.BankedROM`
+        ``data_copies``): a quarter of them (at least one) the raw memory's, the rest the
+        codebook's (all of them the one memory's when the other is absent). Default 0.
     index_bits : int, optional
         ``index`` is the codebook address ``cb_base + index`` of this width, summed upstream (the
         loadable unit's index reader, :class:`hw.pipeline.LinkLayout` ``summed``): the memory is
@@ -172,6 +178,8 @@ class CodebookROM(wiring.Component):
         Byte offsets of this sub-level's planes in the entry.
     en : In(1)
         Pipeline advance.
+    en_data : In(data_copies)
+        Only with ``data_copies``: copies of ``en``, the enables of the memories' data registers.
     samples : Out(SamplesLayout)
         Registered raw samples.
     color_out : Out(2)
@@ -181,7 +189,7 @@ class CodebookROM(wiring.Component):
     def __init__(self, codebook, raw_words, *, cb_bits: int, raw_bits: int, off_bits: int,
                  bank_depth: int = BANK_DEPTH, features: Features | None = None, color_bits: int = 2,
                  entries: int | None = None, entry_bytes: int | None = None, raw_depth: int | None = None,
-                 load=None, raw_port: bool = False, index_bits: int | None = None):
+                 load=None, raw_port: bool = False, index_bits: int | None = None, data_copies: int = 0):
         codebook = np.asarray(codebook, dtype=np.uint8)
         if codebook.ndim != 2:
             raise ValueError("codebook memory must be a 2-D uint8 array")
@@ -201,6 +209,7 @@ class CodebookROM(wiring.Component):
         if color_bits == 2 and max(self._features.color_codes, default=0) > 3:
             raise ValueError("PowerVR2 colour formats need color_bits=3")
         self._summed = index_bits is not None
+        self._data_copies = int(data_copies)
         super().__init__({
             "index": In(index_bits if self._summed else self._features.index_bits),
             "cb_base": In(cb_bits),
@@ -218,6 +227,7 @@ class CodebookROM(wiring.Component):
             "color_out": Out(2),
             **({} if load is None else {"load": In(load), "load_data": Out(DATA_WIDTH)}),
             **({"raw_in": In(32)} if self._raw_port else {}),
+            **({"en_data": In(self._data_copies)} if self._data_copies else {}),
         })
 
     @property
@@ -249,11 +259,25 @@ class CodebookROM(wiring.Component):
         def target(region, lanes):
             return None if load is None else LoadTarget(load, REGIONS[region], lanes=lanes)
 
+        # the data registers' copies of ``en``: a quarter the raw memory's, the rest the codebook's
+        n = self._data_copies
+        own_raw = feat.raw and not self._raw_port
+        n_raw = (n if not feat.compressed else max(1, n // 4)) if own_raw and n else 0
+        copies = {"codebook": (self.en_data[n_raw:] if n else None), "raw": (self.en_data[:n_raw] if n_raw else None)}
+
+        def data_copies(name):
+            return {} if copies[name] is None or not len(copies[name]) else {"data_copies": len(copies[name])}
+
+        def connect(rom, name):
+            if data_copies(name):
+                m.d.comb += rom.en_data.eq(copies[name])
+
         if feat.compressed:
             lanes = entry_lanes(nbytes)
             m.submodules.codebook = codebook = BankedROM(
                 self._entries, width=nbytes * 8, bank_depth=self._bank_depth, depth=self._depths[0],
-                load=target("codebook", lanes))
+                load=target("codebook", lanes), **data_copies("codebook"))
+            connect(codebook, "codebook")
             m.d.comb += [codebook.addr.eq(self.index if self._summed or _is_zero(cb_base) else cb_base + self.index),
                          codebook.en.eq(self.en)]
             if load is not None:
@@ -264,7 +288,8 @@ class CodebookROM(wiring.Component):
             m.d.comb += [raw.data.eq(self.raw_in), raw.en.eq(self.en)]
         elif feat.raw:
             m.submodules.raw = raw = BankedROM(self._raw, width=32, bank_depth=self._bank_depth,
-                                               depth=self._depths[1], load=target("raw", 1))
+                                               depth=self._depths[1], load=target("raw", 1), **data_copies("raw"))
+            connect(raw, "raw")
             m.d.comb += [raw.addr.eq(self.raw_addr), raw.en.eq(self.en)]
             if load is not None:
                 m.d.comb += raw.load.eq(self.load)
@@ -374,18 +399,34 @@ class CodebookROM(wiring.Component):
                 return reg(pick(values, index), name)
             return [reg(v, f"{name}_{lo}") for lo, v in enumerate(pick_group(values, index, PICK_GROUP))]
 
+        banks = codebook.banks if feat.compressed else 0
+        # The loadable ROM of several banks: the picks' selects (stage 2's word numbers) in a copy of
+        # their own per bank (hw.copies: equal to ``fields_data``'s, kept apart), where one
+        # register's bit drove the picks of every bank (1,022 loads on ``paper``: docs/area.md "The
+        # paths between blocks"). Not per value of a split pick's group: the group's candidates
+        # overlap (a window is two words), and with selects of their own abc9 no longer shares
+        # their multiplexers (``max``: 1,300 LUT4 more).
+        selects = {}
+        for name in ("start", "ustart", "vstart") if load is not None and banks > 1 else ():
+            if name in ride:
+                selects[name] = register_copies(m, registered[name][2:], banks, name=f"{name}_pick",
+                                                enable=self.en)
+
+        def select_of(name, value, k):
+            return selects[name][k] if name in selects else value[2:]
+
         windows, u_words, v_words = [], [], []
-        for k in range(codebook.banks if feat.compressed else 0):
+        for k in range(banks):
             entry = codebook.data[k]
             last = entry[(nbytes - 1) * 8:]
             padded = Cat(entry, last, last, last)
             words = [Cat(padded[32 * n:32 * n + 32], C(0, max(0, 32 * n + 32 - len(padded))))
                      for n in range(nwords - 1)] + [C(0, 32)]
-            windows.append(word_pick([Cat(words[n], words[n + 1]) for n in range(nwords - 1)], start[2:],
-                                     f"window{k}"))
+            windows.append(word_pick([Cat(words[n], words[n + 1]) for n in range(nwords - 1)],
+                                     select_of("start", start, k), f"window{k}"))
             if yuv:
-                u_words.append(word_pick(words, ustart[2:], f"u_word{k}"))
-                v_words.append(word_pick(words, vstart[2:], f"v_word{k}"))
+                u_words.append(word_pick(words, select_of("ustart", ustart, k), f"u_word{k}"))
+                v_words.append(word_pick(words, select_of("vstart", vstart, k), f"v_word{k}"))
         bank = reg(codebook.bank, "bank_window") if feat.compressed else None
         raw_word = reg(raw.word, "raw_window") if feat.raw else None
         def low_bits(address):

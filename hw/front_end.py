@@ -20,11 +20,12 @@ from . import index_reader
 from .address import BlockAddress
 from .banked_rom import BANK_DEPTH
 from .bus_port import DATA_WIDTH, or_all
+from .copies import register_copies
 from .descriptor import DescriptorTable, as_geometry
 from .features import Features
 from .index_reader import IndexReader, IndexRequestLayout
 from .registers import enabled_register
-from .pipeline import (ADVANCE_COPIES, STAGES, UPSTREAM_STAGES, REGISTERS, LinkLayout, RequestLayout, SideLayout,
+from .pipeline import (ADVANCE_COPIES, DATA_COPIES, INDEX_DATA_COPIES, STAGES, UPSTREAM_STAGES, REGISTERS, LinkLayout, RequestLayout, SideLayout,
                        addr_bits, advance_copies, pack)
 
 __all__ = ["FrontEnd", "index_port_members"]
@@ -144,7 +145,7 @@ class FrontEnd(wiring.Component):
             "valid": Out(len(REGISTERS)),
             "o_tag": Out(tag_width),
             "link": Out(LinkLayout(g, self._features, summed=self._summed,
-                                   copies=len(ADVANCE_COPIES) if load is not None else 0)),
+                                   copies=len(ADVANCE_COPIES) + DATA_COPIES if load is not None else 0)),
             **(index_port_members(g, self._features) if self._index_port else {}),
             **({} if load is None else {"pause": In(1), "load": In(load), "load_data": Out(DATA_WIDTH)}),
         })
@@ -161,7 +162,7 @@ class FrontEnd(wiring.Component):
         m.submodules.descriptor = desc = DescriptorTable(ts, features=feat, geometry=g, load=load, registered=True)
         m.submodules.address = addr = BlockAddress(
             base_bits=widths["base"], k_bits=kb, raw_bits=addr_bits(g.raw_words), raw=feat.raw,
-            twiddle=feat.twiddled, linear=0 in feat.layouts)
+            twiddle=feat.twiddled, linear=0 in feat.layouts, one_shifter=load is not None)
         if feat.compressed and self._index_port:
             idx = _OutsideIndex(self.index_response)
         elif feat.compressed:
@@ -169,7 +170,8 @@ class FrontEnd(wiring.Component):
                 ts.index_words if ts is not None else (), word_bits=g.word_bits, k_bits=kb, base_bits=widths["base"],
                 one_port=self._one_port, bank_depth=self._bank_depth,
                 widths=feat.index_widths if feat.specialised else None, straddle=feat.straddle,
-                depth=g.index_words, load=load, add_bits=widths["cb_base"] if self._summed else 0)
+                depth=g.index_words, load=load, add_bits=widths["cb_base"] if self._summed else 0,
+                data_copies=INDEX_DATA_COPIES if load is not None else 0)
         else:                               # every level raw: no index reader, the index is 0
             idx = _NoIndex()
 
@@ -199,6 +201,9 @@ class FrontEnd(wiring.Component):
         # a copy's first cycle after a reset would miss) from ``advance`` itself.
         if load is not None:
             copies = dict(zip(ADVANCE_COPIES, advance_copies(m, self.stall_output, len(ADVANCE_COPIES))))
+            # (the codebook ROM's data registers' shares: equal to ``advance`` itself, kept apart by ``keep``)
+            copies.update(enumerate(register_copies(m, ~self.stall_output, DATA_COPIES, name="advance_data",
+                                                    init=1)))
             en_desc = Signal(name="upstream_address")
             m.d.comb += en_desc.eq(copies["address"] & ~idx.hold)
             en_idx, en_side = copies["index_reader"], copies["side"]
@@ -264,6 +269,9 @@ class FrontEnd(wiring.Component):
                 idx.base.eq(d2.base),
                 idx.en.eq(en_idx),
             ]
+            if load is not None:            # the index memories' data registers on copies of their own
+                m.d.comb += idx.en_data.eq(Cat(*register_copies(m, ~self.stall_output, INDEX_DATA_COPIES,
+                                                                name="advance_index", init=1)))
         if load is not None:                # the read answers of the table and the index memory
             inside = feat.compressed and not self._index_port       # an index memory here
             m.d.comb += self.load_data.eq(or_all([desc.load_data] + ([idx.load_data] if inside else [])))

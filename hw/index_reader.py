@@ -55,6 +55,11 @@ class IndexRequestLayout(data.StructLayout):
         })
 
 
+#: The loadable reader's stage 4 shifts the word pair by whole ``2**COARSE_SHIFT``-bit steps of the
+#: index's offset, stage 5 by the rest (``_elaborate_specialised``).
+COARSE_SHIFT = 3
+
+
 class IndexReader(wiring.Component):
     """The packed index reader.
 
@@ -126,6 +131,12 @@ class IndexReader(wiring.Component):
     add : In(add_bits)
         Only with ``add_bits``: added to the index in the extract stage (the value for the item
         entering that stage, i.e. moving in the same cycle as stage 4's register).
+    en_data : In(data_copies)
+        Only with ``data_copies`` ``n`` > 0: copies of ``en`` (the loadable front end gives copies of
+        ``advance``, equal to ``en`` but in a reset's first cycle, when every stage is empty), the
+        enables of the index memories' data registers (:class:`hw.banked_rom.BankedROM`
+        ``data_copies``; two banks: half each), so that ``en`` is not the clock enable of them all
+        (1,241 loads on ``max``, docs/area.md "The paths between blocks").
 
     Raises
     ------
@@ -135,7 +146,7 @@ class IndexReader(wiring.Component):
 
     def __init__(self, words=(), *, word_bits: int, k_bits: int, base_bits: int, one_port: bool = False,
                  bank_depth: int = BANK_DEPTH, widths=None, straddle: bool = True, depth: int | None = None,
-                 load=None, add_bits: int = 0):
+                 load=None, add_bits: int = 0, data_copies: int = 0):
         if word_bits not in (16, 32, 64):
             raise ValueError(f"index word width {word_bits} is not 16, 32 or 64")
         if widths is not None:
@@ -152,6 +163,8 @@ class IndexReader(wiring.Component):
         self._widths = widths
         self._straddle = bool(straddle)
         self._add_bits = int(add_bits)
+        self._data_copies = int(data_copies)
+        self._copies_used = 0
         index_bits = INDEX_BITS if widths is None else widths[-1]
         super().__init__({
             "valid": In(1),
@@ -164,6 +177,7 @@ class IndexReader(wiring.Component):
             "index": Out(max(index_bits, self._add_bits) + 1 if self._add_bits else index_bits),
             **({"add": In(self._add_bits)} if self._add_bits else {}),
             **({} if load is None else {"load": In(load), "load_data": Out(DATA_WIDTH)}),
+            **({"en_data": In(self._data_copies)} if self._data_copies else {}),
         })
 
     @property
@@ -232,8 +246,14 @@ class IndexReader(wiring.Component):
             max(1, (self._depth - phase + stride - 1) // stride)
         target = None if self._load is None else LoadTarget(
             self._load, REGIONS["index"], lanes=index_lanes(self._word_bits), stride=stride, phase=phase)
+        n = self._data_copies
+        share = (n if stride == 1 else (n + 1 - phase) // 2) if n else 0     # two banks: half each
+        copies = {"data_copies": share} if share else {}
         m.submodules[name] = mem = BankedROM(words, width=self._word_bits,
-                                             bank_depth=self._bank_depth, depth=depth, load=target)
+                                             bank_depth=self._bank_depth, depth=depth, load=target, **copies)
+        if share:
+            first = 0 if stride == 1 else phase * ((n + 1) // 2)
+            m.d.comb += mem.en_data.eq(self.en_data[first:first + share])
         if target is not None:
             m.d.comb += mem.load.eq(self.load)
             self._answers.append(mem.load_data)
@@ -254,14 +274,17 @@ class IndexReader(wiring.Component):
         m.d.comb += w_next.eq(base_next + words)
         return w_next
 
-    def _read_words(self, m, w, carried, *, straddle: bool, w_next=None):
+    def _read_words(self, m, w, carried, *, straddle: bool, w_next=None, pre=None):
         """Stages 2-4, the memory organisation both readers share: the read of word ``w`` (and
         ``w + 1`` with ``straddle``), and ``carried`` (the fields stage 5 needs) registered twice
         beside it. Returns ``(lo, hi, fields)``: ``lo`` = word[w] and ``hi`` = word[w + 1]
         registered in stage 4 (``hi`` a 0-bit constant without ``straddle``), ``fields`` the carried
         value after stage 3. Two banks (even and odd words, read together); with ``one_port`` one
         bank read twice for a straddling index (``hold`` high for the first); without ``straddle``
-        one bank, one word. ``w_next``, when given, is ``w + 1`` (:meth:`_next_word`)."""
+        one bank, one word. ``w_next``, when given, is ``w + 1`` (:meth:`_next_word`).
+        ``pre``, with two banks: stage 4 registers ``pre(word pair, fields)`` as ``lo`` instead
+        (``hi`` then a 0-bit constant), the pair ``Cat(word[w], word[w + 1])`` and ``fields`` the
+        carried value in stage 4."""
         W = self._word_bits
 
         def reg(value, name):
@@ -286,6 +309,12 @@ class IndexReader(wiring.Component):
             fields3 = reg(reg(Cat(carried, w[0]), "fields_word"), "fields_data")
             parity = fields3[-1]
             # Stage 4: word[w] is in the odd bank when w is odd.
+            if pre is not None:
+                pair = pre(Cat(Mux(parity, odd.word, even.word), Mux(parity, even.word, odd.word)), fields3[:-1])
+                lo = Signal(len(pair), name="pair")
+                with m.If(self.en):
+                    m.d.sync += lo.eq(pair)
+                return lo, C(0, 0), fields3[:-1]
             with m.If(self.en):
                 m.d.sync += [
                     lo.eq(Mux(parity, odd.word, even.word)),
@@ -361,8 +390,21 @@ class IndexReader(wiring.Component):
         if straddle:
             m.d.comb += self.straddle.eq(valid1 & ((off << log2u) + b1 > W))
 
+        # The loadable reader with two banks: the shift by whole units split over stages 4 and 5,
+        # by whole bytes (``COARSE_SHIFT``) beside the bank select, within the byte in stage 5 (max's
+        # 32-position shift, mask and ``+ cb_base`` in one cycle: docs/area.md "Block by block").
+        F = COARSE_SHIFT
+        coarse = self._load is not None and straddle and not self._one_port and W > unit and log2u < F
+        keep = ib + (1 << F) - 1                       # what stage 5 can still need of the pair
+
+        def pre(pair, fields):
+            at = Cat(C(0, log2u), fields[:len(off)])
+            pair = Cat(pair, C(0, max(0, W + keep - len(pair))))
+            return (pair >> Cat(C(0, F), at[F:]))[:keep]
+
         lo, hi, fields3 = self._read_words(m, w, Cat(off, b1[:bw_bits]), straddle=straddle,
-                                           w_next=self._next_word(m, self.en & ~self.hold, bit >> log2W, len(w)))
+                                           w_next=self._next_word(m, self.en & ~self.hold, bit >> log2W, len(w)),
+                                           pre=pre if coarse else None)
 
         # Stage 5: the index at offset ``off`` units of the word (pair): a right shift by whole units
         # (``off`` with log2(unit) zeros below it), masked to b bits when there are several widths.
@@ -374,7 +416,10 @@ class IndexReader(wiring.Component):
         data = Cat(lo, hi)
         pad = max(0, W - unit + ib - len(data))      # past the word (pair) the index reads zeros
         data = Cat(data, C(0, pad)) if pad else data
-        value = (data >> Cat(C(0, log2u), off4))[:ib] if W > unit else data[:ib]
+        if coarse:                                      # the pair already shifted by whole bytes
+            value = (data >> Cat(C(0, log2u), off4)[:F])[:ib]
+        else:
+            value = (data >> Cat(C(0, log2u), off4))[:ib] if W > unit else data[:ib]
         if several:
             mask = Signal(ib)
             m.d.comb += mask.eq(~(C((1 << ib) - 1, ib) << b4)[:ib])

@@ -184,6 +184,16 @@ class LinkLayout(data.StructLayout):
 #: Stage 1 (the request) moves on ``advance`` itself: it takes the input. Never more than
 #: ``len(_COPY_KINDS)``.
 ADVANCE_COPIES = ("address", "index_reader", "side", "codebook_rom", "color_matrix", "skid")
+#: Further copies of ``advance`` in the loadable unit, each the enable of a share of the codebook
+#: ROM's memories' data registers (:class:`hw.codebook_rom.CodebookROM` ``data_copies``): made by
+#: :func:`hw.copies.register_copies` (marked ``keep``, equal to ``advance`` in every cycle), carried
+#: after :data:`ADVANCE_COPIES` in the link's ``copies``. One copy of ``advance`` was the clock
+#: enable of 2,243 (``paper``) to 3,847 (``max``) flip-flops and block RAM ports (docs/area.md,
+#: "The paths between blocks").
+DATA_COPIES = 8
+#: Copies of ``advance`` in the loadable front end for the index memories' data registers
+#: (:class:`hw.index_reader.IndexReader` ``data_copies``), made and used in the front end.
+INDEX_DATA_COPIES = 4
 
 # (reset value, reset-less, inverted) of each copy: no two alike, and none like ``advance`` itself
 # (reset value 1, reset, not inverted) or ``skid_valid`` (its complement: reset value 0, reset,

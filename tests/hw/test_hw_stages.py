@@ -6,7 +6,7 @@ import pytest
 
 from tests import support
 from vqtex.golden.fetch import block_address, lookup_descriptor, read_codeword, read_index
-from vqtex.golden.format import DESCRIPTOR_DTYPE, DESCRIPTOR_FIELDS, MAX_LEVELS, pack_indices
+from vqtex.golden.format import DESCRIPTOR_DTYPE, DESCRIPTOR_FIELDS, LAYOUT_CODES, MAX_LEVELS, pack_indices
 from vqtex.hw import banked_rom, codebook_rom, index_reader
 from vqtex.hw.address import BlockAddress
 from vqtex.hw.banked_rom import BankedROM
@@ -52,6 +52,36 @@ def test_block_address_random_levels():
     assert res["raw_addr"] == (d["base"].astype(np.int64) + (j << d["log2w"].astype(np.int64)) + i).tolist()
 
 
+@pytest.mark.parametrize("one_shifter", [False, True], ids=["baked", "one_shifter"])
+@pytest.mark.parametrize("linear", [True, False], ids=["both_maps", "twiddled_only"])
+def test_block_address_twiddled_random_levels(linear, one_shifter):
+    """The PowerVR2 shifter (the formula's, and the loadable unit's one shifter) against golden's
+    twiddled block numbers: random levels of every aspect
+    (square, wide, tall: the squares along either side), block sides 1..8 no larger than the level,
+    both maps with ``layout`` random (or every level twiddled), under random enables."""
+    rng = np.random.default_rng(11)
+    n = 400
+    d = np.zeros(n, DESCRIPTOR_DTYPE)
+    d["log2w"] = rng.integers(0, 13, n)
+    d["log2h"] = rng.integers(0, 13, n)
+    d["log2bw"] = np.minimum(rng.integers(0, 4, n), d["log2w"])
+    d["log2bh"] = np.minimum(rng.integers(0, 4, n), d["log2h"])
+    d["layout"] = rng.integers(0, 2, n) if linear else LAYOUT_CODES["pvr2"]
+    i = (rng.random(n) * (1 << d["log2w"].astype(np.int64))).astype(np.int64)
+    j = (rng.random(n) * (1 << d["log2h"].astype(np.int64))).astype(np.int64)
+    i[:4], j[:4] = (1 << d["log2w"][:4].astype(np.int64)) - 1, (1 << d["log2h"][:4].astype(np.int64)) - 1
+    dut = BlockAddress(base_bits=21, k_bits=24, raw_bits=26, twiddle=True, linear=linear, one_shifter=one_shifter)
+    inputs = {"i": i, "j": j, "log2w": d["log2w"], "log2h": d["log2h"], "log2bw": d["log2bw"],
+              "log2bh": d["log2bh"], "layout": d["layout"], "base": d["base"]}
+    res = run_lockstep(dut, {k: np.asarray(v).tolist() for k, v in inputs.items()}, ["k", "x", "y"], 1,
+                       en_pattern=rng.random(1000) > 0.2)
+    k, x, y = block_address(d, i, j)
+    assert (d["layout"] == LAYOUT_CODES["pvr2"]).sum() > n // 3
+    assert res["k"] == k.tolist()
+    assert res["x"] == x.tolist()
+    assert res["y"] == y.tolist()
+
+
 class _Words:
     def __init__(self, words, word_bits):
         self.index_words, self.word_bits = words, word_bits
@@ -92,6 +122,29 @@ def test_index_reader_every_width_and_offset(word_bits, one_port, bank_depth):
     res = run_lockstep(dut, {"base": reqs[:, 0].tolist(), "b": reqs[:, 1].tolist(), "k": reqs[:, 2].tolist(),
                              "valid": [1] * len(reqs)}, ["index"], index_reader.LATENCY,
                        en_pattern=en, hold="hold" if one_port else None)
+    assert res["index"] == want.tolist()
+
+
+@pytest.mark.parametrize("word_bits", [16, 32, 64])
+def test_loadable_index_reader_every_width_and_offset(word_bits):
+    """The loadable reader (its contents the initial value, no bus write), every width 1..16 at every
+    offset: the word pair shifted by whole bytes in stage 4 and within the byte in stage 5
+    (``hw.index_reader.COARSE_SHIFT``), under random enables."""
+    from amaranth.lib import data as _data
+    from vqtex.hw.bus_port import DATA_WIDTH, REGION_BITS
+    rng = np.random.default_rng(100 + word_bits)
+    words, maps = _index_memory(word_bits, rng)
+    reqs = np.array([(base, b, k) for base, b, n in maps for k in range(n)], dtype=np.int64)
+    reqs = reqs[rng.permutation(len(reqs))]
+    d = np.zeros(len(reqs), DESCRIPTOR_DTYPE)
+    d["base"], d["index_bits"] = reqs[:, 0], reqs[:, 1]
+    want = read_index(_Words(words, word_bits), d, reqs[:, 2])
+    load = _data.StructLayout({"write": 1, "read": 1, "region": REGION_BITS, "offset": 16, "data": DATA_WIDTH})
+    dut = IndexReader(words, word_bits=word_bits, k_bits=7, base_bits=12, bank_depth=16,
+                      widths=tuple(range(1, 17)), load=load)
+    res = run_lockstep(dut, {"base": reqs[:, 0].tolist(), "b": reqs[:, 1].tolist(), "k": reqs[:, 2].tolist(),
+                             "valid": [1] * len(reqs)}, ["index"], index_reader.LATENCY,
+                       en_pattern=rng.random(4 * len(reqs)) > 0.15)
     assert res["index"] == want.tolist()
 
 

@@ -57,3 +57,26 @@ def test_bad_input_exits_2(tmp_path):
     bad.write_text(json.dumps(_netlist()))
     r = _run(str(bad), "--module", "nope")
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_fanout_and_depth(tmp_path):
+    """``--fanout``: the nets of most loads (cell inputs), their drivers; ``--depth``: dotted names
+    kept whole (``unit.x`` and ``unit.y`` apart, where depth 1 makes both ``unit``)."""
+    nl = _netlist()
+    cells = nl["modules"]["top"]["cells"]
+    # a fourth load on a (bit 2): a -> LUT -> d_ff; then a has 4 loads (l1, mx, l3, l4), sel 2
+    cells["l4"] = _cell("LUT4", {"A": [2]}, {"Z": [14]})
+    cells["d_ff"] = _cell("TRELLIS_FF", {"DI": [14], "CLK": [99]}, {"Q": [15]})
+    nl["modules"]["top"]["netnames"].update({"unit.x": {"bits": [12]}, "unit.y": {"bits": [14]}})
+    cells["unit.x_TRELLIS_FF_Q"] = cells.pop("c_ff")      # (Yosys names a cell after its net and type)
+    cells["unit.y_TRELLIS_FF_Q"] = cells.pop("d_ff")
+    f = tmp_path / "netlist.json"
+    f.write_text(json.dumps(nl))
+    r = _run(str(f), "--fanout", "2")
+    assert r.returncode == 0, r.stderr
+    rows = [line.split() for line in r.stdout.splitlines()]
+    assert len(rows) == 2 and rows[0] == ["4", "TRELLIS_FF", "a"], rows     # (clk and sel have no driver)
+    ends = [line.split()[-1] for line in _run(str(f), "--depth", "99").stdout.splitlines()]
+    assert "unit.x" in ends and "unit.y" in ends
+    ends = [line.split()[-1] for line in _run(str(f)).stdout.splitlines()]
+    assert "unit.x" not in ends and "unit" in ends
