@@ -28,17 +28,23 @@ def test_descriptor_table_every_row():
         assert {f: int(getattr(row, f)) for f in DESCRIPTOR_FIELDS} == {f: int(want[n][f]) for f in DESCRIPTOR_FIELDS}
 
 
-def test_block_address_random_levels():
-    rng = np.random.default_rng(3)
-    n = 300
+def _random_levels(rng, n):
+    """``n`` descriptors of random levels (sides 1..4096, blocks 1..8 no larger) and a texel in each."""
     d = np.zeros(n, DESCRIPTOR_DTYPE)
     d["log2w"] = rng.integers(0, 13, n)
     d["log2h"] = rng.integers(0, 13, n)
     d["log2bw"] = np.minimum(rng.integers(0, 4, n), d["log2w"])
     d["log2bh"] = np.minimum(rng.integers(0, 4, n), d["log2h"])
-    d["base"] = rng.integers(0, 1 << 20, n)
     i = (rng.random(n) * (1 << d["log2w"].astype(np.int64))).astype(np.int64)
     j = (rng.random(n) * (1 << d["log2h"].astype(np.int64))).astype(np.int64)
+    return d, i, j
+
+
+def test_block_address_random_levels():
+    rng = np.random.default_rng(3)
+    n = 300
+    d, i, j = _random_levels(rng, n)
+    d["base"] = rng.integers(0, 1 << 20, n)
     i[:4], j[:4] = 0, 0
     i[4:8], j[4:8] = (1 << d["log2w"][4:8].astype(np.int64)) - 1, (1 << d["log2h"][4:8].astype(np.int64)) - 1
     dut = BlockAddress(base_bits=21, k_bits=24, raw_bits=26)
@@ -61,14 +67,8 @@ def test_block_address_twiddled_random_levels(linear, one_shifter):
     both maps with ``layout`` random (or every level twiddled), under random enables."""
     rng = np.random.default_rng(11)
     n = 400
-    d = np.zeros(n, DESCRIPTOR_DTYPE)
-    d["log2w"] = rng.integers(0, 13, n)
-    d["log2h"] = rng.integers(0, 13, n)
-    d["log2bw"] = np.minimum(rng.integers(0, 4, n), d["log2w"])
-    d["log2bh"] = np.minimum(rng.integers(0, 4, n), d["log2h"])
+    d, i, j = _random_levels(rng, n)
     d["layout"] = rng.integers(0, 2, n) if linear else LAYOUT_CODES["pvr2"]
-    i = (rng.random(n) * (1 << d["log2w"].astype(np.int64))).astype(np.int64)
-    j = (rng.random(n) * (1 << d["log2h"].astype(np.int64))).astype(np.int64)
     i[:4], j[:4] = (1 << d["log2w"][:4].astype(np.int64)) - 1, (1 << d["log2h"][:4].astype(np.int64)) - 1
     dut = BlockAddress(base_bits=21, k_bits=24, raw_bits=26, twiddle=True, linear=linear, one_shifter=one_shifter)
     inputs = {"i": i, "j": j, "log2w": d["log2w"], "log2h": d["log2h"], "log2bw": d["log2bw"],
@@ -105,17 +105,23 @@ def _index_memory(word_bits, rng):
     return np.concatenate(parts).astype(f"<u{word_bits // 8}"), maps
 
 
-@pytest.mark.parametrize("bank_depth", [512, 16])
-@pytest.mark.parametrize("one_port", [False, True], ids=["two_bank", "one_port"])
-@pytest.mark.parametrize("word_bits", [16, 32, 64])
-def test_index_reader_every_width_and_offset(word_bits, one_port, bank_depth):
-    rng = np.random.default_rng(word_bits + one_port)
+def _index_requests(word_bits, rng):
+    """An index memory of every width's maps, a request for every index of each in random order
+    (``(base, b, k)`` rows), and golden's indices: ``(words, reqs, want)``."""
     words, maps = _index_memory(word_bits, rng)
     reqs = np.array([(base, b, k) for base, b, n in maps for k in range(n)], dtype=np.int64)
     reqs = reqs[rng.permutation(len(reqs))]
     d = np.zeros(len(reqs), DESCRIPTOR_DTYPE)
     d["base"], d["index_bits"] = reqs[:, 0], reqs[:, 1]
-    want = read_index(_Words(words, word_bits), d, reqs[:, 2])
+    return words, reqs, read_index(_Words(words, word_bits), d, reqs[:, 2])
+
+
+@pytest.mark.parametrize("bank_depth", [512, 16])
+@pytest.mark.parametrize("one_port", [False, True], ids=["two_bank", "one_port"])
+@pytest.mark.parametrize("word_bits", [16, 32, 64])
+def test_index_reader_every_width_and_offset(word_bits, one_port, bank_depth):
+    rng = np.random.default_rng(word_bits + one_port)
+    words, reqs, want = _index_requests(word_bits, rng)
     dut = IndexReader(words, word_bits=word_bits, k_bits=7, base_bits=12, one_port=one_port,
                       bank_depth=bank_depth)
     en = rng.random(4 * len(reqs)) > 0.15 if word_bits == 32 else None
@@ -133,12 +139,7 @@ def test_loadable_index_reader_every_width_and_offset(word_bits):
     from amaranth.lib import data as _data
     from vqtex.hw.bus_port import DATA_WIDTH, REGION_BITS
     rng = np.random.default_rng(100 + word_bits)
-    words, maps = _index_memory(word_bits, rng)
-    reqs = np.array([(base, b, k) for base, b, n in maps for k in range(n)], dtype=np.int64)
-    reqs = reqs[rng.permutation(len(reqs))]
-    d = np.zeros(len(reqs), DESCRIPTOR_DTYPE)
-    d["base"], d["index_bits"] = reqs[:, 0], reqs[:, 1]
-    want = read_index(_Words(words, word_bits), d, reqs[:, 2])
+    words, reqs, want = _index_requests(word_bits, rng)
     load = _data.StructLayout({"write": 1, "read": 1, "region": REGION_BITS, "offset": 16, "data": DATA_WIDTH})
     dut = IndexReader(words, word_bits=word_bits, k_bits=7, base_bits=12, bank_depth=16,
                       widths=tuple(range(1, 17)), load=load)
