@@ -72,15 +72,17 @@ def test_left_alone_when_not_the_same_circuit(change):
 
 
 def test_report_area_bram_outreg(capsys):
-    """Both read ports of every block RAM of the loadable index reader (topspin's geometry: 10 block
-    RAMs, seconds; the ``paper`` preset's 16 take a minute) take their data registers (port A the
-    pipeline's bank data register, port B the bus read's, which has no reset), and nextpnr places
-    the result."""
+    """The block RAMs of the loadable index reader (topspin's geometry: 10 block RAMs, seconds; the
+    ``paper`` preset's 16 take a minute) take their data registers, and nextpnr places the result:
+    port B, the bus read's (no reset, no enable), of every block RAM; port A, the pipeline's bank
+    data register, where its bits sit on one copy of ``advance`` (``hw.pipeline.INDEX_DATA_COPIES``
+    shares a bank's bits out over copies; a port whose outputs span two shares has two enables and
+    stays in the fabric, the rule of :func:`absorb_output_registers`)."""
     _need_tools()
     code, out, err = _run(capsys, "report", "area", "--unit", "loadable", "--builtin", "topspin", "--stage",
                           "index_reader", "--no-route", "--bram-outreg", "--json")
     assert code == 0, err
     rep = json.loads(out)
     brams = rep["utilisation"]["brams"]
-    assert brams > 0 and rep["bram_outreg"]["ports"] == 2 * brams
+    assert brams > 0 and brams < rep["bram_outreg"]["ports"] <= 2 * brams
     assert rep["bram_outreg"]["flip_flops"] >= brams and rep["timing"]["fmax_mhz"] > 0
