@@ -201,14 +201,14 @@ class FrontEnd(wiring.Component):
         # a copy's first cycle after a reset would miss) from ``advance`` itself.
         if load is not None:
             copies = dict(zip(ADVANCE_COPIES, advance_copies(m, self.stall_output, len(ADVANCE_COPIES))))
-            # (the codebook ROM's data registers' shares: equal to ``advance`` itself, kept apart by ``keep``)
-            copies.update(enumerate(register_copies(m, ~self.stall_output, DATA_COPIES, name="advance_data",
-                                                    init=1)))
+            # the codebook ROM's data registers' shares: equal to ``advance`` itself, kept apart by
+            # ``keep``; on the link after the blocks' copies
+            data_copies = register_copies(m, ~self.stall_output, DATA_COPIES, name="advance_data", init=1)
             en_desc = Signal(name="upstream_address")
             m.d.comb += en_desc.eq(copies["address"] & ~idx.hold)
             en_idx, en_side = copies["index_reader"], copies["side"]
         else:
-            copies = {}
+            copies, data_copies = {}, []
             en_desc, en_idx, en_side = upstream, advance, advance
         m.d.comb += self.valid.eq(Cat(valid, skid_valid))
         # The first UPSTREAM_STAGES bits shift on ``upstream``, the rest on ``advance`` (a held
@@ -310,5 +310,5 @@ class FrontEnd(wiring.Component):
 
         m.d.comb += self.link.eq(pack(self.link.shape(), {
             "advance": advance, "skid_valid": skid_valid, "index": idx.index, "side": side,
-            **({"copies": Cat(*copies.values())} if copies else {})}))
+            **({"copies": Cat(*copies.values(), *data_copies)} if copies else {})}))
         return m
